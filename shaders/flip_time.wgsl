@@ -1,0 +1,83 @@
+// Flip-time map. Twin of src/cpu/flip_time.rs; driven by src/gpu/flip_time.rs.
+// `flip_init` sets up a tile, `flip_time` advances it by `params.steps` steps. With early exit
+// the pixels still to integrate are kept as a dense list (active_in -> active_out), so
+// finished pixels cost no SIMD lanes in later dispatches.
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
+// Flip time (s) per pixel; NEVER until it flips.
+@group(0) @binding(2) var<storage, read_write> times: array<f32>;
+@group(0) @binding(3) var<storage, read> active_in: array<u32>;
+@group(0) @binding(4) var<storage, read_write> active_out: array<u32>;
+// [0]: length of active_out.
+@group(0) @binding(5) var<storage, read_write> counter: array<atomic<u32>>;
+
+fn start_state(i: u32) -> vec4<f32> {
+    let col = i % params.width;
+    let row = params.row0 + i / params.width;
+    return vec4<f32>(
+        params.theta1_min + (f32(col) + 0.5) * params.theta1_step,
+        params.omega1,
+        params.theta2_max - (f32(row) + 0.5) * params.theta2_step,
+        params.omega2,
+    );
+}
+
+fn push_active(i: u32) {
+    active_out[atomicAdd(&counter[0], 1u)] = i;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn flip_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let y = start_state(i);
+    states[i] = y;
+    times[i] = NEVER;
+    if params.early_exit != 0u && energy(coeffs_from(params), y) >= params.no_flip_energy {
+        push_active(i);
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = linear_index(gid, groups);
+    if n >= params.count {
+        return;
+    }
+    let early = params.early_exit != 0u;
+    var i = n;
+    if early {
+        i = active_in[n];
+    }
+    let c = coeffs_from(params);
+    let dt = params.dt;
+    var y = states[i];
+    var t_flip = times[i];
+    let k_end = params.step0 + params.steps;
+    for (var k = params.step0; k < k_end; k++) {
+        let next = rk4_step(c, y, dt);
+        if t_flip == NEVER && (abs(next.x) > PI || abs(next.z) > PI) {
+            var s = 1.0;
+            if abs(next.x) > PI {
+                s = min(s, hermite_crossing(y.x, y.y, next.x, next.y, dt));
+            }
+            if abs(next.z) > PI {
+                s = min(s, hermite_crossing(y.z, y.w, next.z, next.w, dt));
+            }
+            t_flip = (f32(k) + s) * dt;
+            if early {
+                y = next;
+                break;
+            }
+        }
+        y = next;
+    }
+    states[i] = y;
+    times[i] = t_flip;
+    if early && t_flip == NEVER {
+        push_active(i);
+    }
+}

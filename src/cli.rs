@@ -1,0 +1,457 @@
+//! The command line: clap flags -> validated specs -> runs -> files.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+
+use crate::engine::{self, Backend, RunInfo};
+use crate::error::{Error, Result};
+use crate::model::{Params, State};
+use crate::monitor::Monitor;
+use crate::render::{self, FlipColors};
+use crate::spec::{self, FlipSpec, Grid, Range, Stepping};
+use crate::{cpu, gpu};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "chaoscope",
+    version,
+    about = "Chaos in the double pendulum, millions of pendulums at once"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Flip-time map: time until either arm first flips over, for a grid of starts.
+    Flip(FlipArgs),
+    /// One trajectory as CSV: t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy.
+    Trajectory(TrajectoryArgs),
+    /// GPU adapters found, the one chosen, its limits and features.
+    Info,
+    /// Throughput of the GPU and CPU paths on FLIP-512, optionally beside the peers.
+    Bench(crate::bench::BenchArgs),
+}
+
+/// The physical parameters, SI units.
+#[derive(Args, Debug, Clone)]
+pub struct PhysicalArgs {
+    /// Upper bob mass (kg).
+    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
+    pub m1: f64,
+    /// Lower bob mass (kg).
+    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
+    pub m2: f64,
+    /// Upper arm length (m).
+    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
+    pub l1: f64,
+    /// Lower arm length (m).
+    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
+    pub l2: f64,
+    /// Gravitational acceleration (m/s^2).
+    #[arg(long, default_value = "9.81", value_parser = parse_number, allow_hyphen_values = true)]
+    pub g: f64,
+}
+
+impl PhysicalArgs {
+    pub fn params(&self) -> Params {
+        Params {
+            m1: self.m1,
+            m2: self.m2,
+            l1: self.l1,
+            l2: self.l2,
+            g: self.g,
+        }
+    }
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct FlipArgs {
+    /// Grid size: N (square) or WxH, one pendulum per pixel.
+    #[arg(long, default_value = "512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// theta1 range along x, MIN:MAX in rad (`pi` is understood: -pi:pi).
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_range, allow_hyphen_values = true)]
+    pub theta1: Range,
+    /// theta2 range along y (top = MAX), MIN:MAX in rad.
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_range, allow_hyphen_values = true)]
+    pub theta2: Range,
+    /// Initial angular velocity of the upper arm (rad/s), the same for every pixel.
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: f64,
+    /// Initial angular velocity of the lower arm (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: f64,
+    /// Simulated time (s); pixels that have not flipped by then are "never".
+    #[arg(long, default_value = "30", value_parser = parse_number, allow_hyphen_values = true)]
+    pub t_max: f64,
+    /// RK4 time step (s).
+    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
+    pub dt: f64,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: Backend,
+    /// PNG to write.
+    #[arg(long, default_value = "out/flip.png")]
+    pub output: PathBuf,
+    /// Raw flip times (s) as float32 .npy, shape (height, width), row 0 = top, inf = never.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts).
+    #[arg(long)]
+    pub full: bool,
+}
+
+impl FlipArgs {
+    pub fn spec(&self) -> FlipSpec {
+        let (width, height) = self.size;
+        let grid = Grid {
+            width,
+            height,
+            theta1: self.theta1,
+            theta2: self.theta2,
+            omega1: self.omega1,
+            omega2: self.omega2,
+        };
+        let stepping = Stepping {
+            dt: self.dt,
+            t_max: self.t_max,
+        };
+        FlipSpec {
+            early_exit: !self.full,
+            ..FlipSpec::new(self.physical.params(), grid, stepping)
+        }
+    }
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct TrajectoryArgs {
+    /// Initial upper-arm angle (rad).
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub theta1: f64,
+    /// Initial lower-arm angle (rad).
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub theta2: f64,
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: f64,
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: f64,
+    #[arg(long, default_value = "10", value_parser = parse_number, allow_hyphen_values = true)]
+    pub t_max: f64,
+    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
+    pub dt: f64,
+    /// Output interval (s), a multiple of dt; default every step.
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub every: Option<f64>,
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub backend: Backend,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// CSV to write; standard output if absent.
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+}
+
+/// A number, or a multiple or fraction of pi: `1.5`, `-pi`, `pi/2`, `2pi`, `-0.5*pi`, `3pi/4`.
+pub fn parse_number(s: &str) -> std::result::Result<f64, String> {
+    let t = s.trim().to_ascii_lowercase();
+    if let Some(i) = t.find("pi") {
+        let (head, tail) = (&t[..i], &t[i + 2..]);
+        let head = head.trim_end_matches('*');
+        let factor = match head {
+            "" | "+" => 1.0,
+            "-" => -1.0,
+            h => h
+                .parse::<f64>()
+                .map_err(|_| format!("`{s}` is not a number"))?,
+        };
+        let divisor = match tail {
+            "" => 1.0,
+            d => d
+                .strip_prefix('/')
+                .and_then(|d| d.parse::<f64>().ok())
+                .ok_or_else(|| format!("`{s}` is not a number"))?,
+        };
+        Ok(factor * std::f64::consts::PI / divisor)
+    } else {
+        t.parse::<f64>()
+            .map_err(|_| format!("`{s}` is not a number"))
+    }
+}
+
+fn parse_range(s: &str) -> std::result::Result<Range, String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}` must be MIN:MAX, e.g. -pi:pi"))?;
+    Ok(Range {
+        min: parse_number(a)?,
+        max: parse_number(b)?,
+    })
+}
+
+fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let side = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("`{s}` must be N or WxH with whole numbers"))
+    };
+    match s.split_once(['x', 'X']) {
+        Some((w, h)) => Ok((side(w)?, side(h)?)),
+        None => side(s).map(|n| (n, n)),
+    }
+}
+
+/// The command that reproduces a flip map, for the PNG metadata.
+pub fn flip_command_line(spec: &FlipSpec, backend: Backend) -> String {
+    let (g, p, s) = (&spec.grid, &spec.params, &spec.stepping);
+    let backend = match backend {
+        Backend::Auto => "auto",
+        Backend::Gpu => "gpu",
+        Backend::Cpu => "cpu",
+    };
+    format!(
+        "chaoscope flip --size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {} --t-max {} --dt {} --m1 {} --m2 {} --l1 {} --l2 {} --g {} --backend {}{}",
+        g.width,
+        g.height,
+        g.theta1.min,
+        g.theta1.max,
+        g.theta2.min,
+        g.theta2.max,
+        g.omega1,
+        g.omega2,
+        s.t_max,
+        s.dt,
+        p.m1,
+        p.m2,
+        p.l1,
+        p.l2,
+        p.g,
+        backend,
+        if spec.early_exit { "" } else { " --full" }
+    )
+}
+
+/// PNG text chunks that let an image be reproduced from itself.
+pub fn png_metadata(command: String, info: &RunInfo) -> Vec<(String, String)> {
+    vec![
+        (
+            "Software".into(),
+            format!("chaoscope {}", env!("CARGO_PKG_VERSION")),
+        ),
+        ("chaoscope:command".into(), command),
+        ("chaoscope:backend".into(), info.backend.into()),
+        (
+            "chaoscope:adapter".into(),
+            info.adapter
+                .clone()
+                .unwrap_or_else(|| "none (CPU f64)".into()),
+        ),
+    ]
+}
+
+fn flip(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
+    let spec = args.spec();
+    spec.validate()?;
+    check_extension("--output", &args.output, "png")?;
+    if let Some(data) = &args.data {
+        check_extension("--data", data, "npy")?;
+    }
+    let started = std::time::Instant::now();
+    let (field, info) = engine::flip_map(&spec, args.backend, monitor)?;
+    if let Some(notice) = &info.notice {
+        eprintln!("{notice}");
+    }
+    let colors = FlipColors {
+        t_lo: (spec.params.l1 / spec.params.g).sqrt(),
+        t_max: spec.stepping.t_max,
+    };
+    let rgb = render::flip_colors(&field, colors);
+    let meta = png_metadata(flip_command_line(&spec, args.backend), &info);
+    render::write_png(&args.output, field.width, field.height, &rgb, &meta)?;
+    if let Some(data) = &args.data {
+        render::write_npy(data, &field)?;
+    }
+    let flipped = field.data.iter().filter(|t| t.is_finite()).count();
+    eprintln!(
+        "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s -> {}",
+        field.width,
+        field.height,
+        info.adapter.as_deref().unwrap_or("the CPU"),
+        started.elapsed().as_secs_f64(),
+        100.0 * flipped as f64 / field.data.len() as f64,
+        spec.stepping.t_max,
+        args.output.display()
+    );
+    Ok(())
+}
+
+fn check_extension(flag: &'static str, path: &Path, ext: &str) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
+        _ => Err(Error::invalid(
+            flag,
+            format!("{} must end in .{ext}", path.display()),
+        )),
+    }
+}
+
+/// Output stride in steps for `every` seconds, which must be a whole multiple of dt.
+pub fn output_stride(every: Option<f64>, dt: f64) -> Result<u32> {
+    let Some(every) = every else { return Ok(1) };
+    let k = every / dt;
+    let n = k.round();
+    if !(every.is_finite() && every > 0.0) || n < 1.0 || (k - n).abs() > 1e-9 * n {
+        return Err(Error::invalid(
+            "--every",
+            format!("{every} s must be a positive whole multiple of --dt {dt} s"),
+        ));
+    }
+    Ok(n as u32)
+}
+
+fn trajectory(args: &TrajectoryArgs) -> Result<()> {
+    let params = args.physical.params();
+    let stepping = Stepping {
+        dt: args.dt,
+        t_max: args.t_max,
+    };
+    spec::validate_params(&params)?;
+    spec::validate_stepping(&stepping)?;
+    let stride = output_stride(args.every, args.dt)?;
+    let start = State {
+        theta1: args.theta1,
+        omega1: args.omega1,
+        theta2: args.theta2,
+        omega2: args.omega2,
+    };
+    for (flag, v) in [
+        ("--theta1", args.theta1),
+        ("--theta2", args.theta2),
+        ("--omega1", args.omega1),
+        ("--omega2", args.omega2),
+    ] {
+        if !v.is_finite() {
+            return Err(Error::invalid(flag, "must be a finite number"));
+        }
+    }
+    let steps = stepping.steps();
+    let states = match engine::resolve(args.backend)? {
+        (Some(ctx), _) => gpu::trajectory(&ctx, &params, start, args.dt, steps)?,
+        (None, notice) => {
+            if let Some(n) = notice {
+                eprintln!("{n}");
+            }
+            cpu::trajectory(&params, start, args.dt, steps)
+        }
+    };
+    let write = |w: &mut dyn Write| -> Result<()> {
+        writeln!(w, "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy")?;
+        for (k, s) in states.iter().enumerate().step_by(stride as usize) {
+            let pos = params.positions(s);
+            writeln!(
+                w,
+                "{},{},{},{},{},{},{},{},{},{}",
+                k as f64 * args.dt,
+                s.theta1,
+                s.omega1,
+                s.theta2,
+                s.omega2,
+                pos.x1,
+                pos.y1,
+                pos.x2,
+                pos.y2,
+                params.energy(s)
+            )?;
+        }
+        Ok(())
+    };
+    match &args.output {
+        Some(path) => render::write_atomic(path, |w| write(w)),
+        None => write(&mut std::io::stdout().lock()),
+    }
+}
+
+fn info() -> Result<()> {
+    let adapters = gpu::list_adapters();
+    println!("adapters found: {}", adapters.len());
+    for a in &adapters {
+        let i = a.get_info();
+        println!(
+            "  - {} ({:?}, {:?}, driver {} {})",
+            i.name, i.backend, i.device_type, i.driver, i.driver_info
+        );
+    }
+    match gpu::GpuContext::new() {
+        Ok(ctx) => {
+            println!("chosen: {}", ctx.adapter_name());
+            let l = &ctx.limits;
+            println!(
+                "  max_storage_buffer_binding_size: {} MiB",
+                l.max_storage_buffer_binding_size >> 20
+            );
+            println!("  max_buffer_size: {} MiB", l.max_buffer_size >> 20);
+            println!(
+                "  max_compute_workgroups_per_dimension: {}",
+                l.max_compute_workgroups_per_dimension
+            );
+            println!(
+                "  max_compute_invocations_per_workgroup: {}",
+                l.max_compute_invocations_per_workgroup
+            );
+            let f = ctx.device.features();
+            println!("  SHADER_F64: {}", f.contains(wgpu::Features::SHADER_F64));
+            println!("  features: {f:?}");
+        }
+        Err(e) => println!("chosen: none ({e}); maps run on the CPU"),
+    }
+    Ok(())
+}
+
+/// Runs a parsed command. Invalid values exit 2 (like clap's own errors), other failures 1.
+pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
+    let result = match &cli.command {
+        Command::Flip(args) => flip(args, monitor),
+        Command::Trajectory(args) => trajectory(args),
+        Command::Info => info(),
+        Command::Bench(args) => crate::bench::run(args, monitor),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            match e {
+                Error::InvalidSpec { .. } => ExitCode::from(2),
+                Error::Interrupted => ExitCode::from(130),
+                _ => ExitCode::FAILURE,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn numbers_with_pi() {
+        assert_eq!(parse_number("-pi").unwrap(), -PI);
+        assert_eq!(parse_number("pi/2").unwrap(), PI / 2.0);
+        assert_eq!(parse_number("3pi/4").unwrap(), 3.0 * PI / 4.0);
+        assert_eq!(parse_number("-0.5*pi").unwrap(), -0.5 * PI);
+        assert_eq!(parse_number("-3").unwrap(), -3.0);
+        assert!(parse_number("pie").is_err());
+    }
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("64").unwrap(), (64, 64));
+        assert_eq!(parse_size("640x480").unwrap(), (640, 480));
+        assert!(parse_size("64x").is_err());
+    }
+}

@@ -1,0 +1,281 @@
+//! Drives `shaders/flip_time.wgsl`: tiles the grid to fit a storage binding, splits the time
+//! loop into dispatches of bounded work, and keeps the still-active pixels in a dense list.
+
+use super::context::{GpuContext, map_read, read_buffer};
+use super::layout::{FLIP_TIME_WGSL, GpuParams, NEVER, WORKGROUP_SIZE, shader_source};
+use crate::error::Result;
+use crate::field::Field;
+use crate::monitor::Monitor;
+use crate::spec::FlipSpec;
+
+/// Pendulum-steps per dispatch: about 0.1 s on lavapipe (~1.5e8 steps/s), far less on a real
+/// GPU, so no dispatch holds the device long enough to trip a driver watchdog.
+pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
+
+/// Bytes of GPU memory per pixel of a tile: state (16), time (4), two active lists (4 + 4).
+const BYTES_PER_PIXEL: u64 = 28;
+
+pub struct FlipTimeKernel {
+    init: wgpu::ComputePipeline,
+    advance: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Workgroup counts (x, y) covering `invocations`, within the 65535-per-dimension limit.
+pub(crate) fn workgroups(invocations: u32) -> (u32, u32) {
+    let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
+    let x = groups.min(65535);
+    (x, groups.div_ceil(x))
+}
+
+struct Buffers {
+    params: wgpu::Buffer,
+    // Kept with the bind groups that use it.
+    _states: wgpu::Buffer,
+    times: wgpu::Buffer,
+    counter: wgpu::Buffer,
+    counter_read: wgpu::Buffer,
+    /// Bind groups reading list A and writing list B, and the reverse.
+    a_to_b: wgpu::BindGroup,
+    b_to_a: wgpu::BindGroup,
+}
+
+impl FlipTimeKernel {
+    pub fn new(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("flip_time.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(shader_source(FLIP_TIME_WGSL).into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("flip_time"),
+            entries: &[
+                uniform_entry(0),
+                storage_entry(1, false),
+                storage_entry(2, false),
+                storage_entry(3, true),
+                storage_entry(4, false),
+                storage_entry(5, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("flip_time"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        FlipTimeKernel {
+            init: pipeline("flip_init"),
+            advance: pipeline("flip_time"),
+            layout,
+        }
+    }
+
+    fn buffers(&self, ctx: &GpuContext, capacity: u64) -> Buffers {
+        let device = &ctx.device;
+        let storage = |label, bytes: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("params"),
+            size: std::mem::size_of::<GpuParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let states = storage("states", capacity * 16);
+        let times = storage("times", capacity * 4);
+        let list_a = storage("active list a", capacity * 4);
+        let list_b = storage("active list b", capacity * 4);
+        let counter = storage("counter", 4);
+        let counter_read = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("counter readback"),
+            size: 4,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let bind = |label, list_in: &wgpu::Buffer, list_out: &wgpu::Buffer| {
+            let buffers = [&params, &states, &times, list_in, list_out, &counter];
+            let entries: Vec<_> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout: &self.layout,
+                entries: &entries,
+            })
+        };
+        let a_to_b = bind("a -> b", &list_a, &list_b);
+        let b_to_a = bind("b -> a", &list_b, &list_a);
+        Buffers {
+            params,
+            _states: states,
+            times,
+            counter,
+            counter_read,
+            a_to_b,
+            b_to_a,
+        }
+    }
+
+    /// Runs one dispatch; with `read_count`, returns the number of pixels it left active.
+    fn dispatch(
+        &self,
+        ctx: &GpuContext,
+        bufs: &Buffers,
+        pipeline: &wgpu::ComputePipeline,
+        bind_group: &wgpu::BindGroup,
+        params: &GpuParams,
+        read_count: bool,
+    ) -> Result<u32> {
+        ctx.queue
+            .write_buffer(&bufs.params, 0, bytemuck::bytes_of(params));
+        ctx.queue
+            .write_buffer(&bufs.counter, 0, &0u32.to_le_bytes());
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("flip"),
+            });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("flip"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            let (x, y) = workgroups(params.count);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        if read_count {
+            encoder.copy_buffer_to_buffer(&bufs.counter, 0, &bufs.counter_read, 0, 4);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        if read_count {
+            let bytes = map_read(ctx, &bufs.counter_read)?;
+            Ok(u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")))
+        } else {
+            ctx.wait()?;
+            Ok(params.count)
+        }
+    }
+
+    /// The flip-time map of `spec` (s, +inf = never flipped).
+    pub fn run(&self, ctx: &GpuContext, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
+        let grid = spec.grid;
+        let total_steps = spec.stepping.steps();
+        let max_pixels = (ctx.max_binding() / 16).min(ctx.limits.max_buffer_size / BYTES_PER_PIXEL);
+        let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
+        let capacity = tile_rows as u64 * grid.width as u64;
+        let bufs = self.buffers(ctx, capacity);
+        let tiles = grid.height.div_ceil(tile_rows);
+        monitor.start("gpu", tiles as u64 * total_steps as u64);
+
+        let mut field = Field::new(grid.width, grid.height, f32::INFINITY);
+        let base = GpuParams::new(&spec.params, spec.stepping.dt).with_grid(&grid);
+        let t_max = spec.stepping.t_max as f32;
+        for tile in 0..tiles {
+            let row0 = tile * tile_rows;
+            let rows = tile_rows.min(grid.height - row0);
+            let pixels = rows * grid.width;
+            let mut params = GpuParams {
+                row0,
+                rows,
+                count: pixels,
+                early_exit: spec.early_exit as u32,
+                ..base
+            };
+            let mut active = self.dispatch(
+                ctx,
+                &bufs,
+                &self.init,
+                &bufs.b_to_a,
+                &params,
+                spec.early_exit,
+            )?;
+            if !spec.early_exit {
+                active = pixels;
+            }
+            let mut step0 = 0;
+            let mut a_to_b = true;
+            while step0 < total_steps && active > 0 {
+                monitor.check()?;
+                let steps = (STEPS_PER_DISPATCH / active as u64)
+                    .clamp(1, (total_steps - step0) as u64) as u32;
+                params.step0 = step0;
+                params.steps = steps;
+                params.count = active;
+                let bind = if a_to_b { &bufs.a_to_b } else { &bufs.b_to_a };
+                active =
+                    self.dispatch(ctx, &bufs, &self.advance, bind, &params, spec.early_exit)?;
+                a_to_b = !a_to_b;
+                step0 += steps;
+                monitor.advance(steps as u64);
+            }
+            monitor.advance((total_steps - step0) as u64);
+            let bytes = read_buffer(ctx, &bufs.times, pixels as u64 * 4)?;
+            let times = bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")));
+            let start = row0 as usize * grid.width as usize;
+            for (out, t) in field.data[start..start + pixels as usize]
+                .iter_mut()
+                .zip(times)
+            {
+                *out = if t == NEVER || t > t_max {
+                    f32::INFINITY
+                } else {
+                    t
+                };
+            }
+        }
+        monitor.finish();
+        Ok(field)
+    }
+}

@@ -1,0 +1,93 @@
+//! Pod mirrors of the WGSL structs, and the constants the shaders share with Rust.
+//! Keep in sync with `shaders/common.wgsl`; `tests/layout.rs` checks sizes and offsets.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::model::Params;
+use crate::spec::Grid;
+
+/// Invocations per workgroup. 64 fills eight 8-lane SIMD groups on lavapipe and two warps
+/// on discrete GPUs.
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// The flip-time sentinel for "has not flipped" inside the shader (times are never negative).
+pub const NEVER: f32 = -1.0;
+
+/// Mirror of WGSL `Params`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuParams {
+    pub m1: f32,
+    pub m2: f32,
+    pub l1: f32,
+    pub l2: f32,
+    pub g: f32,
+    pub dt: f32,
+    pub theta1_min: f32,
+    pub theta1_step: f32,
+    pub theta2_max: f32,
+    pub theta2_step: f32,
+    pub omega1: f32,
+    pub omega2: f32,
+    pub no_flip_energy: f32,
+    pub width: u32,
+    pub rows: u32,
+    pub row0: u32,
+    pub step0: u32,
+    pub steps: u32,
+    pub early_exit: u32,
+    pub count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+    pub _pad3: u32,
+}
+
+// A uniform buffer's size must be a multiple of 16 bytes.
+const _: () = assert!(std::mem::size_of::<GpuParams>() == 96);
+
+impl GpuParams {
+    pub fn new(p: &Params, dt: f64) -> Self {
+        GpuParams {
+            m1: p.m1 as f32,
+            m2: p.m2 as f32,
+            l1: p.l1 as f32,
+            l2: p.l2 as f32,
+            g: p.g as f32,
+            dt: dt as f32,
+            no_flip_energy: p.no_flip_threshold(f32::EPSILON as f64) as f32,
+            ..Default::default()
+        }
+    }
+
+    pub fn with_grid(mut self, g: &Grid) -> Self {
+        self.theta1_min = g.theta1.min as f32;
+        self.theta1_step = g.theta1_step() as f32;
+        self.theta2_max = g.theta2.max as f32;
+        self.theta2_step = g.theta2_step() as f32;
+        self.omega1 = g.omega1 as f32;
+        self.omega2 = g.omega2 as f32;
+        self.width = g.width;
+        self
+    }
+}
+
+/// Full WGSL source of a kernel: Rust constants, then `common.wgsl`, then the kernel file.
+pub fn shader_source(kernel: &str) -> String {
+    format!(
+        "const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst NEVER: f32 = {NEVER:?};\n{}\n{}",
+        include_str!("../../shaders/common.wgsl"),
+        kernel
+    )
+}
+
+pub const FLIP_TIME_WGSL: &str = include_str!("../../shaders/flip_time.wgsl");
+pub const TRAJECTORY_WGSL: &str = include_str!("../../shaders/trajectory.wgsl");
+
+/// Every kernel's full source, named, for validation.
+pub fn all_shaders() -> Vec<(&'static str, String)> {
+    vec![
+        ("flip_time", shader_source(FLIP_TIME_WGSL)),
+        ("trajectory", shader_source(TRAJECTORY_WGSL)),
+    ]
+}

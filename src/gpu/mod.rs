@@ -1,0 +1,10 @@
+//! The GPU path: WGSL compute shaders in f32, one invocation per pendulum.
+
+mod context;
+mod flip_time;
+pub mod layout;
+mod trajectory;
+
+pub use context::{GpuContext, list_adapters};
+pub use flip_time::{FlipTimeKernel, STEPS_PER_DISPATCH};
+pub use trajectory::trajectory;

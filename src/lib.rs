@@ -1,0 +1,27 @@
+//! chaoscope explores chaos in the double pendulum by integrating one pendulum per pixel of an
+//! initial-condition grid, on the GPU (WGSL compute shaders through wgpu, f32) or on the CPU
+//! (an f64 reference that solves the mass-matrix system with nalgebra). Both paths return the
+//! same [`Field`], which [`render`] turns into PNG images and raw `.npy` data.
+//!
+//! ```
+//! use chaoscope::{cpu, model::Params, spec::{FlipSpec, Grid, Stepping}, monitor::Monitor};
+//! let spec = FlipSpec::new(Params::default(), Grid::square(8), Stepping { dt: 0.01, t_max: 2.0 });
+//! let map = cpu::flip_map(&spec, &Monitor::hidden()).unwrap();
+//! // The centre of the grid hangs nearly straight down: it can never flip.
+//! assert!(map.get(4, 4).is_infinite());
+//! ```
+
+pub mod bench;
+pub mod cli;
+pub mod cpu;
+pub mod engine;
+pub mod error;
+pub mod field;
+pub mod gpu;
+pub mod model;
+pub mod monitor;
+pub mod render;
+pub mod spec;
+
+pub use error::{Error, Result};
+pub use field::Field;

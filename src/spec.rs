@@ -1,0 +1,265 @@
+//! What a run is: the grid of starts, the physics, the time stepping. Validated before any
+//! work starts, so a bad value fails fast and names its flag.
+
+use crate::error::{Error, Result};
+use crate::model::{Params, State};
+
+/// A closed interval `min:max` of angles (rad).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Range {
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Range {
+    pub const FULL_TURN: Range = Range {
+        min: -std::f64::consts::PI,
+        max: std::f64::consts::PI,
+    };
+}
+
+/// The initial-condition grid: theta1 along x (left to right), theta2 along y (top = max),
+/// every start with the same angular velocities. Pixel centres, not edges.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    pub width: u32,
+    pub height: u32,
+    pub theta1: Range,
+    pub theta2: Range,
+    /// Initial angular velocities (rad/s), the same for every pixel.
+    pub omega1: f64,
+    pub omega2: f64,
+}
+
+impl Grid {
+    pub fn square(n: u32) -> Self {
+        Grid {
+            width: n,
+            height: n,
+            theta1: Range::FULL_TURN,
+            theta2: Range::FULL_TURN,
+            omega1: 0.0,
+            omega2: 0.0,
+        }
+    }
+
+    pub fn theta1_step(&self) -> f64 {
+        (self.theta1.max - self.theta1.min) / self.width as f64
+    }
+
+    pub fn theta2_step(&self) -> f64 {
+        (self.theta2.max - self.theta2.min) / self.height as f64
+    }
+
+    /// theta1 at the centre of column `col`.
+    pub fn theta1_at(&self, col: u32) -> f64 {
+        self.theta1.min + (col as f64 + 0.5) * self.theta1_step()
+    }
+
+    /// theta2 at the centre of row `row` (row 0 is the top, theta2 near its maximum).
+    pub fn theta2_at(&self, row: u32) -> f64 {
+        self.theta2.max - (row as f64 + 0.5) * self.theta2_step()
+    }
+
+    pub fn start(&self, col: u32, row: u32) -> State {
+        State {
+            theta1: self.theta1_at(col),
+            omega1: self.omega1,
+            theta2: self.theta2_at(row),
+            omega2: self.omega2,
+        }
+    }
+
+    pub fn pixels(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+}
+
+/// Fixed-step time integration from t = 0 to `t_max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stepping {
+    /// Time step (s).
+    pub dt: f64,
+    /// End time (s).
+    pub t_max: f64,
+}
+
+impl Stepping {
+    /// Number of steps to cover `t_max`; a final partial step is taken whole, and events
+    /// after `t_max` are not reported.
+    pub fn steps(&self) -> u32 {
+        let n = self.t_max / self.dt;
+        // t_max = 20, dt = 0.01 gives 2000.0000000000002: round when within round-off.
+        let rounded = n.round();
+        if (n - rounded).abs() < 1e-9 * n.max(1.0) {
+            rounded as u32
+        } else {
+            n.ceil() as u32
+        }
+    }
+}
+
+/// A flip-time map: for every start, the time until either arm first flips over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlipSpec {
+    pub params: Params,
+    pub grid: Grid,
+    pub stepping: Stepping,
+    /// Stop integrating a pixel once it has flipped, and skip the starts that cannot flip.
+    /// Off only for benchmarks (every pixel runs every step).
+    pub early_exit: bool,
+}
+
+/// Largest number of steps one run may take (the step counter is a u32 on the GPU, and f32
+/// counts steps exactly only up to 2^24).
+pub const MAX_STEPS: u32 = 1 << 24;
+
+impl FlipSpec {
+    pub fn new(params: Params, grid: Grid, stepping: Stepping) -> Self {
+        FlipSpec {
+            params,
+            grid,
+            stepping,
+            early_exit: true,
+        }
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        validate_params(&self.params)?;
+        validate_grid(&self.grid)?;
+        validate_stepping(&self.stepping)
+    }
+}
+
+fn finite_positive(flag: &'static str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            flag,
+            format!("{v} is not allowed; it must be a finite number > 0"),
+        ))
+    }
+}
+
+pub fn validate_params(p: &Params) -> Result<()> {
+    finite_positive("--m1", p.m1)?;
+    finite_positive("--m2", p.m2)?;
+    finite_positive("--l1", p.l1)?;
+    finite_positive("--l2", p.l2)?;
+    finite_positive("--g", p.g)
+}
+
+pub fn validate_stepping(s: &Stepping) -> Result<()> {
+    finite_positive("--dt", s.dt)?;
+    finite_positive("--t-max", s.t_max)?;
+    let n = s.t_max / s.dt;
+    if n > MAX_STEPS as f64 {
+        return Err(Error::invalid(
+            "--dt",
+            format!(
+                "t-max / dt = {n:.0} steps; at most {MAX_STEPS} are allowed (raise --dt or lower --t-max)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Angles must stay strictly inside (-pi, pi): a start outside has already flipped.
+fn validate_range(flag: &'static str, r: &Range) -> Result<()> {
+    use std::f64::consts::PI;
+    // Allow the user's "-pi:pi" written with a rounded pi.
+    let limit = PI + 1e-9;
+    if !(r.min.is_finite() && r.max.is_finite()) || r.min >= r.max {
+        return Err(Error::invalid(
+            flag,
+            format!("{}:{} must be MIN:MAX with MIN < MAX", r.min, r.max),
+        ));
+    }
+    if r.min < -limit || r.max > limit {
+        return Err(Error::invalid(
+            flag,
+            format!("{}:{} must lie within -pi:pi", r.min, r.max),
+        ));
+    }
+    Ok(())
+}
+
+pub fn validate_grid(g: &Grid) -> Result<()> {
+    const MAX_SIDE: u32 = 1 << 16;
+    if g.width == 0 || g.height == 0 || g.width > MAX_SIDE || g.height > MAX_SIDE {
+        return Err(Error::invalid(
+            "--size",
+            format!(
+                "{}x{} must be between 1 and {MAX_SIDE} on each side",
+                g.width, g.height
+            ),
+        ));
+    }
+    // The map (4 B), its colours (3 B) and the PNG encoder's copy (3 B) live in memory at once.
+    let need = g.pixels() * 10;
+    let have = available_memory();
+    if need > have {
+        return Err(Error::invalid(
+            "--size",
+            format!(
+                "{}x{} needs about {} MiB but only {} MiB of memory are available",
+                g.width,
+                g.height,
+                need >> 20,
+                have >> 20
+            ),
+        ));
+    }
+    validate_range("--theta1", &g.theta1)?;
+    validate_range("--theta2", &g.theta2)?;
+    if !g.omega1.is_finite() {
+        return Err(Error::invalid("--omega1", "must be a finite number"));
+    }
+    if !g.omega2.is_finite() {
+        return Err(Error::invalid("--omega2", "must be a finite number"));
+    }
+    Ok(())
+}
+
+/// Memory the system can give us (bytes), from /proc/meminfo; 16 GiB where it cannot be read.
+pub fn available_memory() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("MemAvailable:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<u64>().ok())
+        })
+        .map(|kb| kb * 1024)
+        .unwrap_or(16 << 30)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_round_off() {
+        let s = Stepping {
+            dt: 0.01,
+            t_max: 20.0,
+        };
+        assert_eq!(s.steps(), 2000);
+        let s = Stepping {
+            dt: 0.3,
+            t_max: 1.0,
+        };
+        assert_eq!(s.steps(), 4);
+    }
+
+    #[test]
+    fn pixel_centres() {
+        let g = Grid::square(4);
+        let h = std::f64::consts::PI / 4.0;
+        assert!((g.theta1_at(0) - (-3.0 * h)).abs() < 1e-15);
+        assert!((g.theta2_at(0) - 3.0 * h).abs() < 1e-15);
+        assert!((g.theta2_at(3) + 3.0 * h).abs() < 1e-15);
+    }
+}
