@@ -4,6 +4,7 @@
 // finished pixels cost no SIMD lanes in later dispatches.
 
 @group(0) @binding(0) var<uniform> params: Params;
+// Per pixel i: states[2 i] = Pendulum.y, states[2 i + 1] = Pendulum.u.
 @group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
 // Flip time (s) per pixel; NEVER until it flips.
 @group(0) @binding(2) var<storage, read_write> times: array<f32>;
@@ -34,7 +35,9 @@ fn flip_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let y = start_state(i);
-    states[i] = y;
+    let p = pendulum_from(y);
+    states[2u * i] = p.y;
+    states[2u * i + 1u] = p.u;
     times[i] = NEVER;
     if params.early_exit != 0u && energy(coeffs_from(params), y) >= params.no_flip_energy {
         push_active(i);
@@ -54,28 +57,40 @@ fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let c = coeffs_from(params);
     let dt = params.dt;
-    var y = states[i];
+    var p = Pendulum(states[2u * i], states[2u * i + 1u]);
     var t_flip = times[i];
+    // The step that flipped, located after the loop to keep the loop small.
+    var flipped = false;
+    var k_flip = 0u;
+    var before = vec4<f32>();
+    var after = vec4<f32>();
     let k_end = params.step0 + params.steps;
     for (var k = params.step0; k < k_end; k++) {
-        let next = rk4_step(c, y, dt);
-        if t_flip == NEVER && (abs(next.x) > PI || abs(next.z) > PI) {
-            var s = 1.0;
-            if abs(next.x) > PI {
-                s = min(s, hermite_crossing(y.x, y.y, next.x, next.y, dt));
-            }
-            if abs(next.z) > PI {
-                s = min(s, hermite_crossing(y.z, y.w, next.z, next.w, dt));
-            }
-            t_flip = (f32(k) + s) * dt;
+        let next = rk4_step(c, p, dt);
+        if !flipped && t_flip == NEVER && max(abs(next.y.x), abs(next.y.z)) > PI {
+            flipped = true;
+            k_flip = k;
+            before = p.y;
+            after = next.y;
             if early {
-                y = next;
+                p = next;
                 break;
             }
         }
-        y = next;
+        p = next;
     }
-    states[i] = y;
+    if flipped {
+        var s = 1.0;
+        if abs(after.x) > PI {
+            s = min(s, hermite_crossing(before.x, before.y, after.x, after.y, dt));
+        }
+        if abs(after.z) > PI {
+            s = min(s, hermite_crossing(before.z, before.w, after.z, after.w, dt));
+        }
+        t_flip = (f32(k_flip) + s) * dt;
+    }
+    states[2u * i] = p.y;
+    states[2u * i + 1u] = p.u;
     times[i] = t_flip;
     if early && t_flip == NEVER {
         push_active(i);

@@ -7,9 +7,9 @@
 @compute @workgroup_size(1)
 fn trajectory() {
     let c = coeffs_from(params);
-    var y = states[0];
+    var p = pendulum_from(states[0]);
     for (var k = 0u; k < params.steps; k++) {
-        y = rk4_step(c, y, params.dt);
-        states[k + 1u] = y;
+        p = rk4_step(c, p, params.dt);
+        states[k + 1u] = p.y;
     }
 }

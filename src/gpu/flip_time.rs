@@ -12,8 +12,8 @@ use crate::spec::FlipSpec;
 /// GPU, so no dispatch holds the device long enough to trip a driver watchdog.
 pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
 
-/// Bytes of GPU memory per pixel of a tile: state (16), time (4), two active lists (4 + 4).
-const BYTES_PER_PIXEL: u64 = 28;
+/// Bytes of GPU memory per pixel of a tile: state (32), time (4), two active lists (4 + 4).
+const BYTES_PER_PIXEL: u64 = 44;
 
 pub struct FlipTimeKernel {
     init: wgpu::ComputePipeline,
@@ -124,7 +124,7 @@ impl FlipTimeKernel {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let states = storage("states", capacity * 16);
+        let states = storage("states", capacity * 32);
         let times = storage("times", capacity * 4);
         let list_a = storage("active list a", capacity * 4);
         let list_b = storage("active list b", capacity * 4);
@@ -210,7 +210,7 @@ impl FlipTimeKernel {
     pub fn run(&self, ctx: &GpuContext, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
         let grid = spec.grid;
         let total_steps = spec.stepping.steps();
-        let max_pixels = (ctx.max_binding() / 16).min(ctx.limits.max_buffer_size / BYTES_PER_PIXEL);
+        let max_pixels = (ctx.max_binding() / 32).min(ctx.limits.max_buffer_size / BYTES_PER_PIXEL);
         let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
         let capacity = tile_rows as u64 * grid.width as u64;
         let bufs = self.buffers(ctx, capacity);
