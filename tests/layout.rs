@@ -1,0 +1,59 @@
+//! No GPU needed: every shader parses and validates with naga, and the WGSL structs match
+//! their Rust mirrors in size and member offsets.
+
+use chaoscope::gpu::layout::{GpuParams, all_shaders};
+use wgpu::naga;
+
+fn module(name: &str, source: &str) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{name}.wgsl does not parse:\n{}", e.emit_to_string(source)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
+    module
+}
+
+#[test]
+fn every_shader_parses_and_validates() {
+    for (name, source) in all_shaders() {
+        module(name, &source);
+    }
+}
+
+/// (name, offset) of each member of the WGSL struct `name`, and its size.
+fn wgsl_struct(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
+    let ty = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name} in the shader"))
+        .1;
+    match &ty.inner {
+        naga::TypeInner::Struct { members, span } => (
+            members
+                .iter()
+                .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                .collect(),
+            *span,
+        ),
+        other => panic!("{name} is not a struct: {other:?}"),
+    }
+}
+
+macro_rules! rust_offsets {
+    ($ty:ty; $($field:ident),* $(,)?) => {
+        vec![$((stringify!($field).to_string(), std::mem::offset_of!($ty, $field) as u32)),*]
+    };
+}
+
+#[test]
+fn params_struct_matches_its_rust_mirror() {
+    let rust = rust_offsets!(GpuParams;
+        m1, m2, l1, l2, g, dt, theta1_min, theta1_step, theta2_max, theta2_step, omega1, omega2,
+        no_flip_energy, width, rows, row0, step0, steps, early_exit, count, _pad0, _pad1, _pad2, _pad3);
+    for (name, source) in all_shaders() {
+        let (wgsl, span) = wgsl_struct(&module(name, &source), "Params");
+        assert_eq!(span as usize, std::mem::size_of::<GpuParams>(), "{name}: size of Params");
+        assert_eq!(wgsl, rust, "{name}: members and offsets of Params (WGSL left, Rust right)");
+    }
+}
