@@ -7,9 +7,12 @@ use wgpu::naga;
 fn module(name: &str, source: &str) -> naga::Module {
     let module = naga::front::wgsl::parse_str(source)
         .unwrap_or_else(|e| panic!("{name}.wgsl does not parse:\n{}", e.emit_to_string(source)));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
     module
 }
 
@@ -53,7 +56,14 @@ fn params_struct_matches_its_rust_mirror() {
         no_flip_energy, width, rows, row0, step0, steps, early_exit, count, _pad0, _pad1, _pad2, _pad3);
     for (name, source) in all_shaders() {
         let (wgsl, span) = wgsl_struct(&module(name, &source), "Params");
-        assert_eq!(span as usize, std::mem::size_of::<GpuParams>(), "{name}: size of Params");
-        assert_eq!(wgsl, rust, "{name}: members and offsets of Params (WGSL left, Rust right)");
+        assert_eq!(
+            span as usize,
+            std::mem::size_of::<GpuParams>(),
+            "{name}: size of Params"
+        );
+        assert_eq!(
+            wgsl, rust,
+            "{name}: members and offsets of Params (WGSL left, Rust right)"
+        );
     }
 }

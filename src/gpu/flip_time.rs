@@ -206,11 +206,23 @@ impl FlipTimeKernel {
         }
     }
 
-    /// The flip-time map of `spec` (s, +inf = never flipped).
+    /// The flip-time map of `spec` (s, +inf = never flipped), in tiles as large as the
+    /// device's storage bindings allow.
     pub fn run(&self, ctx: &GpuContext, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
+        let max_pixels = (ctx.max_binding() / 32).min(ctx.limits.max_buffer_size / BYTES_PER_PIXEL);
+        self.run_tiled(ctx, spec, monitor, max_pixels)
+    }
+
+    /// As `run`, with tiles of at most `max_pixels` pixels (whole rows, at least one).
+    pub fn run_tiled(
+        &self,
+        ctx: &GpuContext,
+        spec: &FlipSpec,
+        monitor: &Monitor,
+        max_pixels: u64,
+    ) -> Result<Field> {
         let grid = spec.grid;
         let total_steps = spec.stepping.steps();
-        let max_pixels = (ctx.max_binding() / 32).min(ctx.limits.max_buffer_size / BYTES_PER_PIXEL);
         let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
         let capacity = tile_rows as u64 * grid.width as u64;
         let bufs = self.buffers(ctx, capacity);
