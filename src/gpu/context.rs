@@ -85,7 +85,9 @@ impl GpuContext {
 
     /// Largest storage buffer a single binding may hold (bytes).
     pub fn max_binding(&self) -> u64 {
-        (self.limits.max_storage_buffer_binding_size as u64).min(self.limits.max_buffer_size)
+        self.limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
     }
 }
 

@@ -1,0 +1,167 @@
+//! The binary end to end in a temporary directory.
+
+mod common;
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+
+fn chaoscope() -> Command {
+    let mut cmd = Command::cargo_bin("chaoscope").expect("binary");
+    cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    cmd
+}
+
+/// (shape, data) of a float32 .npy file written in C order.
+fn read_npy(path: &std::path::Path) -> (Vec<u64>, Vec<f32>) {
+    let bytes = std::fs::read(path).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    assert_eq!(npy.order(), npyz::Order::C);
+    let shape = npy.shape().to_vec();
+    (shape, npy.into_vec::<f32>().unwrap())
+}
+
+#[test]
+fn flip_writes_a_png_and_npy_of_the_right_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    let (png, npy) = (dir.path().join("m.png"), dir.path().join("m.npy"));
+    // The CPU backend needs no adapter; the GPU path is the same command with --backend gpu.
+    for backend in ["cpu", "gpu"] {
+        if backend == "gpu" && common::gpu().is_none() {
+            continue;
+        }
+        chaoscope()
+            .args([
+                "flip", "--size", "40x24", "--t-max", "3", "--theta1", "-pi:pi", "--theta2", "-3:3",
+            ])
+            .args(["--backend", backend, "--output"])
+            .arg(&png)
+            .arg("--data")
+            .arg(&npy)
+            .assert()
+            .success();
+        let (shape, data) = read_npy(&npy);
+        assert_eq!(shape, vec![24, 40], "{backend}: (height, width)");
+        assert!(
+            data.iter().any(|t| t.is_finite()) && data.iter().any(|t| t.is_infinite()),
+            "{backend}"
+        );
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+        let reader = decoder.read_info().unwrap();
+        let info = reader.info();
+        assert_eq!((info.width, info.height), (40, 24));
+        let command = info
+            .uncompressed_latin1_text
+            .iter()
+            .find(|t| t.keyword == "chaoscope:command")
+            .expect("run specification in the PNG")
+            .text
+            .clone();
+        assert!(
+            command.contains("--size 40x24") && command.contains(&format!("--backend {backend}")),
+            "{command}"
+        );
+    }
+    // Nothing but the two outputs: no temporary files left behind.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+#[test]
+fn bad_values_exit_2_and_name_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bad.png");
+    let cases: &[(&[&str], &str)] = &[
+        (&["--m1", "-1"], "--m1"),
+        (&["--l2", "0"], "--l2"),
+        (&["--theta1", "3:1"], "--theta1"),
+        (&["--theta2", "-4:4"], "--theta2"),
+        (&["--dt", "0"], "--dt"),
+        (&["--t-max", "-5"], "--t-max"),
+        (&["--size", "0"], "--size"),
+        (&["--size", "65536x65536"], "--size"),
+        (&["--size", "ten"], "--size"),
+        (&["--g", "nan"], "--g"),
+    ];
+    for (args, flag) in cases {
+        chaoscope()
+            .args(["flip", "--backend", "cpu", "--output"])
+            .arg(&out)
+            .args(*args)
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(*flag));
+        assert!(!out.exists(), "{args:?} left an output file");
+    }
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no partial files"
+    );
+}
+
+#[test]
+fn trajectory_csv_has_the_columns_and_reads_back_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("t.csv");
+    chaoscope()
+        .args([
+            "trajectory",
+            "--theta1",
+            "pi/2",
+            "--theta2",
+            "-0.5",
+            "--omega1",
+            "-1",
+            "--t-max",
+            "1",
+            "--every",
+            "0.1",
+            "--output",
+        ])
+        .arg(&csv)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 11, "t = 0, 0.1, ... 1");
+    assert_eq!(
+        rows[0][1],
+        std::f64::consts::FRAC_PI_2,
+        "shortest round-trip form reads back exactly"
+    );
+    assert_eq!(rows[0][2], -1.0);
+    // The CSV's state reproduces the library's trajectory bit for bit.
+    let p = chaoscope::model::Params::default();
+    let start = chaoscope::model::State {
+        theta1: std::f64::consts::FRAC_PI_2,
+        omega1: -1.0,
+        theta2: -0.5,
+        omega2: 0.0,
+    };
+    let traj = chaoscope::cpu::trajectory(&p, start, 0.01, 100);
+    assert_eq!(rows[10][1], traj[100].theta1);
+    // Energy is conserved along the run to RK4's error, which on this energetic start at
+    // dt 0.01 stays below 1e-4 of the energy scale over 1 s.
+    let e: Vec<f64> = rows.iter().map(|r| r[9]).collect();
+    assert!(e.iter().all(|v| (v - e[0]).abs() < 1e-4 * p.energy_scale()));
+    chaoscope()
+        .args([
+            "trajectory",
+            "--theta1",
+            "1",
+            "--theta2",
+            "1",
+            "--every",
+            "0.015",
+        ])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--every"));
+}
