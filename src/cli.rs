@@ -403,9 +403,12 @@ fn info() -> Result<()> {
                 "  max_compute_invocations_per_workgroup: {}",
                 l.max_compute_invocations_per_workgroup
             );
-            let f = ctx.device.features();
-            println!("  SHADER_F64: {}", f.contains(wgpu::Features::SHADER_F64));
-            println!("  features: {f:?}");
+            let f = ctx.adapter_features;
+            println!(
+                "  adapter supports SHADER_F64: {}",
+                f.contains(wgpu::Features::SHADER_F64)
+            );
+            println!("  adapter features: {f:?}");
         }
         Err(e) => println!("chosen: none ({e}); maps run on the CPU"),
     }

@@ -9,6 +9,8 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
+    /// What the adapter could offer (the device requests none of it yet).
+    pub adapter_features: wgpu::Features,
     /// Errors raised outside an error scope, kept so that a run fails instead of going on
     /// with garbage.
     uncaptured: Arc<Mutex<Option<String>>>,
@@ -51,6 +53,7 @@ impl GpuContext {
             queue,
             info: adapter.get_info(),
             limits,
+            adapter_features: adapter.features(),
             uncaptured,
         })
     }
