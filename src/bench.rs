@@ -201,7 +201,6 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
         "path", "mode", "wall s", "pendulum-steps/s"
     );
     let mut names: Vec<(String, &str)> = samples.iter().map(|s| (s.name.clone(), s.mode)).collect();
-    names.dedup();
     names.sort();
     names.dedup();
     let mut rows = Vec::new();
