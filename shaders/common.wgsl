@@ -35,10 +35,11 @@ struct Params {
     early_exit: u32,
     // Number of invocations with work in this dispatch.
     count: u32,
+    // Divergence maps: steps between renormalisations, steps of the whole run, twin separation.
+    renorm_steps: u32,
+    total_steps: u32,
+    twin_eps: f32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-    _pad3: u32,
 }
 
 // f32(pi) rounds up to 3.1415927, so |theta| > PI is the f32 form of |theta| > pi.
@@ -159,6 +160,19 @@ fn hermite_crossing(ta: f32, wa: f32, tb: f32, wb: f32, h: f32) -> f32 {
         }
     }
     return hi;
+}
+
+// Start (theta1, omega1, theta2, omega2) of pixel i of the tile: pixel centres, row 0 at the
+// top (theta2 at its maximum).
+fn grid_start(p: Params, i: u32) -> vec4<f32> {
+    let col = i % p.width;
+    let row = p.row0 + i / p.width;
+    return vec4<f32>(
+        p.theta1_min + (f32(col) + 0.5) * p.theta1_step,
+        p.omega1,
+        p.theta2_max - (f32(row) + 0.5) * p.theta2_step,
+        p.omega2,
+    );
 }
 
 // Linear invocation index over a 2-D dispatch (more than 65535 workgroups need two dimensions).

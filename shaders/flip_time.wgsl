@@ -13,17 +13,6 @@
 // [0]: length of active_out.
 @group(0) @binding(5) var<storage, read_write> counter: array<atomic<u32>>;
 
-fn start_state(i: u32) -> vec4<f32> {
-    let col = i % params.width;
-    let row = params.row0 + i / params.width;
-    return vec4<f32>(
-        params.theta1_min + (f32(col) + 0.5) * params.theta1_step,
-        params.omega1,
-        params.theta2_max - (f32(row) + 0.5) * params.theta2_step,
-        params.omega2,
-    );
-}
-
 fn push_active(i: u32) {
     active_out[atomicAdd(&counter[0], 1u)] = i;
 }
@@ -34,7 +23,7 @@ fn flip_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     if i >= params.count {
         return;
     }
-    let y = start_state(i);
+    let y = grid_start(params, i);
     let p = pendulum_from(y);
     states[2u * i] = p.y;
     states[2u * i + 1u] = p.u;

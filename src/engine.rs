@@ -3,9 +3,9 @@
 use crate::cpu;
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::gpu::{FlipTimeKernel, GpuContext};
+use crate::gpu::{FlipTimeKernel, GpuContext, LyapunovKernel};
 use crate::monitor::Monitor;
-use crate::spec::FlipSpec;
+use crate::spec::{FlipSpec, LyapunovSpec};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Backend {
@@ -67,5 +67,27 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, monitor: &Monitor) -> Result<
             Ok((field, info))
         }
         None => Ok((cpu::flip_map(spec, monitor)?, RunInfo::cpu(notice))),
+    }
+}
+
+/// The divergence (FTLE) map of `spec` on the chosen backend.
+pub fn lyapunov_map(
+    spec: &LyapunovSpec,
+    backend: Backend,
+    monitor: &Monitor,
+) -> Result<(Field, RunInfo)> {
+    spec.validate()?;
+    let (ctx, notice) = resolve(backend)?;
+    match ctx {
+        Some(ctx) => {
+            let field = LyapunovKernel::new(&ctx, spec.method).run(&ctx, spec, monitor)?;
+            let info = RunInfo {
+                backend: "gpu",
+                adapter: Some(ctx.adapter_name()),
+                notice,
+            };
+            Ok((field, info))
+        }
+        None => Ok((cpu::ftle_map(spec, monitor)?, RunInfo::cpu(notice))),
     }
 }

@@ -131,6 +131,69 @@ impl FlipSpec {
     }
 }
 
+/// How the divergence of nearby starts is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Tangent (variational) equations alongside the state (Benettin et al.).
+    Tangent,
+    /// A second trajectory started `eps` away (Euclidean in (theta1, omega1, theta2, omega2)),
+    /// pulled back to `eps` at every renormalisation.
+    Twin { eps: f64 },
+}
+
+/// A divergence map: the largest finite-time Lyapunov exponent (1/s) of every start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LyapunovSpec {
+    pub params: Params,
+    pub grid: Grid,
+    pub stepping: Stepping,
+    pub method: Method,
+    /// Renormalisation interval (s), a whole number of steps.
+    pub renorm: f64,
+}
+
+impl LyapunovSpec {
+    /// Steps between renormalisations (the last interval may be shorter).
+    pub fn renorm_steps(&self) -> u32 {
+        ((self.renorm / self.stepping.dt).round() as u32).max(1)
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        validate_params(&self.params)?;
+        validate_grid(&self.grid)?;
+        self.validate_run()
+    }
+
+    /// Everything but the grid (a single-point run has none).
+    pub fn validate_run(&self) -> Result<()> {
+        validate_params(&self.params)?;
+        validate_stepping(&self.stepping)?;
+        let k = self.renorm / self.stepping.dt;
+        if !(self.renorm.is_finite() && self.renorm > 0.0)
+            || k.round() < 1.0
+            || (k - k.round()).abs() > 1e-9 * k
+            || self.renorm > self.stepping.t_max
+        {
+            return Err(Error::invalid(
+                "--renorm",
+                format!(
+                    "{} s must be a whole multiple of --dt {} s and at most --t-max {} s",
+                    self.renorm, self.stepping.dt, self.stepping.t_max
+                ),
+            ));
+        }
+        if let Method::Twin { eps } = self.method
+            && !(eps.is_finite() && eps > 0.0 && eps <= 0.1)
+        {
+            return Err(Error::invalid(
+                "--eps",
+                format!("{eps} must be in (0, 0.1]: the twin must stay in the linear regime"),
+            ));
+        }
+        Ok(())
+    }
+}
+
 fn finite_positive(flag: &'static str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())

@@ -53,7 +53,8 @@ macro_rules! rust_offsets {
 fn params_struct_matches_its_rust_mirror() {
     let rust = rust_offsets!(GpuParams;
         m1, m2, l1, l2, g, dt, theta1_min, theta1_step, theta2_max, theta2_step, omega1, omega2,
-        no_flip_energy, width, rows, row0, step0, steps, early_exit, count, _pad0, _pad1, _pad2, _pad3);
+        no_flip_energy, width, rows, row0, step0, steps, early_exit, count, renorm_steps, total_steps,
+        twin_eps, _pad0);
     for (name, source) in all_shaders() {
         let (wgsl, span) = wgsl_struct(&module(name, &source), "Params");
         assert_eq!(

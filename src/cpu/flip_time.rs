@@ -2,9 +2,7 @@
 
 use std::f64::consts::PI;
 
-use rayon::prelude::*;
-
-use super::{hermite_crossing, rk4_step};
+use super::{hermite_crossing, map_pixels, rk4_step};
 use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
@@ -61,22 +59,7 @@ pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool
 
 /// The flip-time map of `spec` (s, +inf = never flipped), rows in parallel.
 pub fn flip_map(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-    let grid = spec.grid;
-    let mut field = Field::new(grid.width, grid.height, f32::INFINITY);
-    monitor.start("cpu", grid.height as u64);
-    field
-        .data
-        .par_chunks_mut(grid.width as usize)
-        .enumerate()
-        .try_for_each(|(row, out)| {
-            monitor.check()?;
-            for (col, t) in out.iter_mut().enumerate() {
-                let start = grid.start(col as u32, row as u32);
-                *t = flip_time(&spec.params, start, &spec.stepping, spec.early_exit) as f32;
-            }
-            monitor.advance(1);
-            Ok::<(), crate::error::Error>(())
-        })?;
-    monitor.finish();
-    Ok(field)
+    map_pixels(&spec.grid, monitor, |start| {
+        flip_time(&spec.params, start, &spec.stepping, spec.early_exit) as f32
+    })
 }

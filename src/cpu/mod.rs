@@ -3,12 +3,21 @@
 //! classic RK4, rayon over pixels. Also the backend for machines without a GPU.
 
 mod flip_time;
+mod lyapunov;
 
 pub use flip_time::{flip_map, flip_time};
+pub use lyapunov::{Convergence, ftle, ftle_map, lyapunov_spectrum};
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Matrix4, RealField, Vector2, Vector4};
+use num_dual::DualSVec64;
 
+use rayon::prelude::*;
+
+use crate::error::Result;
+use crate::field::Field;
 use crate::model::{Params, State};
+use crate::monitor::Monitor;
+use crate::spec::Grid;
 
 /// Angular accelerations (rad/s^2) from the Lagrange equations M(q) q'' = f(q, q'):
 ///
@@ -17,37 +26,57 @@ use crate::model::{Params, State};
 /// [ m2 l1 l2 c    m2 l2^2    ] [a2] = [  m2 l1 l2 s omega1^2 - m2 g l2 sin theta2 ]
 /// ```
 /// with s, c = sin, cos (theta1 - theta2). The matrix is positive definite (det =
-/// m2 l1^2 l2^2 (m1 + m2 sin^2 D) > 0), so the solve never fails.
-pub fn accelerations(p: &Params, s: &State) -> (f64, f64) {
+/// m2 l1^2 l2^2 (m1 + m2 sin^2 D) > 0), so the solve never fails. Generic over the scalar so
+/// that dual numbers (num-dual) differentiate this very solve for the Jacobian.
+pub fn accelerations_of<T: RealField + Copy>(p: &Params, y: &[T; 4]) -> [T; 2] {
+    let k = |x: f64| -> T { nalgebra::convert(x) };
+    let [theta1, omega1, theta2, omega2] = *y;
     let m = p.total_mass();
-    let (sd, cd) = (s.theta1 - s.theta2).sin_cos();
-    let coupling = p.m2 * p.l1 * p.l2;
+    let d = theta1 - theta2;
+    let (sd, cd) = (d.sin(), d.cos());
+    let coupling = k(p.m2 * p.l1 * p.l2);
     let mass = Matrix2::new(
-        m * p.l1 * p.l1,
+        k(m * p.l1 * p.l1),
         coupling * cd,
         coupling * cd,
-        p.m2 * p.l2 * p.l2,
+        k(p.m2 * p.l2 * p.l2),
     );
     let force = Vector2::new(
-        -coupling * sd * s.omega2 * s.omega2 - m * p.g * p.l1 * s.theta1.sin(),
-        coupling * sd * s.omega1 * s.omega1 - p.m2 * p.g * p.l2 * s.theta2.sin(),
+        -coupling * sd * omega2 * omega2 - k(m * p.g * p.l1) * theta1.sin(),
+        coupling * sd * omega1 * omega1 - k(p.m2 * p.g * p.l2) * theta2.sin(),
     );
     let a = mass
         .cholesky()
         .expect("the mass matrix is positive definite")
         .solve(&force);
-    (a[0], a[1])
+    [a[0], a[1]]
+}
+
+/// Angular accelerations (rad/s^2) at `s`; see [`accelerations_of`].
+pub fn accelerations(p: &Params, s: &State) -> (f64, f64) {
+    let [a1, a2] = accelerations_of(p, &s.to_array());
+    (a1, a2)
+}
+
+/// Time derivative of the state, generic over the scalar.
+pub fn rate_of<T: RealField + Copy>(p: &Params, y: &[T; 4]) -> [T; 4] {
+    let [a1, a2] = accelerations_of(p, y);
+    [y[1], a1, y[3], a2]
 }
 
 /// Time derivative of the state.
 pub fn derivative(p: &Params, s: &State) -> State {
-    let (a1, a2) = accelerations(p, s);
-    State {
-        theta1: s.omega1,
-        omega1: a1,
-        theta2: s.omega2,
-        omega2: a2,
-    }
+    State::from_array(rate_of(p, &s.to_array()))
+}
+
+/// Jacobian d(rate)/d(state) at `s`, by forward-mode differentiation of [`rate_of`].
+pub fn jacobian(p: &Params, s: &State) -> Matrix4<f64> {
+    let x = Vector4::from(s.to_array());
+    let (_, jac) = num_dual::jacobian(
+        |x: Vector4<DualSVec64<4>>| Vector4::from(rate_of(p, &[x[0], x[1], x[2], x[3]])),
+        &x,
+    );
+    jac
 }
 
 fn axpy(y: &State, h: f64, k: &State) -> State {
@@ -84,6 +113,31 @@ pub fn trajectory(p: &Params, start: State, dt: f64, steps: u32) -> Vec<State> {
         out.push(y);
     }
     out
+}
+
+/// A map over `grid`: `value(start)` for every pixel, rows in parallel on all cores, with
+/// progress and interruption.
+pub fn map_pixels(
+    grid: &Grid,
+    monitor: &Monitor,
+    value: impl Fn(State) -> f32 + Sync,
+) -> Result<Field> {
+    let mut field = Field::new(grid.width, grid.height, 0.0);
+    monitor.start("cpu", grid.height as u64);
+    field
+        .data
+        .par_chunks_mut(grid.width as usize)
+        .enumerate()
+        .try_for_each(|(row, out)| {
+            monitor.check()?;
+            for (col, v) in out.iter_mut().enumerate() {
+                *v = value(grid.start(col as u32, row as u32));
+            }
+            monitor.advance(1);
+            Ok::<(), crate::error::Error>(())
+        })?;
+    monitor.finish();
+    Ok(field)
 }
 
 /// Where inside a step of length `h` an angle following the cubic Hermite interpolant of the

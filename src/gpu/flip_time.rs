@@ -2,7 +2,11 @@
 //! loop into dispatches of bounded work, and keeps the still-active pixels in a dense list.
 
 use super::context::{GpuContext, map_read, read_buffer};
-use super::layout::{FLIP_TIME_WGSL, GpuParams, NEVER, WORKGROUP_SIZE, shader_source};
+use super::layout::{FLIP_TIME_WGSL, GpuParams, NEVER};
+use super::pipeline::{
+    bind_group, compute_pipeline, layouts, params_buffer, record_dispatch, shader_module,
+    storage_buffer,
+};
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
@@ -21,39 +25,6 @@ pub struct FlipTimeKernel {
     layout: wgpu::BindGroupLayout,
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// Workgroup counts (x, y) covering `invocations`, within the 65535-per-dimension limit.
-pub(crate) fn workgroups(invocations: u32) -> (u32, u32) {
-    let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-    let x = groups.min(65535);
-    (x, groups.div_ceil(x))
-}
-
 struct Buffers {
     params: wgpu::Buffer,
     // Kept with the bind groups that use it.
@@ -68,68 +39,24 @@ struct Buffers {
 
 impl FlipTimeKernel {
     pub fn new(ctx: &GpuContext) -> Self {
-        let device = &ctx.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("flip_time.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(shader_source(FLIP_TIME_WGSL).into()),
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("flip_time"),
-            entries: &[
-                uniform_entry(0),
-                storage_entry(1, false),
-                storage_entry(2, false),
-                storage_entry(3, true),
-                storage_entry(4, false),
-                storage_entry(5, false),
-            ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("flip_time"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let module = shader_module(ctx, "flip_time.wgsl", FLIP_TIME_WGSL);
+        let (layout, pipeline_layout) =
+            layouts(ctx, "flip_time", &[false, false, true, false, false]);
         FlipTimeKernel {
-            init: pipeline("flip_init"),
-            advance: pipeline("flip_time"),
+            init: compute_pipeline(ctx, &module, Some(&pipeline_layout), "flip_init"),
+            advance: compute_pipeline(ctx, &module, Some(&pipeline_layout), "flip_time"),
             layout,
         }
     }
 
     fn buffers(&self, ctx: &GpuContext, capacity: u64) -> Buffers {
-        let device = &ctx.device;
-        let storage = |label, bytes: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("params"),
-            size: std::mem::size_of::<GpuParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let states = storage("states", capacity * 32);
-        let times = storage("times", capacity * 4);
-        let list_a = storage("active list a", capacity * 4);
-        let list_b = storage("active list b", capacity * 4);
-        let counter = storage("counter", 4);
-        let counter_read = device.create_buffer(&wgpu::BufferDescriptor {
+        let params = params_buffer(ctx);
+        let states = storage_buffer(ctx, "states", capacity * 32);
+        let times = storage_buffer(ctx, "times", capacity * 4);
+        let list_a = storage_buffer(ctx, "active list a", capacity * 4);
+        let list_b = storage_buffer(ctx, "active list b", capacity * 4);
+        let counter = storage_buffer(ctx, "counter", 4);
+        let counter_read = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("counter readback"),
             size: 4,
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
@@ -137,19 +64,7 @@ impl FlipTimeKernel {
         });
         let bind = |label, list_in: &wgpu::Buffer, list_out: &wgpu::Buffer| {
             let buffers = [&params, &states, &times, list_in, list_out, &counter];
-            let entries: Vec<_> = buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(label),
-                layout: &self.layout,
-                entries: &entries,
-            })
+            bind_group(ctx, label, &self.layout, &buffers)
         };
         let a_to_b = bind("a -> b", &list_a, &list_b);
         let b_to_a = bind("b -> a", &list_b, &list_a);
@@ -183,16 +98,7 @@ impl FlipTimeKernel {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("flip"),
             });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("flip"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
-            let (x, y) = workgroups(params.count);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        record_dispatch(&mut encoder, pipeline, bind_group, params.count);
         if read_count {
             encoder.copy_buffer_to_buffer(&bufs.counter, 0, &bufs.counter_read, 0, 4);
         }

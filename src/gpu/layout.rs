@@ -37,10 +37,12 @@ pub struct GpuParams {
     pub steps: u32,
     pub early_exit: u32,
     pub count: u32,
+    /// Divergence maps: steps between renormalisations, steps of the whole run, twin
+    /// separation (Euclidean in (theta1, omega1, theta2, omega2)).
+    pub renorm_steps: u32,
+    pub total_steps: u32,
+    pub twin_eps: f32,
     pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
-    pub _pad3: u32,
 }
 
 // A uniform buffer's size must be a multiple of 16 bytes.
@@ -83,11 +85,13 @@ pub fn shader_source(kernel: &str) -> String {
 
 pub const FLIP_TIME_WGSL: &str = include_str!("../../shaders/flip_time.wgsl");
 pub const TRAJECTORY_WGSL: &str = include_str!("../../shaders/trajectory.wgsl");
+pub const LYAPUNOV_WGSL: &str = include_str!("../../shaders/lyapunov.wgsl");
 
 /// Every kernel's full source, named, for validation.
 pub fn all_shaders() -> Vec<(&'static str, String)> {
     vec![
         ("flip_time", shader_source(FLIP_TIME_WGSL)),
         ("trajectory", shader_source(TRAJECTORY_WGSL)),
+        ("lyapunov", shader_source(LYAPUNOV_WGSL)),
     ]
 }

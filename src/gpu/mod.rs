@@ -3,8 +3,11 @@
 mod context;
 mod flip_time;
 pub mod layout;
+mod lyapunov;
+mod pipeline;
 mod trajectory;
 
 pub use context::{GpuContext, list_adapters};
 pub use flip_time::{FlipTimeKernel, STEPS_PER_DISPATCH};
+pub use lyapunov::{LyapunovKernel, jacobians};
 pub use trajectory::trajectory;

@@ -1,9 +1,10 @@
 //! Drives `shaders/trajectory.wgsl`: one pendulum, every state kept.
 
-use wgpu::util::DeviceExt;
-
 use super::context::{GpuContext, read_buffer};
-use super::layout::{GpuParams, TRAJECTORY_WGSL, shader_source};
+use super::layout::{GpuParams, TRAJECTORY_WGSL};
+use super::pipeline::{
+    bind_group, compute_pipeline, dispatch_and_wait, params_buffer, shader_module, storage_buffer,
+};
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 
@@ -22,65 +23,22 @@ pub fn trajectory(
             format!("{steps} steps do not fit one GPU buffer; use --backend cpu or fewer steps"),
         ));
     }
-    let device = &ctx.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("trajectory.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(shader_source(TRAJECTORY_WGSL).into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("trajectory"),
-        layout: None,
-        module: &module,
-        entry_point: Some("trajectory"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let module = shader_module(ctx, "trajectory.wgsl", TRAJECTORY_WGSL);
+    let pipeline = compute_pipeline(ctx, &module, None, "trajectory");
     let params = GpuParams {
         steps,
         ..GpuParams::new(p, dt)
     };
-    let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("params"),
-        contents: bytemuck::bytes_of(&params),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let states = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("trajectory states"),
-        size: bytes,
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let params_buf = params_buffer(ctx);
+    ctx.queue
+        .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
+    let states = storage_buffer(ctx, "trajectory states", bytes);
     let s = start.to_array().map(|v| v as f32);
     ctx.queue.write_buffer(&states, 0, bytemuck::cast_slice(&s));
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("trajectory"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: states.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-        label: Some("trajectory"),
-    });
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("trajectory"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
+    let layout = pipeline.get_bind_group_layout(0);
+    let bind = bind_group(ctx, "trajectory", &layout, &[&params_buf, &states]);
+    // One invocation integrates the whole trajectory.
+    dispatch_and_wait(ctx, &pipeline, &bind, 1)?;
     let out = read_buffer(ctx, &states, bytes)?;
     Ok(out
         .chunks_exact(16)

@@ -1,0 +1,212 @@
+// Divergence map: the largest finite-time Lyapunov exponent of every pixel. Twin of
+// src/cpu/lyapunov.rs; driven by src/gpu/lyapunov.rs. Every pixel integrates the whole run
+// (no early exit); `*_init` sets up a tile, `*_advance` runs steps step0+1 ..= step0+steps and
+// renormalises after every `renorm_steps`-th step and after the last one, adding the log of
+// the stretch to `log_sums`. The host divides by t-max.
+
+@group(0) @binding(0) var<uniform> params: Params;
+// Per pixel i: states[4 i ..= 4 i + 3] = Tangent.y, .u, .v, .du (twin: y, u, y2, u2).
+@group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
+// Sum of the log stretch factors so far.
+@group(0) @binding(2) var<storage, read_write> log_sums: array<f32>;
+
+// The unit tangent vector every run starts from (src/cpu/lyapunov.rs TANGENT_START).
+const TANGENT_START: vec4<f32> = vec4<f32>(0.5, 0.5, 0.5, 0.5);
+
+// Dual numbers as vec2: .x the value, .y the derivative along the tangent vector. Sums and
+// products with plain numbers are the vector operations; these are the rest.
+fn dmul(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(a.x * b.x, fma(a.x, b.y, a.y * b.x));
+}
+
+fn drecip(a: vec2<f32>) -> vec2<f32> {
+    let r = 1.0 / a.x;
+    return vec2<f32>(r, -a.y * r * r);
+}
+
+fn dconst(x: f32) -> vec2<f32> {
+    return vec2<f32>(x, 0.0);
+}
+
+// The state of Pendulum (y, u) and its tangent (v, du) = (d y, d u) along the tangent vector.
+struct Tangent {
+    y: vec4<f32>,
+    u: vec4<f32>,
+    v: vec4<f32>,
+    du: vec4<f32>,
+}
+
+// `rate` of common.wgsl evaluated at dual numbers: the value parts are the rate, the
+// derivative parts are J v (the variational equations), exact up to round-off.
+fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
+    let w1 = vec2<f32>(t.y.y, t.v.y);
+    let w2 = vec2<f32>(t.y.w, t.v.w);
+    let c1 = vec2<f32>(t.u.x, t.du.x);
+    let s1 = vec2<f32>(t.u.y, t.du.y);
+    let c2 = vec2<f32>(t.u.z, t.du.z);
+    let s2 = vec2<f32>(t.u.w, t.du.w);
+    let sd = dmul(s1, c2) - dmul(c1, s2);
+    let cd = dmul(c1, c2) + dmul(s1, s2);
+    let w1sq = dmul(w1, w1);
+    let w2sq = dmul(w2, w2);
+    let inv_den = drecip(dconst(c.m) - c.m2 * dmul(cd, cd));
+    let w1sq_sd = dmul(w1sq, sd);
+    let w2sq_sd = dmul(w2sq, sd);
+    let num1 = -c.m2 * c.l2 * w2sq_sd - c.g * c.m * s1 - c.m2 * c.l1 * dmul(w1sq_sd, cd)
+        + c.g * c.m2 * dmul(s2, cd);
+    let num2 = c.m2 * c.l2 * dmul(w2sq_sd, cd) + c.g * c.m * dmul(s1, cd) + c.m * c.l1 * w1sq_sd
+        - c.g * c.m * s2;
+    let a1 = c.inv_l1 * dmul(num1, inv_den);
+    let a2 = c.inv_l2 * dmul(num2, inv_den);
+    // d/dt (cos, sin) = omega (-sin, cos)
+    let dc1 = -dmul(w1, s1);
+    let ds1 = dmul(w1, c1);
+    let dc2 = -dmul(w2, s2);
+    let ds2 = dmul(w2, c2);
+    return Tangent(
+        vec4<f32>(w1.x, a1.x, w2.x, a2.x),
+        vec4<f32>(dc1.x, ds1.x, dc2.x, ds2.x),
+        vec4<f32>(w1.y, a1.y, w2.y, a2.y),
+        vec4<f32>(dc1.y, ds1.y, dc2.y, ds2.y),
+    );
+}
+
+fn tangent_ahead(t: Tangent, h: f32, k: Tangent) -> Tangent {
+    return Tangent(t.y + h * k.y, t.u + h * k.u, t.v + h * k.v, t.du + h * k.du);
+}
+
+fn tangent_step(c: Coeffs, t: Tangent, dt: f32) -> Tangent {
+    let k1 = tangent_rate(c, t);
+    let k2 = tangent_rate(c, tangent_ahead(t, 0.5 * dt, k1));
+    let k3 = tangent_rate(c, tangent_ahead(t, 0.5 * dt, k2));
+    let k4 = tangent_rate(c, tangent_ahead(t, dt, k3));
+    let w = dt / 6.0;
+    let y = t.y + w * (k1.y + 2.0 * (k2.y + k3.y) + k4.y);
+    let u = t.u + w * (k1.u + 2.0 * (k2.u + k3.u) + k4.u);
+    let v = t.v + w * (k1.v + 2.0 * (k2.v + k3.v) + k4.v);
+    let du = t.du + w * (k1.du + 2.0 * (k2.du + k3.du) + k4.du);
+    // Back onto the unit circles as in rk4_step, u -> u n(u) with n = (3 - |u|^2) / 2, and
+    // the tangent through the same map: du -> du n + u dn, dn = -(u . du) per circle.
+    let n1 = fma(u.x * u.x + u.y * u.y, -0.5, 1.5);
+    let n2 = fma(u.z * u.z + u.w * u.w, -0.5, 1.5);
+    let dn1 = -(u.x * du.x + u.y * du.y);
+    let dn2 = -(u.z * du.z + u.w * du.w);
+    let n = vec4<f32>(n1, n1, n2, n2);
+    let dn = vec4<f32>(dn1, dn1, dn2, dn2);
+    return Tangent(y, u * n, v, du * n + u * dn);
+}
+
+// Renormalise after step k (1-based)?
+fn renormalise_after(k: u32) -> bool {
+    return k % params.renorm_steps == 0u || k == params.total_steps;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn tangent_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let p = pendulum_from(grid_start(params, i));
+    let v = TANGENT_START;
+    // d (cos, sin) = (-sin, cos) d theta
+    let du = vec4<f32>(-p.u.y * v.x, p.u.x * v.x, -p.u.w * v.z, p.u.z * v.z);
+    states[4u * i] = p.y;
+    states[4u * i + 1u] = p.u;
+    states[4u * i + 2u] = v;
+    states[4u * i + 3u] = du;
+    log_sums[i] = 0.0;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let c = coeffs_from(params);
+    let dt = params.dt;
+    var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u], states[4u * i + 3u]);
+    var log_sum = log_sums[i];
+    let k_end = params.step0 + params.steps;
+    for (var k = params.step0 + 1u; k <= k_end; k++) {
+        t = tangent_step(c, t, dt);
+        if renormalise_after(k) {
+            let n = length(t.v);
+            log_sum += log(n);
+            t.v = t.v / n;
+            t.du = t.du / n;
+        }
+    }
+    states[4u * i] = t.y;
+    states[4u * i + 1u] = t.u;
+    states[4u * i + 2u] = t.v;
+    states[4u * i + 3u] = t.du;
+    log_sums[i] = log_sum;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn twin_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let y = grid_start(params, i);
+    let a = pendulum_from(y);
+    let b = pendulum_from(y + params.twin_eps * TANGENT_START);
+    states[4u * i] = a.y;
+    states[4u * i + 1u] = a.u;
+    states[4u * i + 2u] = b.y;
+    states[4u * i + 3u] = b.u;
+    log_sums[i] = 0.0;
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn twin_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let c = coeffs_from(params);
+    let dt = params.dt;
+    let eps = params.twin_eps;
+    var a = Pendulum(states[4u * i], states[4u * i + 1u]);
+    var b = Pendulum(states[4u * i + 2u], states[4u * i + 3u]);
+    var log_sum = log_sums[i];
+    let k_end = params.step0 + params.steps;
+    for (var k = params.step0 + 1u; k <= k_end; k++) {
+        a = rk4_step(c, a, dt);
+        b = rk4_step(c, b, dt);
+        if renormalise_after(k) {
+            let d = b.y - a.y;
+            // In f32 a separation much below ~1e-6 |y| is round-off: that is why the tangent
+            // method is the default. max() keeps a collapsed twin finite.
+            let n = max(length(d), 1e-30);
+            log_sum += log(n / eps);
+            b = pendulum_from(a.y + d * (eps / n));
+        }
+    }
+    states[4u * i] = a.y;
+    states[4u * i + 1u] = a.u;
+    states[4u * i + 2u] = b.y;
+    states[4u * i + 3u] = b.u;
+    log_sums[i] = log_sum;
+}
+
+// For the tests: the Jacobian d(rate)/d(theta1, omega1, theta2, omega2) at states[4 i] (read
+// as y), written as its columns J e_j to states[4 i + j], from the same dual-number rate.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn jacobian_columns(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let p = pendulum_from(states[4u * i]);
+    let c = coeffs_from(params);
+    for (var j = 0u; j < 4u; j++) {
+        var v = vec4<f32>();
+        v[j] = 1.0;
+        let du = vec4<f32>(-p.u.y * v.x, p.u.x * v.x, -p.u.w * v.z, p.u.z * v.z);
+        states[4u * i + j] = tangent_rate(c, Tangent(p.y, p.u, v, du)).v;
+    }
+}

@@ -1,0 +1,154 @@
+//! The wgpu boilerplate every kernel shares: modules, pipelines, bindings, one dispatch.
+
+use super::context::GpuContext;
+use super::layout::{WORKGROUP_SIZE, shader_source};
+use crate::error::Result;
+
+pub fn shader_module(ctx: &GpuContext, label: &str, kernel: &str) -> wgpu::ShaderModule {
+    ctx.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(shader_source(kernel).into()),
+        })
+}
+
+/// A compute pipeline for `entry`; `layout` None derives the layout from the shader.
+pub fn compute_pipeline(
+    ctx: &GpuContext,
+    module: &wgpu::ShaderModule,
+    layout: Option<&wgpu::PipelineLayout>,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    ctx.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout,
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+}
+
+/// A bind group layout of one uniform (binding 0) and storage buffers (1, 2, ...), each
+/// read-only or not, and the pipeline layout holding it.
+pub fn layouts(
+    ctx: &GpuContext,
+    label: &str,
+    storage_read_only: &[bool],
+) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
+    for (i, &read_only) in storage_read_only.iter().enumerate() {
+        entries.push(entry(
+            i as u32 + 1,
+            wgpu::BufferBindingType::Storage { read_only },
+        ));
+    }
+    let group = ctx
+        .device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &entries,
+        });
+    let pipeline = ctx
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&group)],
+            immediate_size: 0,
+        });
+    (group, pipeline)
+}
+
+/// A bind group of whole buffers at bindings 0, 1, 2, ...
+pub fn bind_group(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// A storage buffer that can be copied to and from.
+pub fn storage_buffer(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A uniform buffer for the kernels' `Params`.
+pub fn params_buffer(ctx: &GpuContext) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("params"),
+        size: std::mem::size_of::<super::layout::GpuParams>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// Workgroup counts (x, y) covering `invocations`, within the 65535-per-dimension limit.
+pub fn workgroups(invocations: u32) -> (u32, u32) {
+    let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
+    let x = groups.min(65535);
+    (x, groups.div_ceil(x))
+}
+
+/// Records one dispatch of `invocations` invocations of `pipeline` into `encoder`.
+pub fn record_dispatch(
+    encoder: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::ComputePipeline,
+    bind_group: &wgpu::BindGroup,
+    invocations: u32,
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: None,
+        timestamp_writes: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind_group, &[]);
+    let (x, y) = workgroups(invocations);
+    pass.dispatch_workgroups(x, y, 1);
+}
+
+/// Submits one dispatch and waits for it.
+pub fn dispatch_and_wait(
+    ctx: &GpuContext,
+    pipeline: &wgpu::ComputePipeline,
+    bind_group: &wgpu::BindGroup,
+    invocations: u32,
+) -> Result<()> {
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    record_dispatch(&mut encoder, pipeline, bind_group, invocations);
+    ctx.queue.submit([encoder.finish()]);
+    ctx.wait()
+}

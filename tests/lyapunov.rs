@@ -1,0 +1,320 @@
+//! Divergence maps: the FTLE by the tangent and twin methods on the CPU (f64), the Jacobian
+//! against Liouville's theorem, and the GPU (f32, lavapipe in CI) against the CPU.
+
+mod common;
+
+use chaoscope::cpu;
+use chaoscope::field::Field;
+use chaoscope::gpu::{self, LyapunovKernel};
+use chaoscope::model::{Params, State};
+use chaoscope::monitor::Monitor;
+use chaoscope::spec::{Grid, LyapunovSpec, Method, Stepping};
+
+/// FTLE (1/s) above which a pixel counts as chaotic at t-max = 20 s. A regular
+/// (quasi-periodic) orbit's tangent grows at most linearly, |v(t)| <= 1 + K t with K the
+/// frequency shear (<~ 10 /s here), so its FTLE is <= ln(1 + K t) / t = 0.27 /s at 20 s;
+/// chaotic pixels average ~1.1 /s.
+const CHAOTIC: f32 = 0.5;
+
+const CHAOTIC_STARTS: [(f64, f64); 4] = [
+    (std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2),
+    (2.0, 1.0),
+    (3.0, 0.0),
+    (1.0, -2.5),
+];
+
+fn spec(n: u32, t_max: f64, dt: f64, method: Method) -> LyapunovSpec {
+    LyapunovSpec {
+        params: Params::default(),
+        grid: Grid::square(n),
+        stepping: Stepping { dt, t_max },
+        method,
+        renorm: 0.1,
+    }
+}
+
+/// ln det M(q) up to a constant: det M = m2 l1^2 l2^2 (m1 + m2 sin^2 (theta1 - theta2)).
+fn log_det_mass(p: &Params, s: &State) -> f64 {
+    (p.m1 + p.m2 * (s.theta1 - s.theta2).sin().powi(2)).ln()
+}
+
+#[test]
+fn tangent_and_twin_methods_agree_on_chaotic_starts() {
+    for (a, b) in CHAOTIC_STARTS {
+        let start = State::at_rest(a, b);
+        let tangent = cpu::ftle(&spec(4, 20.0, 0.01, Method::Tangent), start).last();
+        let twin = cpu::ftle(&spec(4, 20.0, 0.01, Method::Twin { eps: 1e-8 }), start).last();
+        assert!(
+            tangent > 0.5,
+            "({a}, {b}) should be chaotic, FTLE {tangent}"
+        );
+        // The twin differs by its nonlinearity (eps e^(lambda tau) ~ 1e-8 relative per
+        // renormalisation) and by f64 cancellation in the 1e-8 separation (1e-16 / 1e-8);
+        // over 200 renormalisations that is <~ 1e-5 relative (measured <= 4e-6).
+        assert!(
+            (tangent - twin).abs() <= 1e-4 * tangent,
+            "({a}, {b}): tangent {tangent}, twin {twin}"
+        );
+    }
+}
+
+#[test]
+fn the_tangent_result_does_not_depend_on_the_renormalisation_interval() {
+    // The tangent equations are linear, so renormalising only rescales: same result up to
+    // round-off, whatever the interval.
+    let start = State::at_rest(2.0, 1.0);
+    let often = cpu::ftle(&spec(4, 20.0, 0.01, Method::Tangent), start).last();
+    let rarely = cpu::ftle(
+        &LyapunovSpec {
+            renorm: 2.0,
+            ..spec(4, 20.0, 0.01, Method::Tangent)
+        },
+        start,
+    );
+    assert_eq!(rarely.t.len(), 10);
+    assert!(
+        (often - rarely.last()).abs() < 1e-9,
+        "{often} vs {}",
+        rarely.last()
+    );
+}
+
+#[test]
+fn small_angle_ftle_goes_to_zero() {
+    for (a, b) in [(0.1, 0.1), (0.2, -0.15), (-0.3, 0.1)] {
+        let start = State::at_rest(a, b);
+        let at = |t| cpu::ftle(&spec(4, t, 0.01, Method::Tangent), start).last();
+        let (short, long) = (at(10.0), at(100.0));
+        // Regular motion: |v| grows at most linearly, so FTLE <= ln(1 + K t) / t -> 0; at
+        // 100 s with K <~ 1 /s for these small oscillations that is <= 0.046 /s.
+        assert!(long.abs() < 0.046, "({a}, {b}): FTLE(100 s) = {long}");
+        assert!(long.abs() < short.abs(), "({a}, {b}): {short} -> {long}");
+    }
+}
+
+#[test]
+fn jacobian_trace_is_liouvilles_volume_change() {
+    // In canonical coordinates (q, p) the flow keeps phase volume (trace 0). In (theta, omega)
+    // the volume element carries det M(q), so trace J = -d/dt ln det M(q) exactly.
+    let mut rng = fastrand::Rng::with_seed(3);
+    for _ in 0..1000 {
+        let p = Params {
+            m1: 0.1 + 3.0 * rng.f64(),
+            m2: 0.1 + 3.0 * rng.f64(),
+            l1: 0.1 + 3.0 * rng.f64(),
+            l2: 0.1 + 3.0 * rng.f64(),
+            g: 1.0 + 20.0 * rng.f64(),
+        };
+        let s = State {
+            theta1: 10.0 * (rng.f64() - 0.5),
+            omega1: 20.0 * (rng.f64() - 0.5),
+            theta2: 10.0 * (rng.f64() - 0.5),
+            omega2: 20.0 * (rng.f64() - 0.5),
+        };
+        let j = cpu::jacobian(&p, &s);
+        let d = s.theta1 - s.theta2;
+        let expected = -2.0 * p.m2 * d.sin() * d.cos() * (s.omega1 - s.omega2)
+            / (p.m1 + p.m2 * d.sin().powi(2));
+        let scale = 1.0 + j.abs().max();
+        assert!(
+            (j.trace() - expected).abs() < 1e-12 * scale,
+            "trace {} vs {expected} at {s:?}",
+            j.trace()
+        );
+    }
+}
+
+#[test]
+fn the_four_exponents_sum_to_the_volume_change_and_so_to_zero() {
+    let p = Params::default();
+    for (a, b) in CHAOTIC_STARTS {
+        let start = State::at_rest(a, b);
+        let t = 20.0;
+        let s = spec(4, t, 0.01, Method::Tangent);
+        let sum: f64 = cpu::lyapunov_spectrum(&s, start).iter().sum();
+        let end = *cpu::trajectory(&p, start, 0.01, s.stepping.steps())
+            .last()
+            .unwrap();
+        let volume = log_det_mass(&p, &start) - log_det_mass(&p, &end);
+        // RK4 keeps volume only up to its truncation error: measured <= 2e-4 over 20 s at
+        // dt = 0.01, and 20-30x less at dt = 0.005 (the O(dt^4) of the method).
+        assert!(
+            (sum * t - volume).abs() < 1e-3,
+            "({a}, {b}): sum x t = {}, ln det M ratio = {volume}",
+            sum * t
+        );
+        // det M lies between m2 l1^2 l2^2 m1 and that times (1 + m2 / m1): the sum of the
+        // exponents is bounded by ln 2 / t, i.e. it goes to zero.
+        assert!(sum.abs() < 2f64.ln() / t + 1e-3 / t, "sum {sum}");
+    }
+}
+
+#[test]
+fn gpu_jacobian_matches_the_cpu_at_random_states() {
+    let Some(ctx) = common::gpu() else { return };
+    let p = Params {
+        m1: 1.3,
+        m2: 0.7,
+        l1: 0.9,
+        l2: 1.2,
+        g: 9.81,
+    };
+    let mut rng = fastrand::Rng::with_seed(11);
+    let states: Vec<State> = (0..500)
+        .map(|_| State {
+            theta1: 6.0 * (rng.f64() - 0.5),
+            omega1: 16.0 * (rng.f64() - 0.5),
+            theta2: 6.0 * (rng.f64() - 0.5),
+            omega2: 16.0 * (rng.f64() - 0.5),
+        })
+        .collect();
+    let gpu_j = gpu::jacobians(&ctx, &p, &states).unwrap();
+    for (s, g) in states.iter().zip(&gpu_j) {
+        let c = cpu::jacobian(&p, s);
+        let scale = 1.0 + c.abs().max();
+        for r in 0..4 {
+            for k in 0..4 {
+                // f32 evaluation of ~30 operations, each rounding by 2^-24 relative, on
+                // terms up to the matrix scale: a few 1e-6 of it.
+                assert!(
+                    (g[r][k] - c[(r, k)]).abs() < 2e-5 * scale,
+                    "J[{r}][{k}] gpu {} cpu {} at {s:?}",
+                    g[r][k],
+                    c[(r, k)]
+                );
+            }
+        }
+    }
+}
+
+fn gpu_map(ctx: &gpu::GpuContext, s: &LyapunovSpec) -> Field {
+    LyapunovKernel::new(ctx, s.method)
+        .run(ctx, s, &Monitor::hidden())
+        .unwrap()
+}
+
+/// Pixels whose 3x3 neighbourhood on the reference map is all clearly regular.
+fn regular_mask(reference: &Field, below: f32) -> Vec<bool> {
+    let (w, h) = (reference.width as i64, reference.height as i64);
+    let mut mask = vec![true; reference.data.len()];
+    for row in 0..h {
+        for col in 0..w {
+            for dr in -1..=1 {
+                for dc in -1..=1 {
+                    let (r, c) = ((row + dr).clamp(0, h - 1), (col + dc).clamp(0, w - 1));
+                    if reference.get(c as u32, r as u32) >= below {
+                        mask[(row * w + col) as usize] = false;
+                    }
+                }
+            }
+        }
+    }
+    mask
+}
+
+fn quantile(values: &mut [f32], q: f64) -> f32 {
+    values.sort_by(f32::total_cmp);
+    values[((values.len() - 1) as f64 * q).round() as usize]
+}
+
+#[test]
+fn gpu_and_cpu_ftle_maps_agree() {
+    let Some(ctx) = common::gpu() else { return };
+    let s = spec(128, 20.0, 0.01, Method::Tangent);
+    let g = gpu_map(&ctx, &s);
+    let c = cpu::ftle_map(&s, &Monitor::hidden()).unwrap();
+
+    let same_class = g
+        .data
+        .iter()
+        .zip(&c.data)
+        .filter(|(a, b)| (**a > CHAOTIC) == (**b > CHAOTIC))
+        .count() as f64
+        / c.data.len() as f64;
+    assert!(same_class >= 0.97, "classification agrees on {same_class}");
+
+    // Regular region: f32 round-off grows only linearly there (~1e-7 per step, 2000 steps),
+    // so the log stretch over 20 s agrees to ~1e-4 /s (measured 1.2e-4).
+    let mask = regular_mask(&c, 0.2);
+    let regular: Vec<f32> = g
+        .data
+        .iter()
+        .zip(&c.data)
+        .zip(&mask)
+        .filter(|(_, m)| **m)
+        .map(|((a, b), _)| (a - b).abs())
+        .collect();
+    assert!(regular.len() > 2000, "{} regular pixels", regular.len());
+    let worst = regular.iter().copied().fold(0.0, f32::max);
+    eprintln!("regular: {} px, worst |gpu - cpu| {worst}", regular.len());
+    assert!(worst < 1e-3, "worst regular difference {worst} /s");
+
+    // Chaotic region: trajectories part after a few Lyapunov times, so compare distributions.
+    let (mut gc, mut cc): (Vec<f32>, Vec<f32>) = g
+        .data
+        .iter()
+        .zip(&c.data)
+        .filter(|(_, b)| **b > CHAOTIC)
+        .map(|(a, b)| (*a, *b))
+        .unzip();
+    let mean = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64;
+    let (mg, mc) = (mean(&gc), mean(&cc));
+    eprintln!("chaotic: {} px, mean gpu {mg} cpu {mc}", cc.len());
+    // Means over ~10 000 pixels of a spread of ~0.3 /s: sampling noise is ~0.003 /s.
+    assert!(
+        (mg - mc).abs() < 0.02 * mc,
+        "chaotic means gpu {mg} cpu {mc}"
+    );
+    for q in [0.1, 0.5, 0.9] {
+        let (a, b) = (quantile(&mut gc, q), quantile(&mut cc, q));
+        assert!((a - b).abs() < 0.05, "quantile {q}: gpu {a} cpu {b}");
+    }
+}
+
+#[test]
+fn f32_exponents_do_not_saturate_over_50_s() {
+    let Some(ctx) = common::gpu() else { return };
+    let s = spec(64, 50.0, 0.01, Method::Tangent);
+    let g = gpu_map(&ctx, &s);
+    let c = cpu::ftle_map(&s, &Monitor::hidden()).unwrap();
+    let pairs: Vec<(f64, f64)> = g
+        .data
+        .iter()
+        .zip(&c.data)
+        .filter(|(_, b)| **b > CHAOTIC)
+        .map(|(a, b)| (*a as f64, *b as f64))
+        .collect();
+    assert!(pairs.len() > 1000, "{} chaotic pixels", pairs.len());
+    let mg = pairs.iter().map(|p| p.0).sum::<f64>() / pairs.len() as f64;
+    let mc = pairs.iter().map(|p| p.1).sum::<f64>() / pairs.len() as f64;
+    eprintln!("50 s: {} chaotic px, mean gpu {mg} cpu {mc}", pairs.len());
+    // The bound: on average within 10 %. A tangent vector saturating f32 (or a twin
+    // lost in round-off) would drag the mean far down.
+    assert!((mg - mc).abs() < 0.1 * mc, "gpu {mg} vs cpu {mc}");
+}
+
+#[test]
+fn tiled_lyapunov_map_equals_untiled() {
+    let Some(ctx) = common::gpu() else { return };
+    let s = spec(48, 5.0, 0.01, Method::Tangent);
+    let kernel = LyapunovKernel::new(&ctx, s.method);
+    let whole = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
+    let tiled = kernel.run_tiled(&ctx, &s, &Monitor::hidden(), 100).unwrap();
+    assert_eq!(whole.data, tiled.data);
+}
+
+#[test]
+fn gpu_twin_method_runs_and_is_coarser_than_tangent_in_f32() {
+    let Some(ctx) = common::gpu() else { return };
+    let tangent = gpu_map(&ctx, &spec(32, 20.0, 0.01, Method::Tangent));
+    let twin = gpu_map(&ctx, &spec(32, 20.0, 0.01, Method::Twin { eps: 1e-3 }));
+    // A 1e-3 twin is resolvable in f32 and sees the same chaos: the classes mostly agree.
+    let same = tangent
+        .data
+        .iter()
+        .zip(&twin.data)
+        .filter(|(a, b)| (**a > CHAOTIC) == (**b > CHAOTIC))
+        .count() as f64
+        / tangent.data.len() as f64;
+    assert!(same > 0.9, "tangent and 1e-3 twin classify alike on {same}");
+}
