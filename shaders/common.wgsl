@@ -119,15 +119,20 @@ fn advanced(p: Pendulum, h: f32, r: Rate) -> Pendulum {
     return Pendulum(p.y + h * r.dy, p.u + h * r.du);
 }
 
-// Classic fourth-order Runge-Kutta.
+// Classic fourth-order Runge-Kutta, the stages summed as they come (k1 + 2 k2 + 2 k3 + k4 in
+// the CPU's order): fewer values stay alive at once, which lavapipe's 16 vector registers feel.
 fn rk4_step(c: Coeffs, p: Pendulum, dt: f32) -> Pendulum {
     let k1 = rate(c, p);
+    var sum = k1;
     let k2 = rate(c, advanced(p, 0.5 * dt, k1));
+    sum = Rate(fma(vec4<f32>(2.0), k2.dy, sum.dy), fma(vec4<f32>(2.0), k2.du, sum.du));
     let k3 = rate(c, advanced(p, 0.5 * dt, k2));
+    sum = Rate(fma(vec4<f32>(2.0), k3.dy, sum.dy), fma(vec4<f32>(2.0), k3.du, sum.du));
     let k4 = rate(c, advanced(p, dt, k3));
-    let w = dt / 6.0;
-    let y = p.y + w * (k1.dy + 2.0 * (k2.dy + k3.dy) + k4.dy);
-    let u = p.u + w * (k1.du + 2.0 * (k2.du + k3.du) + k4.du);
+    sum = Rate(sum.dy + k4.dy, sum.du + k4.du);
+    let next = advanced(p, dt / 6.0, sum);
+    let y = next.y;
+    let u = next.u;
     // Back onto the unit circles: 1/sqrt(r2) = (3 - r2) / 2 + O((r2 - 1)^2), and a step moves
     // r2 off 1 by O(dt^5), so the first-order form is exact in f32.
     let n1 = fma(u.x * u.x + u.y * u.y, -0.5, 1.5);

@@ -5,7 +5,7 @@
 // the stretch to `log_sums`. The host divides by t-max.
 
 @group(0) @binding(0) var<uniform> params: Params;
-// Per pixel i: states[4 i ..= 4 i + 3] = Tangent.y, .u, .v, .du (twin: y, u, y2, u2).
+// Per pixel i: states[4 i ..= 4 i + 2] = Tangent.y, .u, .v (twin: 4 i ..= 4 i + 3 = y, u, y2, u2).
 @group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
 // Sum of the log stretch factors so far.
 @group(0) @binding(2) var<storage, read_write> log_sums: array<f32>;
@@ -28,12 +28,13 @@ fn dconst(x: f32) -> vec2<f32> {
     return vec2<f32>(x, 0.0);
 }
 
-// The state of Pendulum (y, u) and its tangent (v, du) = (d y, d u) along the tangent vector.
+// The state of Pendulum (y, u) and a tangent vector v = (d theta1, d omega1, d theta2,
+// d omega2) of the four-dimensional system. The tangents of the carried cos and sin follow
+// from v (d cos = -sin d theta, d sin = cos d theta), so they are not integrated.
 struct Tangent {
     y: vec4<f32>,
     u: vec4<f32>,
     v: vec4<f32>,
-    du: vec4<f32>,
 }
 
 // `rate` of common.wgsl evaluated at dual numbers: the value parts are the rate, the
@@ -41,10 +42,10 @@ struct Tangent {
 fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
     let w1 = vec2<f32>(t.y.y, t.v.y);
     let w2 = vec2<f32>(t.y.w, t.v.w);
-    let c1 = vec2<f32>(t.u.x, t.du.x);
-    let s1 = vec2<f32>(t.u.y, t.du.y);
-    let c2 = vec2<f32>(t.u.z, t.du.z);
-    let s2 = vec2<f32>(t.u.w, t.du.w);
+    let c1 = vec2<f32>(t.u.x, -t.u.y * t.v.x);
+    let s1 = vec2<f32>(t.u.y, t.u.x * t.v.x);
+    let c2 = vec2<f32>(t.u.z, -t.u.w * t.v.z);
+    let s2 = vec2<f32>(t.u.w, t.u.z * t.v.z);
     let sd = dmul(s1, c2) - dmul(c1, s2);
     let cd = dmul(c1, c2) + dmul(s1, s2);
     let w1sq = dmul(w1, w1);
@@ -58,42 +59,35 @@ fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
         - c.g * c.m * s2;
     let a1 = c.inv_l1 * dmul(num1, inv_den);
     let a2 = c.inv_l2 * dmul(num2, inv_den);
-    // d/dt (cos, sin) = omega (-sin, cos)
-    let dc1 = -dmul(w1, s1);
-    let ds1 = dmul(w1, c1);
-    let dc2 = -dmul(w2, s2);
-    let ds2 = dmul(w2, c2);
     return Tangent(
         vec4<f32>(w1.x, a1.x, w2.x, a2.x),
-        vec4<f32>(dc1.x, ds1.x, dc2.x, ds2.x),
+        // d/dt (cos, sin) = omega (-sin, cos)
+        vec4<f32>(-w1.x * s1.x, w1.x * c1.x, -w2.x * s2.x, w2.x * c2.x),
         vec4<f32>(w1.y, a1.y, w2.y, a2.y),
-        vec4<f32>(dc1.y, ds1.y, dc2.y, ds2.y),
     );
 }
 
 fn tangent_ahead(t: Tangent, h: f32, k: Tangent) -> Tangent {
-    return Tangent(t.y + h * k.y, t.u + h * k.u, t.v + h * k.v, t.du + h * k.du);
+    return Tangent(t.y + h * k.y, t.u + h * k.u, t.v + h * k.v);
 }
 
+// RK4 with the stages summed as they come (k1 + 2 k2 + 2 k3 + k4, in the CPU's order), which
+// keeps fewer values alive at once than summing at the end.
 fn tangent_step(c: Coeffs, t: Tangent, dt: f32) -> Tangent {
     let k1 = tangent_rate(c, t);
+    var sum = k1;
     let k2 = tangent_rate(c, tangent_ahead(t, 0.5 * dt, k1));
+    sum = tangent_ahead(sum, 2.0, k2);
     let k3 = tangent_rate(c, tangent_ahead(t, 0.5 * dt, k2));
+    sum = tangent_ahead(sum, 2.0, k3);
     let k4 = tangent_rate(c, tangent_ahead(t, dt, k3));
-    let w = dt / 6.0;
-    let y = t.y + w * (k1.y + 2.0 * (k2.y + k3.y) + k4.y);
-    let u = t.u + w * (k1.u + 2.0 * (k2.u + k3.u) + k4.u);
-    let v = t.v + w * (k1.v + 2.0 * (k2.v + k3.v) + k4.v);
-    let du = t.du + w * (k1.du + 2.0 * (k2.du + k3.du) + k4.du);
-    // Back onto the unit circles as in rk4_step, u -> u n(u) with n = (3 - |u|^2) / 2, and
-    // the tangent through the same map: du -> du n + u dn, dn = -(u . du) per circle.
+    sum = tangent_ahead(sum, 1.0, k4);
+    let next = tangent_ahead(t, dt / 6.0, sum);
+    // Back onto the unit circles as in rk4_step.
+    let u = next.u;
     let n1 = fma(u.x * u.x + u.y * u.y, -0.5, 1.5);
     let n2 = fma(u.z * u.z + u.w * u.w, -0.5, 1.5);
-    let dn1 = -(u.x * du.x + u.y * du.y);
-    let dn2 = -(u.z * du.z + u.w * du.w);
-    let n = vec4<f32>(n1, n1, n2, n2);
-    let dn = vec4<f32>(dn1, dn1, dn2, dn2);
-    return Tangent(y, u * n, v, du * n + u * dn);
+    return Tangent(next.y, u * vec4<f32>(n1, n1, n2, n2), next.v);
 }
 
 // Renormalise after step k (1-based)?
@@ -108,13 +102,9 @@ fn tangent_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     let p = pendulum_from(grid_start(params, i));
-    let v = TANGENT_START;
-    // d (cos, sin) = (-sin, cos) d theta
-    let du = vec4<f32>(-p.u.y * v.x, p.u.x * v.x, -p.u.w * v.z, p.u.z * v.z);
     states[4u * i] = p.y;
     states[4u * i + 1u] = p.u;
-    states[4u * i + 2u] = v;
-    states[4u * i + 3u] = du;
+    states[4u * i + 2u] = TANGENT_START;
     log_sums[i] = 0.0;
 }
 
@@ -126,7 +116,7 @@ fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     }
     let c = coeffs_from(params);
     let dt = params.dt;
-    var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u], states[4u * i + 3u]);
+    var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u]);
     var log_sum = log_sums[i];
     let k_end = params.step0 + params.steps;
     for (var k = params.step0 + 1u; k <= k_end; k++) {
@@ -135,13 +125,11 @@ fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
             let n = length(t.v);
             log_sum += log(n);
             t.v = t.v / n;
-            t.du = t.du / n;
         }
     }
     states[4u * i] = t.y;
     states[4u * i + 1u] = t.u;
     states[4u * i + 2u] = t.v;
-    states[4u * i + 3u] = t.du;
     log_sums[i] = log_sum;
 }
 
@@ -206,7 +194,6 @@ fn jacobian_columns(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     for (var j = 0u; j < 4u; j++) {
         var v = vec4<f32>();
         v[j] = 1.0;
-        let du = vec4<f32>(-p.u.y * v.x, p.u.x * v.x, -p.u.w * v.z, p.u.z * v.z);
-        states[4u * i + j] = tangent_rate(c, Tangent(p.y, p.u, v, du)).v;
+        states[4u * i + j] = tangent_rate(c, Tangent(p.y, p.u, v)).v;
     }
 }

@@ -14,10 +14,10 @@ use clap::Args;
 use crate::cpu;
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::gpu::{FlipTimeKernel, GpuContext};
+use crate::gpu::{FlipTimeKernel, GpuContext, LyapunovKernel};
 use crate::model::Params;
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, Stepping};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Stepping};
 
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
@@ -92,6 +92,54 @@ fn spec(size: u32, args: &BenchArgs, early_exit: bool) -> FlipSpec {
     }
 }
 
+/// The divergence-map benchmark: the FLIP-512 grid and time, tangent method.
+fn ftle_spec(size: u32, args: &BenchArgs) -> LyapunovSpec {
+    LyapunovSpec {
+        params: Params::default(),
+        grid: Grid::square(size),
+        stepping: Stepping {
+            dt: args.dt,
+            t_max: args.t_max,
+        },
+        method: Method::Tangent,
+        renorm: 0.1,
+    }
+}
+
+/// One FTLE map on the GPU at `size` and on the CPU at half `cpu_size` (scaled), as rows
+/// of mode "ftle": every pixel runs every step, counted as pendulum-steps.
+fn ftle_samples(
+    args: &BenchArgs,
+    ctx: &GpuContext,
+    kernel: &LyapunovKernel,
+    quiet: &Monitor,
+) -> Result<Vec<Sample>> {
+    let mut out = Vec::new();
+    let s = ftle_spec(args.size, args);
+    let t0 = Instant::now();
+    kernel.run(ctx, &s, quiet)?;
+    out.push(Sample {
+        name: format!("chaoscope gpu f32 ({})", ctx.info.name),
+        mode: "ftle",
+        wall_s: t0.elapsed().as_secs_f64(),
+        pendulum_steps: s.grid.pixels() as f64 * s.stepping.steps() as f64,
+    });
+    if !args.no_cpu {
+        let n = (args.cpu_size / 2).max(1);
+        let s = ftle_spec(n, args);
+        let t0 = Instant::now();
+        cpu::ftle_map(&s, quiet)?;
+        let scale = (args.size as f64 / n as f64).powi(2);
+        out.push(Sample {
+            name: format!("chaoscope cpu f64 (n={n})"),
+            mode: "ftle",
+            wall_s: t0.elapsed().as_secs_f64() * scale,
+            pendulum_steps: s.grid.pixels() as f64 * s.stepping.steps() as f64 * scale,
+        });
+    }
+    Ok(out)
+}
+
 fn run_peer(args: &BenchArgs, dir: &PathBuf, peer: &str, full: bool) -> Result<Sample> {
     let (script, arch) = peer
         .split_once(':')
@@ -153,6 +201,8 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     let ctx = GpuContext::new()?;
     let kernel = FlipTimeKernel::new(&ctx);
     kernel.run(&ctx, &spec(32, args, true), &quiet)?; // warm-up: shader compile
+    let lyapunov = LyapunovKernel::new(&ctx, Method::Tangent);
+    lyapunov.run(&ctx, &ftle_spec(32, args), &quiet)?;
     eprintln!("GPU: {}", ctx.adapter_name());
     let mut samples: Vec<Sample> = Vec::new();
     for rep in 0..args.repeat {
@@ -181,6 +231,9 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
                     pendulum_steps: problem_steps(&field, &s)
                         * (args.size as f64 / args.cpu_size as f64).powi(2),
                 });
+            }
+            if !early {
+                samples.extend(ftle_samples(args, &ctx, &lyapunov, &quiet)?);
             }
             if let Some(dir) = &args.peers {
                 for peer in &args.peer {
@@ -213,6 +266,17 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
         let steps = mine[0].pendulum_steps;
         println!("{name:<44} {mode:>6} {wall:>10.3} {:>16.3e}", steps / wall);
         rows.push((name, mode, wall, steps / wall));
+    }
+    let gpu_rate = |mode: &str| {
+        rows.iter()
+            .find(|r| r.0.starts_with("chaoscope gpu") && r.1 == mode)
+            .map(|r| r.3)
+    };
+    if let (Some(full), Some(ftle)) = (gpu_rate("full"), gpu_rate("ftle")) {
+        println!(
+            "ftle: a tangent step (state + variational equations) costs {:.2} plain RK4 steps on the GPU",
+            full / ftle
+        );
     }
     for mode in ["early", "full"] {
         let ours = rows

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::render::{self, FlipColors};
-use crate::spec::{self, FlipSpec, Grid, Range, Stepping};
+use crate::spec::{self, FlipSpec, Grid, LyapunovSpec, Method, Range, Stepping};
 use crate::{cpu, gpu};
 
 #[derive(Parser, Debug)]
@@ -29,6 +29,9 @@ pub struct Cli {
 pub enum Command {
     /// Flip-time map: time until either arm first flips over, for a grid of starts.
     Flip(FlipArgs),
+    /// Divergence map: the largest finite-time Lyapunov exponent (1/s) of every start; with
+    /// single angles (--theta1 A --theta2 B), its convergence over time as CSV `t,ftle`.
+    Lyapunov(LyapunovArgs),
     /// One trajectory as CSV: t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy.
     Trajectory(TrajectoryArgs),
     /// GPU adapters found, the one chosen, its limits and features.
@@ -129,6 +132,71 @@ impl FlipArgs {
     }
 }
 
+/// An angle flag of `lyapunov`: a range of the map, or the single start of a convergence run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Angles {
+    Range(Range),
+    Point(f64),
+}
+
+fn parse_angles(s: &str) -> std::result::Result<Angles, String> {
+    if s.contains(':') {
+        parse_range(s).map(Angles::Range)
+    } else {
+        parse_number(s).map(Angles::Point)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Tangent (variational) equations by dual numbers: works in f32.
+    Tangent,
+    /// A second trajectory --eps away, renormalised back to --eps.
+    Twin,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct LyapunovArgs {
+    /// Grid size: N (square) or WxH, one pendulum per pixel.
+    #[arg(long, default_value = "512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// theta1 range along x, MIN:MAX in rad; or one angle for a single-point convergence run.
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_angles, allow_hyphen_values = true)]
+    pub theta1: Angles,
+    /// theta2 range along y (top = MAX), MIN:MAX in rad; or one angle.
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_angles, allow_hyphen_values = true)]
+    pub theta2: Angles,
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: f64,
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: f64,
+    /// Simulated time (s); the exponent is the mean log stretch rate over [0, t-max].
+    #[arg(long, default_value = "20", value_parser = parse_number, allow_hyphen_values = true)]
+    pub t_max: f64,
+    /// RK4 time step (s).
+    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
+    pub dt: f64,
+    /// Renormalisation interval (s), a multiple of dt.
+    #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
+    pub renorm: f64,
+    #[arg(long, value_enum, default_value = "tangent")]
+    pub method: MethodArg,
+    /// Twin separation (Euclidean in theta1, omega1, theta2, omega2), for --method twin.
+    #[arg(long, default_value = "1e-8", value_parser = parse_number, allow_hyphen_values = true)]
+    pub eps: f64,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// Default: auto for a map, cpu (f64) for a single point.
+    #[arg(long, value_enum)]
+    pub backend: Option<Backend>,
+    /// PNG for a map (default out/lyapunov.png); CSV for a single point (default stdout).
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// Raw exponents (1/s) as float32 .npy, shape (height, width), row 0 = top.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+}
+
 #[derive(Args, Debug, Clone)]
 pub struct TrajectoryArgs {
     /// Initial upper-arm angle (rad).
@@ -209,11 +277,7 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
 /// The command that reproduces a flip map, for the PNG metadata.
 pub fn flip_command_line(spec: &FlipSpec, backend: Backend) -> String {
     let (g, p, s) = (&spec.grid, &spec.params, &spec.stepping);
-    let backend = match backend {
-        Backend::Auto => "auto",
-        Backend::Gpu => "gpu",
-        Backend::Cpu => "cpu",
-    };
+    let backend = backend_name(backend);
     format!(
         "chaoscope flip --size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {} --t-max {} --dt {} --m1 {} --m2 {} --l1 {} --l2 {} --g {} --backend {}{}",
         g.width,
@@ -234,6 +298,56 @@ pub fn flip_command_line(spec: &FlipSpec, backend: Backend) -> String {
         backend,
         if spec.early_exit { "" } else { " --full" }
     )
+}
+
+/// The command that reproduces a divergence map or convergence run.
+pub fn lyapunov_command_line(
+    spec: &LyapunovSpec,
+    point: Option<State>,
+    backend: Backend,
+) -> String {
+    let (g, p, s) = (&spec.grid, &spec.params, &spec.stepping);
+    let where_ = match point {
+        Some(a) => format!(
+            "--theta1 {} --theta2 {} --omega1 {} --omega2 {}",
+            a.theta1, a.theta2, a.omega1, a.omega2
+        ),
+        None => format!(
+            "--size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {}",
+            g.width,
+            g.height,
+            g.theta1.min,
+            g.theta1.max,
+            g.theta2.min,
+            g.theta2.max,
+            g.omega1,
+            g.omega2
+        ),
+    };
+    let method = match spec.method {
+        Method::Tangent => "--method tangent".to_string(),
+        Method::Twin { eps } => format!("--method twin --eps {eps}"),
+    };
+    format!(
+        "chaoscope lyapunov {where_} --t-max {} --dt {} --renorm {} {method} --m1 {} --m2 {} --l1 {} --l2 {} --g {} --backend {}",
+        s.t_max,
+        s.dt,
+        spec.renorm,
+        p.m1,
+        p.m2,
+        p.l1,
+        p.l2,
+        p.g,
+        backend_name(backend)
+    )
+}
+
+fn backend_name(backend: Backend) -> &'static str {
+    match backend {
+        Backend::Auto => "auto",
+        Backend::Gpu => "gpu",
+        Backend::Cpu => "cpu",
+    }
 }
 
 /// PNG text chunks that let an image be reproduced from itself.
@@ -290,6 +404,199 @@ fn flip(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
     Ok(())
 }
 
+fn lyapunov(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
+    let method = match args.method {
+        MethodArg::Tangent => Method::Tangent,
+        MethodArg::Twin => Method::Twin { eps: args.eps },
+    };
+    let (width, height) = args.size;
+    let point = match (args.theta1, args.theta2) {
+        (Angles::Point(a), Angles::Point(b)) => Some((a, b)),
+        (Angles::Range(_), Angles::Range(_)) => None,
+        (Angles::Point(_), Angles::Range(_)) => {
+            return Err(Error::invalid(
+                "--theta2",
+                "must be one angle too when --theta1 is one angle (a single-point run)",
+            ));
+        }
+        (Angles::Range(_), Angles::Point(_)) => {
+            return Err(Error::invalid(
+                "--theta1",
+                "must be one angle too when --theta2 is one angle (a single-point run)",
+            ));
+        }
+    };
+    let range = |a: Angles| match a {
+        Angles::Range(r) => r,
+        Angles::Point(x) => Range {
+            min: x - 1e-3,
+            max: x + 1e-3,
+        },
+    };
+    let spec = LyapunovSpec {
+        params: args.physical.params(),
+        grid: Grid {
+            width,
+            height,
+            theta1: range(args.theta1),
+            theta2: range(args.theta2),
+            omega1: args.omega1,
+            omega2: args.omega2,
+        },
+        stepping: Stepping {
+            dt: args.dt,
+            t_max: args.t_max,
+        },
+        method,
+        renorm: args.renorm,
+    };
+    match point {
+        Some((theta1, theta2)) => {
+            let start = State {
+                theta1,
+                omega1: args.omega1,
+                theta2,
+                omega2: args.omega2,
+            };
+            lyapunov_point(args, &spec, start, monitor)
+        }
+        None => lyapunov_map(args, &spec, monitor),
+    }
+}
+
+fn lyapunov_point(
+    args: &LyapunovArgs,
+    spec: &LyapunovSpec,
+    start: State,
+    monitor: &Monitor,
+) -> Result<()> {
+    spec.validate_run()?;
+    spec::validate_start(&start)?;
+    if let Some(path) = &args.output {
+        check_extension("--output", path, "csv")?;
+    }
+    if args.data.is_some() {
+        return Err(Error::invalid(
+            "--data",
+            "is for maps; a single-point run writes its CSV to --output",
+        ));
+    }
+    let backend = args.backend.unwrap_or(Backend::Cpu);
+    let trace = match engine::resolve(backend)? {
+        (Some(ctx), _) => {
+            let one = LyapunovSpec {
+                grid: Grid {
+                    width: 1,
+                    height: 1,
+                    theta1: Range {
+                        min: start.theta1 - 1e-3,
+                        max: start.theta1 + 1e-3,
+                    },
+                    theta2: Range {
+                        min: start.theta2 - 1e-3,
+                        max: start.theta2 + 1e-3,
+                    },
+                    omega1: start.omega1,
+                    omega2: start.omega2,
+                },
+                ..*spec
+            };
+            twin_notice(spec);
+            gpu::LyapunovKernel::new(&ctx, spec.method).convergence(&ctx, &one, monitor)?
+        }
+        (None, notice) => {
+            if let Some(n) = notice {
+                eprintln!("{n}");
+            }
+            cpu::ftle(spec, start)
+        }
+    };
+    let write = |w: &mut dyn Write| -> Result<()> {
+        writeln!(w, "t,ftle")?;
+        for (t, l) in trace.t.iter().zip(&trace.ftle) {
+            writeln!(w, "{t},{l}")?;
+        }
+        Ok(())
+    };
+    match &args.output {
+        Some(path) => {
+            render::write_atomic(path, |w| write(w))?;
+            eprintln!(
+                "FTLE at {} s: {:.4} /s -> {}",
+                spec.stepping.t_max,
+                trace.last(),
+                path.display()
+            );
+            Ok(())
+        }
+        None => write(&mut std::io::stdout().lock()),
+    }
+}
+
+/// f32 cannot resolve a twin separation much below 1e-6 of the state: say so once.
+fn twin_notice(spec: &LyapunovSpec) {
+    if let Method::Twin { eps } = spec.method
+        && eps < 1e-4
+    {
+        eprintln!(
+            "note: --eps {eps} is close to f32 round-off on the GPU (~1e-7 of the state): the twin reads noise; use --method tangent, a larger --eps, or --backend cpu"
+        );
+    }
+}
+
+fn lyapunov_map(args: &LyapunovArgs, spec: &LyapunovSpec, monitor: &Monitor) -> Result<()> {
+    spec.validate()?;
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/lyapunov.png"));
+    check_extension("--output", &output, "png")?;
+    if let Some(data) = &args.data {
+        check_extension("--data", data, "npy")?;
+    }
+    let backend = args.backend.unwrap_or(Backend::Auto);
+    if backend != Backend::Cpu {
+        twin_notice(spec);
+    }
+    let started = std::time::Instant::now();
+    let (field, info) = engine::lyapunov_map(spec, backend, monitor)?;
+    if let Some(notice) = &info.notice {
+        eprintln!("{notice}");
+    }
+    let range = render::ftle_range(&field);
+    let rgb = render::ftle_colors(&field, range);
+    let mut meta = png_metadata(lyapunov_command_line(spec, None, backend), &info);
+    meta.push((
+        "chaoscope:colour-range".into(),
+        format!(
+            "FTLE {} .. {} 1/s, magma, linear (black = regular)",
+            range.0, range.1
+        ),
+    ));
+    render::write_png(&output, field.width, field.height, &rgb, &meta)?;
+    if let Some(data) = &args.data {
+        render::write_npy(data, &field)?;
+    }
+    let chaotic = field.data.iter().filter(|&&x| x > CHAOTIC_FTLE).count();
+    eprintln!(
+        "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s), colour range {:.2}..{:.2} /s -> {}",
+        field.width,
+        field.height,
+        info.adapter.as_deref().unwrap_or("the CPU"),
+        started.elapsed().as_secs_f64(),
+        100.0 * chaotic as f64 / field.data.len() as f64,
+        spec.stepping.t_max,
+        range.0,
+        range.1,
+        output.display()
+    );
+    Ok(())
+}
+
+/// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
+/// below ln(1 + K t) / t, about 0.27 /s at 20 s (tests/lyapunov.rs).
+pub const CHAOTIC_FTLE: f32 = 0.5;
+
 fn check_extension(flag: &'static str, path: &Path, ext: &str) -> Result<()> {
     match path.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
@@ -329,16 +636,7 @@ fn trajectory(args: &TrajectoryArgs) -> Result<()> {
         theta2: args.theta2,
         omega2: args.omega2,
     };
-    for (flag, v) in [
-        ("--theta1", args.theta1),
-        ("--theta2", args.theta2),
-        ("--omega1", args.omega1),
-        ("--omega2", args.omega2),
-    ] {
-        if !v.is_finite() {
-            return Err(Error::invalid(flag, "must be a finite number"));
-        }
-    }
+    spec::validate_start(&start)?;
     let steps = stepping.steps();
     let states = match engine::resolve(args.backend)? {
         (Some(ctx), _) => gpu::trajectory(&ctx, &params, start, args.dt, steps)?,
@@ -419,6 +717,7 @@ fn info() -> Result<()> {
 pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
     let result = match &cli.command {
         Command::Flip(args) => flip(args, monitor),
+        Command::Lyapunov(args) => lyapunov(args, monitor),
         Command::Trajectory(args) => trajectory(args),
         Command::Info => info(),
         Command::Bench(args) => crate::bench::run(args, monitor),

@@ -228,6 +228,21 @@ pub fn validate_stepping(s: &Stepping) -> Result<()> {
     Ok(())
 }
 
+/// A single start (trajectory, convergence run): every component finite.
+pub fn validate_start(s: &State) -> Result<()> {
+    for (flag, v) in [
+        ("--theta1", s.theta1),
+        ("--theta2", s.theta2),
+        ("--omega1", s.omega1),
+        ("--omega2", s.omega2),
+    ] {
+        if !v.is_finite() {
+            return Err(Error::invalid(flag, "must be a finite number"));
+        }
+    }
+    Ok(())
+}
+
 /// Angles must stay strictly inside (-pi, pi): a start outside has already flipped.
 fn validate_range(flag: &'static str, r: &Range) -> Result<()> {
     use std::f64::consts::PI;

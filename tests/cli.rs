@@ -165,3 +165,148 @@ fn trajectory_csv_has_the_columns_and_reads_back_exactly() {
         .code(2)
         .stderr(predicate::str::contains("--every"));
 }
+
+fn png_text(path: &std::path::Path, key: &str) -> String {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let reader = decoder.read_info().unwrap();
+    reader
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .find(|t| t.keyword == key)
+        .unwrap_or_else(|| panic!("no {key} in the PNG"))
+        .text
+        .clone()
+}
+
+#[test]
+fn lyapunov_map_writes_png_and_npy_on_both_backends() {
+    let dir = tempfile::tempdir().unwrap();
+    let (png, npy) = (dir.path().join("l.png"), dir.path().join("l.npy"));
+    let mut maps = Vec::new();
+    for backend in ["cpu", "gpu"] {
+        if backend == "gpu" && common::gpu().is_none() {
+            continue;
+        }
+        chaoscope()
+            .args([
+                "lyapunov",
+                "--size",
+                "24x16",
+                "--t-max",
+                "5",
+                "--backend",
+                backend,
+            ])
+            .arg("--output")
+            .arg(&png)
+            .arg("--data")
+            .arg(&npy)
+            .assert()
+            .success()
+            .stderr(predicate::str::contains("chaotic"));
+        let (shape, data) = read_npy(&npy);
+        assert_eq!(shape, vec![16, 24], "{backend}: (height, width)");
+        assert!(data.iter().all(|x| x.is_finite()), "{backend}");
+        let command = png_text(&png, "chaoscope:command");
+        assert!(
+            command.contains("chaoscope lyapunov --size 24x16")
+                && command.contains("--method tangent"),
+            "{command}"
+        );
+        assert!(png_text(&png, "chaoscope:colour-range").contains("1/s"));
+        maps.push(data);
+    }
+    // Both backends see the same picture: chaotic corners, regular centre (5 s is short, so
+    // only the gross structure is compared).
+    if let [cpu, gpu] = &maps[..] {
+        let close = cpu
+            .iter()
+            .zip(gpu)
+            .filter(|(a, b)| (*a - *b).abs() < 0.05)
+            .count();
+        assert!(
+            close * 10 >= cpu.len() * 9,
+            "{close} of {} close",
+            cpu.len()
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+#[test]
+fn lyapunov_single_point_writes_the_convergence_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("conv.csv");
+    chaoscope()
+        .args([
+            "lyapunov", "--theta1", "pi/2", "--theta2", "pi/2", "--t-max", "4", "--renorm", "0.5",
+        ])
+        .arg("--output")
+        .arg(&csv)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,ftle"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|l| {
+            let (t, f) = l.split_once(',').unwrap();
+            (t.parse().unwrap(), f.parse().unwrap())
+        })
+        .collect();
+    // One row per renormalisation; the last is the exponent at t-max, equal to the library's.
+    assert_eq!(rows.len(), 8);
+    assert!((rows[7].0 - 4.0).abs() < 1e-12);
+    let spec = chaoscope::spec::LyapunovSpec {
+        params: chaoscope::model::Params::default(),
+        grid: chaoscope::spec::Grid::square(1),
+        stepping: chaoscope::spec::Stepping {
+            dt: 0.01,
+            t_max: 4.0,
+        },
+        method: chaoscope::spec::Method::Tangent,
+        renorm: 0.5,
+    };
+    let start =
+        chaoscope::model::State::at_rest(std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);
+    assert_eq!(rows[7].1, chaoscope::cpu::ftle(&spec, start).last());
+}
+
+#[test]
+fn lyapunov_bad_values_exit_2_and_name_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bad.png");
+    let cases: &[(&[&str], &str)] = &[
+        (&["--renorm", "0.015"], "--renorm"),
+        (&["--renorm", "0"], "--renorm"),
+        (&["--renorm", "50"], "--renorm"),
+        (&["--method", "twin", "--eps", "0"], "--eps"),
+        (&["--theta1", "1.0"], "--theta2"),
+        (&["--theta1", "-pi:pi", "--theta2", "0.5"], "--theta1"),
+        (&["--m2", "0"], "--m2"),
+    ];
+    for (args, flag) in cases {
+        chaoscope()
+            .args([
+                "lyapunov",
+                "--size",
+                "8",
+                "--t-max",
+                "2",
+                "--backend",
+                "cpu",
+                "--output",
+            ])
+            .arg(&out)
+            .args(*args)
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(*flag));
+    }
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no partial files"
+    );
+}

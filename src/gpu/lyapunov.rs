@@ -8,6 +8,7 @@ use super::pipeline::{
     bind_group, compute_pipeline, dispatch_and_wait, layouts, params_buffer, shader_module,
     storage_buffer,
 };
+use crate::cpu::Convergence;
 use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
@@ -56,6 +57,30 @@ impl LyapunovKernel {
         monitor: &Monitor,
         max_pixels: u64,
     ) -> Result<Field> {
+        self.integrate(ctx, spec, monitor, max_pixels, None)
+    }
+
+    /// The running FTLE of the first pixel of `spec`'s grid at every renormalisation (one
+    /// dispatch and read-back per interval: meant for a 1x1 grid).
+    pub fn convergence(
+        &self,
+        ctx: &GpuContext,
+        spec: &LyapunovSpec,
+        monitor: &Monitor,
+    ) -> Result<Convergence> {
+        let mut trace = Convergence::default();
+        self.integrate(ctx, spec, monitor, 1, Some(&mut trace))?;
+        Ok(trace)
+    }
+
+    fn integrate(
+        &self,
+        ctx: &GpuContext,
+        spec: &LyapunovSpec,
+        monitor: &Monitor,
+        max_pixels: u64,
+        mut trace: Option<&mut Convergence>,
+    ) -> Result<Field> {
         let grid = spec.grid;
         let total_steps = spec.stepping.steps();
         let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
@@ -102,13 +127,23 @@ impl LyapunovKernel {
             let mut step0 = 0;
             while step0 < total_steps {
                 monitor.check()?;
-                let steps = (STEPS_PER_DISPATCH / STEP_COST / pixels as u64)
-                    .clamp(1, (total_steps - step0) as u64) as u32;
+                let steps = match trace {
+                    Some(_) => params.renorm_steps.min(total_steps - step0),
+                    None => (STEPS_PER_DISPATCH / STEP_COST / pixels as u64)
+                        .clamp(1, (total_steps - step0) as u64) as u32,
+                };
                 params.step0 = step0;
                 params.steps = steps;
                 dispatch(&self.advance, &params)?;
                 step0 += steps;
                 monitor.advance(steps as u64);
+                if let Some(trace) = trace.as_deref_mut() {
+                    let b = read_buffer(ctx, &log_sums, 4)?;
+                    let log_sum = f32::from_le_bytes(b[..4].try_into().expect("4 bytes"));
+                    let t = step0 as f64 * spec.stepping.dt;
+                    trace.t.push(t);
+                    trace.ftle.push(log_sum as f64 / t);
+                }
             }
             let bytes = read_buffer(ctx, &log_sums, pixels as u64 * 4)?;
             let start = row0 as usize * grid.width as usize;

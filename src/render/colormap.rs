@@ -47,3 +47,39 @@ pub fn flip_colors(field: &Field, colors: FlipColors) -> Vec<u8> {
         });
     rgb
 }
+
+/// Colour range (1/s) of a divergence map: 0 (regular, dark) to the 99.5th percentile of the
+/// exponents, so a few extreme pixels do not wash out the chaotic sea, and at least 0.1 /s.
+pub fn ftle_range(field: &Field) -> (f32, f32) {
+    let mut v: Vec<f32> = field
+        .data
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
+    if v.is_empty() {
+        return (0.0, 1.0);
+    }
+    let k = ((v.len() - 1) as f64 * 0.995).round() as usize;
+    let (_, hi, _) = v.select_nth_unstable_by(k, f32::total_cmp);
+    (0.0, hi.max(0.1))
+}
+
+/// RGB bytes of a divergence map: magma, linear in the exponent from `range.0` (black:
+/// regular) to `range.1` (pale yellow: strongly chaotic); values outside are clamped.
+pub fn ftle_colors(field: &Field, range: (f32, f32)) -> Vec<u8> {
+    let table = lut(&colorgrad::preset::magma(), 0.0, 1.0);
+    let (lo, hi) = range;
+    let mut rgb = vec![0u8; field.data.len() * 3];
+    rgb.par_chunks_mut(3)
+        .zip(field.data.par_iter())
+        .for_each(|(px, &x)| {
+            let u = if x.is_nan() {
+                0.0
+            } else {
+                ((x - lo) / (hi - lo)).clamp(0.0, 1.0)
+            };
+            px.copy_from_slice(&table[(u * (LUT_SIZE - 1) as f32).round() as usize]);
+        });
+    rgb
+}

@@ -4,5 +4,5 @@
 mod colormap;
 mod files;
 
-pub use colormap::{FlipColors, flip_colors};
+pub use colormap::{FlipColors, flip_colors, ftle_colors, ftle_range};
 pub use files::{write_atomic, write_npy, write_png};
