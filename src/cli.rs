@@ -8,9 +8,10 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::engine::{self, Backend, RunInfo};
 use crate::error::{Error, Result};
+use crate::field::Field;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::render::{self, FlipColors};
+use crate::render::{self, Annotation, Axis, ColorBar, Colormap, FlipColors};
 use crate::spec::{self, FlipSpec, Grid, LyapunovSpec, Method, Range, Stepping};
 use crate::{cpu, gpu};
 
@@ -72,6 +73,32 @@ impl PhysicalArgs {
     }
 }
 
+/// How a map becomes a picture.
+#[derive(Args, Debug, Clone, Default)]
+pub struct PictureArgs {
+    /// Frame the map with theta axes (ticks at multiples of pi), a colour bar with units and
+    /// a title. Without it the PNG is the bare map, one pixel a pendulum.
+    #[arg(long)]
+    pub annotate: bool,
+    /// Colour map (default: inferno for flip times, magma for exponents).
+    #[arg(long, value_enum)]
+    pub colormap: Option<Colormap>,
+}
+
+impl PictureArgs {
+    /// The flags as they appear in a reproducing command line.
+    pub fn flags(&self) -> String {
+        let mut out = String::new();
+        if self.annotate {
+            out.push_str(" --annotate");
+        }
+        if let Some(c) = self.colormap {
+            out.push_str(&format!(" --colormap {}", c.name()));
+        }
+        out
+    }
+}
+
 #[derive(Args, Debug, Clone)]
 pub struct FlipArgs {
     /// Grid size: N (square) or WxH, one pendulum per pixel.
@@ -108,6 +135,8 @@ pub struct FlipArgs {
     /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts).
     #[arg(long)]
     pub full: bool,
+    #[command(flatten)]
+    pub picture: PictureArgs,
 }
 
 impl FlipArgs {
@@ -195,6 +224,8 @@ pub struct LyapunovArgs {
     /// Raw exponents (1/s) as float32 .npy, shape (height, width), row 0 = top.
     #[arg(long)]
     pub data: Option<PathBuf>,
+    #[command(flatten)]
+    pub picture: PictureArgs,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -300,6 +331,141 @@ pub fn flip_command_line(spec: &FlipSpec, backend: Backend) -> String {
     )
 }
 
+/// A rendered map: bare (one pixel a pendulum) or annotated, with where the map sits.
+pub struct Picture {
+    pub rgb: Vec<u8>,
+    pub width: u32,
+    pub height: u32,
+    /// (x, y, width, height) of the map inside an annotated picture.
+    pub map: Option<(u32, u32, u32, u32)>,
+}
+
+impl Picture {
+    fn metadata(&self) -> Vec<(String, String)> {
+        match self.map {
+            Some((x, y, w, h)) => vec![(
+                "chaoscope:map-region".into(),
+                format!("{w}x{h} map at x {x}, y {y} (top left); the rest is annotation"),
+            )],
+            None => Vec::new(),
+        }
+    }
+}
+
+fn frame(
+    field: &Field,
+    rgb: Vec<u8>,
+    annotate: bool,
+    a: impl FnOnce() -> Annotation,
+) -> Result<Picture> {
+    if !annotate {
+        return Ok(Picture {
+            rgb,
+            width: field.width,
+            height: field.height,
+            map: None,
+        });
+    }
+    let out = render::annotate(&rgb, field.width, field.height, &a())?;
+    Ok(Picture {
+        rgb: out.rgb,
+        width: out.width,
+        height: out.height,
+        map: Some((out.map_x, out.map_y, field.width, field.height)),
+    })
+}
+
+fn axes(grid: &Grid) -> (Axis, Axis) {
+    (
+        Axis {
+            label: "θ1 (rad)".into(),
+            min: grid.theta1.min,
+            max: grid.theta1.max,
+        },
+        Axis {
+            label: "θ2".into(),
+            min: grid.theta2.min,
+            max: grid.theta2.max,
+        },
+    )
+}
+
+fn physics_line(p: &Params, grid: &Grid) -> String {
+    format!(
+        "m1 {} kg · m2 {} kg · l1 {} m · l2 {} m · g {} m/s² · ω0 ({}, {}) rad/s",
+        p.m1, p.m2, p.l1, p.l2, p.g, grid.omega1, grid.omega2
+    )
+}
+
+/// The flip map as a picture (`--annotate`, `--colormap`).
+pub fn flip_picture(field: &Field, spec: &FlipSpec, picture: &PictureArgs) -> Result<Picture> {
+    let colors = FlipColors {
+        t_lo: (spec.params.l1 / spec.params.g).sqrt(),
+        t_max: spec.stepping.t_max,
+        colormap: picture.colormap.unwrap_or(Colormap::Inferno),
+    };
+    let rgb = render::flip_colors(field, colors);
+    frame(field, rgb, picture.annotate, || {
+        let (x, y) = axes(&spec.grid);
+        let (colors_, ticks) = colors.bar();
+        Annotation {
+            title: "Time until an arm first flips over".into(),
+            subtitle: format!(
+                "{} · RK4 dt {} s",
+                physics_line(&spec.params, &spec.grid),
+                spec.stepping.dt
+            ),
+            x,
+            y,
+            bar: ColorBar {
+                colors: colors_,
+                ticks,
+                label: "flip time (s)".into(),
+                swatch: Some((render::NEVER_RGB, format!("> {} s", spec.stepping.t_max))),
+            },
+        }
+    })
+}
+
+/// The divergence map as a picture, coloured over `range` (1/s).
+pub fn lyapunov_picture(
+    field: &Field,
+    spec: &LyapunovSpec,
+    range: (f32, f32),
+    picture: &PictureArgs,
+) -> Result<Picture> {
+    let colormap = picture.colormap.unwrap_or(Colormap::Magma);
+    let rgb = render::ftle_colors(field, range, colormap);
+    frame(field, rgb, picture.annotate, || {
+        let (x, y) = axes(&spec.grid);
+        let (lo, hi) = (range.0 as f64, range.1 as f64);
+        let ticks = render::decimal_ticks(lo, hi)
+            .into_iter()
+            .map(|(v, l)| ((v - lo) / (hi - lo), l))
+            .collect();
+        Annotation {
+            title: format!(
+                "Largest finite-time Lyapunov exponent over {} s",
+                spec.stepping.t_max
+            ),
+            subtitle: format!(
+                "{} · RK4 dt {} s · renormalised every {} s",
+                physics_line(&spec.params, &spec.grid),
+                spec.stepping.dt,
+                spec.renorm
+            ),
+            x,
+            y,
+            bar: ColorBar {
+                colors: render::ftle_table(colormap),
+                ticks,
+                label: "FTLE (1/s)".into(),
+                swatch: None,
+            },
+        }
+    })
+}
+
 /// The command that reproduces a divergence map or convergence run.
 pub fn lyapunov_command_line(
     spec: &LyapunovSpec,
@@ -380,13 +546,17 @@ fn flip(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
     if let Some(notice) = &info.notice {
         eprintln!("{notice}");
     }
-    let colors = FlipColors {
-        t_lo: (spec.params.l1 / spec.params.g).sqrt(),
-        t_max: spec.stepping.t_max,
-    };
-    let rgb = render::flip_colors(&field, colors);
-    let meta = png_metadata(flip_command_line(&spec, args.backend), &info);
-    render::write_png(&args.output, field.width, field.height, &rgb, &meta)?;
+    let picture = flip_picture(&field, &spec, &args.picture)?;
+    let command = flip_command_line(&spec, args.backend) + &args.picture.flags();
+    let mut meta = png_metadata(command, &info);
+    meta.extend(picture.metadata());
+    render::write_png(
+        &args.output,
+        picture.width,
+        picture.height,
+        &picture.rgb,
+        &meta,
+    )?;
     if let Some(data) = &args.data {
         render::write_npy(data, &field)?;
     }
@@ -564,16 +734,20 @@ fn lyapunov_map(args: &LyapunovArgs, spec: &LyapunovSpec, monitor: &Monitor) -> 
         eprintln!("{notice}");
     }
     let range = render::ftle_range(&field);
-    let rgb = render::ftle_colors(&field, range);
-    let mut meta = png_metadata(lyapunov_command_line(spec, None, backend), &info);
+    let picture = lyapunov_picture(&field, spec, range, &args.picture)?;
+    let command = lyapunov_command_line(spec, None, backend) + &args.picture.flags();
+    let mut meta = png_metadata(command, &info);
+    meta.extend(picture.metadata());
     meta.push((
         "chaoscope:colour-range".into(),
         format!(
-            "FTLE {} .. {} 1/s, magma, linear (black = regular)",
-            range.0, range.1
+            "FTLE {} .. {} 1/s, {}, linear (low = regular)",
+            range.0,
+            range.1,
+            args.picture.colormap.unwrap_or(Colormap::Magma).name()
         ),
     ));
-    render::write_png(&output, field.width, field.height, &rgb, &meta)?;
+    render::write_png(&output, picture.width, picture.height, &picture.rgb, &meta)?;
     if let Some(data) = &args.data {
         render::write_npy(data, &field)?;
     }

@@ -13,10 +13,78 @@ const LUT_SIZE: usize = 1024;
 pub struct FlipColors {
     pub t_lo: f64,
     pub t_max: f64,
+    pub colormap: Colormap,
+}
+
+impl FlipColors {
+    /// (from, to) along the gradient: early flips bright, late flips dark. For dark-ended maps
+    /// stop short of the black end so that "never" stays distinct.
+    fn span(&self) -> (f32, f32) {
+        match self.colormap {
+            Colormap::Inferno | Colormap::Magma => (1.0, 0.15),
+            _ => (1.0, 0.0),
+        }
+    }
+
+    /// The colour bar: colours from late (bottom) to early (top), ticks at round times.
+    pub fn bar(&self) -> (Vec<[u8; 3]>, Vec<(f64, String)>) {
+        let (from, to) = self.span();
+        let colors = lut(&*self.colormap.gradient(), to, from);
+        let (lo, hi) = (self.t_lo.ln(), self.t_max.ln());
+        let mut ticks = Vec::new();
+        for decade in [0.1, 1.0, 10.0, 100.0, 1000.0] {
+            for m in [1.0, 2.0, 5.0] {
+                let t: f64 = decade * m;
+                if t >= self.t_lo * 0.999 && t <= self.t_max * 1.001 {
+                    // Early (t_lo) is the top of the bar.
+                    ticks.push((1.0 - (t.ln() - lo) / (hi - lo), format!("{t}")));
+                }
+            }
+        }
+        (colors, ticks)
+    }
 }
 
 /// The colour of never-flipped pixels: black, below the darkest gradient colour used.
 pub const NEVER_RGB: [u8; 3] = [0, 0, 0];
+
+/// The colour maps `--colormap` offers (colorgrad presets): sequential ones for times and
+/// exponents, cyclic ones (sinebow, rainbow) for angles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Colormap {
+    Inferno,
+    Magma,
+    Viridis,
+    Plasma,
+    Cividis,
+    Turbo,
+    Cubehelix,
+    /// Cyclic.
+    Sinebow,
+    /// Cyclic.
+    Rainbow,
+}
+
+impl Colormap {
+    pub fn gradient(self) -> Box<dyn Gradient> {
+        use colorgrad::preset;
+        match self {
+            Colormap::Inferno => Box::new(preset::inferno()),
+            Colormap::Magma => Box::new(preset::magma()),
+            Colormap::Viridis => Box::new(preset::viridis()),
+            Colormap::Plasma => Box::new(preset::plasma()),
+            Colormap::Cividis => Box::new(preset::cividis()),
+            Colormap::Turbo => Box::new(preset::turbo()),
+            Colormap::Cubehelix => Box::new(preset::cubehelix_default()),
+            Colormap::Sinebow => Box::new(preset::sinebow()),
+            Colormap::Rainbow => Box::new(preset::rainbow()),
+        }
+    }
+
+    pub fn name(self) -> String {
+        format!("{self:?}").to_lowercase()
+    }
+}
 
 fn lut(gradient: &dyn Gradient, from: f32, to: f32) -> Vec<[u8; 3]> {
     (0..LUT_SIZE)
@@ -28,10 +96,11 @@ fn lut(gradient: &dyn Gradient, from: f32, to: f32) -> Vec<[u8; 3]> {
         .collect()
 }
 
-/// RGB bytes of a flip-time map: inferno from pale yellow (early flips) to dark purple (late).
+/// RGB bytes of a flip-time map: by default inferno from pale yellow (early flips) to dark
+/// purple (late).
 pub fn flip_colors(field: &Field, colors: FlipColors) -> Vec<u8> {
-    // Stop short of inferno's black end so that "never" stays distinct.
-    let table = lut(&colorgrad::preset::inferno(), 1.0, 0.15);
+    let (from, to) = colors.span();
+    let table = lut(&*colors.colormap.gradient(), from, to);
     let (lo, hi) = (colors.t_lo.ln(), colors.t_max.ln());
     let mut rgb = vec![0u8; field.data.len() * 3];
     rgb.par_chunks_mut(3)
@@ -65,10 +134,15 @@ pub fn ftle_range(field: &Field) -> (f32, f32) {
     (0.0, hi.max(0.1))
 }
 
-/// RGB bytes of a divergence map: magma, linear in the exponent from `range.0` (black:
-/// regular) to `range.1` (pale yellow: strongly chaotic); values outside are clamped.
-pub fn ftle_colors(field: &Field, range: (f32, f32)) -> Vec<u8> {
-    let table = lut(&colorgrad::preset::magma(), 0.0, 1.0);
+/// The colour table of a divergence map, regular (low) to chaotic (high).
+pub fn ftle_table(colormap: Colormap) -> Vec<[u8; 3]> {
+    lut(&*colormap.gradient(), 0.0, 1.0)
+}
+
+/// RGB bytes of a divergence map: by default magma, linear in the exponent from `range.0`
+/// (black: regular) to `range.1` (pale yellow: strongly chaotic); values outside are clamped.
+pub fn ftle_colors(field: &Field, range: (f32, f32), colormap: Colormap) -> Vec<u8> {
+    let table = ftle_table(colormap);
     let (lo, hi) = range;
     let mut rgb = vec![0u8; field.data.len() * 3];
     rgb.par_chunks_mut(3)

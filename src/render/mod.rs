@@ -1,8 +1,12 @@
 //! From fields to files: colour maps, PNG with the run's specification, raw .npy; every file
 //! written to a temporary name first and renamed, so no half-written output is left behind.
 
+mod annotate;
 mod colormap;
 mod files;
 
-pub use colormap::{FlipColors, flip_colors, ftle_colors, ftle_range};
+pub use annotate::{Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks};
+pub use colormap::{
+    Colormap, FlipColors, NEVER_RGB, flip_colors, ftle_colors, ftle_range, ftle_table,
+};
 pub use files::{write_atomic, write_npy, write_png};
