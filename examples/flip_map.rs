@@ -4,7 +4,7 @@
 use chaoscope::engine::{Backend, flip_map};
 use chaoscope::model::Params;
 use chaoscope::monitor::Monitor;
-use chaoscope::render::{FlipColors, flip_colors, write_png};
+use chaoscope::render::{Colormap, FlipColors, flip_colors, write_png};
 use chaoscope::spec::{FlipSpec, Grid, Stepping};
 
 fn main() -> Result<(), chaoscope::Error> {
@@ -22,6 +22,7 @@ fn main() -> Result<(), chaoscope::Error> {
         FlipColors {
             t_lo: (1.0f64 / 9.81).sqrt(),
             t_max: 20.0,
+            colormap: Colormap::Inferno,
         },
     );
     write_png(

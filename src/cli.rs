@@ -35,6 +35,9 @@ pub enum Command {
     Lyapunov(LyapunovArgs),
     /// One trajectory as CSV: t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy.
     Trajectory(TrajectoryArgs),
+    /// Frames of a map while a parameter changes (--vary) or zooming into a point (--zoom-to),
+    /// as numbered PNGs and an animated PNG; an interrupted sweep resumes where it stopped.
+    Sweep(crate::sweep::SweepArgs),
     /// GPU adapters found, the one chosen, its limits and features.
     Info,
     /// Throughput of the GPU and CPU paths on FLIP-512, optionally beside the peers.
@@ -99,8 +102,9 @@ impl PictureArgs {
     }
 }
 
+/// The grid of starts and the physics, shared by the map commands.
 #[derive(Args, Debug, Clone)]
-pub struct FlipArgs {
+pub struct GridArgs {
     /// Grid size: N (square) or WxH, one pendulum per pixel.
     #[arg(long, default_value = "512", value_parser = parse_size)]
     pub size: (u32, u32),
@@ -116,9 +120,6 @@ pub struct FlipArgs {
     /// Initial angular velocity of the lower arm (rad/s).
     #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
     pub omega2: f64,
-    /// Simulated time (s); pixels that have not flipped by then are "never".
-    #[arg(long, default_value = "30", value_parser = parse_number, allow_hyphen_values = true)]
-    pub t_max: f64,
     /// RK4 time step (s).
     #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
     pub dt: f64,
@@ -126,6 +127,37 @@ pub struct FlipArgs {
     pub physical: PhysicalArgs,
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: Backend,
+    #[command(flatten)]
+    pub picture: PictureArgs,
+}
+
+impl GridArgs {
+    pub fn grid(&self) -> Grid {
+        let (width, height) = self.size;
+        Grid {
+            width,
+            height,
+            theta1: self.theta1,
+            theta2: self.theta2,
+            omega1: self.omega1,
+            omega2: self.omega2,
+        }
+    }
+
+    /// The flip map of these flags up to `t_max`.
+    pub fn flip_spec(&self, t_max: f64) -> FlipSpec {
+        let stepping = Stepping { dt: self.dt, t_max };
+        FlipSpec::new(self.physical.params(), self.grid(), stepping)
+    }
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct FlipArgs {
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Simulated time (s); pixels that have not flipped by then are "never".
+    #[arg(long, default_value = "30", value_parser = parse_number, allow_hyphen_values = true)]
+    pub t_max: f64,
     /// PNG to write.
     #[arg(long, default_value = "out/flip.png")]
     pub output: PathBuf,
@@ -135,28 +167,13 @@ pub struct FlipArgs {
     /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts).
     #[arg(long)]
     pub full: bool,
-    #[command(flatten)]
-    pub picture: PictureArgs,
 }
 
 impl FlipArgs {
     pub fn spec(&self) -> FlipSpec {
-        let (width, height) = self.size;
-        let grid = Grid {
-            width,
-            height,
-            theta1: self.theta1,
-            theta2: self.theta2,
-            omega1: self.omega1,
-            omega2: self.omega2,
-        };
-        let stepping = Stepping {
-            dt: self.dt,
-            t_max: self.t_max,
-        };
         FlipSpec {
             early_exit: !self.full,
-            ..FlipSpec::new(self.physical.params(), grid, stepping)
+            ..self.grid.flip_spec(self.t_max)
         }
     }
 }
@@ -283,7 +300,7 @@ pub fn parse_number(s: &str) -> std::result::Result<f64, String> {
     }
 }
 
-fn parse_range(s: &str) -> std::result::Result<Range, String> {
+pub fn parse_range(s: &str) -> std::result::Result<Range, String> {
     let (a, b) = s
         .split_once(':')
         .ok_or_else(|| format!("`{s}` must be MIN:MAX, e.g. -pi:pi"))?;
@@ -542,12 +559,12 @@ fn flip(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
         check_extension("--data", data, "npy")?;
     }
     let started = std::time::Instant::now();
-    let (field, info) = engine::flip_map(&spec, args.backend, monitor)?;
+    let (field, info) = engine::flip_map(&spec, args.grid.backend, monitor)?;
     if let Some(notice) = &info.notice {
         eprintln!("{notice}");
     }
-    let picture = flip_picture(&field, &spec, &args.picture)?;
-    let command = flip_command_line(&spec, args.backend) + &args.picture.flags();
+    let picture = flip_picture(&field, &spec, &args.grid.picture)?;
+    let command = flip_command_line(&spec, args.grid.backend) + &args.grid.picture.flags();
     let mut meta = png_metadata(command, &info);
     meta.extend(picture.metadata());
     render::write_png(
@@ -893,6 +910,7 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Flip(args) => flip(args, monitor),
         Command::Lyapunov(args) => lyapunov(args, monitor),
         Command::Trajectory(args) => trajectory(args),
+        Command::Sweep(args) => crate::sweep::run(args, monitor),
         Command::Info => info(),
         Command::Bench(args) => crate::bench::run(args, monitor),
     };

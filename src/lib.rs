@@ -22,6 +22,7 @@ pub mod model;
 pub mod monitor;
 pub mod render;
 pub mod spec;
+pub mod sweep;
 
 pub use error::{Error, Result};
 pub use field::Field;

@@ -31,8 +31,16 @@ impl Monitor {
         }
     }
 
+    /// No bar, but cancelled with this one: for work nested inside a phase with its own bar.
+    pub fn quiet(&self) -> Self {
+        Monitor {
+            bar: ProgressBar::hidden(),
+            cancel: self.cancel.clone(),
+        }
+    }
+
     /// Starts a phase of `total` units of work.
-    pub fn start(&self, message: &'static str, total: u64) {
+    pub fn start(&self, message: &str, total: u64) {
         self.bar.set_style(
             ProgressStyle::with_template(
                 "{msg:>10} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}",
@@ -40,7 +48,7 @@ impl Monitor {
             .expect("static template")
             .progress_chars("=> "),
         );
-        self.bar.set_message(message);
+        self.bar.set_message(message.to_string());
         self.bar.set_length(total);
         self.bar.set_position(0);
         self.bar.reset_eta();

@@ -135,7 +135,13 @@ pub fn annotate(map: &[u8], w: u32, h: u32, a: &Annotation) -> Result<Annotated>
     // Text scales with the map, within readable bounds.
     let font = (h.min(w) as f64 / 28.0).clamp(12.0, 30.0);
     let f = |x: f64| (x * font).round() as u32;
-    let (left, right, top, bottom) = (f(4.2), f(7.0), f(3.2), f(3.4));
+    // Wide enough for the y tick labels (about 0.45 em a character at 0.8 of the font size).
+    let widest = angle_ticks(a.y.min, a.y.max)
+        .iter()
+        .map(|t| t.1.chars().count())
+        .max()
+        .unwrap_or(1) as f64;
+    let (left, right, top, bottom) = (f(2.6 + 0.36 * widest).max(f(4.2)), f(7.0), f(3.2), f(3.4));
     let (width, height) = (left + w + right, top + h + bottom);
     let mut rgb = vec![0u8; (width * height * 3) as usize];
     for px in rgb.chunks_exact_mut(3) {

@@ -67,3 +67,101 @@ pub fn write_npy(path: &Path, field: &Field) -> Result<()> {
         Ok(())
     })
 }
+
+/// A decoded 8-bit RGB PNG: width, height, pixels and its tEXt chunks.
+pub struct Png {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<u8>,
+    pub text: Vec<(String, String)>,
+}
+
+pub fn read_png(path: &Path) -> Result<Png> {
+    let err = |e: png::DecodingError| {
+        Error::Io(std::io::Error::other(format!("{}: {e}", path.display())))
+    };
+    let file = std::io::BufReader::new(std::fs::File::open(path)?);
+    let mut reader = png::Decoder::new(file).read_info().map_err(err)?;
+    let mut rgb = vec![0; reader.output_buffer_size().unwrap_or(0)];
+    let frame = reader.next_frame(&mut rgb).map_err(err)?;
+    if frame.color_type != png::ColorType::Rgb || frame.bit_depth != png::BitDepth::Eight {
+        return Err(Error::Io(std::io::Error::other(format!(
+            "{} is not an 8-bit RGB PNG",
+            path.display()
+        ))));
+    }
+    rgb.truncate(frame.buffer_size());
+    let text = reader
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .map(|t| (t.keyword.clone(), t.text.clone()))
+        .collect();
+    Ok(Png {
+        width: frame.width,
+        height: frame.height,
+        rgb,
+        text,
+    })
+}
+
+/// An animated PNG (APNG, lossless) of equally sized RGB frames, `delay_ms` per frame,
+/// looping forever; viewers without APNG support show the first frame.
+pub fn write_apng(
+    path: &Path,
+    width: u32,
+    height: u32,
+    frames: &[Vec<u8>],
+    delay_ms: u16,
+    text: &[(String, String)],
+) -> Result<()> {
+    let png_err = |e: png::EncodingError| Error::Io(std::io::Error::other(e));
+    write_atomic(path, |w| {
+        let mut encoder = png::Encoder::new(w, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder
+            .set_animated(frames.len() as u32, 0)
+            .map_err(png_err)?;
+        encoder.set_frame_delay(delay_ms, 1000).map_err(png_err)?;
+        for (key, value) in text {
+            encoder
+                .add_text_chunk(key.clone(), value.clone())
+                .map_err(png_err)?;
+        }
+        let mut writer = encoder.write_header().map_err(png_err)?;
+        for frame in frames {
+            writer.write_image_data(frame).map_err(png_err)?;
+        }
+        writer.finish().map_err(png_err)
+    })
+}
+
+/// An animated GIF of equally sized RGB frames (each quantised to its own 256-colour
+/// palette), `delay_cs` hundredths of a second per frame, looping forever.
+pub fn write_gif(
+    path: &Path,
+    width: u32,
+    height: u32,
+    frames: &[Vec<u8>],
+    delay_cs: u16,
+) -> Result<()> {
+    let gif_err = |e: gif::EncodingError| Error::Io(std::io::Error::other(e));
+    let (w, h) = (
+        u16::try_from(width)
+            .map_err(|_| Error::invalid("--size", "GIF frames are at most 65535 pixels wide"))?,
+        u16::try_from(height)
+            .map_err(|_| Error::invalid("--size", "GIF frames are at most 65535 pixels high"))?,
+    );
+    write_atomic(path, |out| {
+        let mut encoder = gif::Encoder::new(out, w, h, &[]).map_err(gif_err)?;
+        encoder.set_repeat(gif::Repeat::Infinite).map_err(gif_err)?;
+        for rgb in frames {
+            // Speed 10: NeuQuant's usual trade of palette quality for time.
+            let mut frame = gif::Frame::from_rgb_speed(w, h, rgb, 10);
+            frame.delay = delay_cs;
+            encoder.write_frame(&frame).map_err(gif_err)?;
+        }
+        Ok(())
+    })
+}

@@ -9,4 +9,4 @@ pub use annotate::{Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate,
 pub use colormap::{
     Colormap, FlipColors, NEVER_RGB, flip_colors, ftle_colors, ftle_range, ftle_table,
 };
-pub use files::{write_atomic, write_npy, write_png};
+pub use files::{Png, read_png, write_apng, write_atomic, write_gif, write_npy, write_png};

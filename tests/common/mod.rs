@@ -26,7 +26,11 @@ pub fn dump_maps(name: &str, maps: &[(&str, &chaoscope::Field)], t_max: f64) -> 
     for (label, field) in maps {
         let rgb = chaoscope::render::flip_colors(
             field,
-            chaoscope::render::FlipColors { t_lo: 0.32, t_max },
+            chaoscope::render::FlipColors {
+                t_lo: 0.32,
+                t_max,
+                colormap: chaoscope::render::Colormap::Inferno,
+            },
         );
         let path = dir.join(format!("{name}-{label}.png"));
         chaoscope::render::write_png(&path, field.width, field.height, &rgb, &[])
