@@ -38,6 +38,11 @@ pub enum Command {
     /// Frames of a map while a parameter changes (--vary) or zooming into a point (--zoom-to),
     /// as numbered PNGs and an animated PNG; an interrupted sweep resumes where it stopped.
     Sweep(crate::sweep::SweepArgs),
+    /// Long-exposure light trails of the lower bob for releases from "the same" start.
+    Traces(crate::views::TracesArgs),
+    /// Phase portraits, omega against theta of each arm, as time-density images; --single for
+    /// the single pendulum with its separatrix.
+    Phase(crate::views::PhaseArgs),
     /// GPU adapters found, the one chosen, its limits and features.
     Info,
     /// Throughput of the GPU and CPU paths on FLIP-512, optionally beside the peers.
@@ -398,11 +403,13 @@ fn axes(grid: &Grid) -> (Axis, Axis) {
             label: "θ1 (rad)".into(),
             min: grid.theta1.min,
             max: grid.theta1.max,
+            decimal: false,
         },
         Axis {
             label: "θ2".into(),
             min: grid.theta2.min,
             max: grid.theta2.max,
+            decimal: false,
         },
     )
 }
@@ -788,7 +795,8 @@ fn lyapunov_map(args: &LyapunovArgs, spec: &LyapunovSpec, monitor: &Monitor) -> 
 /// below ln(1 + K t) / t, about 0.27 /s at 20 s (tests/lyapunov.rs).
 pub const CHAOTIC_FTLE: f32 = 0.5;
 
-fn check_extension(flag: &'static str, path: &Path, ext: &str) -> Result<()> {
+/// `path` must end in `.ext`, else an error naming `flag`.
+pub fn check_extension(flag: &'static str, path: &Path, ext: &str) -> Result<()> {
     match path.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
         _ => Err(Error::invalid(
@@ -911,6 +919,8 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Lyapunov(args) => lyapunov(args, monitor),
         Command::Trajectory(args) => trajectory(args),
         Command::Sweep(args) => crate::sweep::run(args, monitor),
+        Command::Traces(args) => crate::views::traces(args, monitor),
+        Command::Phase(args) => crate::views::phase(args, monitor),
         Command::Info => info(),
         Command::Bench(args) => crate::bench::run(args, monitor),
     };

@@ -23,6 +23,7 @@ pub mod monitor;
 pub mod render;
 pub mod spec;
 pub mod sweep;
+pub mod views;
 
 pub use error::{Error, Result};
 pub use field::Field;

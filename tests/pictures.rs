@@ -267,3 +267,142 @@ fn sweep_bad_values_exit_2_and_name_the_flag() {
             .stderr(predicate::str::contains(*flag));
     }
 }
+
+/// (shape, data) of a float32 .npy.
+fn read_npy(path: &Path) -> (Vec<u64>, Vec<f32>) {
+    let bytes = std::fs::read(path).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    let shape = npy.shape().to_vec();
+    (shape, npy.into_vec::<f32>().unwrap())
+}
+
+/// Lower-bob distance (m) between runs a and b at each sample of a traces .npy.
+fn separation(shape: &[u64], data: &[f32], a: usize, b: usize) -> Vec<f32> {
+    let samples = shape[1] as usize;
+    (0..samples)
+        .map(|k| {
+            let at = |r: usize| &data[(r * samples + k) * 4..(r * samples + k) * 4 + 4];
+            let (p, q) = (at(a), at(b));
+            ((p[2] - q[2]).powi(2) + (p[3] - q[3]).powi(2)).sqrt()
+        })
+        .collect()
+}
+
+#[test]
+fn trails_of_identical_starts_coincide_and_of_different_starts_part() {
+    let dir = tempfile::tempdir().unwrap();
+    for backend in backends() {
+        let same = dir.path().join(format!("same-{backend}.npy"));
+        let apart = dir.path().join(format!("apart-{backend}.npy"));
+        for (npy, spread) in [(&same, "0"), (&apart, "5mm")] {
+            chaoscope()
+                .args([
+                    "traces", "--theta1", "2.4", "--theta2", "2.0", "--runs", "3",
+                ])
+                .args(["--exposure", "8", "--dt", "0.002", "--size", "200"])
+                .args(["--spread", spread, "--backend", backend, "--output"])
+                .arg(npy.with_extension("png"))
+                .arg("--data")
+                .arg(npy)
+                .assert()
+                .success();
+        }
+        let (shape, data) = read_npy(&same);
+        assert_eq!(shape, vec![3, 4001, 4]);
+        for b in 1..3 {
+            assert!(
+                separation(&shape, &data, 0, b).iter().all(|d| *d == 0.0),
+                "{backend}: identical starts must give identical trails"
+            );
+        }
+        let (shape, data) = read_npy(&apart);
+        let d = separation(&shape, &data, 0, 1);
+        // 5 mm apart at the start; the first 0.5 s (250 samples) stay within a few times
+        // that, then chaos parts them by more than 20 cm within 8 s.
+        assert!(d[0] > 0.001 && d[0] < 0.02, "{backend}: start {}", d[0]);
+        assert!(d[..250].iter().all(|x| *x < 0.05), "{backend}: early");
+        assert!(d.iter().any(|x| *x > 0.2), "{backend}: never parted");
+        let png = read_png(&apart.with_extension("png")).unwrap();
+        assert_eq!((png.width, png.height), (200, 200));
+    }
+}
+
+#[test]
+fn the_traces_animation_has_the_asked_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let gif_path = dir.path().join("t.gif");
+    chaoscope()
+        .args([
+            "traces",
+            "--theta1",
+            "2",
+            "--theta2",
+            "1",
+            "--exposure",
+            "1.2",
+        ])
+        .args(["--size", "120", "--backend", "cpu", "--output"])
+        .arg(dir.path().join("t.png"))
+        .arg("--gif")
+        .arg(&gif_path)
+        .assert()
+        .success();
+    let mut decoder = gif::DecodeOptions::new()
+        .read_info(std::fs::File::open(&gif_path).unwrap())
+        .unwrap();
+    let mut frames = 0;
+    while decoder.read_next_frame().unwrap().is_some() {
+        frames += 1;
+    }
+    // 25 frames a second of exposure.
+    assert_eq!(frames, 30);
+}
+
+#[test]
+fn phase_density_holds_all_the_time_and_the_single_pendulum_has_its_period() {
+    use chaoscope::views::{phase_density, single_pendulum};
+    // Small oscillations: period 2 pi sqrt(l/g); RK4 at dt 1e-3 is far more accurate than
+    // the 1e-3 relative tolerance, which covers the amplitude correction (theta0^2/16 = 6e-4).
+    let g_over_l = 9.81;
+    let run = single_pendulum(g_over_l, 0.1, 0.0, 1e-3, 10_000);
+    let crossings: Vec<f64> = run
+        .windows(2)
+        .enumerate()
+        .filter(|(_, w)| w[0].1 < 0.0 && w[1].1 >= 0.0)
+        .map(|(k, w)| (k as f64 - w[0].1 / (w[1].1 - w[0].1)) * 1e-3)
+        .collect();
+    let period = crossings[1] - crossings[0];
+    let expected = 2.0 * std::f64::consts::PI / g_over_l.sqrt();
+    assert!(
+        (period / expected - 1.0).abs() < 1e-3,
+        "{period} vs {expected}"
+    );
+    // Every step's time lands in the picture: the density sums to the run's duration.
+    let field = phase_density(&[run], 1e-3, 64, 1.5);
+    let total: f64 = field.data.iter().map(|&x| x as f64).sum();
+    assert!((total - 10.0).abs() < 1e-3, "{total}");
+}
+
+#[test]
+fn phase_portraits_render_both_arms_and_the_single_pendulum() {
+    let dir = tempfile::tempdir().unwrap();
+    for extra in [&["--runs", "4"][..], &["--single"][..]] {
+        let out = dir.path().join("p.png");
+        chaoscope()
+            .args(["phase", "--t-max", "5", "--size", "100", "--backend", "cpu"])
+            .args(extra)
+            .arg("--output")
+            .arg(&out)
+            .assert()
+            .success();
+        let png = read_png(&out).unwrap();
+        // Two framed panels side by side, or one.
+        let panels = if extra[0] == "--single" { 1 } else { 2 };
+        assert!(
+            png.width > panels * 100 && png.width < panels * 300,
+            "{}",
+            png.width
+        );
+        assert!(text(&png, "chaoscope:command").starts_with("chaoscope phase"));
+    }
+}

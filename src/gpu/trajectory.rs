@@ -16,31 +16,49 @@ pub fn trajectory(
     dt: f64,
     steps: u32,
 ) -> Result<Vec<State>> {
-    let bytes = (steps as u64 + 1) * 16;
+    Ok(trajectories(ctx, p, &[start], dt, steps)?.remove(0))
+}
+
+/// One trajectory per start, one GPU invocation each (an ensemble of pendulums).
+pub fn trajectories(
+    ctx: &GpuContext,
+    p: &Params,
+    starts: &[State],
+    dt: f64,
+    steps: u32,
+) -> Result<Vec<Vec<State>>> {
+    let per_run = steps as u64 + 1;
+    let bytes = starts.len() as u64 * per_run * 16;
     if bytes > ctx.max_binding() {
         return Err(Error::invalid(
             "--t-max",
-            format!("{steps} steps do not fit one GPU buffer; use --backend cpu or fewer steps"),
+            format!(
+                "{} runs of {steps} steps do not fit one GPU buffer; use --backend cpu, fewer runs or fewer steps",
+                starts.len()
+            ),
         ));
     }
     let module = shader_module(ctx, "trajectory.wgsl", TRAJECTORY_WGSL);
     let pipeline = compute_pipeline(ctx, &module, None, "trajectory");
     let params = GpuParams {
         steps,
+        count: starts.len() as u32,
         ..GpuParams::new(p, dt)
     };
     let params_buf = params_buffer(ctx);
     ctx.queue
         .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
     let states = storage_buffer(ctx, "trajectory states", bytes);
-    let s = start.to_array().map(|v| v as f32);
-    ctx.queue.write_buffer(&states, 0, bytemuck::cast_slice(&s));
+    for (i, s) in starts.iter().enumerate() {
+        let v = s.to_array().map(|v| v as f32);
+        ctx.queue
+            .write_buffer(&states, i as u64 * per_run * 16, bytemuck::cast_slice(&v));
+    }
     let layout = pipeline.get_bind_group_layout(0);
     let bind = bind_group(ctx, "trajectory", &layout, &[&params_buf, &states]);
-    // One invocation integrates the whole trajectory.
-    dispatch_and_wait(ctx, &pipeline, &bind, 1)?;
+    dispatch_and_wait(ctx, &pipeline, &bind, starts.len() as u32)?;
     let out = read_buffer(ctx, &states, bytes)?;
-    Ok(out
+    let all: Vec<State> = out
         .chunks_exact(16)
         .map(|c| {
             let v: [f32; 4] = std::array::from_fn(|i| {
@@ -48,5 +66,6 @@ pub fn trajectory(
             });
             State::from_array(v.map(f64::from))
         })
-        .collect())
+        .collect();
+    Ok(all.chunks(per_run as usize).map(|c| c.to_vec()).collect())
 }

@@ -26,6 +26,18 @@ pub struct Axis {
     pub label: String,
     pub min: f64,
     pub max: f64,
+    /// Ticks at round decimals instead of multiples of pi (for non-angles).
+    pub decimal: bool,
+}
+
+impl Axis {
+    fn ticks(&self) -> Vec<(f64, String)> {
+        if self.decimal {
+            decimal_ticks(self.min, self.max)
+        } else {
+            angle_ticks(self.min, self.max)
+        }
+    }
 }
 
 /// The colour bar: colours from bottom to top, ticks at fractions of its height.
@@ -136,11 +148,12 @@ pub fn annotate(map: &[u8], w: u32, h: u32, a: &Annotation) -> Result<Annotated>
     let font = (h.min(w) as f64 / 28.0).clamp(12.0, 30.0);
     let f = |x: f64| (x * font).round() as u32;
     // Wide enough for the y tick labels (about 0.45 em a character at 0.8 of the font size).
-    let widest = angle_ticks(a.y.min, a.y.max)
-        .iter()
-        .map(|t| t.1.chars().count())
-        .max()
-        .unwrap_or(1) as f64;
+    let widest =
+        a.y.ticks()
+            .iter()
+            .map(|t| t.1.chars().count())
+            .max()
+            .unwrap_or(1) as f64;
     let (left, right, top, bottom) = (f(2.6 + 0.36 * widest).max(f(4.2)), f(7.0), f(3.2), f(3.4));
     let (width, height) = (left + w + right, top + h + bottom);
     let mut rgb = vec![0u8; (width * height * 3) as usize];
@@ -192,7 +205,7 @@ pub fn annotate(map: &[u8], w: u32, h: u32, a: &Annotation) -> Result<Annotated>
         line(r, t, r, b).map_err(draw_err)?;
         let tick = f(0.35) as i32;
         // x axis: theta1 left to right at pixel edges min .. max.
-        for (v, label) in angle_ticks(a.x.min, a.x.max) {
+        for (v, label) in a.x.ticks() {
             let x = left as f64 + (v - a.x.min) / (a.x.max - a.x.min) * w as f64;
             let x = x.round() as i32;
             line(x, b, x, b + tick).map_err(draw_err)?;
@@ -207,7 +220,7 @@ pub fn annotate(map: &[u8], w: u32, h: u32, a: &Annotation) -> Result<Annotated>
         .map_err(draw_err)?;
         // y axis: theta2 with its maximum at the top.
         let right_font = text(font * 0.8, Pos::new(HPos::Right, VPos::Center));
-        for (v, label) in angle_ticks(a.y.min, a.y.max) {
+        for (v, label) in a.y.ticks() {
             let y = top as f64 + (a.y.max - v) / (a.y.max - a.y.min) * h as f64;
             let y = y.round() as i32;
             line(l - tick, y, l, y).map_err(draw_err)?;

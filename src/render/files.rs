@@ -55,14 +55,23 @@ pub fn write_png(
 
 /// float32 array of shape (height, width), C order, row 0 = top of the image.
 pub fn write_npy(path: &Path, field: &Field) -> Result<()> {
+    write_npy_shaped(
+        path,
+        &[field.height as u64, field.width as u64],
+        &field.data,
+    )
+}
+
+/// float32 array of any `shape`, C order.
+pub fn write_npy_shaped(path: &Path, shape: &[u64], data: &[f32]) -> Result<()> {
     use npyz::WriterBuilder;
     write_atomic(path, |w| {
         let mut npy = npyz::WriteOptions::new()
             .default_dtype()
-            .shape(&[field.height as u64, field.width as u64])
+            .shape(shape)
             .writer(w)
             .begin_nd()?;
-        npy.extend(field.data.iter().copied())?;
+        npy.extend(data.iter().copied())?;
         npy.finish()?;
         Ok(())
     })

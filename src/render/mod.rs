@@ -3,10 +3,14 @@
 
 mod annotate;
 mod colormap;
+mod exposure;
 mod files;
 
 pub use annotate::{Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks};
 pub use colormap::{
     Colormap, FlipColors, NEVER_RGB, flip_colors, ftle_colors, ftle_range, ftle_table,
 };
-pub use files::{Png, read_png, write_apng, write_atomic, write_gif, write_npy, write_png};
+pub use exposure::{Bobs, Film, View, draw_arms};
+pub use files::{
+    Png, read_png, write_apng, write_atomic, write_gif, write_npy, write_npy_shaped, write_png,
+};
