@@ -1,20 +1,25 @@
-// chaoscope: the point-mass double pendulum in f32.
+// chaoscope: the double pendulum in f32.
 //
 // State y = (theta1, omega1, theta2, omega2): rad and rad/s, angles from the downward
-// vertical. Units SI. With D = theta1 - theta2 and M = m1 + m2 (the lab report's equations):
-//   a1 = (-m2 l2 w2^2 sin D - g M sin t1 - m2 l1 w1^2 sin D cos D + g m2 sin t2 cos D) / (l1 (M - m2 cos^2 D))
-//   a2 = ( m2 l2 w2^2 sin D cos D + g M sin t1 cos D + M l1 w1^2 sin D - g M sin t2) / (l2 (M - m2 cos^2 D))
+// vertical. Units SI. With T = A w1^2/2 + B w2^2/2 + C w1 w2 cos D, V = -P cos t1 - Q cos t2
+// (src/model.rs; point masses: A = M l1^2, B = m2 l2^2, C = m2 l1 l2, P = M g l1, Q = m2 g l2)
+// and loss torques tau, the closed form of the 2x2 Lagrange system is
+//   f1 = -C sin D w2^2 - P sin t1 + tau1,   f2 = C sin D w1^2 - Q sin t2 + tau2
+//   a1 = (B f1 - C cos D f2) / det,  a2 = (A f2 - C cos D f1) / det,  det = A B - C^2 cos^2 D.
 // The CPU reference (src/cpu) solves the mass-matrix system instead, so agreement means something.
 //
 // Constants WORKGROUP_SIZE and NEVER are prepended from src/gpu/layout.rs.
 
 // Mirror of src/gpu/layout.rs `GpuParams`: keep in sync (tests/layout.rs checks offsets).
 struct Params {
-    m1: f32,
-    m2: f32,
+    // Kinetic and potential energy coefficients (src/model.rs `Inertia`).
+    a: f32,
+    b: f32,
+    c: f32,
+    p: f32,
+    q: f32,
     l1: f32,
     l2: f32,
-    g: f32,
     dt: f32,
     theta1_min: f32,
     theta1_step: f32,
@@ -24,6 +29,13 @@ struct Params {
     omega2: f32,
     // Starts below this energy (J) can never flip (src/model.rs `no_flip_threshold`).
     no_flip_energy: f32,
+    // Losses: joint damping (N m s), drag factors 1/2 rho c_w A of bobs and rods (N s^2/m^2).
+    joint1: f32,
+    joint2: f32,
+    drag_bob1: f32,
+    drag_bob2: f32,
+    drag_rod1: f32,
+    drag_rod2: f32,
     // Tile of the grid: `rows` rows of `width` pixels from grid row `row0`.
     width: u32,
     rows: u32,
@@ -42,22 +54,64 @@ struct Params {
     _pad0: u32,
 }
 
+// Set per pipeline (src/gpu/pipeline.rs): the loss torques are compiled in only when needed.
+override LOSSES: bool = false;
+
 // f32(pi) rounds up to 3.1415927, so |theta| > PI is the f32 form of |theta| > pi.
 const PI: f32 = 3.14159265358979;
 
-// Physical constants folded once per invocation rather than per stage.
+// Physical constants, read once per invocation.
 struct Coeffs {
-    m: f32,      // M = m1 + m2
-    m2: f32,
+    a: f32,
+    b: f32,
+    c: f32,
+    p: f32,
+    q: f32,
     l1: f32,
     l2: f32,
-    g: f32,
-    inv_l1: f32,
-    inv_l2: f32,
+    joint1: f32,
+    joint2: f32,
+    drag_bob1: f32,
+    drag_bob2: f32,
+    drag_rod1: f32,
+    drag_rod2: f32,
 }
 
 fn coeffs_from(p: Params) -> Coeffs {
-    return Coeffs(p.m1 + p.m2, p.m2, p.l1, p.l2, p.g, 1.0 / p.l1, 1.0 / p.l2);
+    return Coeffs(p.a, p.b, p.c, p.p, p.q, p.l1, p.l2, p.joint1, p.joint2, p.drag_bob1,
+        p.drag_bob2, p.drag_rod1, p.drag_rod2);
+}
+
+// Speeds are smoothed in the drag law, |v| -> sqrt(v^2 + V_SMOOTH^2) (src/cpu V_SMOOTH).
+const V_SMOOTH2: f32 = 1e-12;
+
+// 3-point Gauss-Legendre on [0, 1] for the drag along the lower rod.
+const GAUSS_X: vec3<f32> = vec3<f32>(0.1127016654, 0.5, 0.8872983346);
+const GAUSS_W: vec3<f32> = vec3<f32>(0.2777777778, 0.4444444444, 0.2777777778);
+
+// Generalised forces of the losses (src/cpu/mod.rs `loss_torques`, the same formulas).
+fn loss_torques(c: Coeffs, w1: f32, w2: f32, cd: f32) -> vec2<f32> {
+    let relative = w2 - w1;
+    var tau = vec2<f32>(-c.joint1 * w1 + c.joint2 * relative, -c.joint2 * relative);
+    let v1 = c.l1 * w1;
+    let s1 = sqrt(v1 * v1 + V_SMOOTH2);
+    tau.x -= (c.drag_bob1 + 0.25 * c.drag_rod1) * s1 * v1 * c.l1;
+    tau += c.drag_bob2 * lower_arm_drag(c, w1, w2, cd, c.l2);
+    if c.drag_rod2 != 0.0 {
+        for (var i = 0; i < 3; i++) {
+            tau += (c.drag_rod2 * GAUSS_W[i]) * lower_arm_drag(c, w1, w2, cd, GAUSS_X[i] * c.l2);
+        }
+    }
+    return tau;
+}
+
+// Generalised force per unit drag factor of a point at distance s along the lower arm.
+fn lower_arm_drag(c: Coeffs, w1: f32, w2: f32, cd: f32, s: f32) -> vec2<f32> {
+    let u_e1 = c.l1 * w1 + s * w2 * cd;
+    let u_e2 = c.l1 * w1 * cd + s * w2;
+    let u2 = c.l1 * c.l1 * w1 * w1 + s * s * w2 * w2 + 2.0 * c.l1 * s * w1 * w2 * cd;
+    let sp = sqrt(u2 + V_SMOOTH2);
+    return vec2<f32>(-sp * u_e1 * c.l1, -sp * u_e2 * s);
 }
 
 // (sin x, cos x) with one shared range reduction: x = q pi/2 + r by Cody-Waite with fma (two
@@ -107,11 +161,17 @@ fn rate(c: Coeffs, p: Pendulum) -> Rate {
     // sin D and cos D from the angle-difference identities.
     let sd = s1 * c2 - c1 * s2;
     let cd = c1 * c2 + s1 * s2;
-    let w1sq = w1 * w1;
-    let w2sq = w2 * w2;
-    let inv_den = 1.0 / (c.m - c.m2 * cd * cd);
-    let a1 = (-c.m2 * c.l2 * w2sq * sd - c.g * c.m * s1 - c.m2 * c.l1 * w1sq * sd * cd + c.g * c.m2 * s2 * cd) * (c.inv_l1 * inv_den);
-    let a2 = (c.m2 * c.l2 * w2sq * sd * cd + c.g * c.m * s1 * cd + c.m * c.l1 * w1sq * sd - c.g * c.m * s2) * (c.inv_l2 * inv_den);
+    var tau = vec2<f32>();
+    if LOSSES {
+        tau = loss_torques(c, w1, w2, cd);
+    }
+    let csd = c.c * sd;
+    let f1 = fma(-csd * w2, w2, fma(-c.p, s1, tau.x));
+    let f2 = fma(csd * w1, w1, fma(-c.q, s2, tau.y));
+    let ccd = c.c * cd;
+    let inv_det = 1.0 / fma(-ccd, ccd, c.a * c.b);
+    let a1 = fma(c.b, f1, -ccd * f2) * inv_det;
+    let a2 = fma(c.a, f2, -ccd * f1) * inv_det;
     return Rate(vec4<f32>(w1, a1, w2, a2), vec4<f32>(-w1 * s1, w1 * c1, -w2 * s2, w2 * c2));
 }
 
@@ -141,9 +201,8 @@ fn rk4_step(c: Coeffs, p: Pendulum, dt: f32) -> Pendulum {
 }
 
 fn energy(c: Coeffs, y: vec4<f32>) -> f32 {
-    let kinetic = 0.5 * c.m * c.l1 * c.l1 * y.y * y.y + 0.5 * c.m2 * c.l2 * c.l2 * y.w * y.w
-        + c.m2 * c.l1 * c.l2 * y.y * y.w * cos(y.x - y.z);
-    return kinetic - c.m * c.g * c.l1 * cos(y.x) - c.m2 * c.g * c.l2 * cos(y.z);
+    let kinetic = 0.5 * c.a * y.y * y.y + 0.5 * c.b * y.w * y.w + c.c * y.y * y.w * cos(y.x - y.z);
+    return kinetic - c.p * cos(y.x) - c.q * cos(y.z);
 }
 
 // Fraction of a step of length h at which the cubic Hermite interpolant of the step's end

@@ -28,6 +28,40 @@ fn dconst(x: f32) -> vec2<f32> {
     return vec2<f32>(x, 0.0);
 }
 
+fn dsqrt(a: vec2<f32>) -> vec2<f32> {
+    let r = sqrt(a.x);
+    return vec2<f32>(r, 0.5 * a.y / r);
+}
+
+// `loss_torques` of common.wgsl in dual numbers (value, derivative along v) per torque.
+fn dual_loss_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>) -> array<vec2<f32>, 2> {
+    let relative = w2 - w1;
+    var tau1 = -c.joint1 * w1 + c.joint2 * relative;
+    var tau2 = -c.joint2 * relative;
+    let v1 = c.l1 * w1;
+    let s1 = dsqrt(dmul(v1, v1) + dconst(V_SMOOTH2));
+    tau1 -= (c.drag_bob1 + 0.25 * c.drag_rod1) * c.l1 * dmul(s1, v1);
+    var f = dual_lower_arm_drag(c, w1, w2, cd, c.l2);
+    tau1 += c.drag_bob2 * f[0];
+    tau2 += c.drag_bob2 * f[1];
+    if c.drag_rod2 != 0.0 {
+        for (var i = 0; i < 3; i++) {
+            f = dual_lower_arm_drag(c, w1, w2, cd, GAUSS_X[i] * c.l2);
+            tau1 += (c.drag_rod2 * GAUSS_W[i]) * f[0];
+            tau2 += (c.drag_rod2 * GAUSS_W[i]) * f[1];
+        }
+    }
+    return array<vec2<f32>, 2>(tau1, tau2);
+}
+
+fn dual_lower_arm_drag(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>, s: f32) -> array<vec2<f32>, 2> {
+    let u_e1 = c.l1 * w1 + s * dmul(w2, cd);
+    let u_e2 = c.l1 * dmul(w1, cd) + s * w2;
+    let u2 = c.l1 * c.l1 * dmul(w1, w1) + s * s * dmul(w2, w2) + 2.0 * c.l1 * s * dmul(dmul(w1, w2), cd);
+    let sp = dsqrt(u2 + dconst(V_SMOOTH2));
+    return array<vec2<f32>, 2>(-c.l1 * dmul(sp, u_e1), -s * dmul(sp, u_e2));
+}
+
 // The state of Pendulum (y, u) and a tangent vector v = (d theta1, d omega1, d theta2,
 // d omega2) of the four-dimensional system. The tangents of the carried cos and sin follow
 // from v (d cos = -sin d theta, d sin = cos d theta), so they are not integrated.
@@ -48,17 +82,20 @@ fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
     let s2 = vec2<f32>(t.u.w, t.u.z * t.v.z);
     let sd = dmul(s1, c2) - dmul(c1, s2);
     let cd = dmul(c1, c2) + dmul(s1, s2);
-    let w1sq = dmul(w1, w1);
-    let w2sq = dmul(w2, w2);
-    let inv_den = drecip(dconst(c.m) - c.m2 * dmul(cd, cd));
-    let w1sq_sd = dmul(w1sq, sd);
-    let w2sq_sd = dmul(w2sq, sd);
-    let num1 = -c.m2 * c.l2 * w2sq_sd - c.g * c.m * s1 - c.m2 * c.l1 * dmul(w1sq_sd, cd)
-        + c.g * c.m2 * dmul(s2, cd);
-    let num2 = c.m2 * c.l2 * dmul(w2sq_sd, cd) + c.g * c.m * dmul(s1, cd) + c.m * c.l1 * w1sq_sd
-        - c.g * c.m * s2;
-    let a1 = c.inv_l1 * dmul(num1, inv_den);
-    let a2 = c.inv_l2 * dmul(num2, inv_den);
+    var tau1 = vec2<f32>();
+    var tau2 = vec2<f32>();
+    if LOSSES {
+        let tau = dual_loss_torques(c, w1, w2, cd);
+        tau1 = tau[0];
+        tau2 = tau[1];
+    }
+    let csd = c.c * sd;
+    let f1 = -dmul(dmul(csd, w2), w2) - c.p * s1 + tau1;
+    let f2 = dmul(dmul(csd, w1), w1) - c.q * s2 + tau2;
+    let ccd = c.c * cd;
+    let inv_det = drecip(dconst(c.a * c.b) - dmul(ccd, ccd));
+    let a1 = dmul(c.b * f1 - dmul(ccd, f2), inv_det);
+    let a2 = dmul(c.a * f2 - dmul(ccd, f1), inv_det);
     return Tangent(
         vec4<f32>(w1.x, a1.x, w2.x, a2.x),
         // d/dt (cos, sin) = omega (-sin, cos)

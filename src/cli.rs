@@ -33,7 +33,8 @@ pub enum Command {
     /// Divergence map: the largest finite-time Lyapunov exponent (1/s) of every start; with
     /// single angles (--theta1 A --theta2 B), its convergence over time as CSV `t,ftle`.
     Lyapunov(LyapunovArgs),
-    /// One trajectory as CSV: t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy.
+    /// One trajectory as CSV: t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,dissipated
+    /// (after a `#` line with the command that reproduces it).
     Trajectory(TrajectoryArgs),
     /// Frames of a map while a parameter changes (--vary) or zooming into a point (--zoom-to),
     /// as numbered PNGs and an animated PNG; an interrupted sweep resumes where it stopped.
@@ -49,37 +50,7 @@ pub enum Command {
     Bench(crate::bench::BenchArgs),
 }
 
-/// The physical parameters, SI units.
-#[derive(Args, Debug, Clone)]
-pub struct PhysicalArgs {
-    /// Upper bob mass (kg).
-    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
-    pub m1: f64,
-    /// Lower bob mass (kg).
-    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
-    pub m2: f64,
-    /// Upper arm length (m).
-    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
-    pub l1: f64,
-    /// Lower arm length (m).
-    #[arg(long, default_value = "1", value_parser = parse_number, allow_hyphen_values = true)]
-    pub l2: f64,
-    /// Gravitational acceleration (m/s^2).
-    #[arg(long, default_value = "9.81", value_parser = parse_number, allow_hyphen_values = true)]
-    pub g: f64,
-}
-
-impl PhysicalArgs {
-    pub fn params(&self) -> Params {
-        Params {
-            m1: self.m1,
-            m2: self.m2,
-            l1: self.l1,
-            l2: self.l2,
-            g: self.g,
-        }
-    }
-}
+pub use crate::physics_args::PhysicalArgs;
 
 /// How a map becomes a picture.
 #[derive(Args, Debug, Clone, Default)]
@@ -150,9 +121,13 @@ impl GridArgs {
     }
 
     /// The flip map of these flags up to `t_max`.
-    pub fn flip_spec(&self, t_max: f64) -> FlipSpec {
+    pub fn flip_spec(&self, t_max: f64) -> Result<FlipSpec> {
         let stepping = Stepping { dt: self.dt, t_max };
-        FlipSpec::new(self.physical.params(), self.grid(), stepping)
+        Ok(FlipSpec::new(
+            self.physical.params()?,
+            self.grid(),
+            stepping,
+        ))
     }
 }
 
@@ -175,11 +150,11 @@ pub struct FlipArgs {
 }
 
 impl FlipArgs {
-    pub fn spec(&self) -> FlipSpec {
-        FlipSpec {
+    pub fn spec(&self) -> Result<FlipSpec> {
+        Ok(FlipSpec {
             early_exit: !self.full,
-            ..self.grid.flip_spec(self.t_max)
-        }
+            ..self.grid.flip_spec(self.t_max)?
+        })
     }
 }
 
@@ -332,7 +307,7 @@ pub fn flip_command_line(spec: &FlipSpec, backend: Backend) -> String {
     let (g, p, s) = (&spec.grid, &spec.params, &spec.stepping);
     let backend = backend_name(backend);
     format!(
-        "chaoscope flip --size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {} --t-max {} --dt {} --m1 {} --m2 {} --l1 {} --l2 {} --g {} --backend {}{}",
+        "chaoscope flip --size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {} --t-max {} --dt {} {} --backend {}{}",
         g.width,
         g.height,
         g.theta1.min,
@@ -343,11 +318,7 @@ pub fn flip_command_line(spec: &FlipSpec, backend: Backend) -> String {
         g.omega2,
         s.t_max,
         s.dt,
-        p.m1,
-        p.m2,
-        p.l1,
-        p.l2,
-        p.g,
+        crate::physics_args::flags(p),
         backend,
         if spec.early_exit { "" } else { " --full" }
     )
@@ -415,10 +386,21 @@ fn axes(grid: &Grid) -> (Axis, Axis) {
 }
 
 fn physics_line(p: &Params, grid: &Grid) -> String {
-    format!(
+    let mut line = format!(
         "m1 {} kg · m2 {} kg · l1 {} m · l2 {} m · g {} m/s² · ω0 ({}, {}) rad/s",
         p.m1, p.m2, p.l1, p.l2, p.g, grid.omega1, grid.omega2
-    )
+    );
+    if p.rod1 != 0.0 || p.rod2 != 0.0 {
+        line += &format!(" · rods {}/{} kg", p.rod1, p.rod2);
+    }
+    let l = &p.losses;
+    if l.joint1 != 0.0 || l.joint2 != 0.0 {
+        line += &format!(" · damping {}/{} N m s", l.joint1, l.joint2);
+    }
+    if l.has_drag() {
+        line += " · air drag";
+    }
+    line
 }
 
 /// The flip map as a picture (`--annotate`, `--colormap`).
@@ -519,15 +501,11 @@ pub fn lyapunov_command_line(
         Method::Twin { eps } => format!("--method twin --eps {eps}"),
     };
     format!(
-        "chaoscope lyapunov {where_} --t-max {} --dt {} --renorm {} {method} --m1 {} --m2 {} --l1 {} --l2 {} --g {} --backend {}",
+        "chaoscope lyapunov {where_} --t-max {} --dt {} --renorm {} {method} {} --backend {}",
         s.t_max,
         s.dt,
         spec.renorm,
-        p.m1,
-        p.m2,
-        p.l1,
-        p.l2,
-        p.g,
+        crate::physics_args::flags(p),
         backend_name(backend)
     )
 }
@@ -559,7 +537,7 @@ pub fn png_metadata(command: String, info: &RunInfo) -> Vec<(String, String)> {
 }
 
 fn flip(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
-    let spec = args.spec();
+    let spec = args.spec()?;
     spec.validate()?;
     check_extension("--output", &args.output, "png")?;
     if let Some(data) = &args.data {
@@ -628,7 +606,7 @@ fn lyapunov(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
         },
     };
     let spec = LyapunovSpec {
-        params: args.physical.params(),
+        params: args.physical.params()?,
         grid: Grid {
             width,
             height,
@@ -821,7 +799,7 @@ pub fn output_stride(every: Option<f64>, dt: f64) -> Result<u32> {
 }
 
 fn trajectory(args: &TrajectoryArgs) -> Result<()> {
-    let params = args.physical.params();
+    let params = args.physical.params()?;
     let stepping = Stepping {
         dt: args.dt,
         t_max: args.t_max,
@@ -846,13 +824,29 @@ fn trajectory(args: &TrajectoryArgs) -> Result<()> {
             cpu::trajectory(&params, start, args.dt, steps)
         }
     };
+    let dissipated = cpu::dissipated_along(&params, &states, args.dt);
     let write = |w: &mut dyn Write| -> Result<()> {
-        writeln!(w, "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy")?;
+        writeln!(
+            w,
+            "# chaoscope trajectory --theta1 {} --theta2 {} --omega1 {} --omega2 {} --t-max {} --dt {} {} --backend {}",
+            args.theta1,
+            args.theta2,
+            args.omega1,
+            args.omega2,
+            args.t_max,
+            args.dt,
+            crate::physics_args::flags(&params),
+            backend_name(args.backend)
+        )?;
+        writeln!(
+            w,
+            "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,dissipated"
+        )?;
         for (k, s) in states.iter().enumerate().step_by(stride as usize) {
             let pos = params.positions(s);
             writeln!(
                 w,
-                "{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{}",
                 k as f64 * args.dt,
                 s.theta1,
                 s.omega1,
@@ -862,7 +856,8 @@ fn trajectory(args: &TrajectoryArgs) -> Result<()> {
                 pos.y1,
                 pos.x2,
                 pos.y2,
-                params.energy(s)
+                params.energy(s),
+                dissipated[k]
             )?;
         }
         Ok(())

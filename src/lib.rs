@@ -20,6 +20,7 @@ pub mod field;
 pub mod gpu;
 pub mod model;
 pub mod monitor;
+pub mod physics_args;
 pub mod render;
 pub mod spec;
 pub mod sweep;

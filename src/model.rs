@@ -1,12 +1,60 @@
-//! The point-mass double pendulum: parameters, state, energy, positions.
+//! The double pendulum: parameters (bobs, optional uniform rods, energy losses), state,
+//! energy, positions.
 //!
 //! Angles are measured from the downward vertical, counter-clockwise positive; the pivot is
-//! the origin and y points up. With D = theta1 - theta2 and M = m1 + m2 the Lagrangian gives
+//! the origin and y points up. Arm i carries a bob of mass m_i at its end (length l_i) and,
+//! optionally, a uniform rod of mass r_i from its joint to the bob. With D = theta1 - theta2
+//! the Lagrangian is
 //!
 //! ```text
-//! T = 1/2 M l1^2 omega1^2 + 1/2 m2 l2^2 omega2^2 + m2 l1 l2 omega1 omega2 cos D
-//! V = -M g l1 cos theta1 - m2 g l2 cos theta2
+//! T = 1/2 A omega1^2 + 1/2 B omega2^2 + C omega1 omega2 cos D
+//! V = -P cos theta1 - Q cos theta2
+//! A = (m1 + m2 + r2 + r1/3) l1^2      B = (m2 + r2/3) l2^2      C = (m2 + r2/2) l1 l2
+//! P = (m1 + m2 + r2 + r1/2) g l1      Q = (m2 + r2/2) g l2
 //! ```
+//! (a rod's moment of inertia about its end is r l^2/3, its centre of mass at l/2). Point
+//! masses are r1 = r2 = 0: A = M l1^2, B = m2 l2^2, C = m2 l1 l2, P = M g l1, Q = m2 g l2.
+//! Losses enter the Lagrange equations as generalised forces (torques) tau1, tau2; see
+//! [`Losses`].
+
+/// Energy losses (section 2.4 of the lab report), all off by default.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Losses {
+    /// Viscous joint damping (N m s): torque -c1 omega1 at the pivot and -c2 (omega2 - omega1)
+    /// at the middle joint (equal and opposite on the two arms).
+    pub joint1: f64,
+    pub joint2: f64,
+    /// Quadratic air drag, F = 1/2 rho c_w A v^2 against the local velocity: air density
+    /// (kg/m^3), drag coefficient, projected areas of the bobs and of the rods (m^2).
+    pub rho: f64,
+    pub cw: f64,
+    pub bob_area1: f64,
+    pub bob_area2: f64,
+    pub rod_area1: f64,
+    pub rod_area2: f64,
+}
+
+impl Losses {
+    pub fn any(&self) -> bool {
+        self.joint1 != 0.0 || self.joint2 != 0.0 || self.has_drag()
+    }
+
+    pub fn has_drag(&self) -> bool {
+        self.rho * self.cw * (self.bob_area1 + self.bob_area2 + self.rod_area1 + self.rod_area2)
+            != 0.0
+    }
+
+    /// 1/2 rho c_w A for each bob and rod (N s^2/m^2): the drag force is this times v^2.
+    pub fn drag_factors(&self) -> [f64; 4] {
+        let k = 0.5 * self.rho * self.cw;
+        [
+            k * self.bob_area1,
+            k * self.bob_area2,
+            k * self.rod_area1,
+            k * self.rod_area2,
+        ]
+    }
+}
 
 /// Physical parameters, SI units.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,6 +69,10 @@ pub struct Params {
     pub l2: f64,
     /// Gravitational acceleration (m/s^2).
     pub g: f64,
+    /// Masses of uniform rods along the upper and lower arm (kg); 0 for massless arms.
+    pub rod1: f64,
+    pub rod2: f64,
+    pub losses: Losses,
 }
 
 impl Default for Params {
@@ -31,8 +83,21 @@ impl Default for Params {
             l1: 1.0,
             l2: 1.0,
             g: 9.81,
+            rod1: 0.0,
+            rod2: 0.0,
+            losses: Losses::default(),
         }
     }
+}
+
+/// The coefficients of T and V (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inertia {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+    pub p: f64,
+    pub q: f64,
 }
 
 /// State `(theta1, omega1, theta2, omega2)` in rad and rad/s.
@@ -77,22 +142,34 @@ pub struct Positions {
 }
 
 impl Params {
-    /// Total mass M = m1 + m2 (kg).
+    /// Total mass M = m1 + m2 (kg) of the bobs.
     pub fn total_mass(&self) -> f64 {
         self.m1 + self.m2
     }
 
+    pub fn inertia(&self) -> Inertia {
+        let (r1, r2) = (self.rod1, self.rod2);
+        let outer = self.m2 + r2 / 2.0;
+        Inertia {
+            a: (self.m1 + self.m2 + r2 + r1 / 3.0) * self.l1 * self.l1,
+            b: (self.m2 + r2 / 3.0) * self.l2 * self.l2,
+            c: outer * self.l1 * self.l2,
+            p: (self.m1 + self.m2 + r2 + r1 / 2.0) * self.g * self.l1,
+            q: outer * self.g * self.l2,
+        }
+    }
+
     pub fn kinetic_energy(&self, s: &State) -> f64 {
-        let m = self.total_mass();
+        let k = self.inertia();
         let c = (s.theta1 - s.theta2).cos();
-        0.5 * m * self.l1 * self.l1 * s.omega1 * s.omega1
-            + 0.5 * self.m2 * self.l2 * self.l2 * s.omega2 * s.omega2
-            + self.m2 * self.l1 * self.l2 * s.omega1 * s.omega2 * c
+        0.5 * k.a * s.omega1 * s.omega1
+            + 0.5 * k.b * s.omega2 * s.omega2
+            + k.c * s.omega1 * s.omega2 * c
     }
 
     pub fn potential_energy(&self, theta1: f64, theta2: f64) -> f64 {
-        -self.total_mass() * self.g * self.l1 * theta1.cos()
-            - self.m2 * self.g * self.l2 * theta2.cos()
+        let k = self.inertia();
+        -k.p * theta1.cos() - k.q * theta2.cos()
     }
 
     /// Total mechanical energy (J).
@@ -115,19 +192,19 @@ impl Params {
     ///
     /// Kinetic energy is never negative, so a pendulum whose energy E is below the minimum of V
     /// over the set {|theta1| = pi} or {|theta2| = pi} can never reach it (energy is conserved,
-    /// or lost with damping). On {theta1 = pi}, V = M g l1 - m2 g l2 cos theta2 is least at
-    /// theta2 = 0; on {theta2 = pi}, V = -M g l1 cos theta1 + m2 g l2 is least at theta1 = 0.
-    /// Both minima together: E* = -|M g l1 - m2 g l2|, for any masses and lengths.
+    /// or lost with damping). On {theta1 = pi}, V = P - Q cos theta2 is least at theta2 = 0;
+    /// on {theta2 = pi}, V = -P cos theta1 + Q is least at theta1 = 0. Both minima together:
+    /// E* = -|P - Q| (point masses: -|M g l1 - m2 g l2|), for any masses, rods and lengths.
     pub fn flip_energy(&self) -> f64 {
-        let upper = self.total_mass() * self.g * self.l1 - self.m2 * self.g * self.l2;
-        let lower = -self.total_mass() * self.g * self.l1 + self.m2 * self.g * self.l2;
-        upper.min(lower)
+        let k = self.inertia();
+        -(k.p - k.q).abs()
     }
 
     /// Scale of the potential energy (J): the size of the numbers the energy is made of,
     /// which sets its round-off.
     pub fn energy_scale(&self) -> f64 {
-        self.total_mass() * self.g * self.l1 + self.m2 * self.g * self.l2
+        let k = self.inertia();
+        k.p + k.q
     }
 
     /// Below this energy (J) a start is certain never to flip, in a precision with relative
@@ -140,32 +217,31 @@ impl Params {
 
     /// Small-angle normal-mode angular frequencies squared (1/s^2), slow then fast.
     ///
-    /// Linearising gives M_0 x'' + K x = 0 with M_0 = [[M l1^2, m2 l1 l2], [m2 l1 l2, m2 l2^2]]
-    /// and K = diag(M g l1, m2 g l2); the eigenvalues of M_0^-1 K solve
-    /// det(K - w^2 M_0) = 0, a quadratic in w^2.
+    /// Linearising gives M_0 x'' + K x = 0 with M_0 = [[A, C], [C, B]] and K = diag(P, Q);
+    /// the eigenvalues of M_0^-1 K solve det(K - w^2 M_0) = 0, a quadratic in w^2.
     pub fn normal_modes_squared(&self) -> (f64, f64) {
-        let (m, m2, l1, l2, g) = (self.total_mass(), self.m2, self.l1, self.l2, self.g);
+        let k = self.inertia();
         // a w^4 + b w^2 + c = 0
-        let a = m * m2 * l1 * l1 * l2 * l2 - m2 * m2 * l1 * l1 * l2 * l2;
-        let b = -(m * l1 * l1 * m2 * g * l2 + m2 * l2 * l2 * m * g * l1);
-        let c = m * g * l1 * m2 * g * l2;
+        let a = k.a * k.b - k.c * k.c;
+        let b = -(k.a * k.q + k.b * k.p);
+        let c = k.p * k.q;
         let disc = (b * b - 4.0 * a * c).sqrt();
         ((-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a))
     }
 
-    /// Angular accelerations from the report's closed form (the one the shader uses).
+    /// Angular accelerations without losses from the closed form the shader uses:
+    /// a1 = (B f1 - C cos D f2) / det, a2 = (A f2 - C cos D f1) / det, det = A B - C^2 cos^2 D,
+    /// f1 = -C sin D omega2^2 - P sin theta1, f2 = C sin D omega1^2 - Q sin theta2.
     pub fn accelerations_closed_form(&self, s: &State) -> (f64, f64) {
-        let (m, m2, l1, l2, g) = (self.total_mass(), self.m2, self.l1, self.l2, self.g);
-        let d = s.theta1 - s.theta2;
-        let (sd, cd) = d.sin_cos();
-        let (s1, s2) = (s.theta1.sin(), s.theta2.sin());
-        let (w1sq, w2sq) = (s.omega1 * s.omega1, s.omega2 * s.omega2);
-        let den = m - m2 * cd * cd;
-        let a1 = (-m2 * l2 * w2sq * sd - g * m * s1 - m2 * l1 * w1sq * sd * cd + g * m2 * s2 * cd)
-            / (l1 * den);
-        let a2 = (m2 * l2 * w2sq * sd * cd + g * m * s1 * cd + m * l1 * w1sq * sd - g * m * s2)
-            / (l2 * den);
-        (a1, a2)
+        let k = self.inertia();
+        let (sd, cd) = (s.theta1 - s.theta2).sin_cos();
+        let f1 = -k.c * sd * s.omega2 * s.omega2 - k.p * s.theta1.sin();
+        let f2 = k.c * sd * s.omega1 * s.omega1 - k.q * s.theta2.sin();
+        let det = k.a * k.b - k.c * k.c * cd * cd;
+        (
+            (k.b * f1 - k.c * cd * f2) / det,
+            (k.a * f2 - k.c * cd * f1) / det,
+        )
     }
 }
 

@@ -206,11 +206,7 @@ fn finite_positive(flag: &'static str, v: f64) -> Result<()> {
 }
 
 pub fn validate_params(p: &Params) -> Result<()> {
-    finite_positive("--m1", p.m1)?;
-    finite_positive("--m2", p.m2)?;
-    finite_positive("--l1", p.l1)?;
-    finite_positive("--l2", p.l2)?;
-    finite_positive("--g", p.g)
+    crate::physics_args::validate(p)
 }
 
 pub fn validate_stepping(s: &Stepping) -> Result<()> {

@@ -36,9 +36,11 @@ pub enum Param {
     Mass,
     Omega1,
     Omega2,
+    /// Both joints' viscous damping (N m s).
+    Damping,
 }
 
-const PARAM_NAMES: &str = "m1, m2, l1, l2, g, m2/m1, l2/l1, mass, omega1, omega2";
+const PARAM_NAMES: &str = "m1, m2, l1, l2, g, m2/m1, l2/l1, mass, omega1, omega2, damping";
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vary {
@@ -62,6 +64,7 @@ fn parse_vary(s: &str) -> std::result::Result<Vary, String> {
         "mass" => Param::Mass,
         "omega1" => Param::Omega1,
         "omega2" => Param::Omega2,
+        "damping" => Param::Damping,
         other => return Err(format!("`{other}` is not one of {PARAM_NAMES}")),
     };
     let (a, b) = range
@@ -86,7 +89,8 @@ pub struct SweepArgs {
     /// Which map each frame shows.
     #[arg(long, value_enum, default_value = "flip")]
     pub map: MapKind,
-    /// PARAM=FROM:TO, PARAM one of m1, m2, l1, l2, g, m2/m1, l2/l1, mass, omega1, omega2.
+    /// PARAM=FROM:TO, PARAM one of m1, m2, l1, l2, g, m2/m1, l2/l1, mass, omega1, omega2,
+    /// damping (both joints, N m s).
     #[arg(long, value_parser = parse_vary, allow_hyphen_values = true)]
     pub vary: Option<Vary>,
     /// Zoom towards THETA1,THETA2 (rad), which stays fixed in the picture.
@@ -144,7 +148,7 @@ pub fn frames(args: &SweepArgs) -> Result<Vec<Frame>> {
             "a sweep needs --vary PARAM=FROM:TO or --zoom-to THETA1,THETA2 --zoom FACTOR",
         ));
     }
-    let base_params = args.grid.physical.params();
+    let base_params = args.grid.physical.params()?;
     let base_grid = args.grid.grid();
     let n = args.frames;
     let mut out = Vec::with_capacity(n as usize);
@@ -172,6 +176,10 @@ pub fn frames(args: &SweepArgs) -> Result<Vec<Frame>> {
                 }
                 Param::Omega1 => g.omega1 = x,
                 Param::Omega2 => g.omega2 = x,
+                Param::Damping => {
+                    p.losses.joint1 = x;
+                    p.losses.joint2 = x;
+                }
             }
             crate::spec::validate_params(&p)
                 .map_err(|e| Error::invalid("--vary", format!("at frame {k}: {e}")))?;

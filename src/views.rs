@@ -142,8 +142,7 @@ fn run_color(k: usize, n: usize) -> [u8; 3] {
 }
 
 pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
-    let p = args.physical.params();
-    spec::validate_params(&p)?;
+    let p = args.physical.params()?;
     let stepping = Stepping {
         dt: args.dt,
         t_max: args.exposure,
@@ -208,7 +207,7 @@ pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
     let colors: Vec<[u8; 3]> = (0..n).map(|k| run_color(k, n)).collect();
     let rgb = exposure_picture(&positions, &colors, view, args.dt, usize::MAX, n)?;
     let command = format!(
-        "chaoscope traces --theta1 {} --theta2 {} --omega1 {} --omega2 {} --runs {} --spread {} --exposure {} --dt {} --size {} --m1 {} --m2 {} --l1 {} --l2 {} --g {}",
+        "chaoscope traces --theta1 {} --theta2 {} --omega1 {} --omega2 {} --runs {} --spread {} --exposure {} --dt {} --size {} {}",
         args.theta1,
         args.theta2,
         args.omega1,
@@ -221,11 +220,7 @@ pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
         args.exposure,
         args.dt,
         args.size,
-        p.m1,
-        p.m2,
-        p.l1,
-        p.l2,
-        p.g
+        crate::physics_args::flags(&p)
     );
     let meta = png_metadata(command, &info);
     render::write_png(&args.output, args.size, args.size, &rgb, &meta)?;
@@ -531,8 +526,7 @@ fn omega_extent(values: impl Iterator<Item = f64>) -> f64 {
 }
 
 pub fn phase(args: &PhaseArgs, monitor: &Monitor) -> Result<()> {
-    let p = args.physical.params();
-    spec::validate_params(&p)?;
+    let p = args.physical.params()?;
     let stepping = Stepping {
         dt: args.dt,
         t_max: args.t_max,
@@ -619,7 +613,7 @@ pub fn phase(args: &PhaseArgs, monitor: &Monitor) -> Result<()> {
         }
         let (rgb, w, h) = side_by_side(&panels);
         let command = format!(
-            "chaoscope phase --theta1 {} --theta2 {} --omega1 {} --omega2 {} --runs {} --t-max {} --dt {} --size {} --m1 {} --m2 {} --l1 {} --l2 {} --g {}",
+            "chaoscope phase --theta1 {} --theta2 {} --omega1 {} --omega2 {} --runs {} --t-max {} --dt {} --size {} {}",
             args.theta1,
             args.theta2,
             args.omega1,
@@ -628,11 +622,7 @@ pub fn phase(args: &PhaseArgs, monitor: &Monitor) -> Result<()> {
             args.t_max,
             args.dt,
             args.size,
-            p.m1,
-            p.m2,
-            p.l1,
-            p.l2,
-            p.g
+            crate::physics_args::flags(&p)
         );
         (rgb, w, h, command, info)
     };

@@ -123,9 +123,15 @@ fn trajectory_csv_has_the_columns_and_reads_back_exactly() {
         .success();
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .starts_with("# chaoscope trajectory --theta1 ")
+    );
     assert_eq!(
         lines.next().unwrap(),
-        "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy"
+        "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,dissipated"
     );
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
@@ -151,6 +157,10 @@ fn trajectory_csv_has_the_columns_and_reads_back_exactly() {
     // dt 0.01 stays below 1e-4 of the energy scale over 1 s.
     let e: Vec<f64> = rows.iter().map(|r| r[9]).collect();
     assert!(e.iter().all(|v| (v - e[0]).abs() < 1e-4 * p.energy_scale()));
+    assert!(
+        rows.iter().all(|r| r[10] == 0.0),
+        "no losses, nothing dissipated"
+    );
     chaoscope()
         .args([
             "trajectory",

@@ -165,6 +165,7 @@ fn no_start_inside_the_energetic_region_flips_and_some_just_outside_do() {
             l1: 1.0,
             l2: 0.6,
             g: 9.81,
+            ..Default::default()
         },
         Params {
             m1: 0.5,
@@ -172,6 +173,7 @@ fn no_start_inside_the_energetic_region_flips_and_some_just_outside_do() {
             l1: 0.7,
             l2: 1.2,
             g: 3.7,
+            ..Default::default()
         },
     ];
     for p in sets {

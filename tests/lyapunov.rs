@@ -104,6 +104,7 @@ fn jacobian_trace_is_liouvilles_volume_change() {
             l1: 0.1 + 3.0 * rng.f64(),
             l2: 0.1 + 3.0 * rng.f64(),
             g: 1.0 + 20.0 * rng.f64(),
+            ..Default::default()
         };
         let s = State {
             theta1: 10.0 * (rng.f64() - 0.5),
@@ -158,6 +159,7 @@ fn gpu_jacobian_matches_the_cpu_at_random_states() {
         l1: 0.9,
         l2: 1.2,
         g: 9.81,
+        ..Default::default()
     };
     let mut rng = fastrand::Rng::with_seed(11);
     let states: Vec<State> = (0..500)

@@ -14,6 +14,7 @@ fn random_params(rng: &mut fastrand::Rng) -> Params {
         l1: 0.1 + 3.0 * rng.f64(),
         l2: 0.1 + 3.0 * rng.f64(),
         g: 1.0 + 20.0 * rng.f64(),
+        ..Default::default()
     }
 }
 
@@ -129,6 +130,7 @@ fn small_angle_normal_modes_match_the_analytic_frequencies() {
         l1: 1.5,
         l2: 0.7,
         g: 9.81,
+        ..Default::default()
     };
     let (s, f) = q.normal_modes_squared();
     let m = q.m1 + q.m2;

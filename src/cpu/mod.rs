@@ -19,37 +19,104 @@ use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::Grid;
 
-/// Angular accelerations (rad/s^2) from the Lagrange equations M(q) q'' = f(q, q'):
+/// Angular accelerations (rad/s^2) from the Lagrange equations M(q) q'' = f(q, q') + tau:
 ///
 /// ```text
-/// [ M l1^2        m2 l1 l2 c ] [a1]   [ -m2 l1 l2 s omega2^2 - M g l1 sin theta1 ]
-/// [ m2 l1 l2 c    m2 l2^2    ] [a2] = [  m2 l1 l2 s omega1^2 - m2 g l2 sin theta2 ]
+/// [ A      C c ] [a1]   [ -C s omega2^2 - P sin theta1 ]   [tau1]
+/// [ C c    B   ] [a2] = [  C s omega1^2 - Q sin theta2 ] + [tau2]
 /// ```
-/// with s, c = sin, cos (theta1 - theta2). The matrix is positive definite (det =
-/// m2 l1^2 l2^2 (m1 + m2 sin^2 D) > 0), so the solve never fails. Generic over the scalar so
-/// that dual numbers (num-dual) differentiate this very solve for the Jacobian.
+/// with s, c = sin, cos (theta1 - theta2), A, B, C, P, Q from [`Params::inertia`] and tau the
+/// loss torques ([`loss_torques`]). The matrix is positive definite (det = A B - C^2 c^2 > 0),
+/// so the solve never fails. Generic over the scalar so that dual numbers (num-dual)
+/// differentiate this very solve for the Jacobian.
 pub fn accelerations_of<T: RealField + Copy>(p: &Params, y: &[T; 4]) -> [T; 2] {
     let k = |x: f64| -> T { nalgebra::convert(x) };
+    let i = p.inertia();
     let [theta1, omega1, theta2, omega2] = *y;
-    let m = p.total_mass();
     let d = theta1 - theta2;
     let (sd, cd) = (d.sin(), d.cos());
-    let coupling = k(p.m2 * p.l1 * p.l2);
-    let mass = Matrix2::new(
-        k(m * p.l1 * p.l1),
-        coupling * cd,
-        coupling * cd,
-        k(p.m2 * p.l2 * p.l2),
-    );
+    let coupling = k(i.c);
+    let mass = Matrix2::new(k(i.a), coupling * cd, coupling * cd, k(i.b));
+    let [tau1, tau2] = loss_torques(p, y, cd);
     let force = Vector2::new(
-        -coupling * sd * omega2 * omega2 - k(m * p.g * p.l1) * theta1.sin(),
-        coupling * sd * omega1 * omega1 - k(p.m2 * p.g * p.l2) * theta2.sin(),
+        -coupling * sd * omega2 * omega2 - k(i.p) * theta1.sin() + tau1,
+        coupling * sd * omega1 * omega1 - k(i.q) * theta2.sin() + tau2,
     );
     let a = mass
         .cholesky()
         .expect("the mass matrix is positive definite")
         .solve(&force);
     [a[0], a[1]]
+}
+
+/// Speeds below this (m/s) are smoothed in the drag law, |v| -> sqrt(v^2 + V_SMOOTH^2), so
+/// that the force -k |v| v stays differentiable at rest (for the tangent equations); the
+/// force changes by less than 1e-6 relative above 1 mm/s.
+pub const V_SMOOTH: f64 = 1e-6;
+
+/// 3-point Gauss-Legendre nodes and weights on [0, 1], for the drag along the lower rod.
+const GAUSS3: [(f64, f64); 3] = [
+    (0.112_701_665_379_258_3, 5.0 / 18.0),
+    (0.5, 8.0 / 18.0),
+    (0.887_298_334_620_741_7, 5.0 / 18.0),
+];
+
+/// Generalised forces (N m) of the losses, `cd` = cos(theta1 - theta2):
+/// - joint damping: tau1 = -c1 w1 + c2 (w2 - w1), tau2 = -c2 (w2 - w1);
+/// - drag on a bob at r with velocity v: F = -k |v| v, tau_j += F . dr/dtheta_j, with
+///   v1 = l1 w1 e1, v2 = l1 w1 e1 + l2 w2 e2 (e_i the unit vector along dr_i/dtheta_i, and
+///   e1 . e2 = cos D);
+/// - drag along a rod, per unit length k/l: upper rod exactly, -k l1^3 |w1| w1 / 4; lower rod
+///   by 3-point Gauss quadrature over its length.
+///
+/// Each term's power tau . omega is -k |u| u.u <= 0, so energy never increases.
+pub fn loss_torques<T: RealField + Copy>(p: &Params, y: &[T; 4], cd: T) -> [T; 2] {
+    let losses = &p.losses;
+    let zero = T::zero();
+    if !losses.any() {
+        return [zero, zero];
+    }
+    let k = |x: f64| -> T { nalgebra::convert(x) };
+    let (w1, w2) = (y[1], y[3]);
+    let (l1, l2) = (k(p.l1), k(p.l2));
+    let relative = w2 - w1;
+    let mut tau1 = -k(losses.joint1) * w1 + k(losses.joint2) * relative;
+    let mut tau2 = -k(losses.joint2) * relative;
+    if losses.has_drag() {
+        let [bob1, bob2, rod1, rod2] = losses.drag_factors();
+        let smooth = k(V_SMOOTH * V_SMOOTH);
+        let speed = |v2: T| (v2 + smooth).sqrt();
+        // Upper bob and rod: velocity l w1 along e1 at distance l.
+        let v1 = l1 * w1;
+        let s1 = speed(v1 * v1);
+        tau1 -= k(bob1) * s1 * v1 * l1 + k(rod1 / 4.0) * s1 * v1 * l1;
+        // A point at distance s along the lower arm: u = l1 w1 e1 + s w2 e2.
+        let at = |s: T| {
+            let u_e1 = l1 * w1 + s * w2 * cd;
+            let u_e2 = l1 * w1 * cd + s * w2;
+            let u2 = l1 * l1 * w1 * w1 + s * s * w2 * w2 + k(2.0) * l1 * s * w1 * w2 * cd;
+            let sp = speed(u2);
+            // (force . dr/dtheta1, force . dr/dtheta2) per unit drag factor.
+            (-sp * u_e1 * l1, -sp * u_e2 * s)
+        };
+        let (f1, f2) = at(l2);
+        tau1 += k(bob2) * f1;
+        tau2 += k(bob2) * f2;
+        if rod2 != 0.0 {
+            for (x, w) in GAUSS3 {
+                let (f1, f2) = at(k(x) * l2);
+                tau1 += k(rod2 * w) * f1;
+                tau2 += k(rod2 * w) * f2;
+            }
+        }
+    }
+    [tau1, tau2]
+}
+
+/// Power (W) the losses take out of the pendulum at `s`: -(tau1 omega1 + tau2 omega2) >= 0.
+pub fn dissipated_power(p: &Params, s: &State) -> f64 {
+    let [t1, t2] = loss_torques(p, &s.to_array(), (s.theta1 - s.theta2).cos());
+    -(t1 * s.omega1 + t2 * s.omega2)
 }
 
 /// Angular accelerations (rad/s^2) at `s`; see [`accelerations_of`].
@@ -101,6 +168,41 @@ pub fn rk4_step(p: &Params, y: &State, dt: f64) -> State {
         theta2: y.theta2 + w * (k1.theta2 + 2.0 * k2.theta2 + 2.0 * k3.theta2 + k4.theta2),
         omega2: y.omega2 + w * (k1.omega2 + 2.0 * k2.omega2 + 2.0 * k3.omega2 + k4.omega2),
     }
+}
+
+/// One RK4 step and the work (J) the losses do over it, integrated with the same stages (the
+/// work is a fifth ODE variable, W' = loss power, that does not feed back).
+pub fn rk4_step_with_work(p: &Params, y: &State, dt: f64) -> (State, f64) {
+    let k1 = derivative(p, y);
+    let y2 = axpy(y, 0.5 * dt, &k1);
+    let k2 = derivative(p, &y2);
+    let y3 = axpy(y, 0.5 * dt, &k2);
+    let k3 = derivative(p, &y3);
+    let y4 = axpy(y, dt, &k3);
+    let k4 = derivative(p, &y4);
+    let w = dt / 6.0;
+    let power = |s: &State| dissipated_power(p, s);
+    let work = w * (power(y) + 2.0 * power(&y2) + 2.0 * power(&y3) + power(&y4));
+    let next = State {
+        theta1: y.theta1 + w * (k1.theta1 + 2.0 * k2.theta1 + 2.0 * k3.theta1 + k4.theta1),
+        omega1: y.omega1 + w * (k1.omega1 + 2.0 * k2.omega1 + 2.0 * k3.omega1 + k4.omega1),
+        theta2: y.theta2 + w * (k1.theta2 + 2.0 * k2.theta2 + 2.0 * k3.theta2 + k4.theta2),
+        omega2: y.omega2 + w * (k1.omega2 + 2.0 * k2.omega2 + 2.0 * k3.omega2 + k4.omega2),
+    };
+    (next, work)
+}
+
+/// Work done by the losses up to each state of a trajectory (J), step by step from the
+/// states themselves (so it also serves the GPU's trajectories).
+pub fn dissipated_along(p: &Params, states: &[State], dt: f64) -> Vec<f64> {
+    let mut total = 0.0;
+    let mut out = Vec::with_capacity(states.len());
+    out.push(0.0);
+    for s in &states[..states.len().saturating_sub(1)] {
+        total += rk4_step_with_work(p, s, dt).1;
+        out.push(total);
+    }
+    out
 }
 
 /// States at t = 0, dt, 2 dt, ... n dt (n + 1 states).

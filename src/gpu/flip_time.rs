@@ -4,8 +4,7 @@
 use super::context::{GpuContext, map_read, read_buffer};
 use super::layout::{FLIP_TIME_WGSL, GpuParams, NEVER};
 use super::pipeline::{
-    bind_group, compute_pipeline, layouts, params_buffer, record_dispatch, shader_module,
-    storage_buffer,
+    Variants, bind_group, layouts, params_buffer, record_dispatch, shader_module, storage_buffer,
 };
 use crate::error::Result;
 use crate::field::Field;
@@ -20,8 +19,8 @@ pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
 const BYTES_PER_PIXEL: u64 = 44;
 
 pub struct FlipTimeKernel {
-    init: wgpu::ComputePipeline,
-    advance: wgpu::ComputePipeline,
+    /// (flip_init, flip_time), without and with losses.
+    pipelines: Variants,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -42,11 +41,13 @@ impl FlipTimeKernel {
         let module = shader_module(ctx, "flip_time.wgsl", FLIP_TIME_WGSL);
         let (layout, pipeline_layout) =
             layouts(ctx, "flip_time", &[false, false, true, false, false]);
-        FlipTimeKernel {
-            init: compute_pipeline(ctx, &module, Some(&pipeline_layout), "flip_init"),
-            advance: compute_pipeline(ctx, &module, Some(&pipeline_layout), "flip_time"),
+        let kernel = FlipTimeKernel {
+            pipelines: Variants::new(module, pipeline_layout, ("flip_init", "flip_time")),
             layout,
-        }
+        };
+        // Compile the common (lossless) pipelines now, as callers time runs without compiles.
+        kernel.pipelines.get(ctx, false);
+        kernel
     }
 
     fn buffers(&self, ctx: &GpuContext, capacity: u64) -> Buffers {
@@ -128,6 +129,7 @@ impl FlipTimeKernel {
         max_pixels: u64,
     ) -> Result<Field> {
         let grid = spec.grid;
+        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.any());
         let total_steps = spec.stepping.steps();
         let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
         let capacity = tile_rows as u64 * grid.width as u64;
@@ -149,14 +151,8 @@ impl FlipTimeKernel {
                 early_exit: spec.early_exit as u32,
                 ..base
             };
-            let mut active = self.dispatch(
-                ctx,
-                &bufs,
-                &self.init,
-                &bufs.b_to_a,
-                &params,
-                spec.early_exit,
-            )?;
+            let mut active =
+                self.dispatch(ctx, &bufs, init, &bufs.b_to_a, &params, spec.early_exit)?;
             if !spec.early_exit {
                 active = pixels;
             }
@@ -170,8 +166,7 @@ impl FlipTimeKernel {
                 params.steps = steps;
                 params.count = active;
                 let bind = if a_to_b { &bufs.a_to_b } else { &bufs.b_to_a };
-                active =
-                    self.dispatch(ctx, &bufs, &self.advance, bind, &params, spec.early_exit)?;
+                active = self.dispatch(ctx, &bufs, advance, bind, &params, spec.early_exit)?;
                 a_to_b = !a_to_b;
                 step0 += steps;
                 monitor.advance(steps as u64);

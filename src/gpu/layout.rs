@@ -17,11 +17,13 @@ pub const NEVER: f32 = -1.0;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {
-    pub m1: f32,
-    pub m2: f32,
+    pub a: f32,
+    pub b: f32,
+    pub c: f32,
+    pub p: f32,
+    pub q: f32,
     pub l1: f32,
     pub l2: f32,
-    pub g: f32,
     pub dt: f32,
     pub theta1_min: f32,
     pub theta1_step: f32,
@@ -30,6 +32,12 @@ pub struct GpuParams {
     pub omega1: f32,
     pub omega2: f32,
     pub no_flip_energy: f32,
+    pub joint1: f32,
+    pub joint2: f32,
+    pub drag_bob1: f32,
+    pub drag_bob2: f32,
+    pub drag_rod1: f32,
+    pub drag_rod2: f32,
     pub width: u32,
     pub rows: u32,
     pub row0: u32,
@@ -46,18 +54,29 @@ pub struct GpuParams {
 }
 
 // A uniform buffer's size must be a multiple of 16 bytes.
-const _: () = assert!(std::mem::size_of::<GpuParams>() == 96);
+const _: () = assert!(std::mem::size_of::<GpuParams>() == 128);
 
 impl GpuParams {
+    /// The coefficients are formed in f64 and rounded once.
     pub fn new(p: &Params, dt: f64) -> Self {
+        let i = p.inertia();
+        let [drag_bob1, drag_bob2, drag_rod1, drag_rod2] = p.losses.drag_factors();
         GpuParams {
-            m1: p.m1 as f32,
-            m2: p.m2 as f32,
+            a: i.a as f32,
+            b: i.b as f32,
+            c: i.c as f32,
+            p: i.p as f32,
+            q: i.q as f32,
             l1: p.l1 as f32,
             l2: p.l2 as f32,
-            g: p.g as f32,
             dt: dt as f32,
             no_flip_energy: p.no_flip_threshold(f32::EPSILON as f64) as f32,
+            joint1: p.losses.joint1 as f32,
+            joint2: p.losses.joint2 as f32,
+            drag_bob1: drag_bob1 as f32,
+            drag_bob2: drag_bob2 as f32,
+            drag_rod1: drag_rod1 as f32,
+            drag_rod2: drag_rod2 as f32,
             ..Default::default()
         }
     }

@@ -5,8 +5,8 @@ use super::context::{GpuContext, read_buffer};
 use super::flip_time::STEPS_PER_DISPATCH;
 use super::layout::{GpuParams, LYAPUNOV_WGSL};
 use super::pipeline::{
-    bind_group, compute_pipeline, dispatch_and_wait, layouts, params_buffer, shader_module,
-    storage_buffer,
+    Variants, bind_group, compute_pipeline, dispatch_and_wait, layouts, params_buffer,
+    shader_module, storage_buffer,
 };
 use crate::cpu::Convergence;
 use crate::error::Result;
@@ -22,8 +22,8 @@ const BYTES_PER_PIXEL: u64 = 68;
 const STEP_COST: u64 = 3;
 
 pub struct LyapunovKernel {
-    init: wgpu::ComputePipeline,
-    advance: wgpu::ComputePipeline,
+    /// (init, advance) of the method, without and with losses.
+    pipelines: Variants,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -36,11 +36,12 @@ impl LyapunovKernel {
             Method::Tangent => ("tangent_init", "tangent_advance"),
             Method::Twin { .. } => ("twin_init", "twin_advance"),
         };
-        LyapunovKernel {
-            init: compute_pipeline(ctx, &module, Some(&pipeline_layout), init),
-            advance: compute_pipeline(ctx, &module, Some(&pipeline_layout), advance),
+        let kernel = LyapunovKernel {
+            pipelines: Variants::new(module, pipeline_layout, (init, advance)),
             layout,
-        }
+        };
+        kernel.pipelines.get(ctx, false);
+        kernel
     }
 
     /// The FTLE map of `spec` (1/s at t-max).
@@ -82,6 +83,7 @@ impl LyapunovKernel {
         mut trace: Option<&mut Convergence>,
     ) -> Result<Field> {
         let grid = spec.grid;
+        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.any());
         let total_steps = spec.stepping.steps();
         let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
         let capacity = tile_rows as u64 * grid.width as u64;
@@ -123,7 +125,7 @@ impl LyapunovKernel {
                 count: pixels,
                 ..base
             };
-            dispatch(&self.init, &params)?;
+            dispatch(init, &params)?;
             let mut step0 = 0;
             while step0 < total_steps {
                 monitor.check()?;
@@ -134,7 +136,7 @@ impl LyapunovKernel {
                 };
                 params.step0 = step0;
                 params.steps = steps;
-                dispatch(&self.advance, &params)?;
+                dispatch(advance, &params)?;
                 step0 += steps;
                 monitor.advance(steps as u64);
                 if let Some(trace) = trace.as_deref_mut() {
@@ -164,7 +166,7 @@ impl LyapunovKernel {
 /// (row-major 4x4), for checking against the CPU's.
 pub fn jacobians(ctx: &GpuContext, p: &Params, states: &[State]) -> Result<Vec<[[f64; 4]; 4]>> {
     let module = shader_module(ctx, "lyapunov.wgsl", LYAPUNOV_WGSL);
-    let pipeline = compute_pipeline(ctx, &module, None, "jacobian_columns");
+    let pipeline = compute_pipeline(ctx, &module, None, "jacobian_columns", p.losses.any());
     let params = GpuParams {
         count: states.len() as u32,
         ..GpuParams::new(p, 0.01)

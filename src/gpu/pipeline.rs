@@ -13,21 +13,63 @@ pub fn shader_module(ctx: &GpuContext, label: &str, kernel: &str) -> wgpu::Shade
 }
 
 /// A compute pipeline for `entry`; `layout` None derives the layout from the shader.
+/// `losses` sets the shaders' `override LOSSES`: the driver then compiles the loss torques in
+/// or out entirely (a runtime branch on a uniform cost lavapipe 2x even when off).
 pub fn compute_pipeline(
     ctx: &GpuContext,
     module: &wgpu::ShaderModule,
     layout: Option<&wgpu::PipelineLayout>,
     entry: &str,
+    losses: bool,
 ) -> wgpu::ComputePipeline {
+    let constants = [("LOSSES", if losses { 1.0 } else { 0.0 })];
     ctx.device
         .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
             layout,
             module,
             entry_point: Some(entry),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            },
             cache: None,
         })
+}
+
+/// A pair of pipelines (setup, advance) compiled on first use for each `LOSSES` value.
+pub struct Variants {
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    entries: (&'static str, &'static str),
+    compiled: [std::sync::OnceLock<(wgpu::ComputePipeline, wgpu::ComputePipeline)>; 2],
+}
+
+impl Variants {
+    pub fn new(
+        module: wgpu::ShaderModule,
+        layout: wgpu::PipelineLayout,
+        entries: (&'static str, &'static str),
+    ) -> Self {
+        Variants {
+            module,
+            layout,
+            entries,
+            compiled: Default::default(),
+        }
+    }
+
+    pub fn get(
+        &self,
+        ctx: &GpuContext,
+        losses: bool,
+    ) -> &(wgpu::ComputePipeline, wgpu::ComputePipeline) {
+        self.compiled[losses as usize].get_or_init(|| {
+            let make =
+                |entry| compute_pipeline(ctx, &self.module, Some(&self.layout), entry, losses);
+            (make(self.entries.0), make(self.entries.1))
+        })
+    }
 }
 
 /// A bind group layout of one uniform (binding 0) and storage buffers (1, 2, ...), each

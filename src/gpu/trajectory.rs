@@ -39,7 +39,7 @@ pub fn trajectories(
         ));
     }
     let module = shader_module(ctx, "trajectory.wgsl", TRAJECTORY_WGSL);
-    let pipeline = compute_pipeline(ctx, &module, None, "trajectory");
+    let pipeline = compute_pipeline(ctx, &module, None, "trajectory", p.losses.any());
     let params = GpuParams {
         steps,
         count: starts.len() as u32,
