@@ -47,8 +47,9 @@ struct Params {
     early_exit: u32,
     // Number of invocations with work in this dispatch.
     count: u32,
-    // Divergence maps: steps between renormalisations, steps of the whole run, twin separation.
-    renorm_steps: u32,
+    // Steps between renormalisations (divergence maps) or stored states (trajectories), steps
+    // of the whole run, twin separation.
+    interval: u32,
     total_steps: u32,
     twin_eps: f32,
     _pad0: u32,

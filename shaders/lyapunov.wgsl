@@ -1,7 +1,7 @@
 // Divergence map: the largest finite-time Lyapunov exponent of every pixel. Twin of
 // src/cpu/lyapunov.rs; driven by src/gpu/lyapunov.rs. Every pixel integrates the whole run
 // (no early exit); `*_init` sets up a tile, `*_advance` runs steps step0+1 ..= step0+steps and
-// renormalises after every `renorm_steps`-th step and after the last one, adding the log of
+// renormalises after every `interval`-th step and after the last one, adding the log of
 // the stretch to `log_sums`. The host divides by t-max.
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -129,7 +129,7 @@ fn tangent_step(c: Coeffs, t: Tangent, dt: f32) -> Tangent {
 
 // Renormalise after step k (1-based)?
 fn renormalise_after(k: u32) -> bool {
-    return k % params.renorm_steps == 0u || k == params.total_steps;
+    return k % params.interval == 0u || k == params.total_steps;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)

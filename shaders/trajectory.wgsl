@@ -1,7 +1,8 @@
-// Trajectories of `params.count` pendulums, one per invocation: states[i (steps + 1)] is the
-// start of pendulum i, states[i (steps + 1) + k + 1] its state after step k.
+// Trajectories of `params.count` pendulums, one per invocation, keeping every
+// `params.interval`-th state: with n = steps / interval + 1 states a run, states[i n] is the
+// start of pendulum i and states[i n + k] its state after k * interval steps.
 // Twin of src/cpu/mod.rs `trajectory`; used to compare the two paths step by step and for
-// ensembles (traces, phase portraits).
+// ensembles (traces, phase portraits, fitting tracked data).
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
@@ -12,11 +13,14 @@ fn trajectory(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     if i >= params.count {
         return;
     }
-    let base = i * (params.steps + 1u);
+    let kept = params.steps / params.interval + 1u;
+    let base = i * kept;
     let c = coeffs_from(params);
     var p = pendulum_from(states[base]);
-    for (var k = 0u; k < params.steps; k++) {
+    for (var k = 1u; k <= params.steps; k++) {
         p = rk4_step(c, p, params.dt);
-        states[base + k + 1u] = p.y;
+        if k % params.interval == 0u {
+            states[base + k / params.interval] = p.y;
+        }
     }
 }

@@ -44,6 +44,9 @@ pub enum Command {
     /// Phase portraits, omega against theta of each arm, as time-density images; --single for
     /// the single pendulum with its separatrix.
     Phase(crate::views::PhaseArgs),
+    /// Fit the model to a camera's tracked positions: pivot, arm lengths, energies and their
+    /// decay, the state and damping by a GPU ensemble search; plots and summary.json.
+    Fit(crate::fit::FitArgs),
     /// GPU adapters found, the one chosen, its limits and features.
     Info,
     /// Throughput of the GPU and CPU paths on FLIP-512, optionally beside the peers.
@@ -916,6 +919,7 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Sweep(args) => crate::sweep::run(args, monitor),
         Command::Traces(args) => crate::views::traces(args, monitor),
         Command::Phase(args) => crate::views::phase(args, monitor),
+        Command::Fit(args) => crate::fit::run(args),
         Command::Info => info(),
         Command::Bench(args) => crate::bench::run(args, monitor),
     };

@@ -17,6 +17,7 @@ pub mod cpu;
 pub mod engine;
 pub mod error;
 pub mod field;
+pub mod fit;
 pub mod gpu;
 pub mod model;
 pub mod monitor;

@@ -9,6 +9,7 @@ use serde::Deserialize;
 use crate::cli::parse_number;
 use crate::error::{Error, Result};
 use crate::model::{Losses, Params};
+use crate::spec::finite_positive;
 
 /// `A` or `A,B` (one value for both).
 pub fn parse_pair(s: &str) -> std::result::Result<(f64, f64), String> {
@@ -176,17 +177,6 @@ fn key_of(flag: &str) -> String {
         "--drag-area" => "air_drag.bob_area".into(),
         "--rod-drag-area" => "air_drag.rod_area".into(),
         f => f.trim_start_matches("--").replace('-', "_"),
-    }
-}
-
-fn finite_positive(flag: &'static str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            flag,
-            format!("{v} is not allowed; it must be a finite number > 0"),
-        ))
     }
 }
 

@@ -194,7 +194,8 @@ impl LyapunovSpec {
     }
 }
 
-fn finite_positive(flag: &'static str, v: f64) -> Result<()> {
+/// `v` finite and > 0, else an error naming `flag`.
+pub(crate) fn finite_positive(flag: &'static str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {

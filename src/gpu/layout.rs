@@ -45,9 +45,10 @@ pub struct GpuParams {
     pub steps: u32,
     pub early_exit: u32,
     pub count: u32,
-    /// Divergence maps: steps between renormalisations, steps of the whole run, twin
-    /// separation (Euclidean in (theta1, omega1, theta2, omega2)).
-    pub renorm_steps: u32,
+    /// Steps between renormalisations (divergence maps) or between stored states
+    /// (trajectories); steps of the whole run; twin separation (Euclidean in (theta1, omega1,
+    /// theta2, omega2)).
+    pub interval: u32,
     pub total_steps: u32,
     pub twin_eps: f32,
     pub _pad0: u32,

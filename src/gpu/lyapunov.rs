@@ -106,7 +106,7 @@ impl LyapunovKernel {
         monitor.start("gpu", tiles as u64 * total_steps as u64);
         let mut field = Field::new(grid.width, grid.height, 0.0);
         let base = GpuParams {
-            renorm_steps: spec.renorm_steps(),
+            interval: spec.renorm_steps(),
             total_steps,
             twin_eps: match spec.method {
                 Method::Twin { eps } => eps as f32,
@@ -130,7 +130,7 @@ impl LyapunovKernel {
             while step0 < total_steps {
                 monitor.check()?;
                 let steps = match trace {
-                    Some(_) => params.renorm_steps.min(total_steps - step0),
+                    Some(_) => params.interval.min(total_steps - step0),
                     None => (STEPS_PER_DISPATCH / STEP_COST / pixels as u64)
                         .clamp(1, (total_steps - step0) as u64) as u32,
                 };

@@ -10,4 +10,4 @@ mod trajectory;
 pub use context::{GpuContext, list_adapters};
 pub use flip_time::{FlipTimeKernel, STEPS_PER_DISPATCH};
 pub use lyapunov::{LyapunovKernel, jacobians};
-pub use trajectory::{trajectories, trajectory};
+pub use trajectory::{strided_trajectories, trajectories, trajectory};

@@ -27,7 +27,23 @@ pub fn trajectories(
     dt: f64,
     steps: u32,
 ) -> Result<Vec<Vec<State>>> {
-    let per_run = steps as u64 + 1;
+    strided_trajectories(ctx, p, starts, dt, steps, 1)
+}
+
+/// As `trajectories`, keeping every `stride`-th state (steps must be a multiple of it).
+pub fn strided_trajectories(
+    ctx: &GpuContext,
+    p: &Params,
+    starts: &[State],
+    dt: f64,
+    steps: u32,
+    stride: u32,
+) -> Result<Vec<Vec<State>>> {
+    assert!(
+        stride >= 1 && steps.is_multiple_of(stride),
+        "steps a multiple of the stride"
+    );
+    let per_run = (steps / stride) as u64 + 1;
     let bytes = starts.len() as u64 * per_run * 16;
     if bytes > ctx.max_binding() {
         return Err(Error::invalid(
@@ -42,6 +58,7 @@ pub fn trajectories(
     let pipeline = compute_pipeline(ctx, &module, None, "trajectory", p.losses.any());
     let params = GpuParams {
         steps,
+        interval: stride,
         count: starts.len() as u32,
         ..GpuParams::new(p, dt)
     };

@@ -12,7 +12,8 @@ use crate::error::{Error, Result};
 
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
-fn register_font() {
+/// Makes the embedded DejaVu Sans plotters' "sans-serif" (once).
+pub fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)

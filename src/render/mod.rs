@@ -6,7 +6,9 @@ mod colormap;
 mod exposure;
 mod files;
 
-pub use annotate::{Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks};
+pub use annotate::{
+    Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks, register_font,
+};
 pub use colormap::{
     Colormap, FlipColors, NEVER_RGB, flip_colors, ftle_colors, ftle_range, ftle_table,
 };

@@ -1,0 +1,244 @@
+//! Fitting the model to tracked positions: the state at a start time and the joint damping,
+//! by a large ensemble of candidates on the GPU (or the CPU), refined by least squares in f64.
+
+use nalgebra::DVector;
+use rayon::prelude::*;
+
+use super::data::Frame;
+use super::lsq::{least_squares, numeric_jacobian};
+use crate::cpu;
+use crate::engine::{self, Backend};
+use crate::error::Result;
+use crate::gpu;
+use crate::model::{Params, State};
+
+/// Simulation steps per data interval (~1/300 s for 1/3 s frames).
+const SUBSTEPS: u32 = 100;
+
+pub struct ModelFit {
+    /// The data row the fit starts at and its time (s).
+    pub row: usize,
+    pub t0: f64,
+    pub start: State,
+    /// Joint damping (N m s) at the pivot and the middle joint.
+    pub damping: (f64, f64),
+    /// RMS position error (m) over the fitting window.
+    pub rms: f64,
+    /// Candidates tried in the ensemble search, and on what.
+    pub candidates: usize,
+    pub backend: &'static str,
+    /// Until when (s) the simulation stays within the tolerance of every tracked position.
+    pub agrees_until: f64,
+    /// Simulated positions (m, pivot at the origin) from t0 on, ten per data interval.
+    pub simulated: Vec<(f64, [f64; 4])>,
+}
+
+/// What to fit and how.
+pub struct ModelFitSpec {
+    pub params: Params,
+    pub start_time: f64,
+    pub window: f64,
+    pub tolerance: f64,
+    pub candidates: usize,
+    pub backend: Backend,
+}
+
+/// Measured positions relative to the pivot.
+fn measured(frames: &[Frame], pivot: (f64, f64)) -> Vec<[f64; 4]> {
+    frames
+        .iter()
+        .map(|f| {
+            [
+                f.x1 - pivot.0,
+                f.y1 - pivot.1,
+                f.x2 - pivot.0,
+                f.y2 - pivot.1,
+            ]
+        })
+        .collect()
+}
+
+fn positions(p: &Params, s: &State) -> [f64; 4] {
+    let q = p.positions(s);
+    [q.x1, q.y1, q.x2, q.y2]
+}
+
+/// Simulated positions at rows row0..row0+n, from `start` at row0, stepping each data
+/// interval in SUBSTEPS equal steps (the data's times are not exactly uniform).
+fn simulate(p: &Params, start: State, t: &[f64], row0: usize, n: usize) -> Vec<[f64; 4]> {
+    let mut out = Vec::with_capacity(n);
+    let mut y = start;
+    out.push(positions(p, &y));
+    for i in row0..row0 + n - 1 {
+        let dt = (t[i + 1] - t[i]) / SUBSTEPS as f64;
+        for _ in 0..SUBSTEPS {
+            y = cpu::rk4_step(p, &y, dt);
+        }
+        out.push(positions(p, &y));
+    }
+    out
+}
+
+fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
+    let mut q = *p;
+    q.losses.joint1 = c1;
+    q.losses.joint2 = c2;
+    q
+}
+
+/// Halton point k in [0, 1)^d (bases 2, 3, 5, 7, 11, 13): an even, reproducible spread.
+fn halton(k: usize, d: usize) -> Vec<f64> {
+    const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
+    (0..d)
+        .map(|j| {
+            let (b, mut i, mut f, mut r) = (PRIMES[j], k + 1, 1.0, 0.0);
+            while i > 0 {
+                f /= b as f64;
+                r += f * (i % b) as f64;
+                i /= b;
+            }
+            r
+        })
+        .collect()
+}
+
+pub fn fit_model(
+    frames: &[Frame],
+    pivot: (f64, f64),
+    angles: &[(f64, f64)],
+    spec: &ModelFitSpec,
+) -> Result<ModelFit> {
+    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    let data = measured(frames, pivot);
+    // The row nearest the requested start, with a neighbour on each side.
+    let row = (1..frames.len() - 1)
+        .min_by(|&a, &b| {
+            (t[a] - spec.start_time)
+                .abs()
+                .total_cmp(&(t[b] - spec.start_time).abs())
+        })
+        .unwrap_or(1);
+    let window_rows = t[row..]
+        .iter()
+        .take_while(|&&x| x <= t[row] + spec.window + 1e-9)
+        .count()
+        .max(2);
+    // The measured state at t0: angles, and angular velocities by central differences.
+    let w = |k: usize, arm: usize| {
+        let a = |i: usize| if arm == 0 { angles[i].0 } else { angles[i].1 };
+        (a(k + 1) - a(k - 1)) / (t[k + 1] - t[k - 1])
+    };
+    let guess = State {
+        theta1: angles[row].0,
+        omega1: w(row, 0),
+        theta2: angles[row].1,
+        omega2: w(row, 1),
+    };
+    let cost = |sim: &[[f64; 4]]| -> f64 {
+        sim.iter()
+            .zip(&data[row..])
+            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>())
+            .sum()
+    };
+    // Candidates: angles within +-0.15 rad (a few cm at these lengths), angular velocities
+    // within +-4 rad/s (central differences over 2/3 s are crude), damping 0..0.01 N m s.
+    let spans = [0.15, 4.0, 0.15, 4.0];
+    let dampings: Vec<f64> = (0..4).map(|k| 0.01 * k as f64 / 3.0).collect();
+    let per_damping = (spec.candidates / dampings.len()).max(1);
+    let starts: Vec<State> = (0..per_damping)
+        .map(|k| {
+            let u = halton(k, 4);
+            let g = guess.to_array();
+            State::from_array(std::array::from_fn(|j| {
+                g[j] + spans[j] * (2.0 * u[j] - 1.0)
+            }))
+        })
+        .collect();
+    let n_sub = (window_rows as u32 - 1) * SUBSTEPS;
+    // The ensemble integrates with the mean data interval; refinement uses the exact times.
+    let dt = (t[row + window_rows - 1] - t[row]) / n_sub as f64;
+    let (ctx, notice) = engine::resolve(spec.backend)?;
+    if let Some(n) = notice {
+        eprintln!("{n}");
+    }
+    let backend = if ctx.is_some() { "gpu" } else { "cpu" };
+    let mut best = (f64::INFINITY, guess, 0.0);
+    for &c in &dampings {
+        let p = with_damping(&spec.params, c, c);
+        let runs: Vec<Vec<State>> = match &ctx {
+            Some(ctx) => gpu::strided_trajectories(ctx, &p, &starts, dt, n_sub, SUBSTEPS)?,
+            None => starts
+                .par_iter()
+                .map(|s| {
+                    cpu::trajectory(&p, *s, dt, n_sub)
+                        .into_iter()
+                        .step_by(SUBSTEPS as usize)
+                        .collect()
+                })
+                .collect(),
+        };
+        for (s, run) in starts.iter().zip(&runs) {
+            let sim: Vec<[f64; 4]> = run.iter().map(|y| positions(&p, y)).collect();
+            let e = cost(&sim);
+            if e < best.0 {
+                best = (e, *s, c);
+            }
+        }
+    }
+    // Refine state and both damping constants together in f64 (damping as q^2 >= 0, smooth).
+    let residuals = |q: &DVector<f64>| -> DVector<f64> {
+        let p = with_damping(&spec.params, q[4] * q[4], q[5] * q[5]);
+        let start = State::from_array([q[0], q[1], q[2], q[3]]);
+        let sim = simulate(&p, start, &t, row, window_rows);
+        DVector::from_iterator(
+            window_rows * 4,
+            sim.iter()
+                .zip(&data[row..])
+                .flat_map(|(a, b)| (0..4).map(move |k| a[k] - b[k])),
+        )
+    };
+    let steps = [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5];
+    let c0 = (best.2 + 1e-3).sqrt();
+    let b = best.1.to_array();
+    let refined = least_squares(
+        |q| (residuals(q), numeric_jacobian(&residuals, q, &steps)),
+        DVector::from_vec(vec![b[0], b[1], b[2], b[3], c0, c0]),
+        50,
+    );
+    let q = &refined.params;
+    let fitted = with_damping(&spec.params, q[4] * q[4], q[5] * q[5]);
+    let start = State::from_array([q[0], q[1], q[2], q[3]]);
+    let all = simulate(&fitted, start, &t, row, frames.len() - row);
+    let mut agrees_until = t[row];
+    for (k, (a, b)) in all.iter().zip(&data[row..]).enumerate() {
+        let e1 = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+        let e2 = ((a[2] - b[2]).powi(2) + (a[3] - b[3]).powi(2)).sqrt();
+        if e1.max(e2) > spec.tolerance {
+            break;
+        }
+        agrees_until = t[row + k];
+    }
+    // A dense curve for the plots: ten points per data interval.
+    let mut simulated = vec![(t[row], positions(&fitted, &start))];
+    let mut y = start;
+    for i in row..frames.len() - 1 {
+        let dt = (t[i + 1] - t[i]) / SUBSTEPS as f64;
+        for k in 1..=SUBSTEPS {
+            y = cpu::rk4_step(&fitted, &y, dt);
+            if k % (SUBSTEPS / 10) == 0 {
+                simulated.push((t[i] + k as f64 * dt, positions(&fitted, &y)));
+            }
+        }
+    }
+    Ok(ModelFit {
+        row,
+        t0: t[row],
+        start,
+        damping: (q[4] * q[4], q[5] * q[5]),
+        rms: (refined.chi2 / (window_rows * 4) as f64).sqrt(),
+        candidates: per_damping * dampings.len(),
+        backend,
+        agrees_until,
+        simulated,
+    })
+}

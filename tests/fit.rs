@@ -1,0 +1,196 @@
+//! `chaoscope fit` on the lab report's tracked data, and its parts on synthetic data whose
+//! truth is known.
+
+mod common;
+
+use assert_cmd::Command;
+use chaoscope::cpu;
+use chaoscope::engine::Backend;
+use chaoscope::fit::{self, Frame, ModelFitSpec};
+use chaoscope::model::{Params, State};
+use chaoscope::physics_args::Preset;
+use predicates::prelude::*;
+
+fn chaoscope() -> Command {
+    let mut cmd = Command::cargo_bin("chaoscope").expect("binary");
+    cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    cmd
+}
+
+/// Frames of a simulated pendulum hung from `pivot`, every `every` s for `n` frames.
+fn synthetic(p: &Params, start: State, pivot: (f64, f64), every: f64, n: usize) -> Vec<Frame> {
+    let sub = 100;
+    let states = cpu::trajectory(p, start, every / sub as f64, ((n - 1) * sub) as u32);
+    states
+        .iter()
+        .step_by(sub)
+        .enumerate()
+        .map(|(k, s)| {
+            let q = p.positions(s);
+            Frame {
+                t: k as f64 * every,
+                x1: q.x1 + pivot.0,
+                y1: q.y1 + pivot.1,
+                x2: q.x2 + pivot.0,
+                y2: q.y2 + pivot.1,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn pivot_lengths_and_model_state_are_recovered_from_synthetic_tracking() {
+    let mut p = Preset::Lab.params();
+    p.losses.joint1 = 0.002;
+    p.losses.joint2 = 0.001;
+    let start = State {
+        theta1: 0.6,
+        omega1: -2.0,
+        theta2: -0.9,
+        omega2: 4.5,
+    };
+    let pivot = (0.012, -0.007);
+    let frames = synthetic(&p, start, pivot, 1.0 / 3.0, 40);
+    // Exact positions on exact circles: the fits recover them to round-off.
+    let c = fit::fit_pivot(&frames).unwrap();
+    assert!(
+        (c.x - pivot.0).abs() < 1e-9 && (c.y - pivot.1).abs() < 1e-9,
+        "{} {}",
+        c.x,
+        c.y
+    );
+    let (l1, l2) = fit::arm_lengths(&frames, (c.x, c.y));
+    assert!((l1.value - p.l1).abs() < 1e-9 && (l2.value - p.l2).abs() < 1e-9);
+    // The report's grid search lands on the grid point next to the true pivot.
+    let g = fit::grid_pivot(&frames, (0.0, 0.0), 0.05, 0.001);
+    assert!((g.0 - pivot.0).abs() <= 0.0005 + 1e-12 && (g.1 - pivot.1).abs() <= 0.0005 + 1e-12);
+    // The model fit from the first interior row finds a state that reproduces the window.
+    let angles = fit::angles(&frames, (c.x, c.y));
+    let spec = ModelFitSpec {
+        params: p,
+        start_time: 1.0 / 3.0,
+        window: 1.5,
+        tolerance: 0.005,
+        candidates: 4096,
+        backend: if common::gpu().is_some() {
+            Backend::Gpu
+        } else {
+            Backend::Cpu
+        },
+    };
+    let m = fit::fit_model(&frames, (c.x, c.y), &angles, &spec).unwrap();
+    // Same model, same data: the refinement converges to the truth; the positions match to
+    // well under a millimetre over the window.
+    assert!(m.rms < 1e-4, "rms {}", m.rms);
+    assert!(
+        m.agrees_until >= m.t0 + 1.5 - 1e-9,
+        "agrees until {}",
+        m.agrees_until
+    );
+}
+
+#[test]
+fn decay_fits_recover_a_known_exponential() {
+    let t: Vec<f64> = (1..60).map(|k| k as f64 / 3.0).collect();
+    let e: Vec<f64> = t.iter().map(|&x| 0.8 * (-0.025 * x).exp()).collect();
+    let en = fit::Energies {
+        de: vec![0.01; t.len()],
+        t,
+        e,
+    };
+    let d = fit::fit_decay(&en);
+    let (a, b) = (d.exponential.params[0], d.exponential.params[1]);
+    assert!(
+        (a - 0.8).abs() < 1e-9 && (b + 0.025).abs() < 1e-9,
+        "{a} {b}"
+    );
+    // The exact law fits exactly; the other one does not.
+    assert!(d.exponential.reduced_chi2() < 1e-12);
+    assert!(d.inverse_square.reduced_chi2() > d.exponential.reduced_chi2());
+}
+
+#[test]
+fn the_whole_fit_runs_on_the_lab_report_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv");
+    let backend = if common::gpu().is_some() {
+        "gpu"
+    } else {
+        "cpu"
+    };
+    chaoscope()
+        .arg("fit")
+        .arg(&data)
+        .args(["--candidates", "8192", "--backend", backend, "--output"])
+        .arg(dir.path())
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("fits better"));
+    for f in ["positions.png", "energy.png", "phase.png"] {
+        let png = chaoscope::render::read_png(&dir.path().join(f)).unwrap();
+        assert!(png.width > 500, "{f}");
+    }
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap())
+            .unwrap();
+    let num = |path: &str| s.pointer(path).and_then(|v| v.as_f64()).unwrap();
+    // The report: pivot at the origin (its own grid search), l1 ~ 0.30 m, l2 ~ 0.19-0.20 m.
+    assert!(num("/pivot/least_squares_circle/x").abs() < 0.01);
+    assert!(num("/pivot/least_squares_circle/y").abs() < 0.01);
+    assert!(
+        (num("/pivot/report_grid_least_distance_variance/x")
+            - num("/pivot/least_squares_circle/x"))
+        .abs()
+            <= 0.001
+    );
+    assert!((0.29..0.31).contains(&num("/arm_lengths/l1/value")));
+    assert!((0.19..0.205).contains(&num("/arm_lengths/l2/value")));
+    // Energy decays; the report's b = -0.024 1/s lies within 3 standard errors of ours.
+    let (b, db) = (
+        num("/energy/exponential/b"),
+        num("/energy/exponential/b_error"),
+    );
+    assert!(b < 0.0 && (b + 0.024).abs() < 3.0 * db, "b = {b} +- {db}");
+    // The report's hand-started simulation agreed for about 1.2 s (0.8 s to 2 s).
+    assert!(
+        num("/model/agrees_for") >= 1.0,
+        "{}",
+        num("/model/agrees_for")
+    );
+}
+
+#[test]
+fn bad_tracking_files_name_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = "0,0.1,-0.28,0.1,-0.47\n0.33,0.2,-0.2,0.2,-0.4\n0.67,0.1,-0.28,0.1,-0.47\n1,0,-0.3,0,-0.5\n1.33,-0.1,-0.28,-0.1,-0.47\n";
+    let cases = [
+        ("t,x1,y1,x2\n0,1,2,3\n", "no column `y2`", ":1:"),
+        (
+            &*format!("# comment\nt,x1,y1,x2,y2\n{rows}1.67,abc,0,0,0\n"),
+            "`abc`",
+            ":8:",
+        ),
+        ("t,x1,y1,x2,y2\n0,1,1,1,1\n1,1,1,1,1\n", "at least 5", ":3:"),
+        (
+            &*format!("t,x1,y1,x2,y2\n{rows}1.2,0,0,0,0\n"),
+            "does not increase",
+            ":7:",
+        ),
+    ];
+    for (text, what, line) in cases {
+        let f = dir.path().join("bad.csv");
+        std::fs::write(&f, text).unwrap();
+        chaoscope()
+            .arg("fit")
+            .arg(&f)
+            .args(["--backend", "cpu", "--output"])
+            .arg(dir.path().join("out"))
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(what).and(predicate::str::contains(line)));
+    }
+    assert!(
+        !dir.path().join("out").exists(),
+        "nothing written for a bad file"
+    );
+}
