@@ -36,6 +36,11 @@ struct Params {
     drag_bob2: f32,
     drag_rod1: f32,
     drag_rod2: f32,
+    // Bearing friction: g, all moving mass, the mass below the middle joint, c_R r.
+    g: f32,
+    mass_total: f32,
+    mass_lower: f32,
+    bearing: f32,
     // Tile of the grid: `rows` rows of `width` pixels from grid row `row0`.
     width: u32,
     rows: u32,
@@ -76,11 +81,37 @@ struct Coeffs {
     drag_bob2: f32,
     drag_rod1: f32,
     drag_rod2: f32,
+    g: f32,
+    mass_total: f32,
+    mass_lower: f32,
+    bearing: f32,
 }
 
 fn coeffs_from(p: Params) -> Coeffs {
     return Coeffs(p.a, p.b, p.c, p.p, p.q, p.l1, p.l2, p.joint1, p.joint2, p.drag_bob1,
-        p.drag_bob2, p.drag_rod1, p.drag_rod2);
+        p.drag_bob2, p.drag_rod1, p.drag_rod2, p.g, p.mass_total, p.mass_lower, p.bearing);
+}
+
+// src/model.rs BEARING_SMOOTH (rad/s).
+const BEARING_SMOOTH: f32 = 0.01;
+
+// sgn(w) smoothed over BEARING_SMOOTH.
+fn smooth_sign(w: f32) -> f32 {
+    return w * inverseSqrt(w * w + BEARING_SMOOTH * BEARING_SMOOTH);
+}
+
+// Bearing friction torques for angular accelerations alpha (src/cpu `bearing_torques`): the
+// loads on the pivot and the middle joint from the mass-weighted accelerations and gravity.
+fn bearing_torques(c: Coeffs, w1: f32, w2: f32, c1: f32, s1: f32, c2: f32, s2: f32, alpha: vec2<f32>) -> vec2<f32> {
+    let arm1 = vec2<f32>(alpha.x * c1 - w1 * w1 * s1, alpha.x * s1 + w1 * w1 * c1);
+    let arm2 = vec2<f32>(alpha.y * c2 - w2 * w2 * s2, alpha.y * s2 + w2 * w2 * c2);
+    let s_1 = c.p / c.g;
+    let s_2 = c.q / c.g;
+    let pivot = length(s_1 * arm1 + s_2 * arm2 + vec2<f32>(0.0, c.mass_total * c.g));
+    let joint = length(c.mass_lower * c.l1 * arm1 + s_2 * arm2 + vec2<f32>(0.0, c.mass_lower * c.g));
+    let t_pivot = c.bearing * pivot * smooth_sign(w1);
+    let t_joint = c.bearing * joint * smooth_sign(w2 - w1);
+    return vec2<f32>(-t_pivot + t_joint, -t_joint);
 }
 
 // Speeds are smoothed in the drag law, |v| -> sqrt(v^2 + V_SMOOTH^2) (src/cpu V_SMOOTH).
@@ -171,8 +202,15 @@ fn rate(c: Coeffs, p: Pendulum) -> Rate {
     let f2 = fma(csd * w1, w1, fma(-c.q, s2, tau.y));
     let ccd = c.c * cd;
     let inv_det = 1.0 / fma(-ccd, ccd, c.a * c.b);
-    let a1 = fma(c.b, f1, -ccd * f2) * inv_det;
-    let a2 = fma(c.a, f2, -ccd * f1) * inv_det;
+    var a1 = fma(c.b, f1, -ccd * f2) * inv_det;
+    var a2 = fma(c.a, f2, -ccd * f1) * inv_det;
+    if LOSSES && c.bearing != 0.0 {
+        // As on the CPU: loads from the accelerations without bearing friction, then the
+        // friction torques added through the same (linear) solve.
+        let b = bearing_torques(c, w1, w2, c1, s1, c2, s2, vec2<f32>(a1, a2));
+        a1 += fma(c.b, b.x, -ccd * b.y) * inv_det;
+        a2 += fma(c.a, b.y, -ccd * b.x) * inv_det;
+    }
     return Rate(vec4<f32>(w1, a1, w2, a2), vec4<f32>(-w1 * s1, w1 * c1, -w2 * s2, w2 * c2));
 }
 

@@ -54,6 +54,36 @@ fn dual_loss_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>) -> 
     return array<vec2<f32>, 2>(tau1, tau2);
 }
 
+// smooth_sign of common.wgsl: w / sqrt(w^2 + s^2), derivative s^2 / (w^2 + s^2)^(3/2).
+fn dsmooth_sign(w: vec2<f32>) -> vec2<f32> {
+    let s2 = BEARING_SMOOTH * BEARING_SMOOTH;
+    let r = inverseSqrt(w.x * w.x + s2);
+    return vec2<f32>(w.x * r, s2 * r * r * r * w.y);
+}
+
+// |(x, y)| of dual components.
+fn dlength(x: vec2<f32>, y: vec2<f32>) -> vec2<f32> {
+    return dsqrt(dmul(x, x) + dmul(y, y));
+}
+
+// `bearing_torques` of common.wgsl in dual numbers.
+fn dual_bearing_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, c1: vec2<f32>, s1: vec2<f32>, c2: vec2<f32>, s2: vec2<f32>, a1: vec2<f32>, a2: vec2<f32>) -> array<vec2<f32>, 2> {
+    let w1sq = dmul(w1, w1);
+    let w2sq = dmul(w2, w2);
+    let arm1x = dmul(a1, c1) - dmul(w1sq, s1);
+    let arm1y = dmul(a1, s1) + dmul(w1sq, c1);
+    let arm2x = dmul(a2, c2) - dmul(w2sq, s2);
+    let arm2y = dmul(a2, s2) + dmul(w2sq, c2);
+    let s_1 = c.p / c.g;
+    let s_2 = c.q / c.g;
+    let low = c.mass_lower * c.l1;
+    let pivot = dlength(s_1 * arm1x + s_2 * arm2x, s_1 * arm1y + s_2 * arm2y + dconst(c.mass_total * c.g));
+    let joint = dlength(low * arm1x + s_2 * arm2x, low * arm1y + s_2 * arm2y + dconst(c.mass_lower * c.g));
+    let t_pivot = c.bearing * dmul(pivot, dsmooth_sign(w1));
+    let t_joint = c.bearing * dmul(joint, dsmooth_sign(w2 - w1));
+    return array<vec2<f32>, 2>(-t_pivot + t_joint, -t_joint);
+}
+
 fn dual_lower_arm_drag(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>, s: f32) -> array<vec2<f32>, 2> {
     let u_e1 = c.l1 * w1 + s * dmul(w2, cd);
     let u_e2 = c.l1 * dmul(w1, cd) + s * w2;
@@ -94,8 +124,13 @@ fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
     let f2 = dmul(dmul(csd, w1), w1) - c.q * s2 + tau2;
     let ccd = c.c * cd;
     let inv_det = drecip(dconst(c.a * c.b) - dmul(ccd, ccd));
-    let a1 = dmul(c.b * f1 - dmul(ccd, f2), inv_det);
-    let a2 = dmul(c.a * f2 - dmul(ccd, f1), inv_det);
+    var a1 = dmul(c.b * f1 - dmul(ccd, f2), inv_det);
+    var a2 = dmul(c.a * f2 - dmul(ccd, f1), inv_det);
+    if LOSSES && c.bearing != 0.0 {
+        let b = dual_bearing_torques(c, w1, w2, c1, s1, c2, s2, a1, a2);
+        a1 += dmul(c.b * b[0] - dmul(ccd, b[1]), inv_det);
+        a2 += dmul(c.a * b[1] - dmul(ccd, b[0]), inv_det);
+    }
     return Tangent(
         vec4<f32>(w1.x, a1.x, w2.x, a2.x),
         // d/dt (cos, sin) = omega (-sin, cos)

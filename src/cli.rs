@@ -403,6 +403,9 @@ fn physics_line(p: &Params, grid: &Grid) -> String {
     if l.has_drag() {
         line += " · air drag";
     }
+    if l.has_bearings() {
+        line += " · bearing friction";
+    }
     line
 }
 

@@ -32,11 +32,27 @@ pub struct Losses {
     pub bob_area2: f64,
     pub rod_area1: f64,
     pub rod_area2: f64,
+    /// Rolling friction of the ball bearings (pivot and middle joint): a force c_R F_N at
+    /// the bearing radius r (m), F_N the load on the bearing, i.e. a torque c_R r F_N against
+    /// the joint's relative rotation, its sign smoothed as w / sqrt(w^2 + BEARING_SMOOTH^2).
+    pub bearing: f64,
+    pub bearing_radius: f64,
 }
+
+/// Angular speed (rad/s) over which bearing friction turns on: the torque is
+/// c_R r F_N w / sqrt(w^2 + BEARING_SMOOTH^2), so the equations stay smooth through w = 0
+/// (and non-stiff: the friction's slope c_R r F_N / 0.01 is far below the arms' inertia / dt).
+/// (An algebraic sign rather than tanh, whose dual-number derivative overflows at w / 0.01
+/// of a few hundred.)
+pub const BEARING_SMOOTH: f64 = 0.01;
 
 impl Losses {
     pub fn any(&self) -> bool {
-        self.joint1 != 0.0 || self.joint2 != 0.0 || self.has_drag()
+        self.joint1 != 0.0 || self.joint2 != 0.0 || self.has_drag() || self.has_bearings()
+    }
+
+    pub fn has_bearings(&self) -> bool {
+        self.bearing * self.bearing_radius != 0.0
     }
 
     pub fn has_drag(&self) -> bool {
@@ -145,6 +161,12 @@ impl Params {
     /// Total mass M = m1 + m2 (kg) of the bobs.
     pub fn total_mass(&self) -> f64 {
         self.m1 + self.m2
+    }
+
+    /// All moving mass (kg), and the part below the middle joint.
+    pub fn moving_mass(&self) -> (f64, f64) {
+        let lower = self.m2 + self.rod2;
+        (self.m1 + self.rod1 + lower, lower)
     }
 
     pub fn inertia(&self) -> Inertia {

@@ -24,7 +24,7 @@ pub enum Preset {
     /// The lab report's apparatus (../shared/data/README.md): bobs 0.301 and 0.297 kg, arms
     /// 0.30 and 0.195 m from the tracked data, acrylic plates as rods (0.140 kg: two plates on
     /// the upper arm, 0.070 kg), quadratic air drag on the plates (rho 1.2, c_w 2, 1.45e-3 m^2
-    /// a plate).
+    /// a plate), ball-bearing rolling friction c_R 0.75e-3 (the report: 0.5e-3 to 1e-3).
     Lab,
 }
 
@@ -44,6 +44,8 @@ impl Preset {
                     cw: 2.0,
                     rod_area1: 2.0 * 1.45e-3,
                     rod_area2: 1.45e-3,
+                    bearing: 0.75e-3,
+                    bearing_radius: BEARING_RADIUS,
                     ..Losses::default()
                 },
             },
@@ -55,6 +57,8 @@ impl Preset {
 const RHO: f64 = 1.2;
 const CW: f64 = 2.0;
 const PLATE_AREA: f64 = 1.45e-3;
+/// Bearing radius (m) where rolling friction acts: a 608 bearing's 8 mm bore.
+const BEARING_RADIUS: f64 = 0.004;
 
 /// The physical parameters, SI units.
 #[derive(Args, Debug, Clone, Default)]
@@ -96,11 +100,19 @@ pub struct PhysicalArgs {
     /// Projected areas of the rods, A or A1,A2 (m^2) [default 0].
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub rod_drag_area: Option<(f64, f64)>,
+    /// Rolling-friction coefficient c_R of the pivot and middle bearings (F = c_R F_N; the
+    /// report: 0.5e-3 to 1e-3).
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub bearing_friction: Option<f64>,
+    /// Radius (m) at which bearing friction acts [default 0.004].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub bearing_radius: Option<f64>,
     /// A named set of parameters (flags given as well override it).
     #[arg(long, value_enum)]
     pub preset: Option<Preset>,
-    /// Parameters from a TOML file (keys: m1 m2 l1 l2 g rod_mass joint_damping, table
-    /// [air_drag] with rho cw bob_area rod_area); flags given as well override it.
+    /// Parameters from a TOML file (keys: m1 m2 l1 l2 g rod_mass joint_damping
+    /// bearing_friction bearing_radius, table [air_drag] with rho cw bob_area rod_area);
+    /// flags given as well override it.
     #[arg(long)]
     pub params: Option<PathBuf>,
 }
@@ -116,6 +128,8 @@ struct ParamsFile {
     g: Option<f64>,
     rod_mass: Option<[f64; 2]>,
     joint_damping: Option<[f64; 2]>,
+    bearing_friction: Option<f64>,
+    bearing_radius: Option<f64>,
     air_drag: Option<AirDragFile>,
 }
 
@@ -149,6 +163,12 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
     }
     if let Some([a, b]) = file.joint_damping {
         (p.losses.joint1, p.losses.joint2) = (a, b);
+    }
+    if let Some(c) = file.bearing_friction {
+        p.losses.bearing = c;
+        p.losses.bearing_radius = file.bearing_radius.unwrap_or(BEARING_RADIUS);
+    } else if let Some(r) = file.bearing_radius {
+        p.losses.bearing_radius = r;
     }
     if let Some(air) = file.air_drag {
         p.losses.rho = air.rho.unwrap_or(RHO);
@@ -208,7 +228,9 @@ pub fn validate(p: &Params) -> Result<()> {
     finite_non_negative("--drag-area", l.bob_area1)?;
     finite_non_negative("--drag-area", l.bob_area2)?;
     finite_non_negative("--rod-drag-area", l.rod_area1)?;
-    finite_non_negative("--rod-drag-area", l.rod_area2)
+    finite_non_negative("--rod-drag-area", l.rod_area2)?;
+    finite_non_negative("--bearing-friction", l.bearing)?;
+    finite_non_negative("--bearing-radius", l.bearing_radius)
 }
 
 impl PhysicalArgs {
@@ -258,6 +280,13 @@ impl PhysicalArgs {
         if let Some((a, b)) = self.rod_drag_area {
             (p.losses.rod_area1, p.losses.rod_area2) = (a, b);
         }
+        if let Some(c) = self.bearing_friction {
+            p.losses.bearing = c;
+            if p.losses.bearing_radius == 0.0 {
+                p.losses.bearing_radius = BEARING_RADIUS;
+            }
+        }
+        set(&mut p.losses.bearing_radius, self.bearing_radius);
         validate(&p)?;
         Ok(p)
     }
@@ -275,6 +304,12 @@ pub fn flags(p: &Params) -> String {
     let l = &p.losses;
     if l.joint1 != 0.0 || l.joint2 != 0.0 {
         out += &format!(" --joint-damping {},{}", l.joint1, l.joint2);
+    }
+    if l.has_bearings() {
+        out += &format!(
+            " --bearing-friction {} --bearing-radius {}",
+            l.bearing, l.bearing_radius
+        );
     }
     if l.has_drag() {
         out += &format!(

@@ -42,11 +42,54 @@ pub fn accelerations_of<T: RealField + Copy>(p: &Params, y: &[T; 4]) -> [T; 2] {
         -coupling * sd * omega2 * omega2 - k(i.p) * theta1.sin() + tau1,
         coupling * sd * omega1 * omega1 - k(i.q) * theta2.sin() + tau2,
     );
-    let a = mass
+    let solver = mass
         .cholesky()
-        .expect("the mass matrix is positive definite")
-        .solve(&force);
+        .expect("the mass matrix is positive definite");
+    let a = solver.solve(&force);
+    if !p.losses.has_bearings() {
+        return [a[0], a[1]];
+    }
+    // Bearing friction needs the bearings' loads, which need the accelerations: take them
+    // from the solve without it (the friction changes them by O(c_R) ~ 1e-3, so the loads by
+    // O(c_R) and the torques by O(c_R^2)), then solve again with the friction torques.
+    let [b1, b2] = bearing_torques(p, y, [a[0], a[1]]);
+    let a = solver.solve(&(force + Vector2::new(b1, b2)));
     [a[0], a[1]]
+}
+
+/// Friction torques of the pivot and middle bearings for angular accelerations `alpha`:
+/// loads F = sum(m a) - (total mass) g over the whole pendulum (pivot) and over the lower
+/// arm (middle joint), torque c_R r |F| sgn(w_rel) against the rotation, the sign smoothed
+/// as w / sqrt(w^2 + BEARING_SMOOTH^2).
+/// With e_i = (cos t_i, sin t_i) and n_i = (sin t_i, -cos t_i), a point at s along arm 1
+/// accelerates by s (alpha1 e1 - w1^2 n1), so sum(m a) = S1 (...)_1 + S2 (...)_2 with
+/// S1 = P / g and S2 = Q / g.
+pub fn bearing_torques<T: RealField + Copy>(p: &Params, y: &[T; 4], alpha: [T; 2]) -> [T; 2] {
+    let k = |x: f64| -> T { nalgebra::convert(x) };
+    let i = p.inertia();
+    let (total, lower) = p.moving_mass();
+    let [theta1, w1, theta2, w2] = *y;
+    let (s1, c1, s2, c2) = (theta1.sin(), theta1.cos(), theta2.sin(), theta2.cos());
+    // (alpha e - w^2 n) of each arm, as (x, y).
+    let arm = |alpha: T, w: T, s: T, c: T| (alpha * c - w * w * s, alpha * s + w * w * c);
+    let (a1x, a1y) = arm(alpha[0], w1, s1, c1);
+    let (a2x, a2y) = arm(alpha[1], w2, s2, c2);
+    let (s_1, s_2, low) = (k(i.p / p.g), k(i.q / p.g), k(lower * p.l1));
+    let load = |fx: T, fy: T| (fx * fx + fy * fy + k(1e-18)).sqrt();
+    let pivot = load(
+        s_1 * a1x + s_2 * a2x,
+        s_1 * a1y + s_2 * a2y + k(total * p.g),
+    );
+    let joint = load(
+        low * a1x + s_2 * a2x,
+        low * a1y + s_2 * a2y + k(lower * p.g),
+    );
+    let f = k(p.losses.bearing * p.losses.bearing_radius);
+    let smooth2 = k(crate::model::BEARING_SMOOTH.powi(2));
+    let sign = |w: T| w / (w * w + smooth2).sqrt();
+    let t_pivot = f * pivot * sign(w1);
+    let t_joint = f * joint * sign(w2 - w1);
+    [-t_pivot + t_joint, -t_joint]
 }
 
 /// Speeds below this (m/s) are smoothed in the drag law, |v| -> sqrt(v^2 + V_SMOOTH^2), so
@@ -113,9 +156,19 @@ pub fn loss_torques<T: RealField + Copy>(p: &Params, y: &[T; 4], cd: T) -> [T; 2
     [tau1, tau2]
 }
 
-/// Power (W) the losses take out of the pendulum at `s`: -(tau1 omega1 + tau2 omega2) >= 0.
+/// Power (W) the losses take out of the pendulum at `s`: -(tau1 omega1 + tau2 omega2) >= 0,
+/// bearing friction included (with the loads of the accelerations without it, as in
+/// [`accelerations_of`]).
 pub fn dissipated_power(p: &Params, s: &State) -> f64 {
-    let [t1, t2] = loss_torques(p, &s.to_array(), (s.theta1 - s.theta2).cos());
+    let y = s.to_array();
+    let [mut t1, mut t2] = loss_torques(p, &y, (s.theta1 - s.theta2).cos());
+    if p.losses.has_bearings() {
+        let mut q = *p;
+        q.losses.bearing = 0.0;
+        let [b1, b2] = bearing_torques(p, &y, accelerations_of(&q, &y));
+        t1 += b1;
+        t2 += b2;
+    }
     -(t1 * s.omega1 + t2 * s.omega2)
 }
 

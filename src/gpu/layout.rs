@@ -38,6 +38,11 @@ pub struct GpuParams {
     pub drag_bob2: f32,
     pub drag_rod1: f32,
     pub drag_rod2: f32,
+    /// Bearing friction: g, all moving mass, the mass below the middle joint, c_R r.
+    pub g: f32,
+    pub mass_total: f32,
+    pub mass_lower: f32,
+    pub bearing: f32,
     pub width: u32,
     pub rows: u32,
     pub row0: u32,
@@ -55,7 +60,7 @@ pub struct GpuParams {
 }
 
 // A uniform buffer's size must be a multiple of 16 bytes.
-const _: () = assert!(std::mem::size_of::<GpuParams>() == 128);
+const _: () = assert!(std::mem::size_of::<GpuParams>() == 144);
 
 impl GpuParams {
     /// The coefficients are formed in f64 and rounded once.
@@ -78,6 +83,10 @@ impl GpuParams {
             drag_bob2: drag_bob2 as f32,
             drag_rod1: drag_rod1 as f32,
             drag_rod2: drag_rod2 as f32,
+            g: p.g as f32,
+            mass_total: p.moving_mass().0 as f32,
+            mass_lower: p.moving_mass().1 as f32,
+            bearing: (p.losses.bearing * p.losses.bearing_radius) as f32,
             ..Default::default()
         }
     }
