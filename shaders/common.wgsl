@@ -60,8 +60,20 @@ struct Params {
     _pad0: u32,
 }
 
-// Set per pipeline (src/gpu/pipeline.rs): the loss torques are compiled in only when needed.
-override LOSSES: bool = false;
+// Set per pipeline (src/gpu/pipeline.rs, src/model.rs `Losses::kinds`): each kind of loss is
+// compiled in only when needed. Bits: 1 joint damping, 2 air drag, 4 bearing friction.
+override LOSSES: u32 = 0u;
+fn has_losses() -> bool {
+    return LOSSES != 0u;
+}
+
+fn has_drag() -> bool {
+    return (LOSSES & 2u) != 0u;
+}
+
+fn has_bearings() -> bool {
+    return (LOSSES & 4u) != 0u;
+}
 
 // f32(pi) rounds up to 3.1415927, so |theta| > PI is the f32 form of |theta| > pi.
 const PI: f32 = 3.14159265358979;
@@ -125,6 +137,9 @@ const GAUSS_W: vec3<f32> = vec3<f32>(0.2777777778, 0.4444444444, 0.2777777778);
 fn loss_torques(c: Coeffs, w1: f32, w2: f32, cd: f32) -> vec2<f32> {
     let relative = w2 - w1;
     var tau = vec2<f32>(-c.joint1 * w1 + c.joint2 * relative, -c.joint2 * relative);
+    if !has_drag() {
+        return tau;
+    }
     let v1 = c.l1 * w1;
     let s1 = sqrt(v1 * v1 + V_SMOOTH2);
     tau.x -= (c.drag_bob1 + 0.25 * c.drag_rod1) * s1 * v1 * c.l1;
@@ -141,7 +156,8 @@ fn loss_torques(c: Coeffs, w1: f32, w2: f32, cd: f32) -> vec2<f32> {
 fn lower_arm_drag(c: Coeffs, w1: f32, w2: f32, cd: f32, s: f32) -> vec2<f32> {
     let u_e1 = c.l1 * w1 + s * w2 * cd;
     let u_e2 = c.l1 * w1 * cd + s * w2;
-    let u2 = c.l1 * c.l1 * w1 * w1 + s * s * w2 * w2 + 2.0 * c.l1 * s * w1 * w2 * cd;
+    // |u|^2 >= 0, but f32 rounding takes it below 0 when u ~ 0 (then sqrt gives NaN).
+    let u2 = max(c.l1 * c.l1 * w1 * w1 + s * s * w2 * w2 + 2.0 * c.l1 * s * w1 * w2 * cd, 0.0);
     let sp = sqrt(u2 + V_SMOOTH2);
     return vec2<f32>(-sp * u_e1 * c.l1, -sp * u_e2 * s);
 }
@@ -194,7 +210,7 @@ fn rate(c: Coeffs, p: Pendulum) -> Rate {
     let sd = s1 * c2 - c1 * s2;
     let cd = c1 * c2 + s1 * s2;
     var tau = vec2<f32>();
-    if LOSSES {
+    if has_losses() {
         tau = loss_torques(c, w1, w2, cd);
     }
     let csd = c.c * sd;
@@ -204,7 +220,7 @@ fn rate(c: Coeffs, p: Pendulum) -> Rate {
     let inv_det = 1.0 / fma(-ccd, ccd, c.a * c.b);
     var a1 = fma(c.b, f1, -ccd * f2) * inv_det;
     var a2 = fma(c.a, f2, -ccd * f1) * inv_det;
-    if LOSSES && c.bearing != 0.0 {
+    if has_bearings() {
         // As on the CPU: loads from the accelerations without bearing friction, then the
         // friction torques added through the same (linear) solve.
         let b = bearing_torques(c, w1, w2, c1, s1, c2, s2, vec2<f32>(a1, a2));

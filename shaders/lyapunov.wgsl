@@ -38,6 +38,9 @@ fn dual_loss_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>) -> 
     let relative = w2 - w1;
     var tau1 = -c.joint1 * w1 + c.joint2 * relative;
     var tau2 = -c.joint2 * relative;
+    if !has_drag() {
+        return array<vec2<f32>, 2>(tau1, tau2);
+    }
     let v1 = c.l1 * w1;
     let s1 = dsqrt(dmul(v1, v1) + dconst(V_SMOOTH2));
     tau1 -= (c.drag_bob1 + 0.25 * c.drag_rod1) * c.l1 * dmul(s1, v1);
@@ -88,7 +91,8 @@ fn dual_lower_arm_drag(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>, s
     let u_e1 = c.l1 * w1 + s * dmul(w2, cd);
     let u_e2 = c.l1 * dmul(w1, cd) + s * w2;
     let u2 = c.l1 * c.l1 * dmul(w1, w1) + s * s * dmul(w2, w2) + 2.0 * c.l1 * s * dmul(dmul(w1, w2), cd);
-    let sp = dsqrt(u2 + dconst(V_SMOOTH2));
+    // As in common.wgsl: keep |u|^2 >= 0 against rounding.
+    let sp = dsqrt(select(u2, vec2<f32>(0.0), u2.x < 0.0) + dconst(V_SMOOTH2));
     return array<vec2<f32>, 2>(-c.l1 * dmul(sp, u_e1), -s * dmul(sp, u_e2));
 }
 
@@ -114,7 +118,7 @@ fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
     let cd = dmul(c1, c2) + dmul(s1, s2);
     var tau1 = vec2<f32>();
     var tau2 = vec2<f32>();
-    if LOSSES {
+    if has_losses() {
         let tau = dual_loss_torques(c, w1, w2, cd);
         tau1 = tau[0];
         tau2 = tau[1];
@@ -126,7 +130,7 @@ fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
     let inv_det = drecip(dconst(c.a * c.b) - dmul(ccd, ccd));
     var a1 = dmul(c.b * f1 - dmul(ccd, f2), inv_det);
     var a2 = dmul(c.a * f2 - dmul(ccd, f1), inv_det);
-    if LOSSES && c.bearing != 0.0 {
+    if has_bearings() {
         let b = dual_bearing_torques(c, w1, w2, c1, s1, c2, s2, a1, a2);
         a1 += dmul(c.b * b[0] - dmul(ccd, b[1]), inv_det);
         a2 += dmul(c.a * b[1] - dmul(ccd, b[0]), inv_det);

@@ -51,6 +51,14 @@ impl Losses {
         self.joint1 != 0.0 || self.joint2 != 0.0 || self.has_drag() || self.has_bearings()
     }
 
+    /// Which losses a GPU pipeline must compile in: bit 0 joint damping, bit 1 air drag,
+    /// bit 2 bearing friction (the shaders' `override LOSSES`).
+    pub fn kinds(&self) -> u32 {
+        (self.joint1 != 0.0 || self.joint2 != 0.0) as u32
+            | (self.has_drag() as u32) << 1
+            | (self.has_bearings() as u32) << 2
+    }
+
     pub fn has_bearings(&self) -> bool {
         self.bearing * self.bearing_radius != 0.0
     }

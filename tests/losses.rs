@@ -184,6 +184,60 @@ fn small_oscillations_decay_exponentially_at_the_modal_rate() {
 }
 
 #[test]
+fn every_gpu_loss_variant_follows_the_cpu() {
+    // The shaders compile each kind of loss in or out (override LOSSES): check each alone.
+    let Some(ctx) = common::gpu() else { return };
+    let only = |f: fn(&mut Losses)| {
+        let mut p = lossy();
+        p.losses = Losses::default();
+        f(&mut p.losses);
+        p
+    };
+    let variants = [
+        only(|l| (l.joint1, l.joint2) = (0.05, 0.02)),
+        only(|l| (l.rho, l.cw, l.bob_area1, l.rod_area2) = (1.2, 2.0, 5e-3, 3e-3)),
+        only(|l| (l.bearing, l.bearing_radius) = (0.05, 0.004)),
+    ];
+    for p in variants {
+        let start = State::at_rest(0.5, 0.3);
+        let want = cpu::trajectory(&p, start, 0.01, 200);
+        let got = gpu::trajectory(&ctx, &p, start, 0.01, 200).unwrap();
+        let worst = got
+            .iter()
+            .zip(&want)
+            .flat_map(|(g, c)| {
+                g.to_array()
+                    .into_iter()
+                    .zip(c.to_array())
+                    .map(|(a, b)| (a - b).abs())
+            })
+            .fold(0.0, f64::max);
+        // A regular start: f32 round-off only (as in tests/gpu_vs_cpu.rs).
+        assert!(worst < 1e-4, "{:?}: {worst}", p.losses);
+        // And the maps: same fraction of flips within a percent (chaotic pixels may differ).
+        let spec = FlipSpec::new(
+            p,
+            Grid::square(40),
+            Stepping {
+                dt: 0.01,
+                t_max: 10.0,
+            },
+        );
+        let c = flipped_fraction(&cpu::flip_map(&spec, &Monitor::hidden()).unwrap());
+        let g = flipped_fraction(
+            &FlipTimeKernel::new(&ctx)
+                .run(&ctx, &spec, &Monitor::hidden())
+                .unwrap(),
+        );
+        assert!(
+            (c - g).abs() < 0.01,
+            "{:?}: flipped cpu {c} gpu {g}",
+            p.losses
+        );
+    }
+}
+
+#[test]
 fn gpu_and_cpu_agree_with_rods_and_every_loss() {
     let Some(ctx) = common::gpu() else { return };
     let p = lossy();

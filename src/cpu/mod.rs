@@ -42,9 +42,11 @@ pub fn accelerations_of<T: RealField + Copy>(p: &Params, y: &[T; 4]) -> [T; 2] {
         -coupling * sd * omega2 * omega2 - k(i.p) * theta1.sin() + tau1,
         coupling * sd * omega1 * omega1 - k(i.q) * theta2.sin() + tau2,
     );
-    let solver = mass
-        .cholesky()
-        .expect("the mass matrix is positive definite");
+    // Positive definite for every finite state; a non-finite state (a blown-up run) gives
+    // non-finite accelerations rather than a panic.
+    let Some(solver) = mass.cholesky() else {
+        return [k(f64::NAN), k(f64::NAN)];
+    };
     let a = solver.solve(&force);
     if !p.losses.has_bearings() {
         return [a[0], a[1]];
@@ -137,7 +139,9 @@ pub fn loss_torques<T: RealField + Copy>(p: &Params, y: &[T; 4], cd: T) -> [T; 2
         let at = |s: T| {
             let u_e1 = l1 * w1 + s * w2 * cd;
             let u_e2 = l1 * w1 * cd + s * w2;
-            let u2 = l1 * l1 * w1 * w1 + s * s * w2 * w2 + k(2.0) * l1 * s * w1 * w2 * cd;
+            // |u|^2 >= 0, but rounding can take it below 0 when u ~ 0.
+            let u2 = (l1 * l1 * w1 * w1 + s * s * w2 * w2 + k(2.0) * l1 * s * w1 * w2 * cd)
+                .max(T::zero());
             let sp = speed(u2);
             // (force . dr/dtheta1, force . dr/dtheta2) per unit drag factor.
             (-sp * u_e1 * l1, -sp * u_e2 * s)

@@ -46,7 +46,7 @@ impl FlipTimeKernel {
             layout,
         };
         // Compile the common (lossless) pipelines now, as callers time runs without compiles.
-        kernel.pipelines.get(ctx, false);
+        kernel.pipelines.get(ctx, 0);
         kernel
     }
 
@@ -129,7 +129,7 @@ impl FlipTimeKernel {
         max_pixels: u64,
     ) -> Result<Field> {
         let grid = spec.grid;
-        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.any());
+        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.kinds());
         let total_steps = spec.stepping.steps();
         let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
         let capacity = tile_rows as u64 * grid.width as u64;

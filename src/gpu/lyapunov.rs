@@ -40,7 +40,7 @@ impl LyapunovKernel {
             pipelines: Variants::new(module, pipeline_layout, (init, advance)),
             layout,
         };
-        kernel.pipelines.get(ctx, false);
+        kernel.pipelines.get(ctx, 0);
         kernel
     }
 
@@ -83,7 +83,7 @@ impl LyapunovKernel {
         mut trace: Option<&mut Convergence>,
     ) -> Result<Field> {
         let grid = spec.grid;
-        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.any());
+        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.kinds());
         let total_steps = spec.stepping.steps();
         let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
         let capacity = tile_rows as u64 * grid.width as u64;
@@ -166,7 +166,7 @@ impl LyapunovKernel {
 /// (row-major 4x4), for checking against the CPU's.
 pub fn jacobians(ctx: &GpuContext, p: &Params, states: &[State]) -> Result<Vec<[[f64; 4]; 4]>> {
     let module = shader_module(ctx, "lyapunov.wgsl", LYAPUNOV_WGSL);
-    let pipeline = compute_pipeline(ctx, &module, None, "jacobian_columns", p.losses.any());
+    let pipeline = compute_pipeline(ctx, &module, None, "jacobian_columns", p.losses.kinds());
     let params = GpuParams {
         count: states.len() as u32,
         ..GpuParams::new(p, 0.01)

@@ -13,16 +13,17 @@ pub fn shader_module(ctx: &GpuContext, label: &str, kernel: &str) -> wgpu::Shade
 }
 
 /// A compute pipeline for `entry`; `layout` None derives the layout from the shader.
-/// `losses` sets the shaders' `override LOSSES`: the driver then compiles the loss torques in
-/// or out entirely (a runtime branch on a uniform cost lavapipe 2x even when off).
+/// `losses` sets the shaders' `override LOSSES` (bits: joint damping, drag, bearings, see
+/// `Losses::kinds`): the driver then compiles each kind of loss in or out entirely (a
+/// runtime branch on a uniform cost lavapipe 2x even when off).
 pub fn compute_pipeline(
     ctx: &GpuContext,
     module: &wgpu::ShaderModule,
     layout: Option<&wgpu::PipelineLayout>,
     entry: &str,
-    losses: bool,
+    losses: u32,
 ) -> wgpu::ComputePipeline {
-    let constants = [("LOSSES", if losses { 1.0 } else { 0.0 })];
+    let constants = [("LOSSES", losses as f64)];
     ctx.device
         .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
@@ -42,7 +43,7 @@ pub struct Variants {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     entries: (&'static str, &'static str),
-    compiled: [std::sync::OnceLock<(wgpu::ComputePipeline, wgpu::ComputePipeline)>; 2],
+    compiled: [std::sync::OnceLock<(wgpu::ComputePipeline, wgpu::ComputePipeline)>; 8],
 }
 
 impl Variants {
@@ -62,9 +63,9 @@ impl Variants {
     pub fn get(
         &self,
         ctx: &GpuContext,
-        losses: bool,
+        losses: u32,
     ) -> &(wgpu::ComputePipeline, wgpu::ComputePipeline) {
-        self.compiled[losses as usize].get_or_init(|| {
+        self.compiled[losses as usize & 7].get_or_init(|| {
             let make =
                 |entry| compute_pipeline(ctx, &self.module, Some(&self.layout), entry, losses);
             (make(self.entries.0), make(self.entries.1))
