@@ -126,6 +126,12 @@ fn the_whole_fit_runs_on_the_lab_report_data() {
         .assert()
         .success()
         .stderr(predicate::str::contains("fits better"));
+    let derived = std::fs::read_to_string(dir.path().join("derived.csv")).unwrap();
+    assert_eq!(
+        derived.lines().nth(1),
+        Some("t,theta1,theta2,omega1,omega2,energy,energy_error")
+    );
+    assert_eq!(derived.lines().count(), 2 + 62, "interior rows of 64");
     for f in ["positions.png", "energy.png", "phase.png"] {
         let png = chaoscope::render::read_png(&dir.path().join(f)).unwrap();
         assert!(png.width > 500, "{f}");

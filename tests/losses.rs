@@ -286,6 +286,54 @@ fn gpu_and_cpu_agree_with_rods_and_every_loss() {
     }
 }
 
+#[test]
+fn divergence_maps_carry_the_damping_on_both_paths() {
+    let Some(ctx) = common::gpu() else { return };
+    let mut p = Params::default();
+    p.losses.joint1 = 0.1;
+    p.losses.joint2 = 0.1;
+    let spec = chaoscope::spec::LyapunovSpec {
+        params: p,
+        grid: Grid::square(40),
+        stepping: Stepping {
+            dt: 0.01,
+            t_max: 10.0,
+        },
+        method: chaoscope::spec::Method::Tangent,
+        renorm: 0.1,
+    };
+    let c = cpu::ftle_map(&spec, &Monitor::hidden()).unwrap();
+    let g = gpu::LyapunovKernel::new(&ctx, spec.method)
+        .run(&ctx, &spec, &Monitor::hidden())
+        .unwrap();
+    // Damping contracts phase space: the exponents' mean drops below the undamped map's.
+    let undamped = cpu::ftle_map(
+        &chaoscope::spec::LyapunovSpec {
+            params: Params::default(),
+            ..spec
+        },
+        &Monitor::hidden(),
+    )
+    .unwrap();
+    let mean =
+        |f: &chaoscope::Field| f.data.iter().map(|&x| x as f64).sum::<f64>() / f.data.len() as f64;
+    assert!(
+        mean(&c) < mean(&undamped),
+        "{} vs {}",
+        mean(&c),
+        mean(&undamped)
+    );
+    // Same classification as for the undamped maps (tests/lyapunov.rs), at 10 s.
+    let same = c
+        .data
+        .iter()
+        .zip(&g.data)
+        .filter(|(a, b)| (**a > 0.5) == (**b > 0.5))
+        .count() as f64
+        / c.data.len() as f64;
+    assert!(same >= 0.97, "classes agree on {same}");
+}
+
 fn flipped_fraction(field: &chaoscope::Field) -> f64 {
     field.data.iter().filter(|t| t.is_finite()).count() as f64 / field.data.len() as f64
 }

@@ -162,6 +162,33 @@ pub fn run(args: &FitArgs) -> Result<()> {
     };
     let (w1, w2) = (w(0), w(1));
     plots::phase(&out.join("phase.png"), [&w1, &w2])?;
+    // The derived quantities row by row (interior rows: central differences need neighbours).
+    let (wa, wb) = (
+        data::central_differences(&t, &angle.iter().map(|a| a.0).collect::<Vec<_>>()),
+        data::central_differences(&t, &angle.iter().map(|a| a.1).collect::<Vec<_>>()),
+    );
+    crate::render::write_atomic(&out.join("derived.csv"), |f| {
+        use std::io::Write;
+        writeln!(
+            f,
+            "# chaoscope fit: angles (rad, unwrapped), angular velocities (rad/s, central differences), energy and its error (J)"
+        )?;
+        writeln!(f, "t,theta1,theta2,omega1,omega2,energy,energy_error")?;
+        for i in 1..frames.len() - 1 {
+            writeln!(
+                f,
+                "{},{},{},{},{},{},{}",
+                t[i],
+                angle[i].0,
+                angle[i].1,
+                wa[i - 1],
+                wb[i - 1],
+                en.e[i - 1],
+                en.de[i - 1]
+            )?;
+        }
+        Ok(())
+    })?;
     let fitted = |f: &Fit, names: [&str; 2]| {
         json!({
             names[0]: f.params[0], format!("{}_error", names[0]): f.errors[0],
