@@ -431,6 +431,14 @@ fn presets_files_and_flags_combine_and_bad_keys_are_named() {
     }
     let lab = Preset::Lab.params();
     assert_eq!((lab.m1, lab.m2, lab.rod1), (0.301, 0.297, 0.140));
+    // The shipped example file is the preset written out.
+    let from_file = chaoscope::physics_args::PhysicalArgs {
+        params: Some(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab.toml")),
+        ..Default::default()
+    }
+    .params()
+    .unwrap();
+    assert_eq!(from_file, lab);
     // Unknown keys and impossible values are errors naming the key.
     for (text, key) in [
         ("m1 = 1\nlength = 2\n", "length"),
