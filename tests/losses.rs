@@ -183,6 +183,21 @@ fn small_oscillations_decay_exponentially_at_the_modal_rate() {
     assert!((measured / rate - 1.0).abs() < 0.01, "{measured} vs {rate}");
 }
 
+/// Largest difference of any state component between the GPU and CPU over 200 steps of 0.01 s.
+fn worst_gpu_cpu_difference(ctx: &gpu::GpuContext, p: &Params, start: State) -> f64 {
+    let want = cpu::trajectory(p, start, 0.01, 200);
+    let got = gpu::trajectory(ctx, p, start, 0.01, 200).unwrap();
+    got.iter()
+        .zip(&want)
+        .flat_map(|(g, c)| {
+            g.to_array()
+                .into_iter()
+                .zip(c.to_array())
+                .map(|(a, b)| (a - b).abs())
+        })
+        .fold(0.0, f64::max)
+}
+
 #[test]
 fn every_gpu_loss_variant_follows_the_cpu() {
     // The shaders compile each kind of loss in or out (override LOSSES): check each alone.
@@ -200,18 +215,7 @@ fn every_gpu_loss_variant_follows_the_cpu() {
     ];
     for p in variants {
         let start = State::at_rest(0.5, 0.3);
-        let want = cpu::trajectory(&p, start, 0.01, 200);
-        let got = gpu::trajectory(&ctx, &p, start, 0.01, 200).unwrap();
-        let worst = got
-            .iter()
-            .zip(&want)
-            .flat_map(|(g, c)| {
-                g.to_array()
-                    .into_iter()
-                    .zip(c.to_array())
-                    .map(|(a, b)| (a - b).abs())
-            })
-            .fold(0.0, f64::max);
+        let worst = worst_gpu_cpu_difference(&ctx, &p, start);
         // A regular start: f32 round-off only (as in tests/gpu_vs_cpu.rs).
         assert!(worst < 1e-4, "{:?}: {worst}", p.losses);
         // And the maps: same fraction of flips within a percent (chaotic pixels may differ).
@@ -246,18 +250,7 @@ fn gpu_and_cpu_agree_with_rods_and_every_loss() {
         (State::at_rest(0.5, 0.3), 1e-4),
         (State::at_rest(2.0, 1.5), 2e-3),
     ] {
-        let want = cpu::trajectory(&p, start, 0.01, 200);
-        let got = gpu::trajectory(&ctx, &p, start, 0.01, 200).unwrap();
-        let worst = got
-            .iter()
-            .zip(&want)
-            .flat_map(|(g, c)| {
-                g.to_array()
-                    .into_iter()
-                    .zip(c.to_array())
-                    .map(|(a, b)| (a - b).abs())
-            })
-            .fold(0.0, f64::max);
+        let worst = worst_gpu_cpu_difference(&ctx, &p, start);
         assert!(worst < tol, "{start:?}: {worst}");
     }
     // The shader's dual-number Jacobian carries the losses too.
