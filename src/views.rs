@@ -147,10 +147,12 @@ pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
         dt: args.dt,
         t_max: args.exposure,
     };
+    // The exposure is this command's t-max: name it as the user wrote it.
     spec::validate_stepping(&stepping).map_err(|e| match e {
-        Error::InvalidSpec { reason, .. } if reason.contains("t-max") => {
-            Error::invalid("--exposure", reason)
-        }
+        Error::InvalidSpec {
+            flag: "--t-max",
+            reason,
+        } => Error::invalid("--exposure", reason),
         e => e,
     })?;
     if !(1..=100_000).contains(&args.runs) {

@@ -328,6 +328,35 @@ fn trails_of_identical_starts_coincide_and_of_different_starts_part() {
 }
 
 #[test]
+fn traces_bad_values_exit_2_and_name_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, flag) in [
+        (&["--exposure", "0"][..], "--exposure"),
+        (&["--runs", "0"][..], "--runs"),
+        (&["--spread", "2"][..], "--spread"),
+        (&["--size", "8"][..], "--size"),
+    ] {
+        chaoscope()
+            .args([
+                "traces",
+                "--theta1",
+                "1",
+                "--theta2",
+                "1",
+                "--backend",
+                "cpu",
+            ])
+            .args(args)
+            .arg("--output")
+            .arg(dir.path().join("t.png"))
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(flag));
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
 fn the_traces_animation_has_the_asked_frames() {
     let dir = tempfile::tempdir().unwrap();
     let gif_path = dir.path().join("t.gif");
