@@ -228,18 +228,49 @@ pub struct LyapunovArgs {
     pub picture: PictureArgs,
 }
 
+/// One start: both angles required, angular velocities 0 unless given.
 #[derive(Args, Debug, Clone)]
-pub struct TrajectoryArgs {
+pub struct StartArgs {
     /// Initial upper-arm angle (rad).
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub theta1: f64,
     /// Initial lower-arm angle (rad).
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub theta2: f64,
+    /// Initial angular velocity of the upper arm (rad/s).
     #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
     pub omega1: f64,
+    /// Initial angular velocity of the lower arm (rad/s).
     #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
     pub omega2: f64,
+}
+
+impl StartArgs {
+    /// The start, every component finite (else an error naming the flag).
+    pub fn state(&self) -> Result<State> {
+        let s = State {
+            theta1: self.theta1,
+            omega1: self.omega1,
+            theta2: self.theta2,
+            omega2: self.omega2,
+        };
+        spec::validate_start(&s)?;
+        Ok(s)
+    }
+
+    /// The flags as they appear in a reproducing command line.
+    pub fn flags(&self) -> String {
+        format!(
+            "--theta1 {} --theta2 {} --omega1 {} --omega2 {}",
+            self.theta1, self.theta2, self.omega1, self.omega2
+        )
+    }
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct TrajectoryArgs {
+    #[command(flatten)]
+    pub start: StartArgs,
     #[arg(long, default_value = "10", value_parser = parse_number, allow_hyphen_values = true)]
     pub t_max: f64,
     #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
@@ -662,20 +693,12 @@ fn lyapunov_point(
     let backend = args.backend.unwrap_or(Backend::Cpu);
     let trace = match engine::resolve(backend)? {
         (Some(ctx), _) => {
+            // A one-pixel grid whose centre is the start (the point's ranges are start +- 1e-3).
             let one = LyapunovSpec {
                 grid: Grid {
                     width: 1,
                     height: 1,
-                    theta1: Range {
-                        min: start.theta1 - 1e-3,
-                        max: start.theta1 + 1e-3,
-                    },
-                    theta2: Range {
-                        min: start.theta2 - 1e-3,
-                        max: start.theta2 + 1e-3,
-                    },
-                    omega1: start.omega1,
-                    omega2: start.omega2,
+                    ..spec.grid
                 },
                 ..*spec
             };
@@ -810,35 +833,28 @@ fn trajectory(args: &TrajectoryArgs) -> Result<()> {
         dt: args.dt,
         t_max: args.t_max,
     };
-    spec::validate_params(&params)?;
     spec::validate_stepping(&stepping)?;
     let stride = output_stride(args.every, args.dt)?;
-    let start = State {
-        theta1: args.theta1,
-        omega1: args.omega1,
-        theta2: args.theta2,
-        omega2: args.omega2,
-    };
-    spec::validate_start(&start)?;
+    let start = args.start.state()?;
     let steps = stepping.steps();
-    let states = match engine::resolve(args.backend)? {
-        (Some(ctx), _) => gpu::trajectory(&ctx, &params, start, args.dt, steps)?,
+    let (states, dissipated) = match engine::resolve(args.backend)? {
+        (Some(ctx), _) => {
+            let states = gpu::trajectory(&ctx, &params, start, args.dt, steps)?;
+            let work = cpu::dissipated_along(&params, &states, args.dt);
+            (states, work)
+        }
         (None, notice) => {
             if let Some(n) = notice {
                 eprintln!("{n}");
             }
-            cpu::trajectory(&params, start, args.dt, steps)
+            cpu::trajectory_with_work(&params, start, args.dt, steps)
         }
     };
-    let dissipated = cpu::dissipated_along(&params, &states, args.dt);
     let write = |w: &mut dyn Write| -> Result<()> {
         writeln!(
             w,
-            "# chaoscope trajectory --theta1 {} --theta2 {} --omega1 {} --omega2 {} --t-max {} --dt {} {} --backend {}",
-            args.theta1,
-            args.theta2,
-            args.omega1,
-            args.omega2,
+            "# chaoscope trajectory {} --t-max {} --dt {} {} --backend {}",
+            args.start.flags(),
             args.t_max,
             args.dt,
             crate::physics_args::flags(&params),

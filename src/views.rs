@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::cli::{PhysicalArgs, check_extension, parse_number, png_metadata};
+use crate::cli::{PhysicalArgs, StartArgs, check_extension, parse_number, png_metadata};
 use crate::cpu;
 use crate::engine::{self, Backend, RunInfo};
 use crate::error::{Error, Result};
@@ -94,16 +94,9 @@ pub fn ensemble(
 
 #[derive(Args, Debug, Clone)]
 pub struct TracesArgs {
-    /// Release angle of the upper arm (rad).
-    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
-    pub theta1: f64,
-    /// Release angle of the lower arm (rad).
-    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
-    pub theta2: f64,
-    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
-    pub omega1: f64,
-    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
-    pub omega2: f64,
+    /// The release (nominal start) of every run.
+    #[command(flatten)]
+    pub start: StartArgs,
     /// Number of releases.
     #[arg(long, default_value = "3")]
     pub runs: u32,
@@ -177,13 +170,7 @@ pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
     if let Some(d) = &args.data {
         check_extension("--data", d, "npy")?;
     }
-    let start = State {
-        theta1: args.theta1,
-        omega1: args.omega1,
-        theta2: args.theta2,
-        omega2: args.omega2,
-    };
-    spec::validate_start(&start)?;
+    let start = args.start.state()?;
     monitor.check()?;
     let starts = releases(&p, start, args.runs, args.spread);
     let (runs, info) = ensemble(&p, &starts, stepping, args.backend)?;
@@ -207,13 +194,13 @@ pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
     };
     let n = positions.len();
     let colors: Vec<[u8; 3]> = (0..n).map(|k| run_color(k, n)).collect();
-    let rgb = exposure_picture(&positions, &colors, view, args.dt, usize::MAX, n)?;
+    let speed = reference_speed(&positions, args.dt);
+    let mut film = Film::new(view);
+    expose(&mut film, &positions, &colors, args.dt, 0, usize::MAX);
+    let rgb = develop(&film, speed, &positions, &colors, None, n)?;
     let command = format!(
-        "chaoscope traces --theta1 {} --theta2 {} --omega1 {} --omega2 {} --runs {} --spread {} --exposure {} --dt {} --size {} {}",
-        args.theta1,
-        args.theta2,
-        args.omega1,
-        args.omega2,
+        "chaoscope traces {} --runs {} --spread {} --exposure {} --dt {} --size {} {}",
+        args.start.flags(),
         args.runs,
         match args.spread {
             Spread::Radians(r) => format!("{r}"),
@@ -236,7 +223,7 @@ pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
         render::write_npy_shaped(path, &[n as u64, samples as u64, 4], &flat)?;
     }
     if let Some(path) = &args.gif {
-        write_gif(path, &p, &positions, &colors, args, monitor)?;
+        write_gif(path, &p, &positions, &colors, speed, args, monitor)?;
     }
     eprintln!(
         "{} releases over {} s on {} -> {}",
@@ -248,48 +235,50 @@ pub fn traces(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
     Ok(())
 }
 
-/// Light trails of the lower bobs over the first `upto` samples, with the pivot and the arms
-/// of the first `arms` runs at the start drawn faintly (all at the last sample if animating).
-fn exposure_picture(
+/// Exposes the lower bobs' trails between samples `from` and `to` (exclusive) onto `film`.
+fn expose(
+    film: &mut Film,
     positions: &[Vec<Bobs>],
     colors: &[[u8; 3]],
-    view: View,
     dt: f64,
-    upto: usize,
-    arms: usize,
-) -> Result<Vec<u8>> {
-    let mut film = Film::new(view);
+    from: usize,
+    to: usize,
+) {
     for (run, color) in positions.iter().zip(colors) {
         let c = color.map(|v| v as f32 / 255.0);
-        let last = run.len().min(upto);
-        for w in run[..last].windows(2) {
-            film.expose_segment((w[0].2, w[0].3), (w[1].2, w[1].3), dt, c);
+        let to = run.len().min(to);
+        if to > from + 1 {
+            for w in run[from..to].windows(2) {
+                film.expose_segment((w[0].2, w[0].3), (w[1].2, w[1].3), dt, c);
+            }
         }
     }
-    let mut rgb = film.develop(reference_speed(positions, dt));
-    let at = |run: &Vec<Bobs>| {
-        if upto == usize::MAX {
-            run[0]
-        } else {
-            run[(upto.max(1) - 1).min(run.len() - 1)]
-        }
-    };
+}
+
+/// Develops `film` (half brightness at `speed`, see `reference_speed`) and draws the arms of
+/// the first `arms` runs: at the start, grey and faint, for the photograph (`sample` None);
+/// at `sample`, in each run's colour, for an animation frame.
+fn develop(
+    film: &Film,
+    speed: f64,
+    positions: &[Vec<Bobs>],
+    colors: &[[u8; 3]],
+    sample: Option<usize>,
+    arms: usize,
+) -> Result<Vec<u8>> {
+    let mut rgb = film.develop(speed);
     let drawn: Vec<_> = positions
         .iter()
         .zip(colors)
         .take(arms)
-        .map(|(r, c)| {
-            let grey = if upto == usize::MAX {
-                [200, 200, 200]
-            } else {
-                *c
-            };
-            (at(r), grey)
+        .map(|(run, c)| match sample {
+            None => (run[0], [200, 200, 200]),
+            Some(k) => (run[k.min(run.len() - 1)], *c),
         })
         .collect();
-    let alpha = if upto == usize::MAX { 0.25 } else { 0.85 };
-    let radius = (view.size / 120).max(2) as i32;
-    render::draw_arms(&mut rgb, view, &drawn, alpha, radius)?;
+    let alpha = if sample.is_none() { 0.25 } else { 0.85 };
+    let radius = (film.view.size / 120).max(2) as i32;
+    render::draw_arms(&mut rgb, film.view, &drawn, alpha, radius)?;
     Ok(rgb)
 }
 
@@ -317,6 +306,7 @@ fn write_gif(
     p: &Params,
     positions: &[Vec<Bobs>],
     colors: &[[u8; 3]],
+    speed: f64,
     args: &TracesArgs,
     monitor: &Monitor,
 ) -> Result<()> {
@@ -329,16 +319,21 @@ fn write_gif(
     let frames = ((args.exposure * FPS).round() as usize).max(1);
     monitor.start("gif", frames as u64);
     let mut rgb = Vec::with_capacity(frames);
+    // One film, exposed a frame's worth further each time.
+    let mut film = Film::new(view);
+    let mut exposed = 0;
     for f in 1..=frames {
         monitor.check()?;
         let upto = ((f as f64 / frames as f64) * (samples - 1) as f64).round() as usize + 1;
+        expose(&mut film, positions, colors, args.dt, exposed, upto);
+        exposed = upto - 1;
         // Arms of at most 50 runs, or the picture is all arms.
-        rgb.push(exposure_picture(
+        rgb.push(develop(
+            &film,
+            speed,
             positions,
             colors,
-            view,
-            args.dt,
-            upto,
+            Some(upto - 1),
             positions.len().min(50),
         )?);
         monitor.advance(1);

@@ -227,8 +227,9 @@ fn lyapunov_map_writes_png_and_npy_on_both_backends() {
         assert!(png_text(&png, "chaoscope:colour-range").contains("1/s"));
         maps.push(data);
     }
-    // Both backends see the same picture: chaotic corners, regular centre (5 s is short, so
-    // only the gross structure is compared).
+    // Both backends see the same picture. Over 5 s, f32 and f64 agree to ~1e-4 /s on
+    // regular pixels (tests/lyapunov.rs); chaotic ones part after a few Lyapunov times and
+    // may differ by more, so 90 % of pixels within 0.05 /s.
     if let [cpu, gpu] = &maps[..] {
         let close = cpu
             .iter()

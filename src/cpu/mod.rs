@@ -212,24 +212,9 @@ fn axpy(y: &State, h: f64, k: &State) -> State {
     }
 }
 
-/// One classic fourth-order Runge-Kutta step of size `dt` (s).
-pub fn rk4_step(p: &Params, y: &State, dt: f64) -> State {
-    let k1 = derivative(p, y);
-    let k2 = derivative(p, &axpy(y, 0.5 * dt, &k1));
-    let k3 = derivative(p, &axpy(y, 0.5 * dt, &k2));
-    let k4 = derivative(p, &axpy(y, dt, &k3));
-    let w = dt / 6.0;
-    State {
-        theta1: y.theta1 + w * (k1.theta1 + 2.0 * k2.theta1 + 2.0 * k3.theta1 + k4.theta1),
-        omega1: y.omega1 + w * (k1.omega1 + 2.0 * k2.omega1 + 2.0 * k3.omega1 + k4.omega1),
-        theta2: y.theta2 + w * (k1.theta2 + 2.0 * k2.theta2 + 2.0 * k3.theta2 + k4.theta2),
-        omega2: y.omega2 + w * (k1.omega2 + 2.0 * k2.omega2 + 2.0 * k3.omega2 + k4.omega2),
-    }
-}
-
-/// One RK4 step and the work (J) the losses do over it, integrated with the same stages (the
-/// work is a fifth ODE variable, W' = loss power, that does not feed back).
-pub fn rk4_step_with_work(p: &Params, y: &State, dt: f64) -> (State, f64) {
+/// One classic fourth-order Runge-Kutta step of size `dt` (s): the next state and the
+/// stage states y2, y3, y4 at which the rate was evaluated (besides y).
+fn rk4_stages(p: &Params, y: &State, dt: f64) -> (State, [State; 3]) {
     let k1 = derivative(p, y);
     let y2 = axpy(y, 0.5 * dt, &k1);
     let k2 = derivative(p, &y2);
@@ -238,14 +223,26 @@ pub fn rk4_step_with_work(p: &Params, y: &State, dt: f64) -> (State, f64) {
     let y4 = axpy(y, dt, &k3);
     let k4 = derivative(p, &y4);
     let w = dt / 6.0;
-    let power = |s: &State| dissipated_power(p, s);
-    let work = w * (power(y) + 2.0 * power(&y2) + 2.0 * power(&y3) + power(&y4));
     let next = State {
         theta1: y.theta1 + w * (k1.theta1 + 2.0 * k2.theta1 + 2.0 * k3.theta1 + k4.theta1),
         omega1: y.omega1 + w * (k1.omega1 + 2.0 * k2.omega1 + 2.0 * k3.omega1 + k4.omega1),
         theta2: y.theta2 + w * (k1.theta2 + 2.0 * k2.theta2 + 2.0 * k3.theta2 + k4.theta2),
         omega2: y.omega2 + w * (k1.omega2 + 2.0 * k2.omega2 + 2.0 * k3.omega2 + k4.omega2),
     };
+    (next, [y2, y3, y4])
+}
+
+/// One classic fourth-order Runge-Kutta step of size `dt` (s).
+pub fn rk4_step(p: &Params, y: &State, dt: f64) -> State {
+    rk4_stages(p, y, dt).0
+}
+
+/// One RK4 step and the work (J) the losses do over it, integrated with the same stages (the
+/// work is a fifth ODE variable, W' = loss power, that does not feed back).
+pub fn rk4_step_with_work(p: &Params, y: &State, dt: f64) -> (State, f64) {
+    let (next, [y2, y3, y4]) = rk4_stages(p, y, dt);
+    let power = |s: &State| dissipated_power(p, s);
+    let work = dt / 6.0 * (power(y) + 2.0 * power(&y2) + 2.0 * power(&y3) + power(&y4));
     (next, work)
 }
 
@@ -260,6 +257,22 @@ pub fn dissipated_along(p: &Params, states: &[State], dt: f64) -> Vec<f64> {
         out.push(total);
     }
     out
+}
+
+/// `trajectory` and the losses' work up to each state, in one pass.
+pub fn trajectory_with_work(
+    p: &Params,
+    start: State,
+    dt: f64,
+    steps: u32,
+) -> (Vec<State>, Vec<f64>) {
+    let (mut states, mut work) = (vec![start], vec![0.0]);
+    for _ in 0..steps {
+        let (next, w) = rk4_step_with_work(p, states.last().expect("start"), dt);
+        states.push(next);
+        work.push(work.last().expect("start") + w);
+    }
+    (states, work)
 }
 
 /// States at t = 0, dt, 2 dt, ... n dt (n + 1 states).

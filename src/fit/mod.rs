@@ -146,27 +146,30 @@ pub fn run(args: &FitArgs) -> Result<()> {
         (ex.params[0], ex.params[1]),
         (inv.params[0], inv.params[1]),
     )?;
-    let w = |arm: usize| -> Vec<(f64, f64)> {
-        let a: Vec<f64> = angle
+    // Angular velocities at the interior rows (central differences), once for both uses.
+    let arm = |k: usize| -> Vec<f64> {
+        angle
             .iter()
-            .map(|p| if arm == 0 { p.0 } else { p.1 })
-            .collect();
-        let wrap = |x: f64| {
-            (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
-        };
-        data::central_differences(&t, &a)
-            .into_iter()
-            .enumerate()
-            .map(|(i, w)| (wrap(a[i + 1]), w))
+            .map(|a| if k == 0 { a.0 } else { a.1 })
             .collect()
     };
-    let (w1, w2) = (w(0), w(1));
+    let (wa, wb) = (
+        data::central_differences(&t, &arm(0)),
+        data::central_differences(&t, &arm(1)),
+    );
+    let wrap = |x: f64| {
+        (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    };
+    let portrait = |k: usize, w: &[f64]| -> Vec<(f64, f64)> {
+        let a = arm(k);
+        w.iter()
+            .enumerate()
+            .map(|(i, &w)| (wrap(a[i + 1]), w))
+            .collect()
+    };
+    let (w1, w2) = (portrait(0, &wa), portrait(1, &wb));
     plots::phase(&out.join("phase.png"), [&w1, &w2])?;
     // The derived quantities row by row (interior rows: central differences need neighbours).
-    let (wa, wb) = (
-        data::central_differences(&t, &angle.iter().map(|a| a.0).collect::<Vec<_>>()),
-        data::central_differences(&t, &angle.iter().map(|a| a.1).collect::<Vec<_>>()),
-    );
     crate::render::write_atomic(&out.join("derived.csv"), |f| {
         use std::io::Write;
         writeln!(

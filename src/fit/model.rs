@@ -63,18 +63,35 @@ fn positions(p: &Params, s: &State) -> [f64; 4] {
     [q.x1, q.y1, q.x2, q.y2]
 }
 
-/// Simulated positions at rows row0..row0+n, from `start` at row0, stepping each data
-/// interval in SUBSTEPS equal steps (the data's times are not exactly uniform).
-fn simulate(p: &Params, start: State, t: &[f64], row0: usize, n: usize) -> Vec<[f64; 4]> {
-    let mut out = Vec::with_capacity(n);
+/// Simulated (time, positions) from `start` at row0 over rows row0..row0+n, stepping each
+/// data interval in SUBSTEPS equal steps (the data's times are not exactly uniform) and
+/// keeping `per_interval` points an interval: 1 gives the data times.
+fn simulate(
+    p: &Params,
+    start: State,
+    t: &[f64],
+    row0: usize,
+    n: usize,
+    per_interval: u32,
+) -> Vec<(f64, [f64; 4])> {
+    let keep = SUBSTEPS / per_interval;
+    let mut out = Vec::with_capacity((n - 1) * per_interval as usize + 1);
     let mut y = start;
-    out.push(positions(p, &y));
+    out.push((t[row0], positions(p, &y)));
     for i in row0..row0 + n - 1 {
         let dt = (t[i + 1] - t[i]) / SUBSTEPS as f64;
-        for _ in 0..SUBSTEPS {
+        for k in 1..=SUBSTEPS {
             y = cpu::rk4_step(p, &y, dt);
+            if k % keep == 0 {
+                // The interval's last point sits exactly at the next data time.
+                let time = if k == SUBSTEPS {
+                    t[i + 1]
+                } else {
+                    t[i] + k as f64 * dt
+                };
+                out.push((time, positions(p, &y)));
+            }
         }
-        out.push(positions(p, &y));
     }
     out
 }
@@ -189,12 +206,12 @@ pub fn fit_model(
     let residuals = |q: &DVector<f64>| -> DVector<f64> {
         let p = with_damping(&spec.params, q[4] * q[4], q[5] * q[5]);
         let start = State::from_array([q[0], q[1], q[2], q[3]]);
-        let sim = simulate(&p, start, &t, row, window_rows);
+        let sim = simulate(&p, start, &t, row, window_rows, 1);
         DVector::from_iterator(
             window_rows * 4,
             sim.iter()
                 .zip(&data[row..])
-                .flat_map(|(a, b)| (0..4).map(move |k| a[k] - b[k])),
+                .flat_map(|((_, a), b)| (0..4).map(move |k| a[k] - b[k])),
         )
     };
     let steps = [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5];
@@ -208,7 +225,9 @@ pub fn fit_model(
     let q = &refined.params;
     let fitted = with_damping(&spec.params, q[4] * q[4], q[5] * q[5]);
     let start = State::from_array([q[0], q[1], q[2], q[3]]);
-    let all = simulate(&fitted, start, &t, row, frames.len() - row);
+    // Ten points per data interval for the plots; every tenth is at a data time.
+    let simulated = simulate(&fitted, start, &t, row, frames.len() - row, 10);
+    let all: Vec<[f64; 4]> = simulated.iter().step_by(10).map(|s| s.1).collect();
     let mut agrees_until = t[row];
     for (k, (a, b)) in all.iter().zip(&data[row..]).enumerate() {
         let e1 = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
@@ -217,18 +236,6 @@ pub fn fit_model(
             break;
         }
         agrees_until = t[row + k];
-    }
-    // A dense curve for the plots: ten points per data interval.
-    let mut simulated = vec![(t[row], positions(&fitted, &start))];
-    let mut y = start;
-    for i in row..frames.len() - 1 {
-        let dt = (t[i + 1] - t[i]) / SUBSTEPS as f64;
-        for k in 1..=SUBSTEPS {
-            y = cpu::rk4_step(&fitted, &y, dt);
-            if k % (SUBSTEPS / 10) == 0 {
-                simulated.push((t[i] + k as f64 * dt, positions(&fitted, &y)));
-            }
-        }
     }
     Ok(ModelFit {
         row,

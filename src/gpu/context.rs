@@ -117,6 +117,12 @@ pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer, len: u64) -> Result<
     map_read(ctx, &staging)
 }
 
+/// Reads back the first `count` f32 values of `buffer`.
+pub fn read_f32s(ctx: &GpuContext, buffer: &wgpu::Buffer, count: u64) -> Result<Vec<f32>> {
+    let bytes = read_buffer(ctx, buffer, count * 4)?;
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
+}
+
 /// Maps a MAP_READ buffer and copies its bytes out.
 pub fn map_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>> {
     let (tx, rx) = std::sync::mpsc::channel();

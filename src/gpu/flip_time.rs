@@ -1,10 +1,11 @@
 //! Drives `shaders/flip_time.wgsl`: tiles the grid to fit a storage binding, splits the time
 //! loop into dispatches of bounded work, and keeps the still-active pixels in a dense list.
 
-use super::context::{GpuContext, map_read, read_buffer};
+use super::context::{GpuContext, map_read, read_f32s};
 use super::layout::{FLIP_TIME_WGSL, GpuParams, NEVER};
 use super::pipeline::{
-    Variants, bind_group, layouts, params_buffer, record_dispatch, shader_module, storage_buffer,
+    Tiling, Variants, bind_group, layouts, params_buffer, record_dispatch, shader_module,
+    storage_buffer,
 };
 use crate::error::Result;
 use crate::field::Field;
@@ -131,18 +132,15 @@ impl FlipTimeKernel {
         let grid = spec.grid;
         let (init, advance) = self.pipelines.get(ctx, spec.params.losses.kinds());
         let total_steps = spec.stepping.steps();
-        let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
-        let capacity = tile_rows as u64 * grid.width as u64;
-        let bufs = self.buffers(ctx, capacity);
-        let tiles = grid.height.div_ceil(tile_rows);
+        let tiling = Tiling::new(grid.width, grid.height, max_pixels);
+        let bufs = self.buffers(ctx, tiling.capacity());
+        let tiles = tiling.count();
         monitor.start("gpu", tiles as u64 * total_steps as u64);
 
         let mut field = Field::new(grid.width, grid.height, f32::INFINITY);
         let base = GpuParams::new(&spec.params, spec.stepping.dt).with_grid(&grid);
         let t_max = spec.stepping.t_max as f32;
-        for tile in 0..tiles {
-            let row0 = tile * tile_rows;
-            let rows = tile_rows.min(grid.height - row0);
+        for (row0, rows) in tiling.tiles() {
             let pixels = rows * grid.width;
             let mut params = GpuParams {
                 row0,
@@ -172,10 +170,7 @@ impl FlipTimeKernel {
                 monitor.advance(steps as u64);
             }
             monitor.advance((total_steps - step0) as u64);
-            let bytes = read_buffer(ctx, &bufs.times, pixels as u64 * 4)?;
-            let times = bytes
-                .chunks_exact(4)
-                .map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")));
+            let times = read_f32s(ctx, &bufs.times, pixels as u64)?;
             let start = row0 as usize * grid.width as usize;
             for (out, t) in field.data[start..start + pixels as usize]
                 .iter_mut()

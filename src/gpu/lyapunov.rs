@@ -1,11 +1,11 @@
 //! Drives `shaders/lyapunov.wgsl`: divergence maps, tiled like the flip map, every pixel
 //! integrating the whole run in dispatches of bounded work.
 
-use super::context::{GpuContext, read_buffer};
+use super::context::{GpuContext, read_f32s};
 use super::flip_time::STEPS_PER_DISPATCH;
 use super::layout::{GpuParams, LYAPUNOV_WGSL};
 use super::pipeline::{
-    Variants, bind_group, compute_pipeline, dispatch_and_wait, layouts, params_buffer,
+    Tiling, Variants, bind_group, compute_pipeline, dispatch_and_wait, layouts, params_buffer,
     shader_module, storage_buffer,
 };
 use crate::cpu::Convergence;
@@ -85,8 +85,8 @@ impl LyapunovKernel {
         let grid = spec.grid;
         let (init, advance) = self.pipelines.get(ctx, spec.params.losses.kinds());
         let total_steps = spec.stepping.steps();
-        let tile_rows = (max_pixels / grid.width as u64).clamp(1, grid.height as u64) as u32;
-        let capacity = tile_rows as u64 * grid.width as u64;
+        let tiling = Tiling::new(grid.width, grid.height, max_pixels);
+        let capacity = tiling.capacity();
         let params_buf = params_buffer(ctx);
         let states = storage_buffer(ctx, "states", capacity * 64);
         let log_sums = storage_buffer(ctx, "log sums", capacity * 4);
@@ -102,7 +102,7 @@ impl LyapunovKernel {
             dispatch_and_wait(ctx, pipeline, &bind, params.count)
         };
 
-        let tiles = grid.height.div_ceil(tile_rows);
+        let tiles = tiling.count();
         monitor.start("gpu", tiles as u64 * total_steps as u64);
         let mut field = Field::new(grid.width, grid.height, 0.0);
         let base = GpuParams {
@@ -115,9 +115,7 @@ impl LyapunovKernel {
             ..GpuParams::new(&spec.params, spec.stepping.dt).with_grid(&grid)
         };
         let t_end = total_steps as f64 * spec.stepping.dt;
-        for tile in 0..tiles {
-            let row0 = tile * tile_rows;
-            let rows = tile_rows.min(grid.height - row0);
+        for (row0, rows) in tiling.tiles() {
             let pixels = rows * grid.width;
             let mut params = GpuParams {
                 row0,
@@ -140,20 +138,18 @@ impl LyapunovKernel {
                 step0 += steps;
                 monitor.advance(steps as u64);
                 if let Some(trace) = trace.as_deref_mut() {
-                    let b = read_buffer(ctx, &log_sums, 4)?;
-                    let log_sum = f32::from_le_bytes(b[..4].try_into().expect("4 bytes"));
+                    let log_sum = read_f32s(ctx, &log_sums, 1)?[0];
                     let t = step0 as f64 * spec.stepping.dt;
                     trace.t.push(t);
                     trace.ftle.push(log_sum as f64 / t);
                 }
             }
-            let bytes = read_buffer(ctx, &log_sums, pixels as u64 * 4)?;
+            let sums = read_f32s(ctx, &log_sums, pixels as u64)?;
             let start = row0 as usize * grid.width as usize;
-            for (out, b) in field.data[start..start + pixels as usize]
+            for (out, log_sum) in field.data[start..start + pixels as usize]
                 .iter_mut()
-                .zip(bytes.chunks_exact(4))
+                .zip(sums)
             {
-                let log_sum = f32::from_le_bytes(b.try_into().expect("4 bytes"));
                 *out = (log_sum as f64 / t_end) as f32;
             }
         }
@@ -192,11 +188,7 @@ pub fn jacobians(ctx: &GpuContext, p: &Params, states: &[State]) -> Result<Vec<[
     let layout = pipeline.get_bind_group_layout(0);
     let bind = bind_group(ctx, "jacobian_columns", &layout, &[&params_buf, &buf]);
     dispatch_and_wait(ctx, &pipeline, &bind, params.count)?;
-    let out = read_buffer(ctx, &buf, bytes)?;
-    let floats: Vec<f32> = out
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")))
-        .collect();
+    let floats = read_f32s(ctx, &buf, bytes / 4)?;
     // Column j of state i is floats[16 i + 4 j ..][..4].
     Ok(floats
         .chunks_exact(16)

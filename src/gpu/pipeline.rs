@@ -195,3 +195,38 @@ pub fn dispatch_and_wait(
     ctx.queue.submit([encoder.finish()]);
     ctx.wait()
 }
+
+/// A grid cut into tiles of whole rows that fit the device: at most `max_pixels` pixels each.
+pub struct Tiling {
+    pub width: u32,
+    pub height: u32,
+    pub tile_rows: u32,
+}
+
+impl Tiling {
+    pub fn new(width: u32, height: u32, max_pixels: u64) -> Self {
+        let tile_rows = (max_pixels / width as u64).clamp(1, height as u64) as u32;
+        Tiling {
+            width,
+            height,
+            tile_rows,
+        }
+    }
+
+    /// Pixels of the largest tile (what the buffers must hold).
+    pub fn capacity(&self) -> u64 {
+        self.tile_rows as u64 * self.width as u64
+    }
+
+    pub fn count(&self) -> u32 {
+        self.height.div_ceil(self.tile_rows)
+    }
+
+    /// (first row, rows) of each tile, top to bottom.
+    pub fn tiles(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        (0..self.count()).map(|t| {
+            let row0 = t * self.tile_rows;
+            (row0, self.tile_rows.min(self.height - row0))
+        })
+    }
+}

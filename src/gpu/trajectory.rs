@@ -1,6 +1,6 @@
 //! Drives `shaders/trajectory.wgsl`: one pendulum, every state kept.
 
-use super::context::{GpuContext, read_buffer};
+use super::context::{GpuContext, read_f32s};
 use super::layout::{GpuParams, TRAJECTORY_WGSL};
 use super::pipeline::{
     bind_group, compute_pipeline, dispatch_and_wait, params_buffer, shader_module, storage_buffer,
@@ -74,15 +74,9 @@ pub fn strided_trajectories(
     let layout = pipeline.get_bind_group_layout(0);
     let bind = bind_group(ctx, "trajectory", &layout, &[&params_buf, &states]);
     dispatch_and_wait(ctx, &pipeline, &bind, starts.len() as u32)?;
-    let out = read_buffer(ctx, &states, bytes)?;
-    let all: Vec<State> = out
-        .chunks_exact(16)
-        .map(|c| {
-            let v: [f32; 4] = std::array::from_fn(|i| {
-                f32::from_le_bytes(c[4 * i..4 * i + 4].try_into().expect("4 bytes"))
-            });
-            State::from_array(v.map(f64::from))
-        })
+    let all: Vec<State> = read_f32s(ctx, &states, bytes / 4)?
+        .chunks_exact(4)
+        .map(|v| State::from_array(std::array::from_fn(|i| v[i] as f64)))
         .collect();
     Ok(all.chunks(per_run as usize).map(|c| c.to_vec()).collect())
 }

@@ -37,18 +37,38 @@ pub fn write_png(
     rgb: &[u8],
     text: &[(String, String)],
 ) -> Result<()> {
+    encode_png(path, width, height, &[rgb], None, text)
+}
+
+/// RGB frames as a PNG, animated (APNG, `delay_ms` a frame, looping) when `delay_ms` is given.
+fn encode_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    frames: &[&[u8]],
+    delay_ms: Option<u16>,
+    text: &[(String, String)],
+) -> Result<()> {
     let png_err = |e: png::EncodingError| Error::Io(std::io::Error::other(e));
     write_atomic(path, |w| {
         let mut encoder = png::Encoder::new(w, width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
+        if let Some(delay) = delay_ms {
+            encoder
+                .set_animated(frames.len() as u32, 0)
+                .map_err(png_err)?;
+            encoder.set_frame_delay(delay, 1000).map_err(png_err)?;
+        }
         for (key, value) in text {
             encoder
                 .add_text_chunk(key.clone(), value.clone())
                 .map_err(png_err)?;
         }
         let mut writer = encoder.write_header().map_err(png_err)?;
-        writer.write_image_data(rgb).map_err(png_err)?;
+        for frame in frames {
+            writer.write_image_data(frame).map_err(png_err)?;
+        }
         writer.finish().map_err(png_err)
     })
 }
@@ -124,26 +144,8 @@ pub fn write_apng(
     delay_ms: u16,
     text: &[(String, String)],
 ) -> Result<()> {
-    let png_err = |e: png::EncodingError| Error::Io(std::io::Error::other(e));
-    write_atomic(path, |w| {
-        let mut encoder = png::Encoder::new(w, width, height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder
-            .set_animated(frames.len() as u32, 0)
-            .map_err(png_err)?;
-        encoder.set_frame_delay(delay_ms, 1000).map_err(png_err)?;
-        for (key, value) in text {
-            encoder
-                .add_text_chunk(key.clone(), value.clone())
-                .map_err(png_err)?;
-        }
-        let mut writer = encoder.write_header().map_err(png_err)?;
-        for frame in frames {
-            writer.write_image_data(frame).map_err(png_err)?;
-        }
-        writer.finish().map_err(png_err)
-    })
+    let frames: Vec<&[u8]> = frames.iter().map(Vec::as_slice).collect();
+    encode_png(path, width, height, &frames, Some(delay_ms), text)
 }
 
 /// An animated GIF of equally sized RGB frames (each quantised to its own 256-colour
