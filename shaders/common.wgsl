@@ -21,10 +21,10 @@ struct Params {
     l1: f32,
     l2: f32,
     dt: f32,
-    theta1_min: f32,
-    theta1_step: f32,
-    theta2_max: f32,
-    theta2_step: f32,
+    theta1_mid: f32,
+    theta1_half_step: f32,
+    theta2_mid: f32,
+    theta2_half_step: f32,
     omega1: f32,
     omega2: f32,
     // Starts below this energy (J) can never flip (src/model.rs `no_flip_threshold`).
@@ -41,15 +41,14 @@ struct Params {
     mass_total: f32,
     mass_lower: f32,
     bearing: f32,
-    // Tile of the grid: `rows` rows of `width` pixels from grid row `row0`.
+    // Grid size, and the tile: `rows` rows of `width` pixels from grid row `row0`.
     width: u32,
+    height: u32,
     rows: u32,
     row0: u32,
     // This dispatch integrates steps step0 .. step0 + steps.
     step0: u32,
     steps: u32,
-    // 1: stop a pixel when it flips and integrate only the listed active pixels.
-    early_exit: u32,
     // Number of invocations with work in this dispatch.
     count: u32,
     // Steps between renormalisations (divergence maps) or stored states (trajectories), steps
@@ -282,14 +281,15 @@ fn hermite_crossing(ta: f32, wa: f32, tb: f32, wb: f32, h: f32) -> f32 {
 }
 
 // Start (theta1, omega1, theta2, omega2) of pixel i of the tile: pixel centres, row 0 at the
-// top (theta2 at its maximum).
+// top (theta2 at its maximum). As src/spec.rs `Grid::theta1_at`: the middle plus an odd number
+// of half steps, so mirrored pixels of a range centred on 0 get exactly opposite angles.
 fn grid_start(p: Params, i: u32) -> vec4<f32> {
     let col = i % p.width;
     let row = p.row0 + i / p.width;
     return vec4<f32>(
-        p.theta1_min + (f32(col) + 0.5) * p.theta1_step,
+        p.theta1_mid + f32(i32(2u * col + 1u) - i32(p.width)) * p.theta1_half_step,
         p.omega1,
-        p.theta2_max - (f32(row) + 0.5) * p.theta2_step,
+        p.theta2_mid - f32(i32(2u * row + 1u) - i32(p.height)) * p.theta2_half_step,
         p.omega2,
     );
 }

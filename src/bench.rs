@@ -38,6 +38,9 @@ pub struct BenchArgs {
     /// Skip the CPU rows.
     #[arg(long)]
     pub no_cpu: bool,
+    /// Skip the divergence-map (FTLE) rows.
+    #[arg(long)]
+    pub no_ftle: bool,
     /// Directory of the peer scripts (e.g. ../shared/peers); no peers are run without it.
     #[arg(long)]
     pub peers: Option<PathBuf>,
@@ -60,6 +63,11 @@ struct Sample {
 
 /// Pendulum-steps the benchmark's problem needs, as the peers count them: every pixel up to
 /// its flip step, or all steps (skipped starts count in full, as the peers integrate them).
+/// The GPU rows: the peers' two modes, early exit and every step, as the peers define them
+/// (`early-all`, `full`: every pixel integrated, the raw throughput) and with the mirrored
+/// half of the symmetric grid (`early`: the map as users get it, `full-half`).
+const MODES: [&str; 4] = ["early", "early-all", "full", "full-half"];
+
 fn problem_steps(field: &Field, spec: &FlipSpec) -> f64 {
     let steps = spec.stepping.steps() as f64;
     if !spec.early_exit {
@@ -78,9 +86,11 @@ fn problem_steps(field: &Field, spec: &FlipSpec) -> f64 {
         .sum()
 }
 
-fn spec(size: u32, args: &BenchArgs, early_exit: bool) -> FlipSpec {
+/// The FLIP-512 problem; `mode` is one of `MODES`.
+fn spec(size: u32, args: &BenchArgs, mode: &str) -> FlipSpec {
     FlipSpec {
-        early_exit,
+        early_exit: mode.starts_with("early"),
+        use_symmetry: mode == "early" || mode == "full-half",
         ..FlipSpec::new(
             Params::default(),
             Grid::square(size),
@@ -103,6 +113,7 @@ fn ftle_spec(size: u32, args: &BenchArgs) -> LyapunovSpec {
         },
         method: Method::Tangent,
         renorm: 0.1,
+        use_symmetry: false,
     }
 }
 
@@ -200,7 +211,9 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     let quiet = Monitor::hidden();
     let ctx = GpuContext::new()?;
     let kernel = FlipTimeKernel::new(&ctx);
-    kernel.run(&ctx, &spec(32, args, true), &quiet)?; // warm-up: shader compile
+    for mode in MODES {
+        kernel.run(&ctx, &spec(32, args, mode), &quiet)?; // warm-up: shader compile
+    }
     let lyapunov = LyapunovKernel::new(&ctx, Method::Tangent);
     lyapunov.run(&ctx, &ftle_spec(32, args), &quiet)?;
     eprintln!("GPU: {}", ctx.adapter_name());
@@ -208,31 +221,34 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     for rep in 0..args.repeat {
         monitor.check()?;
         eprintln!("repetition {}/{}", rep + 1, args.repeat);
-        for early in [true, false] {
-            let s = spec(args.size, args, early);
+        for mode in MODES {
+            let s = spec(args.size, args, mode);
             let t0 = Instant::now();
             let field = kernel.run(&ctx, &s, &quiet)?;
             let wall_s = t0.elapsed().as_secs_f64();
             samples.push(Sample {
                 name: format!("chaoscope gpu f32 ({})", ctx.info.name),
-                mode: if early { "early" } else { "full" },
+                mode,
                 wall_s,
                 pendulum_steps: problem_steps(&field, &s),
             });
+        }
+        for early in [true, false] {
+            let mode = if early { "early" } else { "full" };
             if !args.no_cpu {
-                let s = spec(args.cpu_size, args, early);
+                let s = spec(args.cpu_size, args, mode);
                 let t0 = Instant::now();
                 let field = cpu::flip_map(&s, &quiet)?;
                 let wall_s = t0.elapsed().as_secs_f64();
+                let scale = (args.size as f64 / args.cpu_size as f64).powi(2);
                 samples.push(Sample {
                     name: format!("chaoscope cpu f64 (n={})", args.cpu_size),
-                    mode: if early { "early" } else { "full" },
-                    wall_s: wall_s * (args.size as f64 / args.cpu_size as f64).powi(2),
-                    pendulum_steps: problem_steps(&field, &s)
-                        * (args.size as f64 / args.cpu_size as f64).powi(2),
+                    mode,
+                    wall_s: wall_s * scale,
+                    pendulum_steps: problem_steps(&field, &s) * scale,
                 });
             }
-            if !early {
+            if !early && !args.no_ftle {
                 samples.extend(ftle_samples(args, &ctx, &lyapunov, &quiet)?);
             }
             if let Some(dir) = &args.peers {
@@ -250,7 +266,7 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
         args.size, args.dt, args.t_max, args.repeat, args.cpu_size
     );
     println!(
-        "{:<44} {:>6} {:>10} {:>16}",
+        "{:<44} {:>9} {:>10} {:>16}",
         "path", "mode", "wall s", "pendulum-steps/s"
     );
     let mut names: Vec<(String, &str)> = samples.iter().map(|s| (s.name.clone(), s.mode)).collect();
@@ -264,7 +280,7 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
             .collect();
         let wall = median(mine.iter().map(|s| s.wall_s).collect());
         let steps = mine[0].pendulum_steps;
-        println!("{name:<44} {mode:>6} {wall:>10.3} {:>16.3e}", steps / wall);
+        println!("{name:<44} {mode:>9} {wall:>10.3} {:>16.3e}", steps / wall);
         rows.push((name, mode, wall, steps / wall));
     }
     let gpu_rate = |mode: &str| {
@@ -278,13 +294,18 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
             full / ftle
         );
     }
-    for mode in ["early", "full"] {
+    for (mode, peer_mode) in [
+        ("early", "early"),
+        ("early-all", "early"),
+        ("full", "full"),
+        ("full-half", "full"),
+    ] {
         let ours = rows
             .iter()
             .find(|r| r.0.starts_with("chaoscope gpu") && r.1 == mode);
         let best_peer = rows
             .iter()
-            .filter(|r| r.0.starts_with("peer") && r.1 == mode && r.2.is_finite())
+            .filter(|r| r.0.starts_with("peer") && r.1 == peer_mode && r.2.is_finite())
             .min_by(|a, b| a.2.total_cmp(&b.2));
         if let (Some(o), Some(p)) = (ours, best_peer) {
             println!(

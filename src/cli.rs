@@ -147,15 +147,21 @@ pub struct FlipArgs {
     /// Raw flip times (s) as float32 .npy, shape (height, width), row 0 = top, inf = never.
     #[arg(long)]
     pub data: Option<PathBuf>,
-    /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts).
+    /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts,
+    /// no mirrored half).
     #[arg(long)]
     pub full: bool,
+    /// Integrate both halves of a point-symmetric grid (theta ranges centred on 0, released
+    /// from rest) instead of mirroring the top half: the same map, twice the work.
+    #[arg(long)]
+    pub no_symmetry: bool,
 }
 
 impl FlipArgs {
     pub fn spec(&self) -> Result<FlipSpec> {
         Ok(FlipSpec {
             early_exit: !self.full,
+            use_symmetry: !(self.full || self.no_symmetry),
             ..self.grid.flip_spec(self.t_max)?
         })
     }
@@ -213,6 +219,10 @@ pub struct LyapunovArgs {
     /// Twin separation (Euclidean in theta1, omega1, theta2, omega2), for --method twin.
     #[arg(long, default_value = "1e-8", value_parser = parse_number, allow_hyphen_values = true)]
     pub eps: f64,
+    /// Integrate both halves of a point-symmetric grid with the tangent method instead of
+    /// mirroring the top half: the same map, twice the work.
+    #[arg(long)]
+    pub no_symmetry: bool,
     #[command(flatten)]
     pub physical: PhysicalArgs,
     /// Default: auto for a map, cpu (f64) for a single point.
@@ -658,6 +668,7 @@ fn lyapunov(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
         },
         method,
         renorm: args.renorm,
+        use_symmetry: !args.no_symmetry,
     };
     match point {
         Some((theta1, theta2)) => {

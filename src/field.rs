@@ -21,4 +21,42 @@ impl Field {
     pub fn get(&self, col: u32, row: u32) -> f32 {
         self.data[row as usize * self.width as usize + col as usize]
     }
+
+    /// Fills rows `rows..height` from the ones above by point reflection through the centre:
+    /// (col, row) takes the value of (width-1-col, height-1-row). Needs rows >= height / 2.
+    pub fn mirror_below(&mut self, rows: u32) {
+        let w = self.width as usize;
+        let h = self.height as usize;
+        for row in rows as usize..h {
+            let (above, below) = self.data.split_at_mut(row * w);
+            let source = &above[(h - 1 - row) * w..(h - row) * w];
+            for (out, v) in below[..w].iter_mut().zip(source.iter().rev()) {
+                *out = *v;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Field;
+
+    #[test]
+    fn mirror_below_reflects_through_the_centre() {
+        // 3 x 3, rows 0 and 1 computed: row 2 is row 0 reversed; the middle row stays.
+        let mut f = Field {
+            width: 3,
+            height: 3,
+            data: vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 0.0, 0.0, 0.0],
+        };
+        f.mirror_below(2);
+        assert_eq!(f.data, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 3.0, 2.0, 1.0]);
+        let mut g = Field {
+            width: 2,
+            height: 4,
+            data: vec![1.0, 2.0, 3.0, 4.0, 0.0, 0.0, 0.0, 0.0],
+        };
+        g.mirror_below(2);
+        assert_eq!(g.data, [1.0, 2.0, 3.0, 4.0, 4.0, 3.0, 2.0, 1.0]);
+    }
 }

@@ -341,6 +341,7 @@ fn lyapunov_spec(args: &SweepArgs, frame: &Frame, stepping: Stepping) -> Lyapuno
         stepping,
         method: Method::Tangent,
         renorm: args.renorm,
+        use_symmetry: true,
     }
 }
 

@@ -256,36 +256,89 @@ fn tiled_map_equals_untiled_map() {
     assert_eq!(whole, tiled);
 }
 
-#[test]
-fn gpu_map_is_symmetric_under_theta_to_minus_theta() {
-    let Some(ctx) = common::gpu() else { return };
-    let s = spec(128, 10.0, Params::default(), true);
-    let map = FlipTimeKernel::new(&ctx)
-        .run(&ctx, &s, &Monitor::hidden())
-        .unwrap();
-    let (w, h) = (map.width, map.height);
-    let mirrored = Field {
-        width: w,
-        height: h,
-        data: (0..h)
-            .flat_map(|r| (0..w).map(move |c| (c, r)))
-            .map(|(c, r)| map.get(w - 1 - c, h - 1 - r))
-            .collect(),
-    };
-    let regular = regular_mask(&map, 0.5);
-    let (mut n, mut ok) = (0, 0);
-    for ((&a, &b), &is_regular) in map.data.iter().zip(&mirrored.data).zip(&regular) {
-        if is_regular {
-            n += 1;
-            ok += agree(a, b) as u32;
-        }
-    }
-    // The f32 pixel centres are mirror images only to round-off, so chaotic pixels may part.
-    let frac = ok as f64 / n as f64;
-    assert!(
-        frac >= 0.99,
-        "mirror agreement on the regular part {frac:.4}"
+/// Parameters with every kind of loss switched on (all odd in the velocities, as they must be
+/// for the symmetry).
+fn lossy() -> Params {
+    let mut p = chaoscope::physics_args::Preset::Lab.params();
+    p.losses.joint1 = 2e-4;
+    p.losses.joint2 = 1e-4;
+    p
+}
+
+/// The map with every pixel integrated, checked to be point-symmetric bit for bit, and the
+/// map that integrates the top half and mirrors it, checked to be the same map.
+fn check_mirror(full: &Field, half: &Field, what: &str) {
+    let (w, h) = (full.width, full.height);
+    let asymmetric = (0..h)
+        .flat_map(|r| (0..w).map(move |c| (c, r)))
+        .filter(|&(c, r)| full.get(c, r).to_bits() != full.get(w - 1 - c, h - 1 - r).to_bits())
+        .count();
+    // Not a tolerance: the starts are exact negatives (odd half-steps from 0) and every
+    // operation of the integrator commutes with negation under round-to-nearest, so mirrored
+    // starts run through the same numbers with opposite signs, chaotic or not.
+    assert_eq!(
+        asymmetric, 0,
+        "{what}: pixels that differ from their mirror image"
     );
+    assert_eq!(
+        full, half,
+        "{what}: mirrored half differs from the whole map"
+    );
+}
+
+#[test]
+fn gpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() {
+    let Some(ctx) = common::gpu() else { return };
+    let kernel = FlipTimeKernel::new(&ctx);
+    // An odd height (the middle row is its own mirror image), without and with losses.
+    for (params, early_exit, what) in [
+        (Params::default(), true, "point masses, early exit"),
+        (Params::default(), false, "point masses, every step"),
+        (lossy(), true, "lab with every loss"),
+    ] {
+        let mut s = spec(96, 10.0, params, early_exit);
+        s.grid.height = 71;
+        let half = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
+        s.use_symmetry = false;
+        let full = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
+        check_mirror(&full, &half, what);
+    }
+}
+
+#[test]
+fn cpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() {
+    for (params, what) in [
+        (Params::default(), "point masses"),
+        (lossy(), "lab with every loss"),
+    ] {
+        let mut s = spec(24, 6.0, params, true);
+        s.grid.height = 17;
+        let half = cpu::flip_map(&s, &Monitor::hidden()).unwrap();
+        s.use_symmetry = false;
+        let full = cpu::flip_map(&s, &Monitor::hidden()).unwrap();
+        check_mirror(&full, &half, what);
+    }
+}
+
+#[test]
+fn only_symmetric_grids_are_mirrored() {
+    let s = spec(64, 1.0, Params::default(), true);
+    assert_eq!(s.rows_to_integrate(), 32);
+    let mut odd = s;
+    odd.grid.height = 7;
+    assert_eq!(odd.rows_to_integrate(), 4);
+    let mut shifted = s;
+    shifted.grid.theta1 = Range {
+        min: -3.0,
+        max: 3.1,
+    };
+    assert_eq!(shifted.rows_to_integrate(), 64);
+    let mut moving = s;
+    moving.grid.omega2 = 0.5;
+    assert_eq!(moving.rows_to_integrate(), 64);
+    let mut off = s;
+    off.use_symmetry = false;
+    assert_eq!(off.rows_to_integrate(), 64);
 }
 
 #[test]

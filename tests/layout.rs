@@ -52,10 +52,11 @@ macro_rules! rust_offsets {
 #[test]
 fn params_struct_matches_its_rust_mirror() {
     let rust = rust_offsets!(GpuParams;
-        a, b, c, p, q, l1, l2, dt, theta1_min, theta1_step, theta2_max, theta2_step, omega1,
+        a, b, c, p, q, l1, l2, dt, theta1_mid, theta1_half_step, theta2_mid, theta2_half_step,
+        omega1,
         omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
         mass_total, mass_lower, bearing,
-        width, rows, row0, step0, steps, early_exit, count, interval, total_steps,
+        width, height, rows, row0, step0, steps, count, interval, total_steps,
         twin_eps, _pad0);
     for (name, source) in all_shaders() {
         let (wgsl, span) = wgsl_struct(&module(name, &source), "Params");

@@ -294,6 +294,7 @@ fn divergence_maps_carry_the_damping_on_both_paths() {
         },
         method: chaoscope::spec::Method::Tangent,
         renorm: 0.1,
+        use_symmetry: true,
     };
     let c = cpu::ftle_map(&spec, &Monitor::hidden()).unwrap();
     let g = gpu::LyapunovKernel::new(&ctx, spec.method)

@@ -30,6 +30,7 @@ fn spec(n: u32, t_max: f64, dt: f64, method: Method) -> LyapunovSpec {
         stepping: Stepping { dt, t_max },
         method,
         renorm: 0.1,
+        use_symmetry: true,
     }
 }
 
@@ -319,4 +320,43 @@ fn gpu_twin_method_runs_and_is_coarser_than_tangent_in_f32() {
         .count() as f64
         / tangent.data.len() as f64;
     assert!(same > 0.9, "tangent and 1e-3 twin classify alike on {same}");
+}
+
+#[test]
+fn tangent_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() {
+    // The Jacobian of the odd vector field is even, so the tangent vector (the same start on
+    // both) evolves identically along mirrored trajectories; the f32 and f64 arithmetic is
+    // sign-symmetric, so this holds exactly, not to a tolerance.
+    let mut s = spec(40, 4.0, 0.01, Method::Tangent);
+    s.grid.height = 27;
+    let mut every = s;
+    every.use_symmetry = false;
+    let cpu_half = cpu::ftle_map(&s, &Monitor::hidden()).unwrap();
+    let cpu_full = cpu::ftle_map(&every, &Monitor::hidden()).unwrap();
+    let mut maps = vec![("cpu", cpu_half, cpu_full)];
+    if let Some(ctx) = common::gpu() {
+        let kernel = LyapunovKernel::new(&ctx, Method::Tangent);
+        let half = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
+        let full = kernel.run(&ctx, &every, &Monitor::hidden()).unwrap();
+        maps.push(("gpu", half, full));
+    }
+    for (path, half, full) in maps {
+        let (w, h) = (full.width, full.height);
+        for r in 0..h {
+            for c in 0..w {
+                assert_eq!(
+                    full.get(c, r).to_bits(),
+                    full.get(w - 1 - c, h - 1 - r).to_bits(),
+                    "{path}: pixel ({c}, {r}) differs from its mirror image"
+                );
+            }
+        }
+        assert_eq!(
+            full, half,
+            "{path}: the mirrored half differs from the whole map"
+        );
+    }
+    // Twins are not mirror images of each other's twins: never mirrored.
+    let twin = spec(40, 4.0, 0.01, Method::Twin { eps: 1e-8 });
+    assert_eq!(twin.rows_to_integrate(), 40);
 }

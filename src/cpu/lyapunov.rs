@@ -146,5 +146,10 @@ pub fn lyapunov_spectrum(spec: &LyapunovSpec, start: State) -> [f64; 4] {
 
 /// The FTLE map of `spec` (1/s at t-max), rows in parallel.
 pub fn ftle_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(&spec.grid, monitor, |start| ftle(spec, start).last() as f32)
+    let rows = spec.rows_to_integrate();
+    let mut field = map_pixels(&spec.grid, rows, monitor, |start| {
+        ftle(spec, start).last() as f32
+    })?;
+    field.mirror_below(rows);
+    Ok(field)
 }

@@ -287,17 +287,18 @@ pub fn trajectory(p: &Params, start: State, dt: f64, steps: u32) -> Vec<State> {
     out
 }
 
-/// A map over `grid`: `value(start)` for every pixel, rows in parallel on all cores, with
-/// progress and interruption.
+/// A map over `grid`: `value(start)` for every pixel of the top `rows` rows (the rest stay
+/// 0), rows in parallel on all cores, with progress and interruption.
 pub fn map_pixels(
     grid: &Grid,
+    rows: u32,
     monitor: &Monitor,
     value: impl Fn(State) -> f32 + Sync,
 ) -> Result<Field> {
     let mut field = Field::new(grid.width, grid.height, 0.0);
-    monitor.start("cpu", grid.height as u64);
-    field
-        .data
+    monitor.start("cpu", rows as u64);
+    let computed = rows as usize * grid.width as usize;
+    field.data[..computed]
         .par_chunks_mut(grid.width as usize)
         .enumerate()
         .try_for_each(|(row, out)| {

@@ -43,11 +43,17 @@ impl FlipTimeKernel {
         let (layout, pipeline_layout) =
             layouts(ctx, "flip_time", &[false, false, true, false, false]);
         let kernel = FlipTimeKernel {
-            pipelines: Variants::new(module, pipeline_layout, ("flip_init", "flip_time")),
+            pipelines: Variants::new(
+                module,
+                pipeline_layout,
+                ("flip_init", "flip_time"),
+                Some("EARLY_EXIT"),
+            ),
             layout,
         };
         // Compile the common (lossless) pipelines now, as callers time runs without compiles.
-        kernel.pipelines.get(ctx, 0);
+        kernel.pipelines.get(ctx, 0, true);
+        kernel.pipelines.get(ctx, 0, false);
         kernel
     }
 
@@ -130,9 +136,12 @@ impl FlipTimeKernel {
         max_pixels: u64,
     ) -> Result<Field> {
         let grid = spec.grid;
-        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.kinds());
+        let (init, advance) = self
+            .pipelines
+            .get(ctx, spec.params.losses.kinds(), spec.early_exit);
         let total_steps = spec.stepping.steps();
-        let tiling = Tiling::new(grid.width, grid.height, max_pixels);
+        let rows_needed = spec.rows_to_integrate();
+        let tiling = Tiling::new(grid.width, rows_needed, max_pixels);
         let bufs = self.buffers(ctx, tiling.capacity());
         let tiles = tiling.count();
         monitor.start("gpu", tiles as u64 * total_steps as u64);
@@ -146,7 +155,6 @@ impl FlipTimeKernel {
                 row0,
                 rows,
                 count: pixels,
-                early_exit: spec.early_exit as u32,
                 ..base
             };
             let mut active =
@@ -183,6 +191,7 @@ impl FlipTimeKernel {
                 };
             }
         }
+        field.mirror_below(rows_needed);
         monitor.finish();
         Ok(field)
     }

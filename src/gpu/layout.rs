@@ -25,10 +25,10 @@ pub struct GpuParams {
     pub l1: f32,
     pub l2: f32,
     pub dt: f32,
-    pub theta1_min: f32,
-    pub theta1_step: f32,
-    pub theta2_max: f32,
-    pub theta2_step: f32,
+    pub theta1_mid: f32,
+    pub theta1_half_step: f32,
+    pub theta2_mid: f32,
+    pub theta2_half_step: f32,
     pub omega1: f32,
     pub omega2: f32,
     pub no_flip_energy: f32,
@@ -44,11 +44,11 @@ pub struct GpuParams {
     pub mass_lower: f32,
     pub bearing: f32,
     pub width: u32,
+    pub height: u32,
     pub rows: u32,
     pub row0: u32,
     pub step0: u32,
     pub steps: u32,
-    pub early_exit: u32,
     pub count: u32,
     /// Steps between renormalisations (divergence maps) or between stored states
     /// (trajectories); steps of the whole run; twin separation (Euclidean in (theta1, omega1,
@@ -92,13 +92,14 @@ impl GpuParams {
     }
 
     pub fn with_grid(mut self, g: &Grid) -> Self {
-        self.theta1_min = g.theta1.min as f32;
-        self.theta1_step = g.theta1_step() as f32;
-        self.theta2_max = g.theta2.max as f32;
-        self.theta2_step = g.theta2_step() as f32;
+        self.theta1_mid = g.theta1.mid() as f32;
+        self.theta1_half_step = (0.5 * g.theta1_step()) as f32;
+        self.theta2_mid = g.theta2.mid() as f32;
+        self.theta2_half_step = (0.5 * g.theta2_step()) as f32;
         self.omega1 = g.omega1 as f32;
         self.omega2 = g.omega2 as f32;
         self.width = g.width;
+        self.height = g.height;
         self
     }
 }

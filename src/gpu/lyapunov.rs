@@ -37,10 +37,10 @@ impl LyapunovKernel {
             Method::Twin { .. } => ("twin_init", "twin_advance"),
         };
         let kernel = LyapunovKernel {
-            pipelines: Variants::new(module, pipeline_layout, (init, advance)),
+            pipelines: Variants::new(module, pipeline_layout, (init, advance), None),
             layout,
         };
-        kernel.pipelines.get(ctx, 0);
+        kernel.pipelines.get(ctx, 0, false);
         kernel
     }
 
@@ -83,9 +83,10 @@ impl LyapunovKernel {
         mut trace: Option<&mut Convergence>,
     ) -> Result<Field> {
         let grid = spec.grid;
-        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.kinds());
+        let (init, advance) = self.pipelines.get(ctx, spec.params.losses.kinds(), false);
         let total_steps = spec.stepping.steps();
-        let tiling = Tiling::new(grid.width, grid.height, max_pixels);
+        let rows_needed = spec.rows_to_integrate();
+        let tiling = Tiling::new(grid.width, rows_needed, max_pixels);
         let capacity = tiling.capacity();
         let params_buf = params_buffer(ctx);
         let states = storage_buffer(ctx, "states", capacity * 64);
@@ -153,6 +154,7 @@ impl LyapunovKernel {
                 *out = (log_sum as f64 / t_end) as f32;
             }
         }
+        field.mirror_below(rows_needed);
         monitor.finish();
         Ok(field)
     }
@@ -162,7 +164,14 @@ impl LyapunovKernel {
 /// (row-major 4x4), for checking against the CPU's.
 pub fn jacobians(ctx: &GpuContext, p: &Params, states: &[State]) -> Result<Vec<[[f64; 4]; 4]>> {
     let module = shader_module(ctx, "lyapunov.wgsl", LYAPUNOV_WGSL);
-    let pipeline = compute_pipeline(ctx, &module, None, "jacobian_columns", p.losses.kinds());
+    let pipeline = compute_pipeline(
+        ctx,
+        &module,
+        None,
+        "jacobian_columns",
+        p.losses.kinds(),
+        &[],
+    );
     let params = GpuParams {
         count: states.len() as u32,
         ..GpuParams::new(p, 0.01)

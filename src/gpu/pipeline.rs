@@ -15,15 +15,18 @@ pub fn shader_module(ctx: &GpuContext, label: &str, kernel: &str) -> wgpu::Shade
 /// A compute pipeline for `entry`; `layout` None derives the layout from the shader.
 /// `losses` sets the shaders' `override LOSSES` (bits: joint damping, drag, bearings, see
 /// `Losses::kinds`): the driver then compiles each kind of loss in or out entirely (a
-/// runtime branch on a uniform cost lavapipe 2x even when off).
+/// runtime branch on a uniform cost lavapipe 2x even when off). `switches` sets further
+/// boolean overrides of the shader.
 pub fn compute_pipeline(
     ctx: &GpuContext,
     module: &wgpu::ShaderModule,
     layout: Option<&wgpu::PipelineLayout>,
     entry: &str,
     losses: u32,
+    switches: &[(&str, bool)],
 ) -> wgpu::ComputePipeline {
-    let constants = [("LOSSES", losses as f64)];
+    let mut constants = vec![("LOSSES", losses as f64)];
+    constants.extend(switches.iter().map(|&(name, on)| (name, on as u8 as f64)));
     ctx.device
         .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
@@ -38,12 +41,14 @@ pub fn compute_pipeline(
         })
 }
 
-/// A pair of pipelines (setup, advance) compiled on first use for each `LOSSES` value.
+/// A pair of pipelines (setup, advance) compiled on first use for each `LOSSES` value and,
+/// if the kernel has one, each value of its boolean `switch` override.
 pub struct Variants {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     entries: (&'static str, &'static str),
-    compiled: [std::sync::OnceLock<(wgpu::ComputePipeline, wgpu::ComputePipeline)>; 8],
+    switch: Option<&'static str>,
+    compiled: [std::sync::OnceLock<(wgpu::ComputePipeline, wgpu::ComputePipeline)>; 16],
 }
 
 impl Variants {
@@ -51,23 +56,40 @@ impl Variants {
         module: wgpu::ShaderModule,
         layout: wgpu::PipelineLayout,
         entries: (&'static str, &'static str),
+        switch: Option<&'static str>,
     ) -> Self {
         Variants {
             module,
             layout,
             entries,
+            switch,
             compiled: Default::default(),
         }
     }
 
+    /// The pipelines for `losses` (see `Losses::kinds`) with the switch `on` (ignored by
+    /// kernels without one).
     pub fn get(
         &self,
         ctx: &GpuContext,
         losses: u32,
+        on: bool,
     ) -> &(wgpu::ComputePipeline, wgpu::ComputePipeline) {
-        self.compiled[losses as usize & 7].get_or_init(|| {
-            let make =
-                |entry| compute_pipeline(ctx, &self.module, Some(&self.layout), entry, losses);
+        let on = on && self.switch.is_some();
+        let slot = (losses as usize & 7) | (on as usize) << 3;
+        self.compiled[slot].get_or_init(|| {
+            let switches: Vec<(&str, bool)> =
+                self.switch.map(|name| (name, on)).into_iter().collect();
+            let make = |entry| {
+                compute_pipeline(
+                    ctx,
+                    &self.module,
+                    Some(&self.layout),
+                    entry,
+                    losses,
+                    &switches,
+                )
+            };
             (make(self.entries.0), make(self.entries.1))
         })
     }

@@ -55,7 +55,7 @@ pub fn strided_trajectories(
         ));
     }
     let module = shader_module(ctx, "trajectory.wgsl", TRAJECTORY_WGSL);
-    let pipeline = compute_pipeline(ctx, &module, None, "trajectory", p.losses.kinds());
+    let pipeline = compute_pipeline(ctx, &module, None, "trajectory", p.losses.kinds(), &[]);
     let params = GpuParams {
         steps,
         interval: stride,
