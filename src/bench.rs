@@ -266,6 +266,10 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
         args.size, args.dt, args.t_max, args.repeat, args.cpu_size
     );
     println!(
+        "pendulum-steps as the peers count them: early-all and full integrate every pixel; early \
+         and full-half integrate the top half of the symmetric grid and mirror it"
+    );
+    println!(
         "{:<44} {:>9} {:>10} {:>16}",
         "path", "mode", "wall s", "pendulum-steps/s"
     );
