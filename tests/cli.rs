@@ -322,3 +322,30 @@ fn lyapunov_bad_values_exit_2_and_name_the_flag() {
         "no partial files"
     );
 }
+
+#[test]
+fn bench_reports_every_mode_of_both_paths() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let out = chaoscope()
+        .args(["bench", "--size", "32", "--cpu-size", "8", "--t-max", "0.5"])
+        .args(["--repeat", "1", "--no-ftle"])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let text = String::from_utf8(out).unwrap();
+    for mode in ["early", "early-all", "full", "full-half"] {
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with("chaoscope gpu") && l.split_whitespace().any(|w| w == mode)),
+            "no GPU row for {mode}:\n{text}"
+        );
+    }
+    assert!(
+        text.lines().any(|l| l.starts_with("chaoscope cpu")),
+        "{text}"
+    );
+}
