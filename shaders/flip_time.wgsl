@@ -13,7 +13,7 @@
 // [0]: length of active_out.
 @group(0) @binding(5) var<storage, read_write> counter: array<atomic<u32>>;
 
-// Set per pipeline (src/gpu/flip_time.rs): 1 stops a pixel when it flips and integrates only
+// Set per pipeline (src/gpu/flip_time.rs): true stops a pixel when it flips and integrates only
 // the listed active pixels. A constant, so the full-run loop has no exit per pixel (14 % faster
 // on lavapipe than a branch on a uniform).
 override EARLY_EXIT: bool = false;
