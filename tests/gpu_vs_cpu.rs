@@ -265,27 +265,6 @@ fn lossy() -> Params {
     p
 }
 
-/// The map with every pixel integrated, checked to be point-symmetric bit for bit, and the
-/// map that integrates the top half and mirrors it, checked to be the same map.
-fn check_mirror(full: &Field, half: &Field, what: &str) {
-    let (w, h) = (full.width, full.height);
-    let asymmetric = (0..h)
-        .flat_map(|r| (0..w).map(move |c| (c, r)))
-        .filter(|&(c, r)| full.get(c, r).to_bits() != full.get(w - 1 - c, h - 1 - r).to_bits())
-        .count();
-    // Not a tolerance: the starts are exact negatives (odd half-steps from 0) and every
-    // operation of the integrator commutes with negation under round-to-nearest, so mirrored
-    // starts run through the same numbers with opposite signs, chaotic or not.
-    assert_eq!(
-        asymmetric, 0,
-        "{what}: pixels that differ from their mirror image"
-    );
-    assert_eq!(
-        full, half,
-        "{what}: mirrored half differs from the whole map"
-    );
-}
-
 #[test]
 fn gpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() {
     let Some(ctx) = common::gpu() else { return };
@@ -301,7 +280,7 @@ fn gpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() 
         let half = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
         s.use_symmetry = false;
         let full = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
-        check_mirror(&full, &half, what);
+        common::check_mirror(&full, &half, what);
     }
 }
 
@@ -316,7 +295,7 @@ fn cpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() 
         let half = cpu::flip_map(&s, &Monitor::hidden()).unwrap();
         s.use_symmetry = false;
         let full = cpu::flip_map(&s, &Monitor::hidden()).unwrap();
-        check_mirror(&full, &half, what);
+        common::check_mirror(&full, &half, what);
     }
 }
 

@@ -341,20 +341,7 @@ fn tangent_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_the
         maps.push(("gpu", half, full));
     }
     for (path, half, full) in maps {
-        let (w, h) = (full.width, full.height);
-        for r in 0..h {
-            for c in 0..w {
-                assert_eq!(
-                    full.get(c, r).to_bits(),
-                    full.get(w - 1 - c, h - 1 - r).to_bits(),
-                    "{path}: pixel ({c}, {r}) differs from its mirror image"
-                );
-            }
-        }
-        assert_eq!(
-            full, half,
-            "{path}: the mirrored half differs from the whole map"
-        );
+        common::check_mirror(&full, &half, path);
     }
     // Twins are not mirror images of each other's twins: never mirrored.
     let twin = spec(40, 4.0, 0.01, Method::Twin { eps: 1e-8 });
