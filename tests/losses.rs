@@ -262,21 +262,7 @@ fn gpu_and_cpu_agree_with_rods_and_every_loss() {
             omega2: 0.2 * k as f64 - 4.0,
         })
         .collect();
-    for (s, g) in states
-        .iter()
-        .zip(gpu::jacobians(&ctx, &p, &states).unwrap())
-    {
-        let c = cpu::jacobian(&p, s);
-        let scale = 1.0 + c.abs().max();
-        for r in 0..4 {
-            for k in 0..4 {
-                assert!(
-                    (g[r][k] - c[(r, k)]).abs() < 2e-5 * scale,
-                    "J[{r}][{k}] at {s:?}: gpu {g:?} cpu {c}"
-                );
-            }
-        }
-    }
+    common::check_jacobians(&ctx, &p, &states);
 }
 
 #[test]

@@ -171,23 +171,7 @@ fn gpu_jacobian_matches_the_cpu_at_random_states() {
             omega2: 16.0 * (rng.f64() - 0.5),
         })
         .collect();
-    let gpu_j = gpu::jacobians(&ctx, &p, &states).unwrap();
-    for (s, g) in states.iter().zip(&gpu_j) {
-        let c = cpu::jacobian(&p, s);
-        let scale = 1.0 + c.abs().max();
-        for r in 0..4 {
-            for k in 0..4 {
-                // f32 evaluation of ~30 operations, each rounding by 2^-24 relative, on
-                // terms up to the matrix scale: a few 1e-6 of it.
-                assert!(
-                    (g[r][k] - c[(r, k)]).abs() < 2e-5 * scale,
-                    "J[{r}][{k}] gpu {} cpu {} at {s:?}",
-                    g[r][k],
-                    c[(r, k)]
-                );
-            }
-        }
-    }
+    common::check_jacobians(&ctx, &p, &states);
 }
 
 fn gpu_map(ctx: &gpu::GpuContext, s: &LyapunovSpec) -> Field {

@@ -108,7 +108,7 @@ fn frame_count(path: &Path) -> u32 {
         .num_frames
 }
 
-fn sweep(dir: &Path, extra: &[&str]) -> assert_cmd::assert::Assert {
+fn sweep(dir: &Path, backend: &str, extra: &[&str]) -> assert_cmd::assert::Assert {
     chaoscope()
         .args([
             "sweep",
@@ -117,7 +117,7 @@ fn sweep(dir: &Path, extra: &[&str]) -> assert_cmd::assert::Assert {
             "--t-max",
             "5",
             "--backend",
-            "cpu",
+            backend,
         ])
         .args(extra)
         .arg("--output")
@@ -133,20 +133,7 @@ fn a_sweep_over_a_parameter_that_does_not_change_the_physics_gives_identical_fra
         // Scaling both masses leaves the motion unchanged. Factors 1 and 4 scale every f32/f64
         // product exactly (powers of two), so those frames are bit-identical; the factor 2.5
         // rounds differently, which chaotic pixels may amplify: most pixels still agree.
-        chaoscope()
-            .args([
-                "sweep",
-                "--size",
-                "40x30",
-                "--t-max",
-                "5",
-                "--backend",
-                backend,
-            ])
-            .args(["--vary", "mass=1:4", "--frames", "3", "--output"])
-            .arg(&out)
-            .assert()
-            .success();
+        sweep(&out, backend, &["--vary", "mass=1:4", "--frames", "3"]).success();
         let frames: Vec<_> = (0..3)
             .map(|k| {
                 read_png(&out.join(format!("frame_{k:04}.png")))
@@ -171,7 +158,12 @@ fn a_sweep_over_a_parameter_that_does_not_change_the_physics_gives_identical_fra
 #[test]
 fn a_sweep_that_changes_the_physics_changes_the_frames_and_animates_them_all() {
     let dir = tempfile::tempdir().unwrap();
-    sweep(dir.path(), &["--vary", "m2/m1=0.3:3", "--frames", "4"]).success();
+    sweep(
+        dir.path(),
+        "cpu",
+        &["--vary", "m2/m1=0.3:3", "--frames", "4"],
+    )
+    .success();
     let frames: Vec<_> = (0..4)
         .map(|k| read_png(&dir.path().join(format!("frame_{k:04}.png"))).unwrap())
         .collect();
@@ -186,13 +178,13 @@ fn a_sweep_that_changes_the_physics_changes_the_frames_and_animates_them_all() {
 fn an_interrupted_sweep_resumes_and_refuses_to_mix_sweeps() {
     let dir = tempfile::tempdir().unwrap();
     let args = ["--vary", "g=5:15", "--frames", "3"];
-    sweep(dir.path(), &args).success();
+    sweep(dir.path(), "cpu", &args).success();
     let kept = dir.path().join("frame_0000.png");
     let before = std::fs::metadata(&kept).unwrap().modified().unwrap();
     let lost = dir.path().join("frame_0001.png");
     let original = read_png(&lost).unwrap().rgb;
     std::fs::remove_file(&lost).unwrap();
-    sweep(dir.path(), &args)
+    sweep(dir.path(), "cpu", &args)
         .success()
         .stderr(predicate::str::contains("2 kept from an earlier run"));
     assert_eq!(
@@ -201,7 +193,7 @@ fn an_interrupted_sweep_resumes_and_refuses_to_mix_sweeps() {
     );
     assert_eq!(read_png(&lost).unwrap().rgb, original);
     // Another sweep in the same directory is refused, naming the flag.
-    sweep(dir.path(), &["--vary", "g=5:20", "--frames", "3"])
+    sweep(dir.path(), "cpu", &["--vary", "g=5:20", "--frames", "3"])
         .code(2)
         .stderr(predicate::str::contains("--output"));
 }
@@ -211,6 +203,7 @@ fn a_zoom_switches_to_f64_where_f32_runs_out() {
     let dir = tempfile::tempdir().unwrap();
     sweep(
         dir.path(),
+        "cpu",
         &["--zoom-to", "1.9,2.6", "--zoom", "1e6", "--frames", "3"],
     )
     .success();
@@ -262,7 +255,7 @@ fn sweep_bad_values_exit_2_and_name_the_flag() {
         (&[], "--vary"),
     ];
     for (args, flag) in cases {
-        sweep(&dir.path().join("x"), args)
+        sweep(&dir.path().join("x"), "cpu", args)
             .code(2)
             .stderr(predicate::str::contains(*flag));
     }

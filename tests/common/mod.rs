@@ -60,3 +60,29 @@ pub fn check_mirror(full: &chaoscope::Field, half: &chaoscope::Field, what: &str
         "{what}: mirrored half differs from the whole map"
     );
 }
+
+/// The shader's dual-number Jacobians at `states` against the CPU's (num-dual through the
+/// nalgebra solve), entry by entry.
+pub fn check_jacobians(
+    ctx: &GpuContext,
+    p: &chaoscope::model::Params,
+    states: &[chaoscope::model::State],
+) {
+    let gpu_j = chaoscope::gpu::jacobians(ctx, p, states).unwrap();
+    for (s, g) in states.iter().zip(&gpu_j) {
+        let c = chaoscope::cpu::jacobian(p, s);
+        let scale = 1.0 + c.abs().max();
+        for r in 0..4 {
+            for k in 0..4 {
+                // f32 evaluation of ~30 operations, each rounding by 2^-24 relative, on
+                // terms up to the matrix scale: a few 1e-6 of it.
+                assert!(
+                    (g[r][k] - c[(r, k)]).abs() < 2e-5 * scale,
+                    "J[{r}][{k}] gpu {} cpu {} at {s:?}",
+                    g[r][k],
+                    c[(r, k)]
+                );
+            }
+        }
+    }
+}
