@@ -1,42 +1,43 @@
-//! A flip-time map through the library, on the GPU when there is one, else the CPU:
-//! `cargo run --release --example flip_map` writes out/example_flip.png.
+//! The README's flip-time map (docs/flip.png) through the library alone, no command line:
+//! `cargo run --release --example flip_map` writes out/example_flip.png and says whether its
+//! pixels equal the README's picture.
 
-use chaoscope::engine::{Backend, flip_map};
+use chaoscope::engine::{Backend, Engine};
 use chaoscope::model::Params;
 use chaoscope::monitor::Monitor;
-use chaoscope::render::{Colormap, FlipColors, flip_colors, write_png};
+use chaoscope::render::{PictureSpec, flip_picture, read_png, write_png};
 use chaoscope::spec::{FlipSpec, Grid, Stepping};
 
 fn main() -> Result<(), chaoscope::Error> {
     let spec = FlipSpec::new(
         Params::default(),
-        Grid::square(256),
+        Grid::square(1024),
         Stepping {
             dt: 0.01,
-            t_max: 20.0,
+            t_max: 30.0,
         },
     );
-    let (map, info) = flip_map(&spec, Backend::Auto, &Monitor::hidden())?;
-    let rgb = flip_colors(
-        &map,
-        FlipColors {
-            t_lo: (1.0f64 / 9.81).sqrt(),
-            t_max: 20.0,
-            colormap: Colormap::Inferno,
-        },
-    );
-    write_png(
-        "out/example_flip.png".as_ref(),
-        map.width,
-        map.height,
-        &rgb,
-        &[],
-    )?;
+    spec.validate()?;
+    let engine = Engine::new(Backend::Auto)?;
+    if let Some(notice) = engine.notice() {
+        eprintln!("{notice}");
+    }
+    let map = engine.flip_map(&spec, &Monitor::hidden())?;
+    let picture = flip_picture(&map, &spec, &PictureSpec::default())?;
+    let out = std::path::Path::new("out/example_flip.png");
+    write_png(out, picture.width, picture.height, &picture.rgb, &[])?;
     let flipped = map.data.iter().filter(|t| t.is_finite()).count() as f64 / map.data.len() as f64;
+    let readme = read_png("docs/flip.png".as_ref())?;
     println!(
-        "{} backend: {:.1} % of starts flip within 20 s -> out/example_flip.png",
-        info.backend,
-        100.0 * flipped
+        "{} backend: {:.1} % of starts flip within 30 s -> {}; pixels {} docs/flip.png",
+        engine.map_info(&spec.grid).backend,
+        100.0 * flipped,
+        out.display(),
+        if readme.rgb == picture.rgb {
+            "equal to"
+        } else {
+            "differ from"
+        }
     );
     Ok(())
 }

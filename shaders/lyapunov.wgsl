@@ -5,8 +5,15 @@
 // the stretch to `log_sums`. The host divides by t-max.
 
 @group(0) @binding(0) var<uniform> params: Params;
-// Per pixel i: states[4 i ..= 4 i + 2] = Tangent.y, .u, .v (twin: 4 i ..= 4 i + 3 = y, u, y2, u2).
+// Per pixel i a LyapunovSlot, as vec4s: states[4 i ..= 4 i + 2] = Tangent.y, .u, .v (twin:
+// 4 i ..= 4 i + 3 = y, u, y2, u2).
 @group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
+
+// Mirror of src/gpu/layout.rs `GpuLyapunovSlot`: the layout of one pixel's states.
+struct LyapunovSlot {
+    a: Pendulum,
+    b: Pendulum,
+}
 // Sum of the log stretch factors so far.
 @group(0) @binding(2) var<storage, read_write> log_sums: array<f32>;
 

@@ -1,13 +1,18 @@
-//! Chooses the path a run takes: the GPU when an adapter exists, else the CPU.
+//! The one place that picks the CPU or the GPU, for every kind of run: maps, convergence
+//! runs, trajectories and ensembles. An [`Engine`] is made once per command from the chosen
+//! [`Backend`]; its GPU kernels are built on first use and kept.
+
+use rayon::prelude::*;
 
 use crate::cpu;
 use crate::error::{Error, Result};
-use crate::field::Field;
-use crate::gpu::{FlipTimeKernel, GpuContext, LyapunovKernel};
+use crate::field::{Convergence, Field};
+use crate::gpu::{GpuContext, Kernels};
+use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, LyapunovSpec};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Range, Stepping};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
     /// The GPU when an adapter exists, else the CPU (with a one-line notice).
     Auto,
@@ -17,77 +22,201 @@ pub enum Backend {
     Cpu,
 }
 
-/// Which path ran, for the user and the PNG metadata.
+impl Backend {
+    pub const ALL: [Backend; 3] = [Backend::Auto, Backend::Gpu, Backend::Cpu];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Auto => "auto",
+            Backend::Gpu => "gpu",
+            Backend::Cpu => "cpu",
+        }
+    }
+}
+
+/// Which path a run took, for the user and the PNG metadata.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunInfo {
     pub backend: &'static str,
     pub adapter: Option<String>,
-    /// Said once to the user, e.g. that auto fell back to the CPU.
-    pub notice: Option<String>,
 }
 
 impl RunInfo {
-    fn cpu(notice: Option<String>) -> Self {
-        RunInfo {
-            backend: "cpu",
-            adapter: None,
+    pub const CPU: RunInfo = RunInfo {
+        backend: "cpu",
+        adapter: None,
+    };
+
+    /// Where it ran, in words: the adapter's name or "the CPU".
+    pub fn place(&self) -> &str {
+        self.adapter.as_deref().unwrap_or("the CPU")
+    }
+}
+
+/// The chosen path: a GPU with its kernels, or the CPU.
+pub struct Engine {
+    gpu: Option<Kernels>,
+    notice: Option<String>,
+}
+
+impl Engine {
+    /// The engine for `backend`: `Auto` falls back to the CPU without an adapter (see
+    /// [`Engine::notice`]), `Gpu` fails.
+    pub fn new(backend: Backend) -> Result<Self> {
+        let (gpu, notice) = match backend {
+            Backend::Cpu => (None, None),
+            Backend::Gpu => (Some(GpuContext::new()?), None),
+            Backend::Auto => match GpuContext::new() {
+                Ok(ctx) => (Some(ctx), None),
+                Err(Error::NoAdapter) => (
+                    None,
+                    Some("note: no GPU adapter found (install a Vulkan driver, e.g. mesa-vulkan-drivers); running on the CPU".into()),
+                ),
+                Err(e) => return Err(e),
+            },
+        };
+        Ok(Engine {
+            gpu: gpu.map(Kernels::new),
             notice,
+        })
+    }
+
+    /// The engine on an existing GPU context.
+    pub fn on_gpu(ctx: GpuContext) -> Self {
+        Engine {
+            gpu: Some(Kernels::new(ctx)),
+            notice: None,
         }
     }
-}
 
-/// A GPU context for `backend`, or None for the CPU path, with the notice to give.
-pub fn resolve(backend: Backend) -> Result<(Option<GpuContext>, Option<String>)> {
-    match backend {
-        Backend::Cpu => Ok((None, None)),
-        Backend::Gpu => Ok((Some(GpuContext::new()?), None)),
-        Backend::Auto => match GpuContext::new() {
-            Ok(ctx) => Ok((Some(ctx), None)),
-            Err(Error::NoAdapter) => Ok((
-                None,
-                Some("note: no GPU adapter found (install a Vulkan driver, e.g. mesa-vulkan-drivers); running on the CPU".into()),
-            )),
-            Err(e) => Err(e),
-        },
+    /// What to tell the user once about the choice (auto fell back to the CPU).
+    pub fn notice(&self) -> Option<&str> {
+        self.notice.as_deref()
     }
-}
 
-/// The flip-time map of `spec` on the chosen backend.
-pub fn flip_map(spec: &FlipSpec, backend: Backend, monitor: &Monitor) -> Result<(Field, RunInfo)> {
-    spec.validate()?;
-    let (ctx, notice) = resolve(backend)?;
-    match ctx {
-        Some(ctx) => {
-            let field = FlipTimeKernel::new(&ctx).run(&ctx, spec, monitor)?;
-            let info = RunInfo {
+    /// The notice as the start of a run's list of notices.
+    pub fn notices(&self) -> Vec<String> {
+        self.notice.iter().cloned().collect()
+    }
+
+    /// The GPU and its kernels, if this engine has one.
+    pub fn gpu(&self) -> Option<&Kernels> {
+        self.gpu.as_ref()
+    }
+
+    /// The path of single runs, trajectories and ensembles.
+    pub fn info(&self) -> RunInfo {
+        match &self.gpu {
+            Some(k) => RunInfo {
                 backend: "gpu",
-                adapter: Some(ctx.adapter_name()),
-                notice,
-            };
-            Ok((field, info))
+                adapter: Some(k.ctx.adapter_name()),
+            },
+            None => RunInfo::CPU,
         }
-        None => Ok((cpu::flip_map(spec, monitor)?, RunInfo::cpu(notice))),
     }
-}
 
-/// The divergence (FTLE) map of `spec` on the chosen backend.
-pub fn lyapunov_map(
-    spec: &LyapunovSpec,
-    backend: Backend,
-    monitor: &Monitor,
-) -> Result<(Field, RunInfo)> {
-    spec.validate()?;
-    let (ctx, notice) = resolve(backend)?;
-    match ctx {
-        Some(ctx) => {
-            let field = LyapunovKernel::new(&ctx, spec.method).run(&ctx, spec, monitor)?;
-            let info = RunInfo {
-                backend: "gpu",
-                adapter: Some(ctx.adapter_name()),
-                notice,
-            };
-            Ok((field, info))
+    /// The path a map over `grid` takes: the GPU unless neighbouring pixels are closer than
+    /// f32 resolves ([`Grid::needs_f64`]), which run on the CPU in f64.
+    pub fn map_info(&self, grid: &Grid) -> RunInfo {
+        match self.map_gpu(grid) {
+            Some(_) => self.info(),
+            None => RunInfo::CPU,
         }
-        None => Ok((cpu::ftle_map(spec, monitor)?, RunInfo::cpu(notice))),
+    }
+
+    fn map_gpu(&self, grid: &Grid) -> Option<&Kernels> {
+        self.gpu.as_ref().filter(|_| !grid.needs_f64())
+    }
+
+    /// The flip-time map of a validated `spec`.
+    pub fn flip_map(&self, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
+        match self.map_gpu(&spec.grid) {
+            Some(k) => k.flip().run(&k.ctx, spec, monitor),
+            None => cpu::flip_map(spec, monitor),
+        }
+    }
+
+    /// The divergence (FTLE) map of a validated `spec`.
+    pub fn lyapunov_map(&self, spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
+        match self.map_gpu(&spec.grid) {
+            Some(k) => k.lyapunov(spec.method).run(&k.ctx, spec, monitor),
+            None => cpu::ftle_map(spec, monitor),
+        }
+    }
+
+    /// The running FTLE of one start (`spec`'s grid is not used).
+    pub fn ftle_convergence(
+        &self,
+        spec: &LyapunovSpec,
+        start: State,
+        monitor: &Monitor,
+    ) -> Result<Convergence> {
+        match &self.gpu {
+            Some(k) => {
+                // A one-pixel grid whose centre is the start.
+                let around = |x: f64| Range {
+                    min: x - 1e-3,
+                    max: x + 1e-3,
+                };
+                let one = LyapunovSpec {
+                    grid: Grid {
+                        width: 1,
+                        height: 1,
+                        theta1: around(start.theta1),
+                        theta2: around(start.theta2),
+                        omega1: start.omega1,
+                        omega2: start.omega2,
+                    },
+                    ..*spec
+                };
+                k.lyapunov(spec.method).convergence(&k.ctx, &one, monitor)
+            }
+            None => Ok(cpu::ftle(spec, start)),
+        }
+    }
+
+    /// One trajectory: the state at every step and the work done by the losses so far.
+    pub fn trajectory(
+        &self,
+        p: &Params,
+        start: State,
+        stepping: Stepping,
+    ) -> Result<(Vec<State>, Vec<f64>)> {
+        let steps = stepping.steps();
+        match &self.gpu {
+            Some(k) => {
+                let states = k
+                    .trajectory()
+                    .run(&k.ctx, p, &[start], stepping.dt, steps, 1)?
+                    .remove(0);
+                let work = cpu::dissipated_along(p, &states, stepping.dt);
+                Ok((states, work))
+            }
+            None => Ok(cpu::trajectory_with_work(p, start, stepping.dt, steps)),
+        }
+    }
+
+    /// Trajectories of all `starts` over `steps` steps of `dt`, keeping the start and every
+    /// `stride`-th state (GPU: one invocation per run; CPU: runs in parallel).
+    pub fn ensemble(
+        &self,
+        p: &Params,
+        starts: &[State],
+        dt: f64,
+        steps: u32,
+        stride: u32,
+    ) -> Result<Vec<Vec<State>>> {
+        match &self.gpu {
+            Some(k) => k.trajectory().run(&k.ctx, p, starts, dt, steps, stride),
+            None => Ok(starts
+                .par_iter()
+                .map(|s| {
+                    cpu::trajectory(p, *s, dt, steps)
+                        .into_iter()
+                        .step_by(stride as usize)
+                        .collect()
+                })
+                .collect()),
+        }
     }
 }

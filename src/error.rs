@@ -6,15 +6,22 @@
 pub enum Error {
     /// No GPU adapter could be found.
     #[error(
-        "no GPU adapter found: install a Vulkan driver (on Debian: apt-get install mesa-vulkan-drivers) or use --backend cpu"
+        "no GPU adapter found: install a Vulkan driver (on Debian: apt-get install mesa-vulkan-drivers) or use the CPU backend"
     )]
     NoAdapter,
-    /// A value is outside what the run can accept; `flag` names the command-line flag.
-    #[error("invalid value for {flag}: {reason}")]
-    InvalidSpec { flag: &'static str, reason: String },
+    /// A value is outside what the run can accept. `field` names the specification's field
+    /// (`t_max`, `size`, `joint_damping`...); the command line maps it to its flag.
+    #[error("invalid value for {field}: {reason}")]
+    InvalidSpec { field: &'static str, reason: String },
     /// The GPU reported an error (validation, out of memory, lost device).
     #[error("GPU error: {0}")]
     Gpu(String),
+    /// Drawing a plot or an annotation failed.
+    #[error("plotting: {0}")]
+    Plot(String),
+    /// Encoding or decoding a file format (PNG, GIF, JSON) failed.
+    #[error("{0}")]
+    Format(String),
     /// The user interrupted the run (Ctrl-C).
     #[error("interrupted")]
     Interrupted,
@@ -25,10 +32,21 @@ pub enum Error {
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
-    pub fn invalid(flag: &'static str, reason: impl Into<String>) -> Self {
+    /// An invalid value of the specification field `field`.
+    pub fn invalid(field: &'static str, reason: impl Into<String>) -> Self {
         Error::InvalidSpec {
-            flag,
+            field,
             reason: reason.into(),
         }
+    }
+
+    /// A plotting error (plotters' errors carry the backend's error type).
+    pub fn plot(e: impl std::fmt::Debug) -> Self {
+        Error::Plot(format!("{e:?}"))
+    }
+
+    /// A file-format error, with the file it concerns.
+    pub fn format(path: &std::path::Path, e: impl std::fmt::Display) -> Self {
+        Error::Format(format!("{}: {e}", path.display()))
     }
 }

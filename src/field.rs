@@ -1,4 +1,4 @@
-//! What every map returns, whichever path made it.
+//! What the paths return, whichever made it: maps ([`Field`]) and convergence runs.
 
 /// A 2-D grid of f32 values, row-major, row 0 at the top of the image (theta2 at its maximum),
 /// column 0 at theta1's minimum.
@@ -34,6 +34,20 @@ impl Field {
                 *out = *v;
             }
         }
+    }
+}
+
+/// Running FTLE estimates of one start: `ftle[i]` (1/s) is the mean log stretch rate over
+/// `[0, t[i]]`, one entry per renormalisation; the last is the exponent at t-max.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Convergence {
+    pub t: Vec<f64>,
+    pub ftle: Vec<f64>,
+}
+
+impl Convergence {
+    pub fn last(&self) -> f64 {
+        self.ftle.last().copied().unwrap_or(0.0)
     }
 }
 

@@ -3,15 +3,21 @@
 //! (an f64 reference that solves the mass-matrix system with nalgebra). Both paths return the
 //! same [`Field`], which [`render`] turns into PNG images and raw `.npy` data.
 //!
+//! Layers, one way: [`cli`] (flags, the only place that prints) -> a job of [`app`]
+//! (validated specs of [`spec`]) -> [`engine`] (the one place that picks the CPU or the GPU)
+//! -> [`Field`] -> [`render`] -> files. The library is usable without the command line:
+//!
 //! ```
-//! use chaoscope::{cpu, model::Params, spec::{FlipSpec, Grid, Stepping}, monitor::Monitor};
+//! use chaoscope::{engine::{Backend, Engine}, model::Params, monitor::Monitor};
+//! use chaoscope::spec::{FlipSpec, Grid, Stepping};
 //! let spec = FlipSpec::new(Params::default(), Grid::square(8), Stepping { dt: 0.01, t_max: 2.0 });
-//! let map = cpu::flip_map(&spec, &Monitor::hidden()).unwrap();
+//! spec.validate().unwrap();
+//! let map = Engine::new(Backend::Cpu).unwrap().flip_map(&spec, &Monitor::hidden()).unwrap();
 //! // The centre of the grid hangs nearly straight down: it can never flip.
 //! assert!(map.get(4, 4).is_infinite());
 //! ```
 
-pub mod bench;
+pub mod app;
 pub mod cli;
 pub mod cpu;
 pub mod engine;
@@ -21,11 +27,9 @@ pub mod fit;
 pub mod gpu;
 pub mod model;
 pub mod monitor;
-pub mod physics_args;
+pub mod params;
 pub mod render;
 pub mod spec;
-pub mod sweep;
-pub mod views;
 
 pub use error::{Error, Result};
 pub use field::Field;

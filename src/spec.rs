@@ -1,5 +1,6 @@
 //! What a run is: the grid of starts, the physics, the time stepping. Validated before any
-//! work starts, so a bad value fails fast and names its flag.
+//! work starts, so a bad value fails fast; errors name the field (`t_max`, `size`...), which
+//! the command line turns into its flag.
 
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
@@ -92,7 +93,18 @@ impl Grid {
     pub fn pixels(&self) -> u64 {
         self.width as u64 * self.height as u64
     }
+
+    /// Whether neighbouring pixels are closer than f32 resolves near |theta| = pi
+    /// ([`F32_MIN_PIXEL_STEP`]): such a grid must be integrated in f64.
+    pub fn needs_f64(&self) -> bool {
+        self.theta1_step().min(self.theta2_step()) < F32_MIN_PIXEL_STEP
+    }
 }
+
+/// Smallest angle step between pixels that f32 still resolves near |theta| = pi: 16 ulp of
+/// pi (ulp = 2.4e-7), so neighbouring pixels start from distinct f32 angles with room for
+/// the arithmetic that forms them.
+pub const F32_MIN_PIXEL_STEP: f64 = 16.0 * 2.384185791015625e-7;
 
 /// Fixed-step time integration from t = 0 to `t_max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,6 +128,49 @@ impl Stepping {
             n.ceil() as u32
         }
     }
+}
+
+/// How far apart the releases of an ensemble start: an angle (rad) or a position error of
+/// the bobs (m), as the lab report quotes its release accuracy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Spread {
+    Radians(f64),
+    Metres(f64),
+}
+
+impl Spread {
+    /// Between 0 and 1 (rad or m), else an error naming `spread`.
+    pub fn validate(&self) -> Result<()> {
+        let (Spread::Radians(r) | Spread::Metres(r)) = *self;
+        if r.is_finite() && (0.0..=1.0).contains(&r) {
+            Ok(())
+        } else {
+            Err(Error::invalid(
+                "spread",
+                "must be between 0 and 1 (rad, or m with a unit)",
+            ))
+        }
+    }
+}
+
+/// The releases: `runs` starts around `start`, evenly on a circle of radius `spread` in the
+/// (theta1, theta2) plane (a position error e moves arm i by e / l_i). Deterministic, so a
+/// picture can be made again; with spread 0 all starts are identical.
+pub fn releases(p: &Params, start: State, runs: u32, spread: Spread) -> Vec<State> {
+    let (d1, d2) = match spread {
+        Spread::Radians(r) => (r, r),
+        Spread::Metres(e) => (e / p.l1, e / p.l2),
+    };
+    (0..runs)
+        .map(|k| {
+            let phi = std::f64::consts::TAU * k as f64 / runs as f64;
+            State {
+                theta1: start.theta1 + d1 * phi.cos(),
+                theta2: start.theta2 + d2 * phi.sin(),
+                ..start
+            }
+        })
+        .collect()
 }
 
 /// A flip-time map: for every start, the time until either arm first flips over.
@@ -221,9 +276,9 @@ impl LyapunovSpec {
             || self.renorm > self.stepping.t_max
         {
             return Err(Error::invalid(
-                "--renorm",
+                "renorm",
                 format!(
-                    "{} s must be a whole multiple of --dt {} s and at most --t-max {} s",
+                    "{} s must be a whole multiple of the time step {} s and at most the run's {} s",
                     self.renorm, self.stepping.dt, self.stepping.t_max
                 ),
             ));
@@ -232,7 +287,7 @@ impl LyapunovSpec {
             && !(eps.is_finite() && eps > 0.0 && eps <= 0.1)
         {
             return Err(Error::invalid(
-                "--eps",
+                "eps",
                 format!("{eps} must be in (0, 0.1]: the twin must stay in the linear regime"),
             ));
         }
@@ -240,31 +295,31 @@ impl LyapunovSpec {
     }
 }
 
-/// `v` finite and > 0, else an error naming `flag`.
-pub(crate) fn finite_positive(flag: &'static str, v: f64) -> Result<()> {
+/// `v` finite and > 0, else an error naming `field`.
+pub(crate) fn finite_positive(field: &'static str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
         Err(Error::invalid(
-            flag,
+            field,
             format!("{v} is not allowed; it must be a finite number > 0"),
         ))
     }
 }
 
 pub fn validate_params(p: &Params) -> Result<()> {
-    crate::physics_args::validate(p)
+    crate::params::validate(p)
 }
 
 pub fn validate_stepping(s: &Stepping) -> Result<()> {
-    finite_positive("--dt", s.dt)?;
-    finite_positive("--t-max", s.t_max)?;
+    finite_positive("dt", s.dt)?;
+    finite_positive("t_max", s.t_max)?;
     let n = s.t_max / s.dt;
     if n > MAX_STEPS as f64 {
         return Err(Error::invalid(
-            "--dt",
+            "dt",
             format!(
-                "t-max / dt = {n:.0} steps; at most {MAX_STEPS} are allowed (raise --dt or lower --t-max)"
+                "t-max / dt = {n:.0} steps; at most {MAX_STEPS} are allowed (raise the step or shorten the run)"
             ),
         ));
     }
@@ -273,33 +328,33 @@ pub fn validate_stepping(s: &Stepping) -> Result<()> {
 
 /// A single start (trajectory, convergence run): every component finite.
 pub fn validate_start(s: &State) -> Result<()> {
-    for (flag, v) in [
-        ("--theta1", s.theta1),
-        ("--theta2", s.theta2),
-        ("--omega1", s.omega1),
-        ("--omega2", s.omega2),
+    for (field, v) in [
+        ("theta1", s.theta1),
+        ("theta2", s.theta2),
+        ("omega1", s.omega1),
+        ("omega2", s.omega2),
     ] {
         if !v.is_finite() {
-            return Err(Error::invalid(flag, "must be a finite number"));
+            return Err(Error::invalid(field, "must be a finite number"));
         }
     }
     Ok(())
 }
 
 /// Angles must stay strictly inside (-pi, pi): a start outside has already flipped.
-fn validate_range(flag: &'static str, r: &Range) -> Result<()> {
+fn validate_range(field: &'static str, r: &Range) -> Result<()> {
     use std::f64::consts::PI;
     // Allow the user's "-pi:pi" written with a rounded pi.
     let limit = PI + 1e-9;
     if !(r.min.is_finite() && r.max.is_finite()) || r.min >= r.max {
         return Err(Error::invalid(
-            flag,
+            field,
             format!("{}:{} must be MIN:MAX with MIN < MAX", r.min, r.max),
         ));
     }
     if r.min < -limit || r.max > limit {
         return Err(Error::invalid(
-            flag,
+            field,
             format!("{}:{} must lie within -pi:pi", r.min, r.max),
         ));
     }
@@ -310,7 +365,7 @@ pub fn validate_grid(g: &Grid) -> Result<()> {
     const MAX_SIDE: u32 = 1 << 16;
     if g.width == 0 || g.height == 0 || g.width > MAX_SIDE || g.height > MAX_SIDE {
         return Err(Error::invalid(
-            "--size",
+            "size",
             format!(
                 "{}x{} must be between 1 and {MAX_SIDE} on each side",
                 g.width, g.height
@@ -322,7 +377,7 @@ pub fn validate_grid(g: &Grid) -> Result<()> {
     let have = available_memory();
     if need > have {
         return Err(Error::invalid(
-            "--size",
+            "size",
             format!(
                 "{}x{} needs about {} MiB but only {} MiB of memory are available",
                 g.width,
@@ -332,13 +387,13 @@ pub fn validate_grid(g: &Grid) -> Result<()> {
             ),
         ));
     }
-    validate_range("--theta1", &g.theta1)?;
-    validate_range("--theta2", &g.theta2)?;
+    validate_range("theta1", &g.theta1)?;
+    validate_range("theta2", &g.theta2)?;
     if !g.omega1.is_finite() {
-        return Err(Error::invalid("--omega1", "must be a finite number"));
+        return Err(Error::invalid("omega1", "must be a finite number"));
     }
     if !g.omega2.is_finite() {
-        return Err(Error::invalid("--omega2", "must be a finite number"));
+        return Err(Error::invalid("omega2", "must be a finite number"));
     }
     Ok(())
 }

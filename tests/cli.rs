@@ -2,23 +2,9 @@
 
 mod common;
 
-use assert_cmd::Command;
+use common::{chaoscope, png_text, read_npy};
+
 use predicates::prelude::*;
-
-fn chaoscope() -> Command {
-    let mut cmd = Command::cargo_bin("chaoscope").expect("binary");
-    cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    cmd
-}
-
-/// (shape, data) of a float32 .npy file written in C order.
-fn read_npy(path: &std::path::Path) -> (Vec<u64>, Vec<f32>) {
-    let bytes = std::fs::read(path).unwrap();
-    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
-    assert_eq!(npy.order(), npyz::Order::C);
-    let shape = npy.shape().to_vec();
-    (shape, npy.into_vec::<f32>().unwrap())
-}
 
 #[test]
 fn flip_writes_a_png_and_npy_of_the_right_shape() {
@@ -176,19 +162,6 @@ fn trajectory_csv_has_the_columns_and_reads_back_exactly() {
         .stderr(predicate::str::contains("--every"));
 }
 
-fn png_text(path: &std::path::Path, key: &str) -> String {
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let reader = decoder.read_info().unwrap();
-    reader
-        .info()
-        .uncompressed_latin1_text
-        .iter()
-        .find(|t| t.keyword == key)
-        .unwrap_or_else(|| panic!("no {key} in the PNG"))
-        .text
-        .clone()
-}
-
 #[test]
 fn lyapunov_map_writes_png_and_npy_on_both_backends() {
     let dir = tempfile::tempdir().unwrap();
@@ -259,6 +232,12 @@ fn lyapunov_single_point_writes_the_convergence_csv() {
         .success();
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
+    assert!(
+        lines
+            .next()
+            .is_some_and(|l| l.starts_with("# chaoscope lyapunov --theta1 ")),
+        "the command line first"
+    );
     assert_eq!(lines.next(), Some("t,ftle"));
     let rows: Vec<(f64, f64)> = lines
         .map(|l| {

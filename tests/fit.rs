@@ -3,19 +3,14 @@
 
 mod common;
 
-use assert_cmd::Command;
+use common::chaoscope;
+
 use chaoscope::cpu;
-use chaoscope::engine::Backend;
+use chaoscope::engine::{Backend, Engine};
 use chaoscope::fit::{self, Frame, ModelFitSpec};
 use chaoscope::model::{Params, State};
-use chaoscope::physics_args::Preset;
+use chaoscope::params::Preset;
 use predicates::prelude::*;
-
-fn chaoscope() -> Command {
-    let mut cmd = Command::cargo_bin("chaoscope").expect("binary");
-    cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    cmd
-}
 
 /// Frames of a simulated pendulum hung from `pivot`, every `every` s for `n` frames.
 fn synthetic(p: &Params, start: State, pivot: (f64, f64), every: f64, n: usize) -> Vec<Frame> {
@@ -72,13 +67,14 @@ fn pivot_lengths_and_model_state_are_recovered_from_synthetic_tracking() {
         window: 1.5,
         tolerance: 0.005,
         candidates: 4096,
-        backend: if common::gpu().is_some() {
-            Backend::Gpu
-        } else {
-            Backend::Cpu
-        },
     };
-    let m = fit::fit_model(&frames, (c.x, c.y), &angles, &spec).unwrap();
+    let engine = Engine::new(if common::gpu().is_some() {
+        Backend::Gpu
+    } else {
+        Backend::Cpu
+    })
+    .unwrap();
+    let m = fit::fit_model(&frames, (c.x, c.y), &angles, &spec, &engine).unwrap();
     // Same model, same data: the refinement converges to the truth; the positions match to
     // well under a millimetre over the window.
     assert!(m.rms < 1e-4, "rms {}", m.rms);

@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 
 use chaoscope::cpu;
 use chaoscope::field::Field;
-use chaoscope::gpu::{self, FlipTimeKernel};
+use chaoscope::gpu::FlipTimeKernel;
 use chaoscope::model::{Params, State};
 use chaoscope::monitor::Monitor;
 use chaoscope::spec::{FlipSpec, Grid, Range, Stepping};
@@ -76,7 +76,7 @@ fn gpu_and_cpu_trajectories_agree_over_a_short_horizon() {
     ];
     for (start, tol) in cases {
         let want = cpu::trajectory(&p, start, dt, steps);
-        let got = gpu::trajectory(&ctx, &p, start, dt, steps).expect("gpu trajectory");
+        let got = common::gpu_trajectory(&ctx, &p, start, dt, steps);
         assert_eq!(got.len(), want.len());
         let mut worst: f64 = 0.0;
         for (k, (g, c)) in got.iter().zip(&want).enumerate() {
@@ -256,15 +256,6 @@ fn tiled_map_equals_untiled_map() {
     assert_eq!(whole, tiled);
 }
 
-/// Parameters with every kind of loss switched on (all odd in the velocities, as they must be
-/// for the symmetry).
-fn lossy() -> Params {
-    let mut p = chaoscope::physics_args::Preset::Lab.params();
-    p.losses.joint1 = 2e-4;
-    p.losses.joint2 = 1e-4;
-    p
-}
-
 #[test]
 fn gpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() {
     let Some(ctx) = common::gpu() else { return };
@@ -273,7 +264,7 @@ fn gpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() 
     for (params, early_exit, what) in [
         (Params::default(), true, "point masses, early exit"),
         (Params::default(), false, "point masses, every step"),
-        (lossy(), true, "lab with every loss"),
+        (common::lab_with_every_loss(), true, "lab with every loss"),
     ] {
         let mut s = spec(96, 10.0, params, early_exit);
         s.grid.height = 71;
@@ -288,7 +279,7 @@ fn gpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() 
 fn cpu_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_them() {
     for (params, what) in [
         (Params::default(), "point masses"),
-        (lossy(), "lab with every loss"),
+        (common::lab_with_every_loss(), "lab with every loss"),
     ] {
         let mut s = spec(24, 6.0, params, true);
         s.grid.height = 17;

@@ -1,7 +1,7 @@
 //! No GPU needed: every shader parses and validates with naga, and the WGSL structs match
 //! their Rust mirrors in size and member offsets.
 
-use chaoscope::gpu::layout::{GpuParams, all_shaders};
+use chaoscope::gpu::layout::{GpuLyapunovSlot, GpuParams, GpuPendulum, all_shaders};
 use wgpu::naga;
 
 fn module(name: &str, source: &str) -> naga::Module {
@@ -69,5 +69,31 @@ fn params_struct_matches_its_rust_mirror() {
             wgsl, rust,
             "{name}: members and offsets of Params (WGSL left, Rust right)"
         );
+    }
+}
+
+/// The per-pixel storage mirrors, from whose sizes the tiles' bytes per pixel are computed.
+#[test]
+fn storage_structs_match_their_rust_mirrors() {
+    let pendulum = rust_offsets!(GpuPendulum; y, u);
+    let slot = rust_offsets!(GpuLyapunovSlot; a, b);
+    for (name, source) in all_shaders() {
+        let module = module(name, &source);
+        let (wgsl, span) = wgsl_struct(&module, "Pendulum");
+        assert_eq!(
+            span as usize,
+            std::mem::size_of::<GpuPendulum>(),
+            "{name}: Pendulum"
+        );
+        assert_eq!(wgsl, pendulum, "{name}: members and offsets of Pendulum");
+        if name == "lyapunov" {
+            let (wgsl, span) = wgsl_struct(&module, "LyapunovSlot");
+            assert_eq!(
+                span as usize,
+                std::mem::size_of::<GpuLyapunovSlot>(),
+                "LyapunovSlot"
+            );
+            assert_eq!(wgsl, slot, "members and offsets of LyapunovSlot");
+        }
     }
 }

@@ -2,40 +2,15 @@
 
 mod common;
 
-use assert_cmd::Command;
+use common::chaoscope;
+
 use chaoscope::cpu;
 use chaoscope::gpu::{self, FlipTimeKernel};
 use chaoscope::model::{Losses, Params, State};
 use chaoscope::monitor::Monitor;
-use chaoscope::physics_args::Preset;
+use chaoscope::params::{ParamSources, Preset};
 use chaoscope::spec::{FlipSpec, Grid, Stepping};
 use predicates::prelude::*;
-
-/// Every loss on, rods with mass: the hardest case for both paths.
-fn lossy() -> Params {
-    Params {
-        m1: 0.8,
-        m2: 0.5,
-        l1: 0.7,
-        l2: 0.5,
-        rod1: 0.2,
-        rod2: 0.1,
-        losses: Losses {
-            joint1: 0.02,
-            joint2: 0.01,
-            rho: 1.2,
-            cw: 2.0,
-            bob_area1: 3e-3,
-            bob_area2: 3e-3,
-            rod_area1: 4e-3,
-            rod_area2: 3e-3,
-            // 100x the report's, to be visible in short runs.
-            bearing: 0.05,
-            bearing_radius: 0.004,
-        },
-        ..Params::default()
-    }
-}
 
 #[test]
 fn massless_rods_are_point_masses() {
@@ -110,7 +85,7 @@ fn worst_balance(p: &Params, start: State, dt: f64) -> f64 {
 
 #[test]
 fn energy_never_increases_and_energy_plus_dissipated_is_conserved() {
-    let p = lossy();
+    let p = common::rods_and_every_loss();
     let fast = State {
         theta1: 0.5,
         omega1: 6.0,
@@ -186,7 +161,7 @@ fn small_oscillations_decay_exponentially_at_the_modal_rate() {
 /// Largest difference of any state component between the GPU and CPU over 200 steps of 0.01 s.
 fn worst_gpu_cpu_difference(ctx: &gpu::GpuContext, p: &Params, start: State) -> f64 {
     let want = cpu::trajectory(p, start, 0.01, 200);
-    let got = gpu::trajectory(ctx, p, start, 0.01, 200).unwrap();
+    let got = common::gpu_trajectory(ctx, p, start, 0.01, 200);
     got.iter()
         .zip(&want)
         .flat_map(|(g, c)| {
@@ -203,7 +178,7 @@ fn every_gpu_loss_variant_follows_the_cpu() {
     // The shaders compile each kind of loss in or out (override LOSSES): check each alone.
     let Some(ctx) = common::gpu() else { return };
     let only = |f: fn(&mut Losses)| {
-        let mut p = lossy();
+        let mut p = common::rods_and_every_loss();
         p.losses = Losses::default();
         f(&mut p.losses);
         p
@@ -244,7 +219,7 @@ fn every_gpu_loss_variant_follows_the_cpu() {
 #[test]
 fn gpu_and_cpu_agree_with_rods_and_every_loss() {
     let Some(ctx) = common::gpu() else { return };
-    let p = lossy();
+    let p = common::rods_and_every_loss();
     // Regular start and a short chaotic horizon, tolerances as for the lossless comparison.
     for (start, tol) in [
         (State::at_rest(0.5, 0.3), 1e-4),
@@ -363,12 +338,6 @@ fn damping_shrinks_the_flipping_region_and_the_no_flip_bound_still_holds() {
     }
 }
 
-fn chaoscope() -> Command {
-    let mut cmd = Command::cargo_bin("chaoscope").expect("binary");
-    cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    cmd
-}
-
 #[test]
 fn presets_files_and_flags_combine_and_bad_keys_are_named() {
     let dir = tempfile::tempdir().unwrap();
@@ -412,11 +381,11 @@ fn presets_files_and_flags_combine_and_bad_keys_are_named() {
     let lab = Preset::Lab.params();
     assert_eq!((lab.m1, lab.m2, lab.rod1), (0.301, 0.297, 0.140));
     // The shipped example file is the preset written out.
-    let from_file = chaoscope::physics_args::PhysicalArgs {
+    let from_file = ParamSources {
         params: Some(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab.toml")),
         ..Default::default()
     }
-    .params()
+    .resolve()
     .unwrap();
     assert_eq!(from_file, lab);
     // Unknown keys and impossible values are errors naming the key.

@@ -2,26 +2,12 @@
 
 mod common;
 
+use common::{chaoscope, read_npy, text_of as text};
+
 use std::path::Path;
 
-use assert_cmd::Command;
 use chaoscope::render::read_png;
 use predicates::prelude::*;
-
-fn chaoscope() -> Command {
-    let mut cmd = Command::cargo_bin("chaoscope").expect("binary");
-    cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    cmd
-}
-
-fn text(png: &chaoscope::render::Png, key: &str) -> String {
-    png.text
-        .iter()
-        .find(|(k, _)| k == key)
-        .unwrap_or_else(|| panic!("no {key}"))
-        .1
-        .clone()
-}
 
 /// The backends a picture test runs on: the CPU always, the GPU when there is one.
 fn backends() -> Vec<&'static str> {
@@ -261,14 +247,6 @@ fn sweep_bad_values_exit_2_and_name_the_flag() {
     }
 }
 
-/// (shape, data) of a float32 .npy.
-fn read_npy(path: &Path) -> (Vec<u64>, Vec<f32>) {
-    let bytes = std::fs::read(path).unwrap();
-    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
-    let shape = npy.shape().to_vec();
-    (shape, npy.into_vec::<f32>().unwrap())
-}
-
 /// Lower-bob distance (m) between runs a and b at each sample of a traces .npy.
 fn separation(shape: &[u64], data: &[f32], a: usize, b: usize) -> Vec<f32> {
     let samples = shape[1] as usize;
@@ -382,7 +360,7 @@ fn the_traces_animation_has_the_asked_frames() {
 
 #[test]
 fn phase_density_holds_all_the_time_and_the_single_pendulum_has_its_period() {
-    use chaoscope::views::{phase_density, single_pendulum};
+    use chaoscope::app::phase::{phase_density, single_pendulum};
     // Small oscillations: period 2 pi sqrt(l/g); RK4 at dt 1e-3 is far more accurate than
     // the 1e-3 relative tolerance, which covers the amplitude correction (theta0^2/16 = 6e-4).
     let g_over_l = 9.81;

@@ -8,7 +8,7 @@ use num_dual::Dual64;
 
 use super::{jacobian, map_pixels, rate_of, rk4_step};
 use crate::error::Result;
-use crate::field::Field;
+use crate::field::{Convergence, Field};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{LyapunovSpec, Method};
@@ -16,20 +16,6 @@ use crate::spec::{LyapunovSpec, Method};
 /// The tangent vector every run starts from (unit length, all components equal), so the CPU
 /// and the GPU follow the same vector.
 pub const TANGENT_START: [f64; 4] = [0.5, 0.5, 0.5, 0.5];
-
-/// Running FTLE estimates: `ftle[i]` (1/s) is the mean log stretch rate over `[0, t[i]]`,
-/// one entry per renormalisation; the last is the exponent at t-max.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Convergence {
-    pub t: Vec<f64>,
-    pub ftle: Vec<f64>,
-}
-
-impl Convergence {
-    pub fn last(&self) -> f64 {
-        self.ftle.last().copied().unwrap_or(0.0)
-    }
-}
 
 /// One RK4 step of the state and of a tangent vector along it: each stage evaluates the rate
 /// at dual numbers (y + eps v), whose dual part is J(y) v.

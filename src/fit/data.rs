@@ -19,14 +19,14 @@ pub struct Frame {
 }
 
 fn bad(path: &Path, line: usize, what: String) -> Error {
-    Error::invalid("FILE", format!("{}:{line}: {what}", path.display()))
+    Error::invalid("file", format!("{}:{line}: {what}", path.display()))
 }
 
 /// Reads a CSV with a header naming t, x1, y1, x2, y2 (any order, other columns ignored);
 /// lines starting with # are comments. Errors name the line.
 pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
     let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::invalid("FILE", format!("cannot read {}: {e}", path.display())))?;
+        .map_err(|e| Error::invalid("file", format!("cannot read {}: {e}", path.display())))?;
     let mut lines = text
         .lines()
         .enumerate()
@@ -121,7 +121,7 @@ pub fn fit_pivot(frames: &[Frame]) -> Result<Pivot> {
     let sol = a
         .svd(true, true)
         .solve(&b, 1e-12)
-        .map_err(|e| Error::invalid("FILE", format!("circle fit: {e}")))?;
+        .map_err(|e| Error::invalid("file", format!("circle fit: {e}")))?;
     let (cx, cy) = (-sol[0] / 2.0, -sol[1] / 2.0);
     let r = (cx * cx + cy * cy - sol[2]).max(0.0).sqrt();
     let residuals = |p: &DVector<f64>| {

@@ -2,14 +2,12 @@
 //! by a large ensemble of candidates on the GPU (or the CPU), refined by least squares in f64.
 
 use nalgebra::DVector;
-use rayon::prelude::*;
 
 use super::data::Frame;
 use super::lsq::{least_squares, numeric_jacobian};
 use crate::cpu;
-use crate::engine::{self, Backend};
+use crate::engine::Engine;
 use crate::error::Result;
-use crate::gpu;
 use crate::model::{Params, State};
 
 /// Simulation steps per data interval (~1/300 s for 1/3 s frames).
@@ -40,7 +38,6 @@ pub struct ModelFitSpec {
     pub window: f64,
     pub tolerance: f64,
     pub candidates: usize,
-    pub backend: Backend,
 }
 
 /// Measured positions relative to the pivot.
@@ -119,11 +116,14 @@ fn halton(k: usize, d: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Fits the model to `frames` from the row nearest `spec.start_time`, the ensemble search
+/// on `engine`'s path.
 pub fn fit_model(
     frames: &[Frame],
     pivot: (f64, f64),
     angles: &[(f64, f64)],
     spec: &ModelFitSpec,
+    engine: &Engine,
 ) -> Result<ModelFit> {
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     let data = measured(frames, pivot);
@@ -174,26 +174,11 @@ pub fn fit_model(
     let n_sub = (window_rows as u32 - 1) * SUBSTEPS;
     // The ensemble integrates with the mean data interval; refinement uses the exact times.
     let dt = (t[row + window_rows - 1] - t[row]) / n_sub as f64;
-    let (ctx, notice) = engine::resolve(spec.backend)?;
-    if let Some(n) = notice {
-        eprintln!("{n}");
-    }
-    let backend = if ctx.is_some() { "gpu" } else { "cpu" };
+    let backend = engine.info().backend;
     let mut best = (f64::INFINITY, guess, 0.0);
     for &c in &dampings {
         let p = with_damping(&spec.params, c, c);
-        let runs: Vec<Vec<State>> = match &ctx {
-            Some(ctx) => gpu::strided_trajectories(ctx, &p, &starts, dt, n_sub, SUBSTEPS)?,
-            None => starts
-                .par_iter()
-                .map(|s| {
-                    cpu::trajectory(&p, *s, dt, n_sub)
-                        .into_iter()
-                        .step_by(SUBSTEPS as usize)
-                        .collect()
-                })
-                .collect(),
-        };
+        let runs = engine.ensemble(&p, &starts, dt, n_sub, SUBSTEPS)?;
         for (s, run) in starts.iter().zip(&runs) {
             let sim: Vec<[f64; 4]> = run.iter().map(|y| positions(&p, y)).collect();
             let e = cost(&sim);

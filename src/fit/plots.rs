@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::render;
 
 fn err<E: std::fmt::Debug>(e: E) -> Error {
-    Error::Io(std::io::Error::other(format!("plotting: {e:?}")))
+    Error::plot(e)
 }
 
 const BG: RGBColor = RGBColor(255, 255, 255);

@@ -1,26 +1,19 @@
-//! Drives `shaders/flip_time.wgsl`: tiles the grid to fit a storage binding, splits the time
-//! loop into dispatches of bounded work, and keeps the still-active pixels in a dense list.
+//! Drives `shaders/flip_time.wgsl`: keeps the still-active pixels of a tile in a dense list,
+//! inside the tiled loop of `tiled.rs`.
 
 use super::context::{GpuContext, map_read, read_f32s};
-use super::layout::{FLIP_TIME_WGSL, GpuParams, NEVER};
+use super::layout::{FLIP_BYTES_PER_PIXEL, FLIP_TIME_WGSL, GpuParams, GpuPendulum, NEVER};
 use super::pipeline::{
-    Tiling, Variants, bind_group, layouts, params_buffer, record_dispatch, shader_module,
-    storage_buffer,
+    Variants, bind_group, layouts, params_buffer, record_dispatch, shader_module, storage_buffer,
 };
+use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::spec::FlipSpec;
 
-/// Pendulum-steps per dispatch: about 0.1 s on lavapipe (~1.5e8 steps/s), far less on a real
-/// GPU, so no dispatch holds the device long enough to trip a driver watchdog.
-pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
-
-/// Bytes of GPU memory per pixel of a tile: state (32), time (4), two active lists (4 + 4).
-const BYTES_PER_PIXEL: u64 = 44;
-
 pub struct FlipTimeKernel {
-    /// (flip_init, flip_time), without and with losses.
+    /// (flip_init, flip_time) per kind of loss and early exit.
     pipelines: Variants,
     layout: wgpu::BindGroupLayout,
 }
@@ -37,6 +30,8 @@ struct Buffers {
     b_to_a: wgpu::BindGroup,
 }
 
+const PENDULUM_BYTES: u64 = std::mem::size_of::<GpuPendulum>() as u64;
+
 impl FlipTimeKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(ctx, "flip_time.wgsl", FLIP_TIME_WGSL);
@@ -46,7 +41,7 @@ impl FlipTimeKernel {
             pipelines: Variants::new(
                 module,
                 pipeline_layout,
-                ("flip_init", "flip_time"),
+                &["flip_init", "flip_time"],
                 Some("EARLY_EXIT"),
             ),
             layout,
@@ -59,7 +54,7 @@ impl FlipTimeKernel {
 
     fn buffers(&self, ctx: &GpuContext, capacity: u64) -> Buffers {
         let params = params_buffer(ctx);
-        let states = storage_buffer(ctx, "states", capacity * 32);
+        let states = storage_buffer(ctx, "states", capacity * PENDULUM_BYTES);
         let times = storage_buffer(ctx, "times", capacity * 4);
         let list_a = storage_buffer(ctx, "active list a", capacity * 4);
         let list_b = storage_buffer(ctx, "active list b", capacity * 4);
@@ -123,8 +118,8 @@ impl FlipTimeKernel {
     /// The flip-time map of `spec` (s, +inf = never flipped), in tiles as large as the
     /// device's storage bindings allow.
     pub fn run(&self, ctx: &GpuContext, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-        let max_pixels = (ctx.max_binding() / 32).min(ctx.limits.max_buffer_size / BYTES_PER_PIXEL);
-        self.run_tiled(ctx, spec, monitor, max_pixels)
+        let max = max_pixels(ctx, PENDULUM_BYTES, FLIP_BYTES_PER_PIXEL);
+        self.run_tiled(ctx, spec, monitor, max)
     }
 
     /// As `run`, with tiles of at most `max_pixels` pixels (whole rows, at least one).
@@ -136,20 +131,18 @@ impl FlipTimeKernel {
         max_pixels: u64,
     ) -> Result<Field> {
         let grid = spec.grid;
-        let (init, advance) = self
+        let [init, advance] = self
             .pipelines
-            .get(ctx, spec.params.losses.kinds(), spec.early_exit);
+            .get(ctx, spec.params.losses.kinds(), spec.early_exit)
+        else {
+            unreachable!("two entry points")
+        };
         let total_steps = spec.stepping.steps();
-        let rows_needed = spec.rows_to_integrate();
-        let tiling = Tiling::new(grid.width, rows_needed, max_pixels);
+        let tiling = Tiling::new(grid.width, spec.rows_to_integrate(), max_pixels);
         let bufs = self.buffers(ctx, tiling.capacity());
-        let tiles = tiling.count();
-        monitor.start("gpu", tiles as u64 * total_steps as u64);
-
-        let mut field = Field::new(grid.width, grid.height, f32::INFINITY);
         let base = GpuParams::new(&spec.params, spec.stepping.dt).with_grid(&grid);
         let t_max = spec.stepping.t_max as f32;
-        for (row0, rows) in tiling.tiles() {
+        map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows| {
             let pixels = rows * grid.width;
             let mut params = GpuParams {
                 row0,
@@ -157,42 +150,35 @@ impl FlipTimeKernel {
                 count: pixels,
                 ..base
             };
-            let mut active =
-                self.dispatch(ctx, &bufs, init, &bufs.b_to_a, &params, spec.early_exit)?;
-            if !spec.early_exit {
-                active = pixels;
-            }
-            let mut step0 = 0;
+            let listed = self.dispatch(ctx, &bufs, init, &bufs.b_to_a, &params, spec.early_exit)?;
+            let active = if spec.early_exit { listed } else { pixels };
             let mut a_to_b = true;
-            while step0 < total_steps && active > 0 {
-                monitor.check()?;
-                let steps = (STEPS_PER_DISPATCH / active as u64)
-                    .clamp(1, (total_steps - step0) as u64) as u32;
-                params.step0 = step0;
-                params.steps = steps;
-                params.count = active;
-                let bind = if a_to_b { &bufs.a_to_b } else { &bufs.b_to_a };
-                active = self.dispatch(ctx, &bufs, advance, bind, &params, spec.early_exit)?;
-                a_to_b = !a_to_b;
-                step0 += steps;
-                monitor.advance(steps as u64);
-            }
-            monitor.advance((total_steps - step0) as u64);
+            time_loop(
+                total_steps,
+                active,
+                1,
+                None,
+                monitor,
+                |step0, steps, active| {
+                    params.step0 = step0;
+                    params.steps = steps;
+                    params.count = active;
+                    let bind = if a_to_b { &bufs.a_to_b } else { &bufs.b_to_a };
+                    a_to_b = !a_to_b;
+                    self.dispatch(ctx, &bufs, advance, bind, &params, spec.early_exit)
+                },
+            )?;
             let times = read_f32s(ctx, &bufs.times, pixels as u64)?;
-            let start = row0 as usize * grid.width as usize;
-            for (out, t) in field.data[start..start + pixels as usize]
-                .iter_mut()
-                .zip(times)
-            {
-                *out = if t == NEVER || t > t_max {
-                    f32::INFINITY
-                } else {
-                    t
-                };
-            }
-        }
-        field.mirror_below(rows_needed);
-        monitor.finish();
-        Ok(field)
+            Ok(times
+                .into_iter()
+                .map(|t| {
+                    if t == NEVER || t > t_max {
+                        f32::INFINITY
+                    } else {
+                        t
+                    }
+                })
+                .collect())
+        })
     }
 }

@@ -13,6 +13,35 @@ pub const WORKGROUP_SIZE: u32 = 64;
 /// The flip-time sentinel for "has not flipped" inside the shader (times are never negative).
 pub const NEVER: f32 = -1.0;
 
+/// Mirror of WGSL `Pendulum`: the state y = (theta1, omega1, theta2, omega2) and the cos and
+/// sin of the angles carried along, u = (cos theta1, sin theta1, cos theta2, sin theta2).
+/// The flip kernel stores one per pixel (`states[2 i]`, `states[2 i + 1]`), trajectories
+/// store the y of each kept step.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPendulum {
+    pub y: [f32; 4],
+    pub u: [f32; 4],
+}
+
+/// Mirror of WGSL `LyapunovSlot`, one per pixel of a divergence map: a pendulum and its
+/// tangent vector in `b.y` (tangent method), or a pendulum and its twin (twin method).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLyapunovSlot {
+    pub a: GpuPendulum,
+    pub b: GpuPendulum,
+}
+
+/// Bytes of a flip map's tile per pixel: its pendulum, flip time and two active-list entries.
+pub const FLIP_BYTES_PER_PIXEL: u64 = (std::mem::size_of::<GpuPendulum>()
+    + std::mem::size_of::<f32>()
+    + 2 * std::mem::size_of::<u32>()) as u64;
+
+/// Bytes of a divergence map's tile per pixel: its slot and log-stretch sum.
+pub const LYAPUNOV_BYTES_PER_PIXEL: u64 =
+    (std::mem::size_of::<GpuLyapunovSlot>() + std::mem::size_of::<f32>()) as u64;
+
 /// Mirror of WGSL `Params`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -1,13 +1,64 @@
-//! The GPU path: WGSL compute shaders in f32, one invocation per pendulum.
+//! The GPU path: WGSL compute shaders in f32, one invocation per pendulum. Every kernel is
+//! built once per context ([`Kernels`]) and its pipelines compiled on first use.
 
 mod context;
 mod flip_time;
 pub mod layout;
 mod lyapunov;
 mod pipeline;
+mod tiled;
 mod trajectory;
 
+use std::sync::OnceLock;
+
 pub use context::{GpuContext, list_adapters};
-pub use flip_time::{FlipTimeKernel, STEPS_PER_DISPATCH};
-pub use lyapunov::{LyapunovKernel, jacobians};
-pub use trajectory::{strided_trajectories, trajectories, trajectory};
+pub use flip_time::FlipTimeKernel;
+pub use lyapunov::{JacobianKernel, LyapunovKernel};
+pub use tiled::STEPS_PER_DISPATCH;
+pub use trajectory::TrajectoryKernel;
+
+use crate::spec::Method;
+
+/// A context and its kernels, each built on first use and kept.
+pub struct Kernels {
+    pub ctx: GpuContext,
+    flip: OnceLock<FlipTimeKernel>,
+    tangent: OnceLock<LyapunovKernel>,
+    twin: OnceLock<LyapunovKernel>,
+    trajectory: OnceLock<TrajectoryKernel>,
+    jacobian: OnceLock<JacobianKernel>,
+}
+
+impl Kernels {
+    pub fn new(ctx: GpuContext) -> Self {
+        Kernels {
+            ctx,
+            flip: OnceLock::new(),
+            tangent: OnceLock::new(),
+            twin: OnceLock::new(),
+            trajectory: OnceLock::new(),
+            jacobian: OnceLock::new(),
+        }
+    }
+
+    pub fn flip(&self) -> &FlipTimeKernel {
+        self.flip.get_or_init(|| FlipTimeKernel::new(&self.ctx))
+    }
+
+    pub fn lyapunov(&self, method: Method) -> &LyapunovKernel {
+        let slot = match method {
+            Method::Tangent => &self.tangent,
+            Method::Twin { .. } => &self.twin,
+        };
+        slot.get_or_init(|| LyapunovKernel::new(&self.ctx, method))
+    }
+
+    pub fn trajectory(&self) -> &TrajectoryKernel {
+        self.trajectory
+            .get_or_init(|| TrajectoryKernel::new(&self.ctx))
+    }
+
+    pub fn jacobian(&self) -> &JacobianKernel {
+        self.jacobian.get_or_init(|| JacobianKernel::new(&self.ctx))
+    }
+}

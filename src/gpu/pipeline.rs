@@ -41,21 +41,21 @@ pub fn compute_pipeline(
         })
 }
 
-/// A pair of pipelines (setup, advance) compiled on first use for each `LOSSES` value and,
-/// if the kernel has one, each value of its boolean `switch` override.
+/// The pipelines of a kernel's entry points (setup, advance, ...), compiled on first use for
+/// each `LOSSES` value and, if the kernel has one, each value of its boolean `switch` override.
 pub struct Variants {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    entries: (&'static str, &'static str),
+    entries: &'static [&'static str],
     switch: Option<&'static str>,
-    compiled: [std::sync::OnceLock<(wgpu::ComputePipeline, wgpu::ComputePipeline)>; 16],
+    compiled: [std::sync::OnceLock<Vec<wgpu::ComputePipeline>>; 16],
 }
 
 impl Variants {
     pub fn new(
         module: wgpu::ShaderModule,
         layout: wgpu::PipelineLayout,
-        entries: (&'static str, &'static str),
+        entries: &'static [&'static str],
         switch: Option<&'static str>,
     ) -> Self {
         Variants {
@@ -67,30 +67,27 @@ impl Variants {
         }
     }
 
-    /// The pipelines for `losses` (see `Losses::kinds`) with the switch `on` (ignored by
-    /// kernels without one).
-    pub fn get(
-        &self,
-        ctx: &GpuContext,
-        losses: u32,
-        on: bool,
-    ) -> &(wgpu::ComputePipeline, wgpu::ComputePipeline) {
+    /// The pipelines of the entry points, in order, for `losses` (see `Losses::kinds`) with
+    /// the switch `on` (ignored by kernels without one).
+    pub fn get(&self, ctx: &GpuContext, losses: u32, on: bool) -> &[wgpu::ComputePipeline] {
         let on = on && self.switch.is_some();
         let slot = (losses as usize & 7) | (on as usize) << 3;
         self.compiled[slot].get_or_init(|| {
             let switches: Vec<(&str, bool)> =
                 self.switch.map(|name| (name, on)).into_iter().collect();
-            let make = |entry| {
-                compute_pipeline(
-                    ctx,
-                    &self.module,
-                    Some(&self.layout),
-                    entry,
-                    losses,
-                    &switches,
-                )
-            };
-            (make(self.entries.0), make(self.entries.1))
+            self.entries
+                .iter()
+                .map(|entry| {
+                    compute_pipeline(
+                        ctx,
+                        &self.module,
+                        Some(&self.layout),
+                        entry,
+                        losses,
+                        &switches,
+                    )
+                })
+                .collect()
         })
     }
 }
@@ -216,39 +213,4 @@ pub fn dispatch_and_wait(
     record_dispatch(&mut encoder, pipeline, bind_group, invocations);
     ctx.queue.submit([encoder.finish()]);
     ctx.wait()
-}
-
-/// A grid cut into tiles of whole rows that fit the device: at most `max_pixels` pixels each.
-pub struct Tiling {
-    pub width: u32,
-    pub height: u32,
-    pub tile_rows: u32,
-}
-
-impl Tiling {
-    pub fn new(width: u32, height: u32, max_pixels: u64) -> Self {
-        let tile_rows = (max_pixels / width as u64).clamp(1, height as u64) as u32;
-        Tiling {
-            width,
-            height,
-            tile_rows,
-        }
-    }
-
-    /// Pixels of the largest tile (what the buffers must hold).
-    pub fn capacity(&self) -> u64 {
-        self.tile_rows as u64 * self.width as u64
-    }
-
-    pub fn count(&self) -> u32 {
-        self.height.div_ceil(self.tile_rows)
-    }
-
-    /// (first row, rows) of each tile, top to bottom.
-    pub fn tiles(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
-        (0..self.count()).map(|t| {
-            let row0 = t * self.tile_rows;
-            (row0, self.tile_rows.min(self.height - row0))
-        })
-    }
 }

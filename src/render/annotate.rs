@@ -139,7 +139,7 @@ const BACKGROUND: [u8; 3] = [17, 17, 20];
 const INK: RGBColor = RGBColor(225, 225, 225);
 
 fn draw_err<E: std::fmt::Debug>(e: E) -> Error {
-    Error::Io(std::io::Error::other(format!("annotating the map: {e:?}")))
+    Error::Plot(format!("annotating the map: {e:?}"))
 }
 
 /// Frames a `w` x `h` RGB map with axes, colour bar and title.

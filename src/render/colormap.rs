@@ -50,7 +50,7 @@ pub const NEVER_RGB: [u8; 3] = [0, 0, 0];
 
 /// The colour maps `--colormap` offers (colorgrad presets): sequential ones for times and
 /// exponents, cyclic ones (sinebow, rainbow) for angles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Colormap {
     Inferno,
     Magma,
@@ -66,6 +66,18 @@ pub enum Colormap {
 }
 
 impl Colormap {
+    pub const ALL: [Colormap; 9] = [
+        Colormap::Inferno,
+        Colormap::Magma,
+        Colormap::Viridis,
+        Colormap::Plasma,
+        Colormap::Cividis,
+        Colormap::Turbo,
+        Colormap::Cubehelix,
+        Colormap::Sinebow,
+        Colormap::Rainbow,
+    ];
+
     pub fn gradient(self) -> Box<dyn Gradient> {
         use colorgrad::preset;
         match self {
@@ -81,8 +93,18 @@ impl Colormap {
         }
     }
 
-    pub fn name(self) -> String {
-        format!("{self:?}").to_lowercase()
+    pub fn name(self) -> &'static str {
+        match self {
+            Colormap::Inferno => "inferno",
+            Colormap::Magma => "magma",
+            Colormap::Viridis => "viridis",
+            Colormap::Plasma => "plasma",
+            Colormap::Cividis => "cividis",
+            Colormap::Turbo => "turbo",
+            Colormap::Cubehelix => "cubehelix",
+            Colormap::Sinebow => "sinebow",
+            Colormap::Rainbow => "rainbow",
+        }
     }
 }
 

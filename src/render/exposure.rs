@@ -105,7 +105,7 @@ impl Film {
 }
 
 fn draw_err<E: std::fmt::Debug>(e: E) -> Error {
-    Error::Io(std::io::Error::other(format!("drawing: {e:?}")))
+    Error::Plot(format!("drawing: {e:?}"))
 }
 
 /// Arms drawn over a picture: pivot -> bob 1 -> bob 2 for each (x1, y1, x2, y2), in `color`

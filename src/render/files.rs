@@ -49,7 +49,7 @@ fn encode_png(
     delay_ms: Option<u16>,
     text: &[(String, String)],
 ) -> Result<()> {
-    let png_err = |e: png::EncodingError| Error::Io(std::io::Error::other(e));
+    let png_err = |e: png::EncodingError| Error::format(path, e);
     write_atomic(path, |w| {
         let mut encoder = png::Encoder::new(w, width, height);
         encoder.set_color(png::ColorType::Rgb);
@@ -106,18 +106,13 @@ pub struct Png {
 }
 
 pub fn read_png(path: &Path) -> Result<Png> {
-    let err = |e: png::DecodingError| {
-        Error::Io(std::io::Error::other(format!("{}: {e}", path.display())))
-    };
+    let err = |e: png::DecodingError| Error::format(path, e);
     let file = std::io::BufReader::new(std::fs::File::open(path)?);
     let mut reader = png::Decoder::new(file).read_info().map_err(err)?;
     let mut rgb = vec![0; reader.output_buffer_size().unwrap_or(0)];
     let frame = reader.next_frame(&mut rgb).map_err(err)?;
     if frame.color_type != png::ColorType::Rgb || frame.bit_depth != png::BitDepth::Eight {
-        return Err(Error::Io(std::io::Error::other(format!(
-            "{} is not an 8-bit RGB PNG",
-            path.display()
-        ))));
+        return Err(Error::format(path, "not an 8-bit RGB PNG"));
     }
     rgb.truncate(frame.buffer_size());
     let text = reader
@@ -157,12 +152,12 @@ pub fn write_gif(
     frames: &[Vec<u8>],
     delay_cs: u16,
 ) -> Result<()> {
-    let gif_err = |e: gif::EncodingError| Error::Io(std::io::Error::other(e));
+    let gif_err = |e: gif::EncodingError| Error::format(path, e);
     let (w, h) = (
         u16::try_from(width)
-            .map_err(|_| Error::invalid("--size", "GIF frames are at most 65535 pixels wide"))?,
+            .map_err(|_| Error::invalid("size", "GIF frames are at most 65535 pixels wide"))?,
         u16::try_from(height)
-            .map_err(|_| Error::invalid("--size", "GIF frames are at most 65535 pixels high"))?,
+            .map_err(|_| Error::invalid("size", "GIF frames are at most 65535 pixels high"))?,
     );
     write_atomic(path, |out| {
         let mut encoder = gif::Encoder::new(out, w, h, &[]).map_err(gif_err)?;

@@ -1,10 +1,12 @@
-//! From fields to files: colour maps, PNG with the run's specification, raw .npy; every file
-//! written to a temporary name first and renamed, so no half-written output is left behind.
+//! From fields to files: colour maps, pictures of maps with the run's provenance, PNG and raw
+//! .npy; every file written to a temporary name first and renamed, so no half-written output
+//! is left behind.
 
 mod annotate;
 mod colormap;
 mod exposure;
 mod files;
+mod maps;
 
 pub use annotate::{
     Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks, register_font,
@@ -16,3 +18,4 @@ pub use exposure::{Bobs, Film, View, draw_arms};
 pub use files::{
     Png, read_png, write_apng, write_atomic, write_gif, write_npy, write_npy_shaped, write_png,
 };
+pub use maps::{Picture, PictureSpec, flip_picture, lyapunov_picture, provenance};

@@ -1,8 +1,93 @@
 //! Shared by the integration tests.
 #![allow(dead_code)]
 
+use std::path::Path;
+
+use assert_cmd::Command;
 use chaoscope::Error;
 use chaoscope::gpu::GpuContext;
+use chaoscope::model::{Losses, Params, State};
+use chaoscope::params::Preset;
+
+/// The binary, with lavapipe's runtime directory set so it does not warn.
+pub fn chaoscope() -> Command {
+    let mut cmd = Command::cargo_bin("chaoscope").expect("binary");
+    cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    cmd
+}
+
+/// (shape, data) of a float32 .npy file written in C order.
+pub fn read_npy(path: &Path) -> (Vec<u64>, Vec<f32>) {
+    let bytes = std::fs::read(path).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    assert_eq!(npy.order(), npyz::Order::C);
+    let shape = npy.shape().to_vec();
+    (shape, npy.into_vec::<f32>().unwrap())
+}
+
+/// The text chunk `key` of a decoded PNG.
+pub fn text_of(png: &chaoscope::render::Png, key: &str) -> String {
+    png.text
+        .iter()
+        .find(|(k, _)| k == key)
+        .unwrap_or_else(|| panic!("no {key} in the PNG"))
+        .1
+        .clone()
+}
+
+/// The text chunk `key` of the PNG at `path`.
+pub fn png_text(path: &Path, key: &str) -> String {
+    text_of(&chaoscope::render::read_png(path).unwrap(), key)
+}
+
+/// Every loss on, rods with mass: the hardest case for both paths.
+pub fn rods_and_every_loss() -> Params {
+    Params {
+        m1: 0.8,
+        m2: 0.5,
+        l1: 0.7,
+        l2: 0.5,
+        rod1: 0.2,
+        rod2: 0.1,
+        losses: Losses {
+            joint1: 0.02,
+            joint2: 0.01,
+            rho: 1.2,
+            cw: 2.0,
+            bob_area1: 3e-3,
+            bob_area2: 3e-3,
+            rod_area1: 4e-3,
+            rod_area2: 3e-3,
+            // 100x the report's, to be visible in short runs.
+            bearing: 0.05,
+            bearing_radius: 0.004,
+        },
+        ..Params::default()
+    }
+}
+
+/// The lab preset (drag, bearings, rods) with joint damping too: every kind of loss at the
+/// apparatus' scale (all odd in the velocities, as they must be for the symmetry).
+pub fn lab_with_every_loss() -> Params {
+    let mut p = Preset::Lab.params();
+    p.losses.joint1 = 2e-4;
+    p.losses.joint2 = 1e-4;
+    p
+}
+
+/// One GPU trajectory: the state at every step.
+pub fn gpu_trajectory(
+    ctx: &GpuContext,
+    p: &Params,
+    start: State,
+    dt: f64,
+    steps: u32,
+) -> Vec<State> {
+    chaoscope::gpu::TrajectoryKernel::new(ctx)
+        .run(ctx, p, &[start], dt, steps, 1)
+        .expect("gpu trajectory")
+        .remove(0)
+}
 
 /// A real GPU adapter (lavapipe in CI). Under CI=true a missing adapter fails the test; on a
 /// developer's machine without one the GPU test says so and does nothing else.
@@ -68,7 +153,9 @@ pub fn check_jacobians(
     p: &chaoscope::model::Params,
     states: &[chaoscope::model::State],
 ) {
-    let gpu_j = chaoscope::gpu::jacobians(ctx, p, states).unwrap();
+    let gpu_j = chaoscope::gpu::JacobianKernel::new(ctx)
+        .run(ctx, p, states)
+        .unwrap();
     for (s, g) in states.iter().zip(&gpu_j) {
         let c = chaoscope::cpu::jacobian(p, s);
         let scale = 1.0 + c.abs().max();

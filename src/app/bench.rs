@@ -9,8 +9,6 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
 
-use clap::Args;
-
 use crate::cpu;
 use crate::error::{Error, Result};
 use crate::field::Field;
@@ -19,37 +17,46 @@ use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Stepping};
 
-#[derive(Args, Debug, Clone)]
-pub struct BenchArgs {
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchJob {
     /// Grid side (FLIP-512: 512).
-    #[arg(long, default_value = "512")]
     pub size: u32,
     /// Grid side for the CPU rows (steps per second do not depend on it; the f64 CPU path
     /// is slow enough that 512 would dominate the run).
-    #[arg(long, default_value = "256")]
     pub cpu_size: u32,
-    #[arg(long, default_value = "20")]
     pub t_max: f64,
-    #[arg(long, default_value = "0.01")]
     pub dt: f64,
     /// Repetitions of every configuration, interleaved; the median is reported.
-    #[arg(long, default_value = "3")]
     pub repeat: u32,
     /// Skip the CPU rows.
-    #[arg(long)]
     pub no_cpu: bool,
     /// Skip the divergence-map (FTLE) rows.
-    #[arg(long)]
     pub no_ftle: bool,
     /// Directory of the peer scripts (e.g. ../shared/peers); no peers are run without it.
-    #[arg(long)]
     pub peers: Option<PathBuf>,
     /// Python with the peers' requirements installed.
-    #[arg(long, default_value = "python3")]
     pub python: String,
     /// Peers to run, as SCRIPT[:ARCH] (e.g. taichi:vulkan, numba), in f32.
-    #[arg(long, default_values = ["taichi:vulkan", "numba"])]
     pub peer: Vec<String>,
+}
+
+/// One row of the report: the median of the repetitions of one path and mode.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub path: String,
+    pub mode: &'static str,
+    pub wall_s: f64,
+    pub steps_per_s: f64,
+}
+
+#[derive(Clone, Debug)]
+pub struct BenchReport {
+    pub adapter: String,
+    pub rows: Vec<Row>,
+    /// Same-run comparisons, one sentence each.
+    pub ratios: Vec<String>,
+    /// Peers that failed, and why.
+    pub notices: Vec<String>,
 }
 
 /// One measured run.
@@ -87,7 +94,7 @@ fn problem_steps(field: &Field, spec: &FlipSpec) -> f64 {
 }
 
 /// The FLIP-512 problem; `mode` is one of `MODES`.
-fn spec(size: u32, args: &BenchArgs, mode: &str) -> FlipSpec {
+fn spec(size: u32, args: &BenchJob, mode: &str) -> FlipSpec {
     FlipSpec {
         early_exit: mode.starts_with("early"),
         use_symmetry: mode == "early" || mode == "full-half",
@@ -103,7 +110,7 @@ fn spec(size: u32, args: &BenchArgs, mode: &str) -> FlipSpec {
 }
 
 /// The divergence-map benchmark: the FLIP-512 grid and time, tangent method.
-fn ftle_spec(size: u32, args: &BenchArgs) -> LyapunovSpec {
+fn ftle_spec(size: u32, args: &BenchJob) -> LyapunovSpec {
     LyapunovSpec {
         params: Params::default(),
         grid: Grid::square(size),
@@ -120,7 +127,7 @@ fn ftle_spec(size: u32, args: &BenchArgs) -> LyapunovSpec {
 /// One FTLE map on the GPU at `size` and on the CPU at half `cpu_size` (scaled), as rows
 /// of mode "ftle": every pixel runs every step, counted as pendulum-steps.
 fn ftle_samples(
-    args: &BenchArgs,
+    args: &BenchJob,
     ctx: &GpuContext,
     kernel: &LyapunovKernel,
     quiet: &Monitor,
@@ -151,7 +158,7 @@ fn ftle_samples(
     Ok(out)
 }
 
-fn run_peer(args: &BenchArgs, dir: &PathBuf, peer: &str, full: bool) -> Result<Sample> {
+fn run_peer(args: &BenchJob, dir: &PathBuf, peer: &str, full: bool) -> Result<Sample> {
     let (script, arch) = peer
         .split_once(':')
         .map_or((peer, None), |(s, a)| (s, Some(a)));
@@ -207,7 +214,7 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
     let quiet = Monitor::hidden();
     let ctx = GpuContext::new()?;
     let kernel = FlipTimeKernel::new(&ctx);
@@ -216,11 +223,11 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     }
     let lyapunov = LyapunovKernel::new(&ctx, Method::Tangent);
     lyapunov.run(&ctx, &ftle_spec(32, args), &quiet)?;
-    eprintln!("GPU: {}", ctx.adapter_name());
     let mut samples: Vec<Sample> = Vec::new();
-    for rep in 0..args.repeat {
+    let mut notices = Vec::new();
+    monitor.start("bench", args.repeat as u64);
+    for _ in 0..args.repeat {
         monitor.check()?;
-        eprintln!("repetition {}/{}", rep + 1, args.repeat);
         for mode in MODES {
             let s = spec(args.size, args, mode);
             let t0 = Instant::now();
@@ -255,24 +262,14 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
                 for peer in &args.peer {
                     match run_peer(args, dir, peer, !early) {
                         Ok(s) => samples.push(s),
-                        Err(e) => eprintln!("peer {peer}: {e}"),
+                        Err(e) => notices.push(format!("peer {peer}: {e}")),
                     }
                 }
             }
         }
+        monitor.advance(1);
     }
-    println!(
-        "FLIP-{} (RK4, dt {}, t_max {} s): medians of {} interleaved runs; cpu rows scaled from n={}",
-        args.size, args.dt, args.t_max, args.repeat, args.cpu_size
-    );
-    println!(
-        "pendulum-steps as the peers count them: early-all and full integrate every pixel; early \
-         and full-half integrate the top half of the symmetric grid and mirror it"
-    );
-    println!(
-        "{:<44} {:>9} {:>10} {:>16}",
-        "path", "mode", "wall s", "pendulum-steps/s"
-    );
+    monitor.finish();
     let mut names: Vec<(String, &str)> = samples.iter().map(|s| (s.name.clone(), s.mode)).collect();
     names.sort();
     names.dedup();
@@ -284,19 +281,36 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
             .collect();
         let wall = median(mine.iter().map(|s| s.wall_s).collect());
         let steps = mine[0].pendulum_steps;
-        println!("{name:<44} {mode:>9} {wall:>10.3} {:>16.3e}", steps / wall);
-        rows.push((name, mode, wall, steps / wall));
+        rows.push(Row {
+            path: name,
+            mode,
+            wall_s: wall,
+            steps_per_s: steps / wall,
+        });
     }
+    let ratios = ratios(&rows);
+    Ok(BenchReport {
+        adapter: ctx.adapter_name(),
+        rows,
+        ratios,
+        notices,
+    })
+}
+
+/// The same-run comparisons: a tangent step against a plain one, and each GPU mode against
+/// the fastest peer in the same mode.
+fn ratios(rows: &[Row]) -> Vec<String> {
+    let mut out = Vec::new();
     let gpu_rate = |mode: &str| {
         rows.iter()
-            .find(|r| r.0.starts_with("chaoscope gpu") && r.1 == mode)
-            .map(|r| r.3)
+            .find(|r| r.path.starts_with("chaoscope gpu") && r.mode == mode)
+            .map(|r| r.steps_per_s)
     };
     if let (Some(full), Some(ftle)) = (gpu_rate("full"), gpu_rate("ftle")) {
-        println!(
+        out.push(format!(
             "ftle: a tangent step (state + variational equations) costs {:.2} plain RK4 steps on the GPU",
             full / ftle
-        );
+        ));
     }
     for (mode, peer_mode) in [
         ("early", "early"),
@@ -306,19 +320,19 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     ] {
         let ours = rows
             .iter()
-            .find(|r| r.0.starts_with("chaoscope gpu") && r.1 == mode);
+            .find(|r| r.path.starts_with("chaoscope gpu") && r.mode == mode);
         let best_peer = rows
             .iter()
-            .filter(|r| r.0.starts_with("peer") && r.1 == peer_mode && r.2.is_finite())
-            .min_by(|a, b| a.2.total_cmp(&b.2));
+            .filter(|r| r.path.starts_with("peer") && r.mode == peer_mode && r.wall_s.is_finite())
+            .min_by(|a, b| a.wall_s.total_cmp(&b.wall_s));
         if let (Some(o), Some(p)) = (ours, best_peer) {
-            println!(
+            out.push(format!(
                 "{mode}: chaoscope gpu takes {:.3} of the time of the fastest peer ({}), {:.2}x its pendulum-steps/s",
-                o.2 / p.2,
-                p.0,
-                o.3 / p.3
-            );
+                o.wall_s / p.wall_s,
+                p.path,
+                o.steps_per_s / p.steps_per_s
+            ));
         }
     }
-    Ok(())
+    out
 }

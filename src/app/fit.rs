@@ -1,0 +1,261 @@
+//! `fit`: from a camera's tracked positions to the model (src/fit), with plots, the derived
+//! quantities as CSV and a summary as JSON.
+
+use std::path::PathBuf;
+
+use serde_json::json;
+
+use super::{check_count, check_within};
+use crate::engine::{Backend, Engine};
+use crate::error::{Error, Result};
+use crate::fit::{
+    Fit, ModelFitSpec, angles, arm_lengths, data, energies, fit_decay, fit_model, fit_pivot,
+    grid_pivot, plots, read_frames,
+};
+use crate::params::{ParamSources, Preset};
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitJob {
+    /// CSV of tracked positions: header with t, x1, y1, x2, y2 (s, m; y up); # comments.
+    pub file: PathBuf,
+    /// Directory for the plots, derived.csv and summary.json.
+    pub output: PathBuf,
+    /// Time (s) to start the model fit; the nearest data row is used.
+    pub start: f64,
+    /// Length of data (s) the model is fitted to.
+    pub window: f64,
+    /// Position tolerance (m) for "the model agrees with the measurement".
+    pub tolerance: f64,
+    /// Size of the candidate ensemble of the model fit.
+    pub candidates: usize,
+    /// Velocity error (m/s) of each mass, for the energy error bars.
+    pub velocity_error: f64,
+    /// The model's parameters: the lab preset unless a preset or file is given, the arm
+    /// lengths from the data unless given.
+    pub params: ParamSources,
+    pub backend: Backend,
+}
+
+#[derive(Clone, Debug)]
+pub struct FitSummary {
+    pub pivot: (f64, f64),
+    /// (value, error) of each arm length (m).
+    pub l1: (f64, f64),
+    pub l2: (f64, f64),
+    /// The exponential decay a exp(b t): a (J), b (1/s), chi^2/dof; and the inverse square's.
+    pub exponential: (f64, f64, f64),
+    pub inverse_square_chi2: f64,
+    pub better: &'static str,
+    pub t0: f64,
+    pub agrees_until: f64,
+    pub tolerance: f64,
+    pub output: PathBuf,
+    pub notices: Vec<String>,
+}
+
+/// Runs the fit; `command` reproduces it and goes into summary.json.
+pub fn run(job: &FitJob, command: String) -> Result<FitSummary> {
+    check_within("window", job.window, 0.3, 60.0)?;
+    check_within("tolerance", job.tolerance, 1e-4, 1.0)?;
+    check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
+    check_count("candidates", job.candidates as u64, 64, 4_000_000)?;
+    let frames = read_frames(&job.file)?;
+    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+
+    // Pivot: least-squares circle, and the report's grid search beside it.
+    let pivot = fit_pivot(&frames)?;
+    // The report's grid: whole millimetres within 5 cm of the data's origin.
+    let grid = grid_pivot(&frames, (0.0, 0.0), 0.05, 0.001);
+    let (l1, l2) = arm_lengths(&frames, (pivot.x, pivot.y));
+    let angle = angles(&frames, (pivot.x, pivot.y));
+
+    // The model: preset lab unless told otherwise, arm lengths from the data unless given.
+    let sources = ParamSources {
+        preset: job
+            .params
+            .preset
+            .or((job.params.params.is_none()).then_some(Preset::Lab)),
+        l1: job.params.l1.or(Some(l1.value)),
+        l2: job.params.l2.or(Some(l2.value)),
+        ..job.params.clone()
+    };
+    let params = sources.resolve()?;
+
+    let en = energies(
+        &frames,
+        (pivot.x, pivot.y),
+        (params.m1, params.m2),
+        (l1.value, l2.value),
+        params.g,
+        job.velocity_error,
+    );
+    let decay = fit_decay(&en);
+    let (ex, inv) = (&decay.exponential, &decay.inverse_square);
+    let better = if ex.reduced_chi2() <= inv.reduced_chi2() {
+        "exponential"
+    } else {
+        "inverse_square"
+    };
+
+    let spec = ModelFitSpec {
+        params,
+        start_time: job.start,
+        window: job.window,
+        tolerance: job.tolerance,
+        candidates: job.candidates,
+    };
+    let engine = Engine::new(job.backend)?;
+    let notices: Vec<String> = engine.notices();
+    let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, &engine)?;
+
+    // Plots and summary.
+    let out = &job.output;
+    std::fs::create_dir_all(out)?;
+    let measured: Vec<[f64; 4]> = frames
+        .iter()
+        .map(|f| {
+            [
+                f.x1 - pivot.x,
+                f.y1 - pivot.y,
+                f.x2 - pivot.x,
+                f.y2 - pivot.y,
+            ]
+        })
+        .collect();
+    // Long enough to see the model agree and then part (chaos), short enough to read.
+    let t_end = (fit.agrees_until + 4.0).max(fit.t0 + 4.0);
+    plots::positions(
+        &out.join("positions.png"),
+        &t,
+        &measured,
+        &fit.simulated,
+        fit.t0,
+        t_end,
+    )?;
+    plots::energy(
+        &out.join("energy.png"),
+        &en.t,
+        &en.e,
+        &en.de,
+        (ex.params[0], ex.params[1]),
+        (inv.params[0], inv.params[1]),
+    )?;
+    // Angular velocities at the interior rows (central differences), once for both uses.
+    let arm = |k: usize| -> Vec<f64> {
+        angle
+            .iter()
+            .map(|a| if k == 0 { a.0 } else { a.1 })
+            .collect()
+    };
+    let (wa, wb) = (
+        data::central_differences(&t, &arm(0)),
+        data::central_differences(&t, &arm(1)),
+    );
+    let wrap = |x: f64| {
+        (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    };
+    let portrait = |k: usize, w: &[f64]| -> Vec<(f64, f64)> {
+        let a = arm(k);
+        w.iter()
+            .enumerate()
+            .map(|(i, &w)| (wrap(a[i + 1]), w))
+            .collect()
+    };
+    let (w1, w2) = (portrait(0, &wa), portrait(1, &wb));
+    plots::phase(&out.join("phase.png"), [&w1, &w2])?;
+    // The derived quantities row by row (interior rows: central differences need neighbours).
+    crate::render::write_atomic(&out.join("derived.csv"), |f| {
+        use std::io::Write;
+        writeln!(
+            f,
+            "# chaoscope fit: angles (rad, unwrapped), angular velocities (rad/s, central differences), energy and its error (J)"
+        )?;
+        writeln!(f, "t,theta1,theta2,omega1,omega2,energy,energy_error")?;
+        for i in 1..frames.len() - 1 {
+            writeln!(
+                f,
+                "{},{},{},{},{},{},{}",
+                t[i],
+                angle[i].0,
+                angle[i].1,
+                wa[i - 1],
+                wb[i - 1],
+                en.e[i - 1],
+                en.de[i - 1]
+            )?;
+        }
+        Ok(())
+    })?;
+    let fitted = |f: &Fit, names: [&str; 2]| {
+        json!({
+            names[0]: f.params[0], format!("{}_error", names[0]): f.errors[0],
+            names[1]: f.params[1], format!("{}_error", names[1]): f.errors[1],
+            "chi2": f.chi2, "dof": f.dof, "reduced_chi2": f.reduced_chi2(),
+        })
+    };
+    let summary = json!({
+        "command": command,
+        "file": job.file.display().to_string(),
+        "rows": frames.len(),
+        "pivot": {
+            "least_squares_circle": {
+                "x": pivot.x, "y": pivot.y, "x_error": pivot.errors[0], "y_error": pivot.errors[1],
+                "radius": pivot.radius, "radius_error": pivot.errors[2], "rms_residual": pivot.rms_residual,
+            },
+            "report_grid_least_distance_variance": { "x": grid.0, "y": grid.1, "grid_step": 0.001 },
+        },
+        "arm_lengths": { "l1": l1, "l2": l2 },
+        "energy": {
+            "velocity_error": job.velocity_error,
+            "exponential": fitted(ex, ["a", "b"]),
+            "inverse_square": fitted(inv, ["a", "b"]),
+            "inverse_square_note": "E = a (b t + d)^-2 with d = 1: a, b, d are degenerate (only a/d^2 and b/d matter)",
+            "better_fit": better,
+        },
+        "model": {
+            "parameters": params_json(&params),
+            "start_row": fit.row, "t0": fit.t0,
+            "state": fit.start.to_array(),
+            "joint_damping": [fit.damping.0, fit.damping.1],
+            "rms_position_error_in_window": fit.rms,
+            "window": job.window,
+            "candidates": fit.candidates, "searched_on": fit.backend,
+            "tolerance": job.tolerance,
+            "agrees_until": fit.agrees_until,
+            "agrees_for": fit.agrees_until - fit.t0,
+        },
+    });
+    let text = serde_json::to_string_pretty(&summary)
+        .map_err(|e| Error::format(&out.join("summary.json"), e))?;
+    crate::render::write_atomic(&out.join("summary.json"), |w| {
+        use std::io::Write;
+        writeln!(w, "{text}")?;
+        Ok(())
+    })?;
+    Ok(FitSummary {
+        pivot: (pivot.x, pivot.y),
+        l1: (l1.value, l1.error),
+        l2: (l2.value, l2.error),
+        exponential: (ex.params[0], ex.params[1], ex.reduced_chi2()),
+        inverse_square_chi2: inv.reduced_chi2(),
+        better,
+        t0: fit.t0,
+        agrees_until: fit.agrees_until,
+        tolerance: job.tolerance,
+        output: out.clone(),
+        notices,
+    })
+}
+
+/// The model's parameters as JSON, SI units.
+fn params_json(p: &crate::model::Params) -> serde_json::Value {
+    let l = &p.losses;
+    json!({
+        "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,
+        "rod_mass": [p.rod1, p.rod2],
+        "joint_damping": [l.joint1, l.joint2],
+        "air_drag": { "rho": l.rho, "cw": l.cw, "bob_area": [l.bob_area1, l.bob_area2],
+                      "rod_area": [l.rod_area1, l.rod_area2] },
+        "bearing_friction": l.bearing, "bearing_radius": l.bearing_radius,
+    })
+}

@@ -1,0 +1,89 @@
+//! `flip`: a flip-time map as a PNG, optionally with the raw times as .npy.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use super::{check_extension, write_map};
+use crate::engine::{Backend, Engine};
+use crate::error::Result;
+use crate::monitor::Monitor;
+use crate::render::{self, PictureSpec};
+use crate::spec::FlipSpec;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlipJob {
+    pub spec: FlipSpec,
+    pub backend: Backend,
+    pub picture: PictureSpec,
+    /// The PNG.
+    pub output: PathBuf,
+    /// Raw flip times (s) as float32 .npy, shape (height, width), inf = never.
+    pub data: Option<PathBuf>,
+}
+
+impl FlipJob {
+    pub fn validate(&self) -> Result<()> {
+        self.spec.validate()?;
+        check_extension("output", &self.output, "png")?;
+        if let Some(data) = &self.data {
+            check_extension("data", data, "npy")?;
+        }
+        Ok(())
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct FlipSummary {
+    pub width: u32,
+    pub height: u32,
+    /// Where it ran: the adapter's name or "the CPU".
+    pub place: String,
+    pub seconds: f64,
+    /// Fraction of the pixels that flipped within t-max.
+    pub flipped: f64,
+    pub t_max: f64,
+    pub output: PathBuf,
+    pub notices: Vec<String>,
+}
+
+/// Runs `job`; `command` (the line that reproduces it) goes into the PNG.
+pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSummary> {
+    job.validate()?;
+    let started = Instant::now();
+    let engine = Engine::new(job.backend)?;
+    let mut notices: Vec<String> = engine.notices();
+    notices.extend(f64_notice(&engine, &job.spec.grid));
+    let info = engine.map_info(&job.spec.grid);
+    let field = engine.flip_map(&job.spec, monitor)?;
+    let picture = render::flip_picture(&field, &job.spec, &job.picture)?;
+    let meta = render::provenance(command, &info);
+    write_map(
+        &picture,
+        meta,
+        Vec::new(),
+        &job.output,
+        job.data.as_deref(),
+        &field,
+    )?;
+    let flipped = field.data.iter().filter(|t| t.is_finite()).count();
+    Ok(FlipSummary {
+        width: field.width,
+        height: field.height,
+        place: info.place().to_string(),
+        seconds: started.elapsed().as_secs_f64(),
+        flipped: flipped as f64 / field.data.len() as f64,
+        t_max: job.spec.stepping.t_max,
+        output: job.output.clone(),
+        notices,
+    })
+}
+
+/// Said when a map that would run on the GPU runs on the CPU in f64 instead.
+pub fn f64_notice(engine: &Engine, grid: &crate::spec::Grid) -> Option<String> {
+    (engine.gpu().is_some() && grid.needs_f64()).then(|| {
+        format!(
+            "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the CPU in f64",
+            crate::spec::F32_MIN_PIXEL_STEP
+        )
+    })
+}

@@ -1,0 +1,157 @@
+//! `lyapunov`: a divergence (FTLE) map as PNG and .npy, or the convergence of one start's
+//! exponent as CSV `t,ftle`.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use super::{check_extension, write_map};
+use crate::engine::{Backend, Engine};
+use crate::error::Result;
+use crate::model::State;
+use crate::monitor::Monitor;
+use crate::render::{self, Colormap, PictureSpec};
+use crate::spec::{self, LyapunovSpec, Method};
+
+/// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
+/// below ln(1 + K t) / t, about 0.27 /s at 20 s (tests/lyapunov.rs).
+pub const CHAOTIC_FTLE: f32 = 0.5;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct LyapunovMapJob {
+    pub spec: LyapunovSpec,
+    pub backend: Backend,
+    pub picture: PictureSpec,
+    pub output: PathBuf,
+    /// Raw exponents (1/s) as float32 .npy, shape (height, width).
+    pub data: Option<PathBuf>,
+}
+
+#[derive(Clone, Debug)]
+pub struct LyapunovMapSummary {
+    pub width: u32,
+    pub height: u32,
+    pub place: String,
+    pub seconds: f64,
+    /// Fraction of the pixels whose exponent exceeds [`CHAOTIC_FTLE`].
+    pub chaotic: f64,
+    pub t_max: f64,
+    /// The colour range (1/s).
+    pub range: (f32, f32),
+    pub output: PathBuf,
+    pub notices: Vec<String>,
+}
+
+/// f32 cannot resolve a twin separation much below 1e-6 of the state: say so.
+fn twin_notice(engine: &Engine, spec: &LyapunovSpec) -> Option<String> {
+    match spec.method {
+        Method::Twin { eps } if eps < 1e-4 && engine.gpu().is_some() => Some(format!(
+            "note: a twin separation of {eps} is close to f32 round-off on the GPU (~1e-7 of the state): the twin reads noise; use the tangent method, a larger separation, or the CPU"
+        )),
+        _ => None,
+    }
+}
+
+pub fn run_map(
+    job: &LyapunovMapJob,
+    command: String,
+    monitor: &Monitor,
+) -> Result<LyapunovMapSummary> {
+    job.spec.validate()?;
+    check_extension("output", &job.output, "png")?;
+    if let Some(data) = &job.data {
+        check_extension("data", data, "npy")?;
+    }
+    let started = Instant::now();
+    let engine = Engine::new(job.backend)?;
+    let mut notices: Vec<String> = engine.notices();
+    notices.extend(twin_notice(&engine, &job.spec));
+    notices.extend(super::flip::f64_notice(&engine, &job.spec.grid));
+    let info = engine.map_info(&job.spec.grid);
+    let field = engine.lyapunov_map(&job.spec, monitor)?;
+    let range = render::ftle_range(&field);
+    let picture = render::lyapunov_picture(&field, &job.spec, range, &job.picture)?;
+    let colour_range = (
+        "chaoscope:colour-range".into(),
+        format!(
+            "FTLE {} .. {} 1/s, {}, linear (low = regular)",
+            range.0,
+            range.1,
+            job.picture.colormap.unwrap_or(Colormap::Magma).name()
+        ),
+    );
+    write_map(
+        &picture,
+        render::provenance(command, &info),
+        vec![colour_range],
+        &job.output,
+        job.data.as_deref(),
+        &field,
+    )?;
+    let chaotic = field.data.iter().filter(|&&x| x > CHAOTIC_FTLE).count();
+    Ok(LyapunovMapSummary {
+        width: field.width,
+        height: field.height,
+        place: info.place().to_string(),
+        seconds: started.elapsed().as_secs_f64(),
+        chaotic: chaotic as f64 / field.data.len() as f64,
+        t_max: job.spec.stepping.t_max,
+        range,
+        output: job.output.clone(),
+        notices,
+    })
+}
+
+/// The convergence of one start's exponent. `spec.grid` is not used.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LyapunovPointJob {
+    pub spec: LyapunovSpec,
+    pub start: State,
+    pub backend: Backend,
+    /// The CSV; None writes to the `stdout` given to [`run_point`].
+    pub output: Option<PathBuf>,
+}
+
+#[derive(Clone, Debug)]
+pub struct LyapunovPointSummary {
+    pub t_max: f64,
+    /// The exponent at t-max (1/s).
+    pub ftle: f64,
+    pub output: Option<PathBuf>,
+    pub notices: Vec<String>,
+}
+
+pub fn run_point(
+    job: &LyapunovPointJob,
+    command: String,
+    monitor: &Monitor,
+    stdout: &mut dyn Write,
+) -> Result<LyapunovPointSummary> {
+    job.spec.validate_run()?;
+    spec::validate_start(&job.start)?;
+    if let Some(path) = &job.output {
+        check_extension("output", path, "csv")?;
+    }
+    let engine = Engine::new(job.backend)?;
+    let mut notices: Vec<String> = engine.notices();
+    notices.extend(twin_notice(&engine, &job.spec));
+    let trace = engine.ftle_convergence(&job.spec, job.start, monitor)?;
+    let write = |w: &mut dyn Write| -> Result<()> {
+        writeln!(w, "# {command}")?;
+        writeln!(w, "t,ftle")?;
+        for (t, l) in trace.t.iter().zip(&trace.ftle) {
+            writeln!(w, "{t},{l}")?;
+        }
+        Ok(())
+    };
+    match &job.output {
+        Some(path) => render::write_atomic(path, |w| write(w))?,
+        None => write(stdout)?,
+    }
+    Ok(LyapunovPointSummary {
+        t_max: job.spec.stepping.t_max,
+        ftle: trace.last(),
+        output: job.output.clone(),
+        notices,
+    })
+}

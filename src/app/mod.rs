@@ -1,0 +1,74 @@
+//! One function per command: a job (what to compute, on which backend, into which files) in,
+//! files and a summary out. No flags and no printing here: the command line (src/cli) turns
+//! flags into jobs and summaries into words, and supplies the reproducing command line that
+//! goes into each file's metadata.
+
+pub mod bench;
+pub mod fit;
+pub mod flip;
+pub mod lyapunov;
+pub mod phase;
+pub mod sweep;
+pub mod traces;
+pub mod trajectory;
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::field::Field;
+use crate::render::{self, Picture};
+
+/// A map's files: the picture as PNG with its provenance, where the map sits in it and
+/// `extra` text, and the raw values as .npy when asked.
+pub fn write_map(
+    picture: &Picture,
+    provenance: Vec<(String, String)>,
+    extra: Vec<(String, String)>,
+    output: &Path,
+    data: Option<&Path>,
+    field: &Field,
+) -> Result<()> {
+    let mut meta = provenance;
+    meta.extend(picture.metadata());
+    meta.extend(extra);
+    render::write_png(output, picture.width, picture.height, &picture.rgb, &meta)?;
+    if let Some(data) = data {
+        render::write_npy(data, field)?;
+    }
+    Ok(())
+}
+
+/// `path` must end in `.ext`, else an error naming `field`.
+pub fn check_extension(field: &'static str, path: &Path, ext: &str) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
+        _ => Err(Error::invalid(
+            field,
+            format!("{} must end in .{ext}", path.display()),
+        )),
+    }
+}
+
+/// `v` within [lo, hi], else an error naming `field`.
+pub fn check_within(field: &'static str, v: f64, lo: f64, hi: f64) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("{v} must be in [{lo}, {hi}]"),
+        ))
+    }
+}
+
+/// A count within [lo, hi], else an error naming `field`.
+pub fn check_count(field: &'static str, n: u64, lo: u64, hi: u64) -> Result<()> {
+    if (lo..=hi).contains(&n) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("must be between {lo} and {hi}"),
+        ))
+    }
+}

@@ -1,0 +1,336 @@
+//! `chaoscope sweep`: one map per frame while a physical parameter changes, or a zoom into a
+//! point of the map; numbered PNGs plus an animated PNG. Frames that already exist (from an
+//! interrupted run of the same sweep) are kept, so running the command again resumes it.
+
+use std::path::{Path, PathBuf};
+
+use crate::engine::{Backend, Engine};
+use crate::error::{Error, Result};
+use crate::model::Params;
+use crate::monitor::Monitor;
+use crate::render::{self, Picture, PictureSpec};
+use crate::spec::{
+    self, F32_MIN_PIXEL_STEP, FlipSpec, Grid, LyapunovSpec, Method, Range, Stepping,
+};
+
+/// Which map each frame shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapKind {
+    Flip,
+    Lyapunov,
+}
+
+/// The parameters a sweep can vary. Ratios keep the denominator and change the numerator;
+/// `mass` scales both masses (the motion does not change: a check of the pipeline).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Param {
+    M1,
+    M2,
+    L1,
+    L2,
+    G,
+    MassRatio,
+    LengthRatio,
+    Mass,
+    Omega1,
+    Omega2,
+    /// Both joints' viscous damping (N m s).
+    Damping,
+}
+
+impl Param {
+    /// Every parameter with its name.
+    pub const NAMES: [(Param, &'static str); 11] = [
+        (Param::M1, "m1"),
+        (Param::M2, "m2"),
+        (Param::L1, "l1"),
+        (Param::L2, "l2"),
+        (Param::G, "g"),
+        (Param::MassRatio, "m2/m1"),
+        (Param::LengthRatio, "l2/l1"),
+        (Param::Mass, "mass"),
+        (Param::Omega1, "omega1"),
+        (Param::Omega2, "omega2"),
+        (Param::Damping, "damping"),
+    ];
+
+    pub fn name(self) -> &'static str {
+        Param::NAMES
+            .iter()
+            .find(|(p, _)| *p == self)
+            .map(|(_, n)| *n)
+            .expect("every parameter has a name")
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vary {
+    pub param: Param,
+    pub from: f64,
+    pub to: f64,
+}
+
+/// A zoom into a point: the last frame is `factor` times magnified around `to` (theta1,
+/// theta2), which keeps its place in the picture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Zoom {
+    pub to: (f64, f64),
+    pub factor: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepJob {
+    pub map: MapKind,
+    pub vary: Option<Vary>,
+    pub zoom: Option<Zoom>,
+    pub frames: u32,
+    /// Frames per second of the animation.
+    pub fps: f64,
+    /// The first frame's parameters and grid.
+    pub params: Params,
+    pub grid: Grid,
+    pub stepping: Stepping,
+    /// Lyapunov frames: renormalisation interval (s) and top of the colour range (1/s).
+    pub renorm: f64,
+    pub ftle_max: f64,
+    pub backend: Backend,
+    pub picture: PictureSpec,
+    /// Directory for frame_0000.png ... and animation.png.
+    pub output: PathBuf,
+}
+
+/// One frame's parameters and grid.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    pub params: Params,
+    pub grid: Grid,
+}
+
+/// One frame as a single map: what the frame's reproducing command describes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FrameMap {
+    Flip(FlipSpec),
+    Lyapunov(LyapunovSpec),
+}
+
+/// The frames of a sweep, validated; errors name the job's field.
+pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
+    if args.frames == 0 || args.frames > 100_000 {
+        return Err(Error::invalid("frames", "must be between 1 and 100000"));
+    }
+    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 100.0) {
+        return Err(Error::invalid("fps", "must be in (0, 100]"));
+    }
+    if args.vary.is_none() && args.zoom.is_none() {
+        return Err(Error::invalid(
+            "vary",
+            "a sweep needs a parameter to vary or a point to zoom into",
+        ));
+    }
+    spec::validate_params(&args.params)?;
+    let base_params = args.params;
+    let base_grid = args.grid;
+    let n = args.frames;
+    let mut out = Vec::with_capacity(n as usize);
+    for k in 0..n {
+        let s = if n == 1 {
+            0.0
+        } else {
+            k as f64 / (n - 1) as f64
+        };
+        let mut p = base_params;
+        let mut g = base_grid;
+        if let Some(v) = args.vary {
+            let x = v.from + (v.to - v.from) * s;
+            match v.param {
+                Param::M1 => p.m1 = x,
+                Param::M2 => p.m2 = x,
+                Param::L1 => p.l1 = x,
+                Param::L2 => p.l2 = x,
+                Param::G => p.g = x,
+                Param::MassRatio => p.m2 = x * p.m1,
+                Param::LengthRatio => p.l2 = x * p.l1,
+                Param::Mass => {
+                    p.m1 *= x;
+                    p.m2 *= x;
+                }
+                Param::Omega1 => g.omega1 = x,
+                Param::Omega2 => g.omega2 = x,
+                Param::Damping => {
+                    p.losses.joint1 = x;
+                    p.losses.joint2 = x;
+                }
+            }
+            spec::validate_params(&p)
+                .map_err(|e| Error::invalid("vary", format!("at frame {k}: {e}")))?;
+        }
+        if let Some(Zoom {
+            to: (t1, t2),
+            factor,
+        }) = args.zoom
+        {
+            if !(factor.is_finite() && factor >= 1.0) {
+                return Err(Error::invalid("zoom", "must be a magnification >= 1"));
+            }
+            if !(base_grid.theta1.min..=base_grid.theta1.max).contains(&t1)
+                || !(base_grid.theta2.min..=base_grid.theta2.max).contains(&t2)
+            {
+                return Err(Error::invalid(
+                    "zoom_to",
+                    "must lie inside the theta1 and theta2 ranges",
+                ));
+            }
+            // The point keeps its place in the picture while the window shrinks.
+            let scale = factor.powf(-s);
+            let shrink = |r: Range, c: f64| Range {
+                min: c + (r.min - c) * scale,
+                max: c + (r.max - c) * scale,
+            };
+            g.theta1 = shrink(base_grid.theta1, t1);
+            g.theta2 = shrink(base_grid.theta2, t2);
+        }
+        out.push(Frame { params: p, grid: g });
+    }
+    Ok(out)
+}
+
+fn frame_path(dir: &Path, k: u32) -> PathBuf {
+    dir.join(format!("frame_{k:04}.png"))
+}
+
+#[derive(Clone, Debug)]
+pub struct SweepSummary {
+    pub frames: usize,
+    /// Frames kept from an earlier, interrupted run of the same sweep.
+    pub kept: usize,
+    pub output: PathBuf,
+    pub animation: PathBuf,
+    pub notices: Vec<String>,
+}
+
+/// Runs the sweep; `command` reproduces the whole sweep (it goes into the animation),
+/// `frame_command` the single map of one frame on one backend (it goes into the frame and
+/// identifies it when a sweep resumes).
+pub fn run(
+    job: &SweepJob,
+    command: String,
+    frame_command: &dyn Fn(&FrameMap, Backend, &PictureSpec) -> String,
+    monitor: &Monitor,
+) -> Result<SweepSummary> {
+    let frames = frames(job)?;
+    for f in &frames {
+        spec::validate_grid(&f.grid)?;
+    }
+    spec::validate_stepping(&job.stepping)?;
+    if job.map == MapKind::Lyapunov {
+        lyapunov_spec(job, &frames[0]).validate()?;
+    }
+    if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
+        return Err(Error::invalid("ftle_max", "must be > 0"));
+    }
+    let engine = Engine::new(job.backend)?;
+    let mut notices: Vec<String> = engine.notices();
+    if let (Some(_), Some(k)) = (engine.gpu(), frames.iter().position(|f| f.grid.needs_f64())) {
+        notices.push(format!(
+            "note: from frame {k} on the pixel step is below {F32_MIN_PIXEL_STEP:.1e} rad, finer than f32 resolves near pi; those frames run on the CPU in f64"
+        ));
+    }
+    std::fs::create_dir_all(&job.output)?;
+    monitor.start("frames", frames.len() as u64);
+    let quiet = monitor.quiet();
+    let mut kept = 0;
+    for (k, frame) in frames.iter().enumerate() {
+        monitor.check()?;
+        let path = frame_path(&job.output, k as u32);
+        let info = engine.map_info(&frame.grid);
+        let on = if info.backend == "gpu" {
+            Backend::Gpu
+        } else {
+            Backend::Cpu
+        };
+        let map = frame_map(job, frame);
+        let command = frame_command(&map, on, &job.picture);
+        if path.exists() {
+            // Resume: keep a finished frame of the same sweep; refuse to mix sweeps.
+            let old = render::read_png(&path)?;
+            let same = old
+                .text
+                .iter()
+                .any(|(key, text)| key == "chaoscope:command" && *text == command);
+            if !same {
+                return Err(Error::invalid(
+                    "output",
+                    format!(
+                        "{} holds frames of a different sweep; choose another directory",
+                        job.output.display()
+                    ),
+                ));
+            }
+            kept += 1;
+        } else {
+            let picture = render_frame(job, &map, &engine, &quiet)?;
+            let mut meta = render::provenance(command, &info);
+            meta.push(("chaoscope:frame".into(), format!("{k} of {}", frames.len())));
+            render::write_png(&path, picture.width, picture.height, &picture.rgb, &meta)?;
+        }
+        monitor.advance(1);
+    }
+    monitor.finish();
+    // The animation from the frame files (including those of an earlier, interrupted run).
+    let mut rgb = Vec::with_capacity(frames.len());
+    let mut size = None;
+    for k in 0..frames.len() {
+        let png = render::read_png(&frame_path(&job.output, k as u32))?;
+        size.get_or_insert((png.width, png.height));
+        rgb.push(png.rgb);
+    }
+    let (w, h) = size.expect("at least one frame");
+    let delay_ms = (1000.0 / job.fps).round() as u16;
+    let animation = job.output.join("animation.png");
+    let meta = render::provenance(command, &engine.info());
+    render::write_apng(&animation, w, h, &rgb, delay_ms, &meta)?;
+    Ok(SweepSummary {
+        frames: frames.len(),
+        kept,
+        output: job.output.clone(),
+        animation,
+        notices,
+    })
+}
+
+fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
+    LyapunovSpec {
+        params: frame.params,
+        grid: frame.grid,
+        stepping: job.stepping,
+        method: Method::Tangent,
+        renorm: job.renorm,
+        use_symmetry: true,
+    }
+}
+
+fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
+    match job.map {
+        MapKind::Flip => FrameMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
+        MapKind::Lyapunov => FrameMap::Lyapunov(lyapunov_spec(job, frame)),
+    }
+}
+
+/// Renders one frame, on the GPU unless it needs f64 (the engine decides).
+fn render_frame(
+    job: &SweepJob,
+    map: &FrameMap,
+    engine: &Engine,
+    monitor: &Monitor,
+) -> Result<Picture> {
+    match map {
+        FrameMap::Flip(spec) => {
+            let field = engine.flip_map(spec, monitor)?;
+            render::flip_picture(&field, spec, &job.picture)
+        }
+        FrameMap::Lyapunov(spec) => {
+            let field = engine.lyapunov_map(spec, monitor)?;
+            render::lyapunov_picture(&field, spec, (0.0, job.ftle_max as f32), &job.picture)
+        }
+    }
+}

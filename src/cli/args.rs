@@ -1,0 +1,211 @@
+//! Flag groups shared by the commands, flattened into each; a command changes a group's
+//! defaults with `mut_arg` (e.g. `trajectory`'s `--t-max 10`).
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::parse::{one_of, parse_number, parse_pair, parse_range, parse_size};
+use crate::engine::Backend;
+use crate::model::State;
+use crate::params::{ParamSources, Preset};
+use crate::render::{Colormap, PictureSpec};
+use crate::spec::{Grid, Range, Stepping};
+
+/// `--backend auto|gpu|cpu`.
+pub fn backend_parser() -> impl clap::builder::TypedValueParser<Value = Backend> {
+    one_of(&Backend::ALL, Backend::name)
+}
+
+pub fn colormap_parser() -> impl clap::builder::TypedValueParser<Value = Colormap> {
+    one_of(&Colormap::ALL, Colormap::name)
+}
+
+fn preset_parser() -> impl clap::builder::TypedValueParser<Value = Preset> {
+    one_of(&Preset::ALL, Preset::name)
+}
+
+/// The physical parameters, SI units; every command takes them.
+#[derive(Args, Debug, Clone, Default)]
+pub struct PhysicalArgs {
+    /// Upper bob mass (kg) [default 1].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub m1: Option<f64>,
+    /// Lower bob mass (kg) [default 1].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub m2: Option<f64>,
+    /// Upper arm length (m) [default 1].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub l1: Option<f64>,
+    /// Lower arm length (m) [default 1].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub l2: Option<f64>,
+    /// Gravitational acceleration (m/s^2) [default 9.81].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub g: Option<f64>,
+    /// Masses of uniform rods along the arms, R or R1,R2 (kg) [default 0: massless arms].
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    pub rod_mass: Option<(f64, f64)>,
+    /// Viscous joint damping, C or C1,C2 (N m s): torque -C1 w1 at the pivot, -C2 (w2 - w1)
+    /// at the middle joint.
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    pub joint_damping: Option<(f64, f64)>,
+    /// Quadratic air drag on bobs and rods (F = 1/2 rho c_w A v^2).
+    #[arg(long)]
+    pub air_drag: bool,
+    /// Air density (kg/m^3) for --air-drag [default 1.2].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub rho: Option<f64>,
+    /// Drag coefficient for --air-drag [default 2, the report's plates].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub cw: Option<f64>,
+    /// Projected areas of the bobs, A or A1,A2 (m^2) [default 1.45e-3].
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    pub drag_area: Option<(f64, f64)>,
+    /// Projected areas of the rods, A or A1,A2 (m^2) [default 0].
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    pub rod_drag_area: Option<(f64, f64)>,
+    /// Rolling-friction coefficient c_R of the pivot and middle bearings (F = c_R F_N; the
+    /// report: 0.5e-3 to 1e-3).
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub bearing_friction: Option<f64>,
+    /// Radius (m) at which bearing friction acts [default 0.004].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub bearing_radius: Option<f64>,
+    /// A named set of parameters: lab, the report's apparatus (flags given as well override
+    /// it).
+    #[arg(long, value_parser = preset_parser())]
+    pub preset: Option<Preset>,
+    /// Parameters from a TOML file (keys: m1 m2 l1 l2 g rod_mass joint_damping
+    /// bearing_friction bearing_radius, table [air_drag] with rho cw bob_area rod_area);
+    /// flags given as well override it.
+    #[arg(long)]
+    pub params: Option<PathBuf>,
+}
+
+impl PhysicalArgs {
+    pub fn sources(&self) -> ParamSources {
+        ParamSources {
+            m1: self.m1,
+            m2: self.m2,
+            l1: self.l1,
+            l2: self.l2,
+            g: self.g,
+            rod_mass: self.rod_mass,
+            joint_damping: self.joint_damping,
+            air_drag: self.air_drag,
+            rho: self.rho,
+            cw: self.cw,
+            drag_area: self.drag_area,
+            rod_drag_area: self.rod_drag_area,
+            bearing_friction: self.bearing_friction,
+            bearing_radius: self.bearing_radius,
+            preset: self.preset,
+            params: self.params.clone(),
+        }
+    }
+}
+
+/// The grid of starts of a map.
+#[derive(Args, Debug, Clone)]
+pub struct GridArgs {
+    /// Grid size: N (square) or WxH, one pendulum per pixel.
+    #[arg(long, default_value = "512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// theta1 range along x, MIN:MAX in rad (`pi` is understood: -pi:pi).
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_range, allow_hyphen_values = true)]
+    pub theta1: Range,
+    /// theta2 range along y (top = MAX), MIN:MAX in rad.
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_range, allow_hyphen_values = true)]
+    pub theta2: Range,
+    /// Initial angular velocity of the upper arm (rad/s), the same for every pixel.
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: f64,
+    /// Initial angular velocity of the lower arm (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: f64,
+}
+
+impl GridArgs {
+    pub fn grid(&self) -> Grid {
+        let (width, height) = self.size;
+        Grid {
+            width,
+            height,
+            theta1: self.theta1,
+            theta2: self.theta2,
+            omega1: self.omega1,
+            omega2: self.omega2,
+        }
+    }
+}
+
+/// Time stepping: fixed-step RK4 from 0 to --t-max.
+#[derive(Args, Debug, Clone)]
+pub struct StepArgs {
+    /// Simulated time (s).
+    #[arg(long, default_value = "30", value_parser = parse_number, allow_hyphen_values = true)]
+    pub t_max: f64,
+    /// RK4 time step (s).
+    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
+    pub dt: f64,
+}
+
+impl StepArgs {
+    pub fn stepping(&self) -> Stepping {
+        Stepping {
+            dt: self.dt,
+            t_max: self.t_max,
+        }
+    }
+}
+
+/// One start: both angles, angular velocities 0 unless given.
+#[derive(Args, Debug, Clone)]
+pub struct StartArgs {
+    /// Initial upper-arm angle (rad).
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub theta1: f64,
+    /// Initial lower-arm angle (rad).
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub theta2: f64,
+    /// Initial angular velocity of the upper arm (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: f64,
+    /// Initial angular velocity of the lower arm (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: f64,
+}
+
+impl StartArgs {
+    pub fn state(&self) -> State {
+        State {
+            theta1: self.theta1,
+            omega1: self.omega1,
+            theta2: self.theta2,
+            omega2: self.omega2,
+        }
+    }
+}
+
+/// How a map becomes a picture.
+#[derive(Args, Debug, Clone, Default)]
+pub struct PictureArgs {
+    /// Frame the map with theta axes (ticks at multiples of pi), a colour bar with units and
+    /// a title. Without it the PNG is the bare map, one pixel a pendulum.
+    #[arg(long)]
+    pub annotate: bool,
+    /// Colour map (default: inferno for flip times, magma for exponents; sinebow and rainbow
+    /// are cyclic).
+    #[arg(long, value_parser = colormap_parser())]
+    pub colormap: Option<Colormap>,
+}
+
+impl PictureArgs {
+    pub fn spec(&self) -> PictureSpec {
+        PictureSpec {
+            annotate: self.annotate,
+            colormap: self.colormap,
+        }
+    }
+}

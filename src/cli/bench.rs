@@ -1,0 +1,99 @@
+//! `chaoscope bench`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::say;
+use crate::app::bench::{self, BenchJob};
+use crate::error::Result;
+use crate::monitor::Monitor;
+
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Grid side (FLIP-512: 512).
+    #[arg(long, default_value = "512")]
+    pub size: u32,
+    /// Grid side for the CPU rows (steps per second do not depend on it; the f64 CPU path
+    /// is slow enough that 512 would dominate the run).
+    #[arg(long, default_value = "256")]
+    pub cpu_size: u32,
+    /// Simulated time (s).
+    #[arg(long, default_value = "20")]
+    pub t_max: f64,
+    /// RK4 time step (s).
+    #[arg(long, default_value = "0.01")]
+    pub dt: f64,
+    /// Repetitions of every configuration, interleaved; the median is reported.
+    #[arg(long, default_value = "3")]
+    pub repeat: u32,
+    /// Skip the CPU rows.
+    #[arg(long)]
+    pub no_cpu: bool,
+    /// Skip the divergence-map (FTLE) rows.
+    #[arg(long)]
+    pub no_ftle: bool,
+    /// Directory of the peer scripts (e.g. ../shared/peers); no peers are run without it.
+    #[arg(long)]
+    pub peers: Option<PathBuf>,
+    /// Python with the peers' requirements installed.
+    #[arg(long, default_value = "python3")]
+    pub python: String,
+    /// Peers to run, as SCRIPT[:ARCH] (e.g. taichi:vulkan, numba), in f32.
+    #[arg(long, default_values = ["taichi:vulkan", "numba"])]
+    pub peer: Vec<String>,
+}
+
+impl BenchArgs {
+    pub fn job(&self) -> BenchJob {
+        BenchJob {
+            size: self.size,
+            cpu_size: self.cpu_size,
+            t_max: self.t_max,
+            dt: self.dt,
+            repeat: self.repeat,
+            no_cpu: self.no_cpu,
+            no_ftle: self.no_ftle,
+            peers: self.peers.clone(),
+            python: self.python.clone(),
+            peer: self.peer.clone(),
+        }
+    }
+}
+
+pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
+    let job = args.job();
+    let r = bench::run(&job, monitor)?;
+    say(&r.notices);
+    eprintln!("GPU: {}", r.adapter);
+    println!(
+        "FLIP-{} (RK4, dt {}, t_max {} s): medians of {} interleaved runs; cpu rows scaled from n={}",
+        job.size, job.dt, job.t_max, job.repeat, job.cpu_size
+    );
+    println!(
+        "pendulum-steps as the peers count them: early-all and full integrate every pixel; early \
+         and full-half integrate the top half of the symmetric grid and mirror it"
+    );
+    // The path column as wide as the longest name (adapter names are long).
+    let w = r
+        .rows
+        .iter()
+        .map(|row| row.path.len())
+        .max()
+        .unwrap_or(0)
+        .max(4);
+    println!(
+        "{:<w$} {:>9} {:>10} {:>16}",
+        "path", "mode", "wall s", "pendulum-steps/s"
+    );
+    for row in &r.rows {
+        println!(
+            "{:<w$} {:>9} {:>10.3} {:>16.3e}",
+            row.path, row.mode, row.wall_s, row.steps_per_s
+        );
+    }
+    for line in &r.ratios {
+        println!("{line}");
+    }
+    Ok(())
+}

@@ -1,0 +1,305 @@
+//! Job -> the command line that reproduces it: the one inverse of the flags (args.rs and the
+//! commands' own), written into every output's metadata. Output paths are not part of it.
+//! Flags at their defaults are left out unless they always were (so that pictures made
+//! before keep their bytes).
+
+use crate::app::fit::FitJob;
+use crate::app::flip::FlipJob;
+use crate::app::lyapunov::{LyapunovMapJob, LyapunovPointJob};
+use crate::app::phase::PhaseJob;
+use crate::app::sweep::{FrameMap, MapKind, SweepJob};
+use crate::app::traces::TracesJob;
+use crate::app::trajectory::TrajectoryJob;
+use crate::engine::Backend;
+use crate::model::{Params, State};
+use crate::params::ParamSources;
+use crate::render::PictureSpec;
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Spread, Stepping};
+
+/// The flags that reproduce `p` exactly.
+pub fn params(p: &Params) -> String {
+    let mut out = format!(
+        "--m1 {} --m2 {} --l1 {} --l2 {} --g {}",
+        p.m1, p.m2, p.l1, p.l2, p.g
+    );
+    if p.rod1 != 0.0 || p.rod2 != 0.0 {
+        out += &format!(" --rod-mass {},{}", p.rod1, p.rod2);
+    }
+    let l = &p.losses;
+    if l.joint1 != 0.0 || l.joint2 != 0.0 {
+        out += &format!(" --joint-damping {},{}", l.joint1, l.joint2);
+    }
+    if l.has_bearings() {
+        out += &format!(
+            " --bearing-friction {} --bearing-radius {}",
+            l.bearing, l.bearing_radius
+        );
+    }
+    if l.has_drag() {
+        out += &format!(
+            " --air-drag --rho {} --cw {} --drag-area {},{} --rod-drag-area {},{}",
+            l.rho, l.cw, l.bob_area1, l.bob_area2, l.rod_area1, l.rod_area2
+        );
+    }
+    out
+}
+
+/// The flags of the sources as given (a preset and a file stay named).
+pub fn sources(s: &ParamSources) -> String {
+    let mut out = String::new();
+    let mut one = |name: &str, v: Option<f64>| {
+        if let Some(v) = v {
+            out += &format!(" --{name} {v}");
+        }
+    };
+    one("m1", s.m1);
+    one("m2", s.m2);
+    one("l1", s.l1);
+    one("l2", s.l2);
+    one("g", s.g);
+    one("rho", s.rho);
+    one("cw", s.cw);
+    one("bearing-friction", s.bearing_friction);
+    one("bearing-radius", s.bearing_radius);
+    for (name, pair) in [
+        ("rod-mass", s.rod_mass),
+        ("joint-damping", s.joint_damping),
+        ("drag-area", s.drag_area),
+        ("rod-drag-area", s.rod_drag_area),
+    ] {
+        if let Some((a, b)) = pair {
+            out += &format!(" --{name} {a},{b}");
+        }
+    }
+    if s.air_drag {
+        out += " --air-drag";
+    }
+    if let Some(p) = s.preset {
+        out += &format!(" --preset {}", p.name());
+    }
+    if let Some(f) = &s.params {
+        out += &format!(" --params {}", f.display());
+    }
+    out
+}
+
+fn picture(p: &PictureSpec) -> String {
+    let mut out = String::new();
+    if p.annotate {
+        out.push_str(" --annotate");
+    }
+    if let Some(c) = p.colormap {
+        out.push_str(&format!(" --colormap {}", c.name()));
+    }
+    out
+}
+
+fn grid(g: &Grid) -> String {
+    format!(
+        "--size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {}",
+        g.width,
+        g.height,
+        g.theta1.min,
+        g.theta1.max,
+        g.theta2.min,
+        g.theta2.max,
+        g.omega1,
+        g.omega2
+    )
+}
+
+fn start(s: &State) -> String {
+    format!(
+        "--theta1 {} --theta2 {} --omega1 {} --omega2 {}",
+        s.theta1, s.theta2, s.omega1, s.omega2
+    )
+}
+
+fn steps(s: &Stepping) -> String {
+    format!("--t-max {} --dt {}", s.t_max, s.dt)
+}
+
+/// A flip map on `backend`.
+pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String {
+    let mut out = format!(
+        "chaoscope flip {} {} {} --backend {}",
+        grid(&spec.grid),
+        steps(&spec.stepping),
+        params(&spec.params),
+        backend.name()
+    );
+    if !spec.early_exit {
+        out += " --full";
+    } else if !spec.use_symmetry {
+        out += " --no-symmetry";
+    }
+    out + &picture(pic)
+}
+
+pub fn flip(job: &FlipJob) -> String {
+    flip_map(&job.spec, job.backend, &job.picture)
+}
+
+fn method(m: Method) -> String {
+    match m {
+        Method::Tangent => "--method tangent".into(),
+        Method::Twin { eps } => format!("--method twin --eps {eps}"),
+    }
+}
+
+/// A divergence map on `backend`.
+pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec) -> String {
+    let mut out = format!(
+        "chaoscope lyapunov {} {} --renorm {} {} {} --backend {}",
+        grid(&spec.grid),
+        steps(&spec.stepping),
+        spec.renorm,
+        method(spec.method),
+        params(&spec.params),
+        backend.name()
+    );
+    if !spec.use_symmetry {
+        out += " --no-symmetry";
+    }
+    out + &picture(pic)
+}
+
+pub fn lyapunov_map(job: &LyapunovMapJob) -> String {
+    lyapunov_map_of(&job.spec, job.backend, &job.picture)
+}
+
+pub fn lyapunov_point(job: &LyapunovPointJob) -> String {
+    let s = &job.spec;
+    format!(
+        "chaoscope lyapunov {} {} --renorm {} {} {} --backend {}",
+        start(&job.start),
+        steps(&s.stepping),
+        s.renorm,
+        method(s.method),
+        params(&s.params),
+        job.backend.name()
+    )
+}
+
+pub fn trajectory(job: &TrajectoryJob) -> String {
+    let mut out = format!(
+        "chaoscope trajectory {} {} {} --backend {}",
+        start(&job.start),
+        steps(&job.stepping),
+        params(&job.params),
+        job.backend.name()
+    );
+    if let Some(every) = job.every {
+        out += &format!(" --every {every}");
+    }
+    out
+}
+
+fn spread(s: Spread) -> String {
+    match s {
+        Spread::Radians(r) => format!("{r}"),
+        Spread::Metres(m) => format!("{m}m"),
+    }
+}
+
+pub fn traces(job: &TracesJob) -> String {
+    let mut out = format!(
+        "chaoscope traces {} --runs {} --spread {} --exposure {} --dt {} --size {} {}",
+        start(&job.start),
+        job.runs,
+        spread(job.spread),
+        job.stepping.t_max,
+        job.stepping.dt,
+        job.size,
+        params(&job.params)
+    );
+    if job.backend != Backend::Auto {
+        out += &format!(" --backend {}", job.backend.name());
+    }
+    out
+}
+
+/// `phase`'s default spread, left out of its command.
+pub const PHASE_SPREAD: Spread = Spread::Radians(0.01);
+
+pub fn phase(job: &PhaseJob) -> String {
+    let mut out = if job.single {
+        format!(
+            "chaoscope phase --single {} --size {} --l1 {} --g {}",
+            steps(&job.stepping),
+            job.size,
+            job.params.l1,
+            job.params.g
+        )
+    } else {
+        let mut out = format!(
+            "chaoscope phase {} --runs {} {} --size {} {}",
+            start(&job.start),
+            job.runs,
+            steps(&job.stepping),
+            job.size,
+            params(&job.params)
+        );
+        if job.spread != PHASE_SPREAD {
+            out += &format!(" --spread {}", spread(job.spread));
+        }
+        if job.backend != Backend::Auto {
+            out += &format!(" --backend {}", job.backend.name());
+        }
+        out
+    };
+    if let Some(c) = job.colormap {
+        out += &format!(" --colormap {}", c.name());
+    }
+    out
+}
+
+/// One sweep frame as a single map.
+pub fn frame(map: &FrameMap, backend: Backend, pic: &PictureSpec) -> String {
+    match map {
+        FrameMap::Flip(spec) => flip_map(spec, backend, pic),
+        FrameMap::Lyapunov(spec) => lyapunov_map_of(spec, backend, pic),
+    }
+}
+
+pub fn sweep(job: &SweepJob) -> String {
+    let mut out = format!(
+        "chaoscope sweep --map {}",
+        match job.map {
+            MapKind::Flip => "flip",
+            MapKind::Lyapunov => "lyapunov",
+        }
+    );
+    if let Some(v) = job.vary {
+        out += &format!(" --vary {}={}:{}", v.param.name(), v.from, v.to);
+    }
+    if let Some(z) = job.zoom {
+        out += &format!(" --zoom-to {},{} --zoom {}", z.to.0, z.to.1, z.factor);
+    }
+    out += &format!(
+        " --frames {} --fps {} {} {} --renorm {} --ftle-max {} {} --backend {}",
+        job.frames,
+        job.fps,
+        grid(&job.grid),
+        steps(&job.stepping),
+        job.renorm,
+        job.ftle_max,
+        params(&job.params),
+        job.backend.name()
+    );
+    out + &picture(&job.picture)
+}
+
+pub fn fit(job: &FitJob) -> String {
+    format!(
+        "chaoscope fit {} --start {} --window {} --tolerance {} --candidates {} --velocity-error {}{} --backend {}",
+        job.file.display(),
+        job.start,
+        job.window,
+        job.tolerance,
+        job.candidates,
+        job.velocity_error,
+        sources(&job.params),
+        job.backend.name()
+    )
+}

@@ -1,0 +1,84 @@
+//! `chaoscope fit`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::args::{PhysicalArgs, backend_parser};
+use super::parse::parse_number;
+use super::{command_line, say};
+use crate::app::fit::{self, FitJob};
+use crate::engine::Backend;
+use crate::error::Result;
+
+#[derive(Args, Debug, Clone)]
+pub struct FitArgs {
+    /// CSV of tracked positions: header with t, x1, y1, x2, y2 (s, m; y up); # comments.
+    pub file: PathBuf,
+    /// Directory for the plots, derived.csv and summary.json.
+    #[arg(long, default_value = "out/fit")]
+    pub output: PathBuf,
+    /// Time (s) to start the model fit (the report: 0.8 s, where dx2/dt ~ 0); the nearest
+    /// data row is used.
+    #[arg(long, default_value = "0.8", value_parser = parse_number)]
+    pub start: f64,
+    /// Length of data (s) the model is fitted to.
+    #[arg(long, default_value = "1.5", value_parser = parse_number)]
+    pub window: f64,
+    /// Position tolerance (m) for "the model agrees with the measurement".
+    #[arg(long, default_value = "0.03", value_parser = parse_number)]
+    pub tolerance: f64,
+    /// Size of the candidate ensemble of the model fit.
+    #[arg(long, default_value = "65536")]
+    pub candidates: usize,
+    /// Velocity error (m/s) of each mass, for the energy error bars (the report: 0.1).
+    #[arg(long, default_value = "0.1", value_parser = parse_number)]
+    pub velocity_error: f64,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// auto, gpu or cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+}
+
+impl FitArgs {
+    pub fn job(&self) -> FitJob {
+        FitJob {
+            file: self.file.clone(),
+            output: self.output.clone(),
+            start: self.start,
+            window: self.window,
+            tolerance: self.tolerance,
+            candidates: self.candidates,
+            velocity_error: self.velocity_error,
+            params: self.physical.sources(),
+            backend: self.backend,
+        }
+    }
+}
+
+pub fn run(args: &FitArgs) -> Result<()> {
+    let job = args.job();
+    let s = fit::run(&job, command_line::fit(&job))?;
+    say(&s.notices);
+    eprintln!(
+        "pivot ({:.4}, {:.4}) m, l1 {:.4} ± {:.4} m, l2 {:.4} ± {:.4} m; energy a exp(b t): a {:.3} J, b {:.4} 1/s (chi2/dof {:.2}); inverse square chi2/dof {:.2}: {} fits better; model from t = {} s agrees within {} m until {} s ({:.2} s) -> {}",
+        s.pivot.0,
+        s.pivot.1,
+        s.l1.0,
+        s.l1.1,
+        s.l2.0,
+        s.l2.1,
+        s.exponential.0,
+        s.exponential.1,
+        s.exponential.2,
+        s.inverse_square_chi2,
+        s.better,
+        s.t0,
+        s.tolerance,
+        s.agrees_until,
+        s.agrees_until - s.t0,
+        s.output.display()
+    );
+    Ok(())
+}

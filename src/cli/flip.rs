@@ -1,0 +1,79 @@
+//! `chaoscope flip`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
+use super::{command_line, say};
+use crate::app::flip::{self, FlipJob};
+use crate::engine::Backend;
+use crate::error::Result;
+use crate::monitor::Monitor;
+use crate::spec::FlipSpec;
+
+#[derive(Args, Debug, Clone)]
+pub struct FlipArgs {
+    #[command(flatten)]
+    pub grid: GridArgs,
+    #[command(flatten)]
+    pub step: StepArgs,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// auto: the GPU when an adapter exists, else the CPU (with a notice); gpu; cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+    #[command(flatten)]
+    pub picture: PictureArgs,
+    /// PNG to write.
+    #[arg(long, default_value = "out/flip.png")]
+    pub output: PathBuf,
+    /// Raw flip times (s) as float32 .npy, shape (height, width), row 0 = top, inf = never.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts,
+    /// no mirrored half).
+    #[arg(long)]
+    pub full: bool,
+    /// Integrate both halves of a point-symmetric grid (theta ranges centred on 0, released
+    /// from rest) instead of mirroring the top half: the same map, twice the work.
+    #[arg(long)]
+    pub no_symmetry: bool,
+}
+
+impl FlipArgs {
+    pub fn job(&self) -> Result<FlipJob> {
+        Ok(FlipJob {
+            spec: FlipSpec {
+                early_exit: !self.full,
+                use_symmetry: !(self.full || self.no_symmetry),
+                ..FlipSpec::new(
+                    self.physical.sources().resolve()?,
+                    self.grid.grid(),
+                    self.step.stepping(),
+                )
+            },
+            backend: self.backend,
+            picture: self.picture.spec(),
+            output: self.output.clone(),
+            data: self.data.clone(),
+        })
+    }
+}
+
+pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
+    let job = args.job()?;
+    let s = flip::run(&job, command_line::flip(&job), monitor)?;
+    say(&s.notices);
+    eprintln!(
+        "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s -> {}",
+        s.width,
+        s.height,
+        s.place,
+        s.seconds,
+        100.0 * s.flipped,
+        s.t_max,
+        s.output.display()
+    );
+    Ok(())
+}

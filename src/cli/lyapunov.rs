@@ -1,0 +1,201 @@
+//! `chaoscope lyapunov`: a divergence map, or with single angles a convergence run.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use super::args::{PhysicalArgs, PictureArgs, backend_parser};
+use super::parse::{Angles, parse_angles, parse_number, parse_size};
+use super::{command_line, say};
+use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
+use crate::engine::Backend;
+use crate::error::{Error, Result};
+use crate::model::State;
+use crate::monitor::Monitor;
+use crate::spec::{Grid, LyapunovSpec, Method, Range, Stepping};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// Tangent (variational) equations by dual numbers: works in f32.
+    Tangent,
+    /// A second trajectory --eps away, renormalised back to --eps.
+    Twin,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct LyapunovArgs {
+    /// Grid size: N (square) or WxH, one pendulum per pixel.
+    #[arg(long, default_value = "512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// theta1 range along x, MIN:MAX in rad; or one angle for a single-point convergence run.
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_angles, allow_hyphen_values = true)]
+    pub theta1: Angles,
+    /// theta2 range along y (top = MAX), MIN:MAX in rad; or one angle.
+    #[arg(long, default_value = "-pi:pi", value_parser = parse_angles, allow_hyphen_values = true)]
+    pub theta2: Angles,
+    /// Initial angular velocity of the upper arm (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: f64,
+    /// Initial angular velocity of the lower arm (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: f64,
+    /// Simulated time (s); the exponent is the mean log stretch rate over [0, t-max].
+    #[arg(long, default_value = "20", value_parser = parse_number, allow_hyphen_values = true)]
+    pub t_max: f64,
+    /// RK4 time step (s).
+    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
+    pub dt: f64,
+    /// Renormalisation interval (s), a multiple of dt.
+    #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
+    pub renorm: f64,
+    #[arg(long, value_enum, default_value = "tangent")]
+    pub method: MethodArg,
+    /// Twin separation (Euclidean in theta1, omega1, theta2, omega2), for --method twin.
+    #[arg(long, default_value = "1e-8", value_parser = parse_number, allow_hyphen_values = true)]
+    pub eps: f64,
+    /// Integrate both halves of a point-symmetric grid with the tangent method instead of
+    /// mirroring the top half: the same map, twice the work.
+    #[arg(long)]
+    pub no_symmetry: bool,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// auto, gpu or cpu. Default: auto for a map, cpu (f64) for a single point.
+    #[arg(long, value_parser = backend_parser())]
+    pub backend: Option<Backend>,
+    /// PNG for a map (default out/lyapunov.png); CSV for a single point (default stdout).
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// Raw exponents (1/s) as float32 .npy, shape (height, width), row 0 = top.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    #[command(flatten)]
+    pub picture: PictureArgs,
+}
+
+/// What the flags ask for: a map or a convergence run.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LyapunovJob {
+    Map(LyapunovMapJob),
+    Point(LyapunovPointJob),
+}
+
+impl LyapunovArgs {
+    fn spec(&self, grid: Grid) -> Result<LyapunovSpec> {
+        Ok(LyapunovSpec {
+            params: self.physical.sources().resolve()?,
+            grid,
+            stepping: Stepping {
+                dt: self.dt,
+                t_max: self.t_max,
+            },
+            method: match self.method {
+                MethodArg::Tangent => Method::Tangent,
+                MethodArg::Twin => Method::Twin { eps: self.eps },
+            },
+            renorm: self.renorm,
+            use_symmetry: !self.no_symmetry,
+        })
+    }
+
+    pub fn job(&self) -> Result<LyapunovJob> {
+        let (width, height) = self.size;
+        match (self.theta1, self.theta2) {
+            (Angles::Range(theta1), Angles::Range(theta2)) => {
+                let grid = Grid {
+                    width,
+                    height,
+                    theta1,
+                    theta2,
+                    omega1: self.omega1,
+                    omega2: self.omega2,
+                };
+                Ok(LyapunovJob::Map(LyapunovMapJob {
+                    spec: self.spec(grid)?,
+                    backend: self.backend.unwrap_or(Backend::Auto),
+                    picture: self.picture.spec(),
+                    output: self
+                        .output
+                        .clone()
+                        .unwrap_or_else(|| PathBuf::from("out/lyapunov.png")),
+                    data: self.data.clone(),
+                }))
+            }
+            (Angles::Point(theta1), Angles::Point(theta2)) => {
+                if self.data.is_some() {
+                    return Err(Error::invalid(
+                        "data",
+                        "is for maps; a single-point run writes its CSV to --output",
+                    ));
+                }
+                let start = State {
+                    theta1,
+                    omega1: self.omega1,
+                    theta2,
+                    omega2: self.omega2,
+                };
+                // A convergence run has no grid: the start's own, one pixel.
+                let around = |x: f64| Range {
+                    min: x - 1e-3,
+                    max: x + 1e-3,
+                };
+                let grid = Grid {
+                    width: 1,
+                    height: 1,
+                    theta1: around(theta1),
+                    theta2: around(theta2),
+                    omega1: self.omega1,
+                    omega2: self.omega2,
+                };
+                Ok(LyapunovJob::Point(LyapunovPointJob {
+                    spec: self.spec(grid)?,
+                    start,
+                    backend: self.backend.unwrap_or(Backend::Cpu),
+                    output: self.output.clone(),
+                }))
+            }
+            (Angles::Point(_), Angles::Range(_)) => Err(Error::invalid(
+                "theta2",
+                "must be one angle too when --theta1 is one angle (a single-point run)",
+            )),
+            (Angles::Range(_), Angles::Point(_)) => Err(Error::invalid(
+                "theta1",
+                "must be one angle too when --theta2 is one angle (a single-point run)",
+            )),
+        }
+    }
+}
+
+pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
+    match args.job()? {
+        LyapunovJob::Map(job) => {
+            let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
+            say(&s.notices);
+            eprintln!(
+                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s), colour range {:.2}..{:.2} /s -> {}",
+                s.width,
+                s.height,
+                s.place,
+                s.seconds,
+                100.0 * s.chaotic,
+                s.t_max,
+                s.range.0,
+                s.range.1,
+                s.output.display()
+            );
+        }
+        LyapunovJob::Point(job) => {
+            let command = command_line::lyapunov_point(&job);
+            let s = lyapunov::run_point(&job, command, monitor, &mut std::io::stdout().lock())?;
+            say(&s.notices);
+            if let Some(path) = &s.output {
+                eprintln!(
+                    "FTLE at {} s: {:.4} /s -> {}",
+                    s.t_max,
+                    s.ftle,
+                    path.display()
+                );
+            }
+        }
+    }
+    Ok(())
+}

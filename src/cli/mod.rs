@@ -1,0 +1,149 @@
+//! The command line: the only place that knows flag names and prints. Flags become jobs
+//! (`src/app`), jobs run, summaries become words; library errors name a job's field, which
+//! `names` turns back into the flag the user typed.
+
+mod args;
+mod bench;
+pub mod command_line;
+mod fit;
+mod flip;
+mod info;
+mod lyapunov;
+mod names;
+pub mod parse;
+mod phase;
+mod sweep;
+mod traces;
+mod trajectory;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use crate::error::Error;
+use crate::monitor::Monitor;
+
+pub use lyapunov::LyapunovJob;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "chaoscope",
+    version,
+    about = "Chaos in the double pendulum, millions of pendulums at once"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Flip-time map: time until either arm first flips over, for a grid of starts.
+    Flip(flip::FlipArgs),
+    /// Divergence map: the largest finite-time Lyapunov exponent (1/s) of every start; with
+    /// single angles (--theta1 A --theta2 B), its convergence over time as CSV `t,ftle`.
+    Lyapunov(lyapunov::LyapunovArgs),
+    /// One trajectory as CSV: t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,dissipated
+    /// (after a `#` line with the command that reproduces it).
+    Trajectory(trajectory::TrajectoryArgs),
+    /// Frames of a map while a parameter changes (--vary) or zooming into a point (--zoom-to),
+    /// as numbered PNGs and an animated PNG; an interrupted sweep resumes where it stopped.
+    Sweep(sweep::SweepArgs),
+    /// Long-exposure light trails of the lower bob for releases from "the same" start.
+    Traces(traces::TracesArgs),
+    /// Phase portraits, omega against theta of each arm, as time-density images; --single for
+    /// the single pendulum with its separatrix.
+    Phase(phase::PhaseArgs),
+    /// Fit the model to a camera's tracked positions: pivot, arm lengths, energies and their
+    /// decay, the state and damping by a GPU ensemble search; plots and summary.json.
+    Fit(fit::FitArgs),
+    /// GPU adapters found, the one chosen, its limits and features.
+    Info,
+    /// Throughput of the GPU and CPU paths on FLIP-512, optionally beside the peers.
+    Bench(bench::BenchArgs),
+}
+
+/// The job a parsed command line describes (for checking that a stored command line
+/// reproduces its run): flip, lyapunov, trajectory, sweep, traces, phase and fit.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Job {
+    Flip(crate::app::flip::FlipJob),
+    Lyapunov(LyapunovJob),
+    Trajectory(crate::app::trajectory::TrajectoryJob),
+    Sweep(crate::app::sweep::SweepJob),
+    Traces(crate::app::traces::TracesJob),
+    Phase(crate::app::phase::PhaseJob),
+    Fit(crate::app::fit::FitJob),
+}
+
+impl Command {
+    /// The command's name, as typed.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Command::Flip(_) => "flip",
+            Command::Lyapunov(_) => "lyapunov",
+            Command::Trajectory(_) => "trajectory",
+            Command::Sweep(_) => "sweep",
+            Command::Traces(_) => "traces",
+            Command::Phase(_) => "phase",
+            Command::Fit(_) => "fit",
+            Command::Info => "info",
+            Command::Bench(_) => "bench",
+        }
+    }
+
+    /// The job of a command that makes files; None for info and bench.
+    pub fn job(&self) -> crate::Result<Option<Job>> {
+        Ok(Some(match self {
+            Command::Flip(a) => Job::Flip(a.job()?),
+            Command::Lyapunov(a) => Job::Lyapunov(a.job()?),
+            Command::Trajectory(a) => Job::Trajectory(a.job()?),
+            Command::Sweep(a) => Job::Sweep(a.job()?),
+            Command::Traces(a) => Job::Traces(a.job()?),
+            Command::Phase(a) => Job::Phase(a.job()?),
+            Command::Fit(a) => Job::Fit(a.job()),
+            Command::Info | Command::Bench(_) => return Ok(None),
+        }))
+    }
+}
+
+/// Notices from a run, one a line.
+fn say(notices: &[String]) {
+    for n in notices {
+        eprintln!("{n}");
+    }
+}
+
+/// Runs a parsed command. Invalid values exit 2 (like clap's own errors) naming the flag,
+/// an interruption 130, other failures 1.
+pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
+    let command = cli.command.name();
+    let result = match &cli.command {
+        Command::Flip(args) => flip::run(args, monitor),
+        Command::Lyapunov(args) => lyapunov::run(args, monitor),
+        Command::Trajectory(args) => trajectory::run(args),
+        Command::Sweep(args) => sweep::run(args, monitor),
+        Command::Traces(args) => traces::run(args, monitor),
+        Command::Phase(args) => phase::run(args, monitor),
+        Command::Fit(args) => fit::run(args),
+        Command::Info => info::run(),
+        Command::Bench(args) => bench::run(args, monitor),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Error::InvalidSpec { field, reason }) => {
+            eprintln!(
+                "error: invalid value for {}: {reason}",
+                names::flag(command, field)
+            );
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            match e {
+                Error::Interrupted => ExitCode::from(130),
+                _ => ExitCode::FAILURE,
+            }
+        }
+    }
+}

@@ -1,0 +1,161 @@
+//! Value parsers for the flags: numbers with pi, ranges, sizes, pairs, spreads, points, and
+//! the library's named choices.
+
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+
+use crate::app::sweep::{Param, Vary};
+use crate::spec::{Range, Spread};
+
+/// A number, or a multiple or fraction of pi: `1.5`, `-pi`, `pi/2`, `2pi`, `-0.5*pi`, `3pi/4`.
+pub fn parse_number(s: &str) -> Result<f64, String> {
+    let t = s.trim().to_ascii_lowercase();
+    if let Some(i) = t.find("pi") {
+        let (head, tail) = (&t[..i], &t[i + 2..]);
+        let head = head.trim_end_matches('*');
+        let factor = match head {
+            "" | "+" => 1.0,
+            "-" => -1.0,
+            h => h
+                .parse::<f64>()
+                .map_err(|_| format!("`{s}` is not a number"))?,
+        };
+        let divisor = match tail {
+            "" => 1.0,
+            d => d
+                .strip_prefix('/')
+                .and_then(|d| d.parse::<f64>().ok())
+                .ok_or_else(|| format!("`{s}` is not a number"))?,
+        };
+        Ok(factor * std::f64::consts::PI / divisor)
+    } else {
+        t.parse::<f64>()
+            .map_err(|_| format!("`{s}` is not a number"))
+    }
+}
+
+/// `MIN:MAX`.
+pub fn parse_range(s: &str) -> Result<Range, String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}` must be MIN:MAX, e.g. -pi:pi"))?;
+    Ok(Range {
+        min: parse_number(a)?,
+        max: parse_number(b)?,
+    })
+}
+
+/// `N` (square) or `WxH`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let side = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("`{s}` must be N or WxH with whole numbers"))
+    };
+    match s.split_once(['x', 'X']) {
+        Some((w, h)) => Ok((side(w)?, side(h)?)),
+        None => side(s).map(|n| (n, n)),
+    }
+}
+
+/// `A` or `A,B` (one value for both).
+pub fn parse_pair(s: &str) -> Result<(f64, f64), String> {
+    match s.split_once(',') {
+        Some((a, b)) => Ok((parse_number(a)?, parse_number(b)?)),
+        None => parse_number(s).map(|v| (v, v)),
+    }
+}
+
+/// An angle (rad, `pi` understood) or a position error with a unit: `5mm`, `0.5cm`, `0.005m`.
+pub fn parse_spread(s: &str) -> Result<Spread, String> {
+    let t = s.trim();
+    for (suffix, factor) in [("mm", 1e-3), ("cm", 1e-2), ("m", 1.0)] {
+        if let Some(v) = t.strip_suffix(suffix) {
+            return v
+                .trim()
+                .parse::<f64>()
+                .map(|v| Spread::Metres(v * factor))
+                .map_err(|_| format!("`{s}` is not a length"));
+        }
+    }
+    parse_number(t.strip_suffix("rad").unwrap_or(t)).map(Spread::Radians)
+}
+
+/// `PARAM=FROM:TO`.
+pub fn parse_vary(s: &str) -> Result<Vary, String> {
+    let (name, range) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}` must be PARAM=FROM:TO, e.g. m2/m1=0.5:2"))?;
+    let names: Vec<&str> = Param::NAMES.iter().map(|(_, n)| *n).collect();
+    let param = Param::NAMES
+        .iter()
+        .find(|(_, n)| *n == name.trim())
+        .map(|(p, _)| *p)
+        .ok_or_else(|| format!("`{}` is not one of {}", name.trim(), names.join(", ")))?;
+    let (a, b) = range
+        .split_once(':')
+        .ok_or_else(|| format!("`{range}` must be FROM:TO"))?;
+    Ok(Vary {
+        param,
+        from: parse_number(a)?,
+        to: parse_number(b)?,
+    })
+}
+
+/// `THETA1,THETA2`.
+pub fn parse_point(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once(',')
+        .ok_or_else(|| format!("`{s}` must be THETA1,THETA2"))?;
+    Ok((parse_number(a)?, parse_number(b)?))
+}
+
+/// An angle flag of `lyapunov`: a range of the map, or the single start of a convergence run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Angles {
+    Range(Range),
+    Point(f64),
+}
+
+pub fn parse_angles(s: &str) -> Result<Angles, String> {
+    if s.contains(':') {
+        parse_range(s).map(Angles::Range)
+    } else {
+        parse_number(s).map(Angles::Point)
+    }
+}
+
+/// One of the library's named choices (`values`, named by `name`), listed in the help.
+pub fn one_of<T: Copy + Send + Sync + 'static>(
+    values: &'static [T],
+    name: fn(T) -> &'static str,
+) -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(values.iter().map(|&v| name(v))).map(move |s| {
+        *values
+            .iter()
+            .find(|&&v| name(v) == s)
+            .expect("clap accepts only the possible values")
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn numbers_with_pi() {
+        assert_eq!(parse_number("-pi").unwrap(), -PI);
+        assert_eq!(parse_number("pi/2").unwrap(), PI / 2.0);
+        assert_eq!(parse_number("3pi/4").unwrap(), 3.0 * PI / 4.0);
+        assert_eq!(parse_number("-0.5*pi").unwrap(), -0.5 * PI);
+        assert_eq!(parse_number("-3").unwrap(), -3.0);
+        assert!(parse_number("pie").is_err());
+    }
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("64").unwrap(), (64, 64));
+        assert_eq!(parse_size("640x480").unwrap(), (640, 480));
+        assert!(parse_size("64x").is_err());
+    }
+}

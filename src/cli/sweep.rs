@@ -1,0 +1,108 @@
+//! `chaoscope sweep`.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
+use super::parse::{parse_number, parse_point, parse_vary};
+use super::{command_line, say};
+use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
+use crate::engine::Backend;
+use crate::error::Result;
+use crate::monitor::Monitor;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MapArg {
+    Flip,
+    Lyapunov,
+}
+
+#[derive(Args, Debug, Clone)]
+#[command(mut_arg("t_max", |a| a.default_value("20")))]
+pub struct SweepArgs {
+    /// Which map each frame shows.
+    #[arg(long, value_enum, default_value = "flip")]
+    pub map: MapArg,
+    /// PARAM=FROM:TO, PARAM one of m1, m2, l1, l2, g, m2/m1, l2/l1, mass, omega1, omega2,
+    /// damping (both joints, N m s).
+    #[arg(long, value_parser = parse_vary, allow_hyphen_values = true)]
+    pub vary: Option<Vary>,
+    /// Zoom towards THETA1,THETA2 (rad), which stays fixed in the picture.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "zoom")]
+    pub zoom_to: Option<(f64, f64)>,
+    /// Total magnification of the last frame over the first.
+    #[arg(long, value_parser = parse_number, requires = "zoom_to")]
+    pub zoom: Option<f64>,
+    /// Number of frames.
+    #[arg(long, default_value = "24")]
+    pub frames: u32,
+    /// Frames per second of the animation.
+    #[arg(long, default_value = "8", value_parser = parse_number)]
+    pub fps: f64,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    #[command(flatten)]
+    pub step: StepArgs,
+    /// Lyapunov frames: renormalisation interval (s).
+    #[arg(long, default_value = "0.1", value_parser = parse_number)]
+    pub renorm: f64,
+    /// Lyapunov frames: top of the colour range (1/s), the same for every frame.
+    #[arg(long, default_value = "2", value_parser = parse_number)]
+    pub ftle_max: f64,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// auto, gpu or cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+    #[command(flatten)]
+    pub picture: PictureArgs,
+    /// Directory for frame_0000.png ... and animation.png (APNG).
+    #[arg(long, default_value = "out/sweep")]
+    pub output: PathBuf,
+}
+
+impl SweepArgs {
+    pub fn job(&self) -> Result<SweepJob> {
+        Ok(SweepJob {
+            map: match self.map {
+                MapArg::Flip => MapKind::Flip,
+                MapArg::Lyapunov => MapKind::Lyapunov,
+            },
+            vary: self.vary,
+            zoom: self
+                .zoom_to
+                .zip(self.zoom)
+                .map(|(to, factor)| Zoom { to, factor }),
+            frames: self.frames,
+            fps: self.fps,
+            params: self.physical.sources().resolve()?,
+            grid: self.grid.grid(),
+            stepping: self.step.stepping(),
+            renorm: self.renorm,
+            ftle_max: self.ftle_max,
+            backend: self.backend,
+            picture: self.picture.spec(),
+            output: self.output.clone(),
+        })
+    }
+}
+
+pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<()> {
+    let job = args.job()?;
+    let s = sweep::run(
+        &job,
+        command_line::sweep(&job),
+        &command_line::frame,
+        monitor,
+    )?;
+    say(&s.notices);
+    eprintln!(
+        "{} frames ({} kept from an earlier run) in {} -> {}",
+        s.frames,
+        s.kept,
+        s.output.display(),
+        s.animation.display()
+    );
+    Ok(())
+}

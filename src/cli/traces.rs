@@ -1,0 +1,83 @@
+//! `chaoscope traces`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::args::{PhysicalArgs, StartArgs, backend_parser};
+use super::parse::{parse_number, parse_spread};
+use super::{command_line, say};
+use crate::app::traces::{self, TracesJob};
+use crate::engine::Backend;
+use crate::error::Result;
+use crate::monitor::Monitor;
+use crate::spec::{Spread, Stepping};
+
+#[derive(Args, Debug, Clone)]
+pub struct TracesArgs {
+    #[command(flatten)]
+    pub start: StartArgs,
+    /// Number of releases.
+    #[arg(long, default_value = "3")]
+    pub runs: u32,
+    /// Distance between releases: rad (0.01) or a position error (5mm, the report's).
+    #[arg(long, default_value = "5mm", value_parser = parse_spread)]
+    pub spread: Spread,
+    /// Exposure time (s): the report's photographs were 3.2 s.
+    #[arg(long, default_value = "3.2", value_parser = parse_number, allow_hyphen_values = true)]
+    pub exposure: f64,
+    /// RK4 time step (s); small, so the trails are smooth.
+    #[arg(long, default_value = "0.001", value_parser = parse_number, allow_hyphen_values = true)]
+    pub dt: f64,
+    /// Picture side (px).
+    #[arg(long, default_value = "1024")]
+    pub size: u32,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// auto, gpu or cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+    /// PNG to write.
+    #[arg(long, default_value = "out/traces.png")]
+    pub output: PathBuf,
+    /// Also an animated GIF of the pendulums swinging and parting.
+    #[arg(long)]
+    pub gif: Option<PathBuf>,
+    /// Lower-bob positions as float32 .npy, shape (runs, samples, 4): x1, y1, x2, y2 (m).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+}
+
+impl TracesArgs {
+    pub fn job(&self) -> Result<TracesJob> {
+        Ok(TracesJob {
+            params: self.physical.sources().resolve()?,
+            start: self.start.state(),
+            runs: self.runs,
+            spread: self.spread,
+            stepping: Stepping {
+                dt: self.dt,
+                t_max: self.exposure,
+            },
+            size: self.size,
+            backend: self.backend,
+            output: self.output.clone(),
+            gif: self.gif.clone(),
+            data: self.data.clone(),
+        })
+    }
+}
+
+pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
+    let job = args.job()?;
+    let s = traces::run(&job, command_line::traces(&job), monitor)?;
+    say(&s.notices);
+    eprintln!(
+        "{} releases over {} s on {} -> {}",
+        s.runs,
+        s.exposure,
+        s.place,
+        s.output.display()
+    );
+    Ok(())
+}

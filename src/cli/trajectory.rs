@@ -1,0 +1,53 @@
+//! `chaoscope trajectory`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::args::{PhysicalArgs, StartArgs, StepArgs, backend_parser};
+use super::parse::parse_number;
+use super::{command_line, say};
+use crate::app::trajectory::{self, TrajectoryJob};
+use crate::engine::Backend;
+use crate::error::Result;
+
+#[derive(Args, Debug, Clone)]
+#[command(mut_arg("t_max", |a| a.default_value("10")))]
+pub struct TrajectoryArgs {
+    #[command(flatten)]
+    pub start: StartArgs,
+    #[command(flatten)]
+    pub step: StepArgs,
+    /// Output interval (s), a multiple of dt; default every step.
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub every: Option<f64>,
+    /// cpu (f64, the default), gpu (f32) or auto.
+    #[arg(long, default_value = "cpu", value_parser = backend_parser())]
+    pub backend: Backend,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// CSV to write; standard output if absent.
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+}
+
+impl TrajectoryArgs {
+    pub fn job(&self) -> Result<TrajectoryJob> {
+        Ok(TrajectoryJob {
+            params: self.physical.sources().resolve()?,
+            start: self.start.state(),
+            stepping: self.step.stepping(),
+            every: self.every,
+            backend: self.backend,
+            output: self.output.clone(),
+        })
+    }
+}
+
+pub fn run(args: &TrajectoryArgs) -> Result<()> {
+    let job = args.job()?;
+    let command = command_line::trajectory(&job);
+    let s = trajectory::run(&job, command, &mut std::io::stdout().lock())?;
+    say(&s.notices);
+    Ok(())
+}

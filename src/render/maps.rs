@@ -1,0 +1,193 @@
+//! Maps as pictures: bare (one pixel a pendulum) or annotated with axes, colour bar and
+//! title; and the PNG text chunks that say how a picture was made.
+
+use crate::engine::RunInfo;
+use crate::error::Result;
+use crate::field::Field;
+use crate::model::Params;
+use crate::spec::{FlipSpec, Grid, LyapunovSpec};
+
+use super::{
+    Annotation, Axis, ColorBar, Colormap, FlipColors, NEVER_RGB, annotate, decimal_ticks,
+    flip_colors, ftle_colors, ftle_table,
+};
+
+/// How a map becomes a picture.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PictureSpec {
+    /// Frame the map with theta axes, a colour bar with units and a title.
+    pub annotate: bool,
+    /// The colour map; None for the kind's default (inferno for times, magma for exponents).
+    pub colormap: Option<Colormap>,
+}
+
+/// A rendered map: bare or annotated, with where the map sits.
+pub struct Picture {
+    pub rgb: Vec<u8>,
+    pub width: u32,
+    pub height: u32,
+    /// (x, y, width, height) of the map inside an annotated picture.
+    pub map: Option<(u32, u32, u32, u32)>,
+}
+
+impl Picture {
+    /// PNG text chunks saying where the map sits (annotated pictures only).
+    pub fn metadata(&self) -> Vec<(String, String)> {
+        match self.map {
+            Some((x, y, w, h)) => vec![(
+                "chaoscope:map-region".into(),
+                format!("{w}x{h} map at x {x}, y {y} (top left); the rest is annotation"),
+            )],
+            None => Vec::new(),
+        }
+    }
+}
+
+/// PNG text chunks that let an image be reproduced from itself: the version, the command
+/// (given by the caller, which knows how it was asked for) and the path that ran.
+pub fn provenance(command: String, info: &RunInfo) -> Vec<(String, String)> {
+    vec![
+        (
+            "Software".into(),
+            format!("chaoscope {}", env!("CARGO_PKG_VERSION")),
+        ),
+        ("chaoscope:command".into(), command),
+        ("chaoscope:backend".into(), info.backend.into()),
+        (
+            "chaoscope:adapter".into(),
+            info.adapter
+                .clone()
+                .unwrap_or_else(|| "none (CPU f64)".into()),
+        ),
+    ]
+}
+
+fn frame(
+    field: &Field,
+    rgb: Vec<u8>,
+    annotated: bool,
+    a: impl FnOnce() -> Annotation,
+) -> Result<Picture> {
+    if !annotated {
+        return Ok(Picture {
+            rgb,
+            width: field.width,
+            height: field.height,
+            map: None,
+        });
+    }
+    let out = annotate(&rgb, field.width, field.height, &a())?;
+    Ok(Picture {
+        rgb: out.rgb,
+        width: out.width,
+        height: out.height,
+        map: Some((out.map_x, out.map_y, field.width, field.height)),
+    })
+}
+
+fn axes(grid: &Grid) -> (Axis, Axis) {
+    (
+        Axis {
+            label: "θ1 (rad)".into(),
+            min: grid.theta1.min,
+            max: grid.theta1.max,
+            decimal: false,
+        },
+        Axis {
+            label: "θ2".into(),
+            min: grid.theta2.min,
+            max: grid.theta2.max,
+            decimal: false,
+        },
+    )
+}
+
+fn physics_line(p: &Params, grid: &Grid) -> String {
+    let mut line = format!(
+        "m1 {} kg · m2 {} kg · l1 {} m · l2 {} m · g {} m/s² · ω0 ({}, {}) rad/s",
+        p.m1, p.m2, p.l1, p.l2, p.g, grid.omega1, grid.omega2
+    );
+    if p.rod1 != 0.0 || p.rod2 != 0.0 {
+        line += &format!(" · rods {}/{} kg", p.rod1, p.rod2);
+    }
+    let l = &p.losses;
+    if l.joint1 != 0.0 || l.joint2 != 0.0 {
+        line += &format!(" · damping {}/{} N m s", l.joint1, l.joint2);
+    }
+    if l.has_drag() {
+        line += " · air drag";
+    }
+    if l.has_bearings() {
+        line += " · bearing friction";
+    }
+    line
+}
+
+/// The flip map as a picture.
+pub fn flip_picture(field: &Field, spec: &FlipSpec, picture: &PictureSpec) -> Result<Picture> {
+    let colors = FlipColors {
+        t_lo: (spec.params.l1 / spec.params.g).sqrt(),
+        t_max: spec.stepping.t_max,
+        colormap: picture.colormap.unwrap_or(Colormap::Inferno),
+    };
+    let rgb = flip_colors(field, colors);
+    frame(field, rgb, picture.annotate, || {
+        let (x, y) = axes(&spec.grid);
+        let (colors_, ticks) = colors.bar();
+        Annotation {
+            title: "Time until an arm first flips over".into(),
+            subtitle: format!(
+                "{} · RK4 dt {} s",
+                physics_line(&spec.params, &spec.grid),
+                spec.stepping.dt
+            ),
+            x,
+            y,
+            bar: ColorBar {
+                colors: colors_,
+                ticks,
+                label: "flip time (s)".into(),
+                swatch: Some((NEVER_RGB, format!("> {} s", spec.stepping.t_max))),
+            },
+        }
+    })
+}
+
+/// The divergence map as a picture, coloured over `range` (1/s).
+pub fn lyapunov_picture(
+    field: &Field,
+    spec: &LyapunovSpec,
+    range: (f32, f32),
+    picture: &PictureSpec,
+) -> Result<Picture> {
+    let colormap = picture.colormap.unwrap_or(Colormap::Magma);
+    let rgb = ftle_colors(field, range, colormap);
+    frame(field, rgb, picture.annotate, || {
+        let (x, y) = axes(&spec.grid);
+        let (lo, hi) = (range.0 as f64, range.1 as f64);
+        let ticks = decimal_ticks(lo, hi)
+            .into_iter()
+            .map(|(v, l)| ((v - lo) / (hi - lo), l))
+            .collect();
+        Annotation {
+            title: format!(
+                "Largest finite-time Lyapunov exponent over {} s",
+                spec.stepping.t_max
+            ),
+            subtitle: format!(
+                "{} · RK4 dt {} s · renormalised every {} s",
+                physics_line(&spec.params, &spec.grid),
+                spec.stepping.dt,
+                spec.renorm
+            ),
+            x,
+            y,
+            bar: ColorBar {
+                colors: ftle_table(colormap),
+                ticks,
+                label: "FTLE (1/s)".into(),
+                swatch: None,
+            },
+        }
+    })
+}
