@@ -8,7 +8,7 @@
 //   a1 = (B f1 - C cos D f2) / det,  a2 = (A f2 - C cos D f1) / det,  det = A B - C^2 cos^2 D.
 // The CPU reference (src/cpu) solves the mass-matrix system instead, so agreement means something.
 //
-// Constants WORKGROUP_SIZE and NEVER are prepended from src/gpu/layout.rs.
+// Constants WORKGROUP_SIZE, NEVER and NONFINITE are prepended from src/gpu/layout.rs.
 
 // Mirror of src/gpu/layout.rs `GpuParams`: keep in sync (tests/layout.rs checks offsets).
 struct Params {
@@ -72,6 +72,12 @@ fn has_drag() -> bool {
 
 fn has_bearings() -> bool {
     return (LOSSES & 4u) != 0u;
+}
+
+// Whether no component is infinite or NaN (by the exponent bits: `x != x` may be folded).
+fn is_finite4(v: vec4<f32>) -> bool {
+    let exponent = bitcast<vec4<u32>>(v) & vec4<u32>(0x7f800000u);
+    return all(exponent != vec4<u32>(0x7f800000u));
 }
 
 // f32(pi) rounds up to 3.1415927, so |theta| > PI is the f32 form of |theta| > pi.

@@ -82,6 +82,11 @@ fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         }
         t_flip = (f32(k_flip) + s) * dt;
     }
+    // A state that left the numbers (the step blew up) has no flip time: say so, never
+    // "never". Checked once a dispatch, outside the loop.
+    if t_flip == NEVER && !is_finite4(p.y) {
+        t_flip = NONFINITE;
+    }
     states[2u * i] = p.y;
     states[2u * i + 1u] = p.u;
     times[i] = t_flip;

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use crate::cpu;
 use crate::error::{Error, Result};
 use crate::field::{Convergence, Field};
-use crate::gpu::{GpuContext, Kernels};
+use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{FlipSpec, Grid, LyapunovSpec, Range, Stepping};
@@ -181,6 +181,7 @@ impl Engine {
         p: &Params,
         start: State,
         stepping: Stepping,
+        monitor: &Monitor,
     ) -> Result<(Vec<State>, Vec<f64>)> {
         let steps = stepping.steps();
         match &self.gpu {
@@ -192,12 +193,13 @@ impl Engine {
                 let work = cpu::dissipated_along(p, &states, stepping.dt);
                 Ok((states, work))
             }
-            None => Ok(cpu::trajectory_with_work(p, start, stepping.dt, steps)),
+            None => cpu::trajectory_with_work(p, start, stepping.dt, steps, monitor),
         }
     }
 
     /// Trajectories of all `starts` over `steps` steps of `dt`, keeping the start and every
-    /// `stride`-th state (GPU: one invocation per run; CPU: runs in parallel).
+    /// `stride`-th state (GPU: one invocation per run; CPU: runs in parallel). Runs go in
+    /// chunks of bounded work, with progress and Ctrl-C between them.
     pub fn ensemble(
         &self,
         p: &Params,
@@ -205,18 +207,26 @@ impl Engine {
         dt: f64,
         steps: u32,
         stride: u32,
+        monitor: &Monitor,
     ) -> Result<Vec<Vec<State>>> {
-        match &self.gpu {
-            Some(k) => k.trajectory().run(&k.ctx, p, starts, dt, steps, stride),
-            None => Ok(starts
-                .par_iter()
-                .map(|s| {
+        let per_chunk =
+            (STEPS_PER_DISPATCH / steps.max(1) as u64).clamp(1, starts.len().max(1) as u64);
+        monitor.start("runs", starts.len() as u64);
+        let mut runs = Vec::with_capacity(starts.len());
+        for chunk in starts.chunks(per_chunk as usize) {
+            monitor.check()?;
+            match &self.gpu {
+                Some(k) => runs.extend(k.trajectory().run(&k.ctx, p, chunk, dt, steps, stride)?),
+                None => runs.par_extend(chunk.par_iter().map(|s| {
                     cpu::trajectory(p, *s, dt, steps)
                         .into_iter()
                         .step_by(stride as usize)
-                        .collect()
-                })
-                .collect()),
+                        .collect::<Vec<_>>()
+                })),
+            }
+            monitor.advance(chunk.len() as u64);
         }
+        monitor.finish();
+        Ok(runs)
     }
 }

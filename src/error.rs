@@ -22,6 +22,12 @@ pub enum Error {
     /// Encoding or decoding a file format (PNG, GIF, JSON) failed.
     #[error("{0}")]
     Format(String),
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    File {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
     /// The user interrupted the run (Ctrl-C).
     #[error("interrupted")]
     Interrupted,

@@ -6,14 +6,17 @@ use clap::Parser;
 
 use chaoscope::cli::{Cli, run};
 use chaoscope::monitor::Monitor;
+use chaoscope::render::remove_pending;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = cancel.clone();
-    // First Ctrl-C: stop at the next dispatch or row and leave no partial file; second: now.
+    // First Ctrl-C (or SIGTERM, SIGHUP): stop at the next dispatch, row or chunk and leave no
+    // partial file; second: now, removing the temporary files being written.
     let _ = ctrlc::set_handler(move || {
         if flag.swap(true, Ordering::Relaxed) {
+            remove_pending();
             std::process::exit(130);
         }
     });

@@ -1,17 +1,33 @@
-//! Progress and interruption for long runs: a progress bar (hidden when stderr is not a
-//! terminal) and a cancel flag that Ctrl-C sets and every long loop checks.
+//! Progress and interruption for long runs: a progress bar on a terminal, plain log lines
+//! every few seconds elsewhere (a log file, a batch job), and a cancel flag that Ctrl-C sets
+//! and every long loop checks.
 
-use std::sync::Arc;
+use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::error::{Error, Result};
 
+/// Seconds between log lines when stderr is not a terminal.
+const LOG_EVERY: Duration = Duration::from_secs(10);
+
 #[derive(Clone)]
 pub struct Monitor {
     bar: ProgressBar,
+    /// Log lines instead of a bar (stderr is not a terminal).
+    log: Option<Arc<Mutex<LogState>>>,
     cancel: Arc<AtomicBool>,
+}
+
+struct LogState {
+    phase: String,
+    total: u64,
+    done: u64,
+    started: Instant,
+    last: Instant,
 }
 
 impl Monitor {
@@ -19,14 +35,29 @@ impl Monitor {
     pub fn hidden() -> Self {
         Monitor {
             bar: ProgressBar::hidden(),
+            log: None,
             cancel: Arc::new(AtomicBool::new(false)),
         }
     }
 
-    /// A bar on stderr, cancelled through `cancel`.
+    /// A bar on stderr when it is a terminal, else log lines; cancelled through `cancel`.
     pub fn terminal(cancel: Arc<AtomicBool>) -> Self {
+        let logs = !std::io::stderr().is_terminal();
         Monitor {
-            bar: ProgressBar::new(0),
+            bar: if logs {
+                ProgressBar::hidden()
+            } else {
+                ProgressBar::new(0)
+            },
+            log: logs.then(|| {
+                Arc::new(Mutex::new(LogState {
+                    phase: String::new(),
+                    total: 0,
+                    done: 0,
+                    started: Instant::now(),
+                    last: Instant::now(),
+                }))
+            }),
             cancel,
         }
     }
@@ -35,6 +66,7 @@ impl Monitor {
     pub fn quiet(&self) -> Self {
         Monitor {
             bar: ProgressBar::hidden(),
+            log: None,
             cancel: self.cancel.clone(),
         }
     }
@@ -52,10 +84,45 @@ impl Monitor {
         self.bar.set_length(total);
         self.bar.set_position(0);
         self.bar.reset_eta();
+        if let Some(log) = &self.log
+            && let Ok(mut s) = log.lock()
+        {
+            let now = Instant::now();
+            *s = LogState {
+                phase: message.to_string(),
+                total,
+                done: 0,
+                started: now,
+                last: now,
+            };
+        }
     }
 
     pub fn advance(&self, units: u64) {
         self.bar.inc(units);
+        if let Some(log) = &self.log
+            && let Ok(mut s) = log.lock()
+        {
+            s.done = (s.done + units).min(s.total);
+            let now = Instant::now();
+            if now - s.last >= LOG_EVERY {
+                s.last = now;
+                let elapsed = (now - s.started).as_secs_f64();
+                let fraction = s.done as f64 / s.total.max(1) as f64;
+                let eta = if s.done > 0 {
+                    format!("{:.0} s", elapsed * (1.0 - fraction) / fraction)
+                } else {
+                    "unknown".into()
+                };
+                eprintln!(
+                    "{}: {:.0} % ({} of {}), {elapsed:.0} s elapsed, eta {eta}",
+                    s.phase,
+                    100.0 * fraction,
+                    s.done,
+                    s.total
+                );
+            }
+        }
     }
 
     pub fn finish(&self) {

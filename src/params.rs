@@ -96,8 +96,8 @@ struct ParamsFile {
     l1: Option<f64>,
     l2: Option<f64>,
     g: Option<f64>,
-    rod_mass: Option<[f64; 2]>,
-    joint_damping: Option<[f64; 2]>,
+    rod_mass: Option<Vec<f64>>,
+    joint_damping: Option<Vec<f64>>,
     bearing_friction: Option<f64>,
     bearing_radius: Option<f64>,
     air_drag: Option<AirDragFile>,
@@ -108,8 +108,8 @@ struct ParamsFile {
 struct AirDragFile {
     rho: Option<f64>,
     cw: Option<f64>,
-    bob_area: Option<[f64; 2]>,
-    rod_area: Option<[f64; 2]>,
+    bob_area: Option<Vec<f64>>,
+    rod_area: Option<Vec<f64>>,
 }
 
 fn read_params_file(path: &Path, base: Params) -> Result<Params> {
@@ -117,7 +117,21 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
         .map_err(|e| Error::invalid("params", format!("cannot read {}: {e}", path.display())))?;
     let file: ParamsFile = toml::from_str(&text)
         .map_err(|e| Error::invalid("params", format!("{}: {e}", path.display())))?;
+    let in_file =
+        |reason: String| Error::invalid("params", format!("{}: {reason}", path.display()));
+    // serde takes the first two of a longer array silently: pairs are read as lists.
+    let pair = |key: &str, v: &Option<Vec<f64>>| -> Result<Option<[f64; 2]>> {
+        match v.as_deref() {
+            None => Ok(None),
+            Some([a, b]) => Ok(Some([*a, *b])),
+            Some(other) => Err(in_file(format!(
+                "key {key}: {} values given; it takes two, e.g. [0.1, 0.05]",
+                other.len()
+            ))),
+        }
+    };
     let mut p = base;
+    let mut no_area = false;
     let set = |slot: &mut f64, v: Option<f64>| {
         if let Some(v) = v {
             *slot = v;
@@ -128,10 +142,10 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
     set(&mut p.l1, file.l1);
     set(&mut p.l2, file.l2);
     set(&mut p.g, file.g);
-    if let Some([a, b]) = file.rod_mass {
+    if let Some([a, b]) = pair("rod_mass", &file.rod_mass)? {
         (p.rod1, p.rod2) = (a, b);
     }
-    if let Some([a, b]) = file.joint_damping {
+    if let Some([a, b]) = pair("joint_damping", &file.joint_damping)? {
         (p.losses.joint1, p.losses.joint2) = (a, b);
     }
     if let Some(c) = file.bearing_friction {
@@ -143,8 +157,11 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
     if let Some(air) = file.air_drag {
         p.losses.rho = air.rho.unwrap_or(RHO);
         p.losses.cw = air.cw.unwrap_or(CW);
-        let [a1, a2] = air.bob_area.unwrap_or([0.0; 2]);
-        let [r1, r2] = air.rod_area.unwrap_or([0.0; 2]);
+        let bob = pair("air_drag.bob_area", &air.bob_area)?;
+        let rod = pair("air_drag.rod_area", &air.rod_area)?;
+        no_area = bob.is_none() && rod.is_none();
+        let [a1, a2] = bob.unwrap_or([0.0; 2]);
+        let [r1, r2] = rod.unwrap_or([0.0; 2]);
         (p.losses.bob_area1, p.losses.bob_area2) = (a1, a2);
         (p.losses.rod_area1, p.losses.rod_area2) = (r1, r2);
     }
@@ -156,6 +173,12 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
         ),
         e => e,
     })?;
+    if no_area {
+        return Err(in_file(
+            "table [air_drag] needs bob_area or rod_area (m^2): without an area there is no drag"
+                .into(),
+        ));
+    }
     Ok(p)
 }
 

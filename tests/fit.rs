@@ -74,7 +74,15 @@ fn pivot_lengths_and_model_state_are_recovered_from_synthetic_tracking() {
         Backend::Cpu
     })
     .unwrap();
-    let m = fit::fit_model(&frames, (c.x, c.y), &angles, &spec, &engine).unwrap();
+    let m = fit::fit_model(
+        &frames,
+        (c.x, c.y),
+        &angles,
+        &spec,
+        &engine,
+        &chaoscope::monitor::Monitor::hidden(),
+    )
+    .unwrap();
     // Same model, same data: the refinement converges to the truth; the positions match to
     // well under a millimetre over the window.
     assert!(m.rms < 1e-4, "rms {}", m.rms);

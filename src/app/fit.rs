@@ -12,7 +12,9 @@ use crate::fit::{
     Fit, ModelFitSpec, angles, arm_lengths, data, energies, fit_decay, fit_model, fit_pivot,
     grid_pivot, plots, read_frames,
 };
+use crate::monitor::Monitor;
 use crate::params::{ParamSources, Preset};
+use crate::render::{Outputs, check_writable};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitJob {
@@ -54,11 +56,13 @@ pub struct FitSummary {
 }
 
 /// Runs the fit; `command` reproduces it and goes into summary.json.
-pub fn run(job: &FitJob, command: String) -> Result<FitSummary> {
+pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummary> {
     check_within("window", job.window, 0.3, 60.0)?;
     check_within("tolerance", job.tolerance, 1e-4, 1.0)?;
     check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
     check_count("candidates", job.candidates as u64, 64, 4_000_000)?;
+    check_within("start", job.start, f64::MIN, f64::MAX)?;
+    check_writable("output", &job.output.join("summary.json"))?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
 
@@ -106,11 +110,11 @@ pub fn run(job: &FitJob, command: String) -> Result<FitSummary> {
     };
     let engine = Engine::new(job.backend)?;
     let notices: Vec<String> = engine.notices();
-    let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, &engine)?;
+    let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, &engine, monitor)?;
 
-    // Plots and summary.
+    // Plots, derived quantities and summary, written as a set.
     let out = &job.output;
-    std::fs::create_dir_all(out)?;
+    let mut files = Outputs::new();
     let measured: Vec<[f64; 4]> = frames
         .iter()
         .map(|f| {
@@ -125,6 +129,7 @@ pub fn run(job: &FitJob, command: String) -> Result<FitSummary> {
     // Long enough to see the model agree and then part (chaos), short enough to read.
     let t_end = (fit.agrees_until + 4.0).max(fit.t0 + 4.0);
     plots::positions(
+        &mut files,
         &out.join("positions.png"),
         &t,
         &measured,
@@ -133,6 +138,7 @@ pub fn run(job: &FitJob, command: String) -> Result<FitSummary> {
         t_end,
     )?;
     plots::energy(
+        &mut files,
         &out.join("energy.png"),
         &en.t,
         &en.e,
@@ -162,9 +168,9 @@ pub fn run(job: &FitJob, command: String) -> Result<FitSummary> {
             .collect()
     };
     let (w1, w2) = (portrait(0, &wa), portrait(1, &wb));
-    plots::phase(&out.join("phase.png"), [&w1, &w2])?;
+    plots::phase(&mut files, &out.join("phase.png"), [&w1, &w2])?;
     // The derived quantities row by row (interior rows: central differences need neighbours).
-    crate::render::write_atomic(&out.join("derived.csv"), |f| {
+    files.write(&out.join("derived.csv"), |f| {
         use std::io::Write;
         writeln!(
             f,
@@ -227,11 +233,12 @@ pub fn run(job: &FitJob, command: String) -> Result<FitSummary> {
     });
     let text = serde_json::to_string_pretty(&summary)
         .map_err(|e| Error::format(&out.join("summary.json"), e))?;
-    crate::render::write_atomic(&out.join("summary.json"), |w| {
+    files.write(&out.join("summary.json"), |w| {
         use std::io::Write;
         writeln!(w, "{text}")?;
         Ok(())
     })?;
+    files.commit(monitor)?;
     Ok(FitSummary {
         pivot: (pivot.x, pivot.y),
         l1: (l1.value, l1.error),

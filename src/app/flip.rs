@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{check_extension, write_map};
+use super::{check_output, write_map};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
@@ -24,9 +24,9 @@ pub struct FlipJob {
 impl FlipJob {
     pub fn validate(&self) -> Result<()> {
         self.spec.validate()?;
-        check_extension("output", &self.output, "png")?;
+        check_output("output", &self.output, "png")?;
         if let Some(data) = &self.data {
-            check_extension("data", data, "npy")?;
+            check_output("data", data, "npy")?;
         }
         Ok(())
     }
@@ -41,6 +41,8 @@ pub struct FlipSummary {
     pub seconds: f64,
     /// Fraction of the pixels that flipped within t-max.
     pub flipped: f64,
+    /// Pixels whose state became infinite or NaN before flipping (NaN in the data).
+    pub nan: usize,
     pub t_max: f64,
     pub output: PathBuf,
     pub notices: Vec<String>,
@@ -64,6 +66,7 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         &job.output,
         job.data.as_deref(),
         &field,
+        monitor,
     )?;
     let flipped = field.data.iter().filter(|t| t.is_finite()).count();
     Ok(FlipSummary {
@@ -72,6 +75,7 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         place: info.place().to_string(),
         seconds: started.elapsed().as_secs_f64(),
         flipped: flipped as f64 / field.data.len() as f64,
+        nan: field.data.iter().filter(|t| t.is_nan()).count(),
         t_max: job.spec.stepping.t_max,
         output: job.output.clone(),
         notices,

@@ -5,12 +5,12 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{check_extension, write_map};
+use super::{check_output, write_map};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::render::{self, Colormap, PictureSpec};
+use crate::render::{self, Colormap, Outputs, PictureSpec};
 use crate::spec::{self, LyapunovSpec, Method};
 
 /// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
@@ -35,6 +35,8 @@ pub struct LyapunovMapSummary {
     pub seconds: f64,
     /// Fraction of the pixels whose exponent exceeds [`CHAOTIC_FTLE`].
     pub chaotic: f64,
+    /// Pixels whose exponent is NaN (the integration left the numbers).
+    pub nan: usize,
     pub t_max: f64,
     /// The colour range (1/s).
     pub range: (f32, f32),
@@ -58,9 +60,9 @@ pub fn run_map(
     monitor: &Monitor,
 ) -> Result<LyapunovMapSummary> {
     job.spec.validate()?;
-    check_extension("output", &job.output, "png")?;
+    check_output("output", &job.output, "png")?;
     if let Some(data) = &job.data {
-        check_extension("data", data, "npy")?;
+        check_output("data", data, "npy")?;
     }
     let started = Instant::now();
     let engine = Engine::new(job.backend)?;
@@ -87,6 +89,7 @@ pub fn run_map(
         &job.output,
         job.data.as_deref(),
         &field,
+        monitor,
     )?;
     let chaotic = field.data.iter().filter(|&&x| x > CHAOTIC_FTLE).count();
     Ok(LyapunovMapSummary {
@@ -95,6 +98,7 @@ pub fn run_map(
         place: info.place().to_string(),
         seconds: started.elapsed().as_secs_f64(),
         chaotic: chaotic as f64 / field.data.len() as f64,
+        nan: field.data.iter().filter(|x| x.is_nan()).count(),
         t_max: job.spec.stepping.t_max,
         range,
         output: job.output.clone(),
@@ -130,12 +134,18 @@ pub fn run_point(
     job.spec.validate_run()?;
     spec::validate_start(&job.start)?;
     if let Some(path) = &job.output {
-        check_extension("output", path, "csv")?;
+        check_output("output", path, "csv")?;
     }
     let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     notices.extend(twin_notice(&engine, &job.spec));
     let trace = engine.ftle_convergence(&job.spec, job.start, monitor)?;
+    if trace.last().is_nan() {
+        notices.push(
+            "warning: the exponent is NaN: the state left the numbers (a smaller time step may help)"
+                .into(),
+        );
+    }
     let write = |w: &mut dyn Write| -> Result<()> {
         writeln!(w, "# {command}")?;
         writeln!(w, "t,ftle")?;
@@ -145,7 +155,11 @@ pub fn run_point(
         Ok(())
     };
     match &job.output {
-        Some(path) => render::write_atomic(path, |w| write(w))?,
+        Some(path) => {
+            let mut files = Outputs::new();
+            files.write(path, |w| write(w))?;
+            files.commit(monitor)?;
+        }
         None => write(stdout)?,
     }
     Ok(LyapunovPointSummary {

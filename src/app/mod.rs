@@ -16,10 +16,11 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::render::{self, Picture};
+use crate::monitor::Monitor;
+use crate::render::{Outputs, Picture, check_writable};
 
-/// A map's files: the picture as PNG with its provenance, where the map sits in it and
-/// `extra` text, and the raw values as .npy when asked.
+/// A map's files, as a set: the picture as PNG with its provenance, where the map sits in it
+/// and `extra` text, and the raw values as .npy when asked.
 pub fn write_map(
     picture: &Picture,
     provenance: Vec<(String, String)>,
@@ -27,15 +28,24 @@ pub fn write_map(
     output: &Path,
     data: Option<&Path>,
     field: &Field,
+    monitor: &Monitor,
 ) -> Result<()> {
     let mut meta = provenance;
     meta.extend(picture.metadata());
     meta.extend(extra);
-    render::write_png(output, picture.width, picture.height, &picture.rgb, &meta)?;
+    let mut files = Outputs::new();
+    files.png(output, picture.width, picture.height, &picture.rgb, &meta)?;
     if let Some(data) = data {
-        render::write_npy(data, field)?;
+        files.npy(data, field)?;
     }
-    Ok(())
+    files.commit(monitor)
+}
+
+/// An output file `path` given as `field`: the right extension and a place it can be
+/// written, checked before any work.
+pub fn check_output(field: &'static str, path: &Path, ext: &str) -> Result<()> {
+    check_extension(field, path, ext)?;
+    check_writable(field, path)
 }
 
 /// `path` must end in `.ext`, else an error naming `field`.

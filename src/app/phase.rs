@@ -3,13 +3,13 @@
 
 use std::path::PathBuf;
 
-use super::{check_count, check_extension};
+use super::{check_count, check_output};
 use crate::engine::{Backend, Engine, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::render::{self, Colormap};
+use crate::render::{self, Colormap, Outputs};
 use crate::spec::{self, Spread, Stepping, releases};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -35,11 +35,17 @@ impl PhaseJob {
     pub fn validate(&self) -> Result<()> {
         spec::validate_params(&self.params)?;
         spec::validate_stepping(&self.stepping)?;
+        if !self.single {
+            spec::validate_stability(&self.params, &self.stepping)?;
+        }
         check_count("runs", self.runs as u64, 1, 100_000)?;
         check_count("size", self.size as u64, 32, 4096)?;
-        check_extension("output", &self.output, "png")?;
+        self.spread.validate()?;
+        check_output("output", &self.output, "png")?;
         if !self.single {
             spec::validate_start(&self.start)?;
+            let s = &self.start;
+            spec::validate_speeds(&self.params, &self.stepping, s.omega1, s.omega2)?;
         }
         Ok(())
     }
@@ -61,11 +67,13 @@ pub fn run(job: &PhaseJob, command: String, monitor: &Monitor) -> Result<PhaseSu
     } else {
         let engine = Engine::new(job.backend)?;
         let notices: Vec<String> = engine.notices();
-        let (rgb, w, h) = double_pendulum_portraits(job, &engine, colormap)?;
+        let (rgb, w, h) = double_pendulum_portraits(job, &engine, colormap, monitor)?;
         (rgb, w, h, engine.info(), notices)
     };
     let meta = render::provenance(command, &info);
-    render::write_png(&job.output, width, height, &rgb, &meta)?;
+    let mut files = Outputs::new();
+    files.png(&job.output, width, height, &rgb, &meta)?;
+    files.commit(monitor)?;
     Ok(PhaseSummary {
         output: job.output.clone(),
         notices,
@@ -76,10 +84,18 @@ fn double_pendulum_portraits(
     job: &PhaseJob,
     engine: &Engine,
     colormap: Colormap,
+    monitor: &Monitor,
 ) -> Result<(Vec<u8>, u32, u32)> {
     let p = &job.params;
     let starts = releases(p, job.start, job.runs, job.spread);
-    let runs = engine.ensemble(p, &starts, job.stepping.dt, job.stepping.steps(), 1)?;
+    let runs = engine.ensemble(
+        p,
+        &starts,
+        job.stepping.dt,
+        job.stepping.steps(),
+        1,
+        monitor,
+    )?;
     let pick = |arm: usize, s: &State| {
         if arm == 0 {
             (s.theta1, s.omega1)

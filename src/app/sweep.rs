@@ -118,8 +118,12 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
     if args.frames == 0 || args.frames > 100_000 {
         return Err(Error::invalid("frames", "must be between 1 and 100000"));
     }
-    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 100.0) {
-        return Err(Error::invalid("fps", "must be in (0, 100]"));
+    // The APNG stores a frame's delay in milliseconds, at most 65535.
+    if !(args.fps.is_finite() && (0.02..=100.0).contains(&args.fps)) {
+        return Err(Error::invalid(
+            "fps",
+            format!("{} must be in [0.02, 100]", args.fps),
+        ));
     }
     if args.vary.is_none() && args.zoom.is_none() {
         return Err(Error::invalid(
@@ -169,8 +173,17 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
             factor,
         }) = args.zoom
         {
-            if !(factor.is_finite() && factor >= 1.0) {
-                return Err(Error::invalid("zoom", "must be a magnification >= 1"));
+            // Beyond this, neighbouring pixels of the last frame would start from the same
+            // f64 angle (8 ulps of the point apart at least).
+            let ulp = f64::EPSILON * t1.abs().max(t2.abs()).max(1.0);
+            let max_zoom = base_grid.theta1_step().min(base_grid.theta2_step()) / (8.0 * ulp);
+            if !(factor.is_finite() && factor >= 1.0 && factor <= max_zoom) {
+                return Err(Error::invalid(
+                    "zoom",
+                    format!(
+                        "{factor} must be a magnification from 1 to {max_zoom:.3e} (where this grid's pixels reach f64 resolution)"
+                    ),
+                ));
             }
             if !(base_grid.theta1.min..=base_grid.theta1.max).contains(&t1)
                 || !(base_grid.theta2.min..=base_grid.theta2.max).contains(&t2)
@@ -218,16 +231,19 @@ pub fn run(
     monitor: &Monitor,
 ) -> Result<SweepSummary> {
     let frames = frames(job)?;
+    spec::validate_stepping(&job.stepping)?;
     for f in &frames {
         spec::validate_grid(&f.grid)?;
+        spec::validate_stability(&f.params, &job.stepping)?;
+        spec::validate_speeds(&f.params, &job.stepping, f.grid.omega1, f.grid.omega2)?;
     }
-    spec::validate_stepping(&job.stepping)?;
     if job.map == MapKind::Lyapunov {
         lyapunov_spec(job, &frames[0]).validate()?;
     }
     if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
         return Err(Error::invalid("ftle_max", "must be > 0"));
     }
+    render::check_writable("output", &job.output.join("animation.png"))?;
     let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     if let (Some(_), Some(k)) = (engine.gpu(), frames.iter().position(|f| f.grid.needs_f64())) {
@@ -276,19 +292,32 @@ pub fn run(
         monitor.advance(1);
     }
     monitor.finish();
-    // The animation from the frame files (including those of an earlier, interrupted run).
-    let mut rgb = Vec::with_capacity(frames.len());
-    let mut size = None;
-    for k in 0..frames.len() {
-        let png = render::read_png(&frame_path(&job.output, k as u32))?;
-        size.get_or_insert((png.width, png.height));
-        rgb.push(png.rgb);
-    }
-    let (w, h) = size.expect("at least one frame");
+    // The animation from the frame files (including those of an earlier, interrupted run),
+    // read one at a time.
+    let first = render::read_png(&frame_path(&job.output, 0))?;
     let delay_ms = (1000.0 / job.fps).round() as u16;
     let animation = job.output.join("animation.png");
     let meta = render::provenance(command, &engine.info());
-    render::write_apng(&animation, w, h, &rgb, delay_ms, &meta)?;
+    let mut files = render::Outputs::new();
+    files.apng(
+        &animation,
+        (first.width, first.height),
+        frames.len(),
+        delay_ms,
+        &meta,
+        |k| {
+            monitor.check()?;
+            let png = render::read_png(&frame_path(&job.output, k as u32))?;
+            if (png.width, png.height) != (first.width, first.height) {
+                return Err(Error::format(
+                    &frame_path(&job.output, k as u32),
+                    "a frame of another size than frame 0",
+                ));
+            }
+            Ok(png.rgb)
+        },
+    )?;
+    files.commit(monitor)?;
     Ok(SweepSummary {
         frames: frames.len(),
         kept,

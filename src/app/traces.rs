@@ -3,12 +3,12 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{check_count, check_extension};
+use super::{check_count, check_output};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::render::{self, Bobs, Colormap, Film, View};
+use crate::render::{self, Bobs, Colormap, Film, Outputs, View};
 use crate::spec::{self, Spread, Stepping, releases};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -34,16 +34,19 @@ impl TracesJob {
     pub fn validate(&self) -> Result<()> {
         spec::validate_params(&self.params)?;
         spec::validate_stepping(&self.stepping)?;
+        spec::validate_stability(&self.params, &self.stepping)?;
         spec::validate_start(&self.start)?;
+        let s = &self.start;
+        spec::validate_speeds(&self.params, &self.stepping, s.omega1, s.omega2)?;
         check_count("runs", self.runs as u64, 1, 100_000)?;
         check_count("size", self.size as u64, 16, 8192)?;
         self.spread.validate()?;
-        check_extension("output", &self.output, "png")?;
+        check_output("output", &self.output, "png")?;
         if let Some(g) = &self.gif {
-            check_extension("gif", g, "gif")?;
+            check_output("gif", g, "gif")?;
         }
         if let Some(d) = &self.data {
-            check_extension("data", d, "npy")?;
+            check_output("data", d, "npy")?;
         }
         Ok(())
     }
@@ -73,7 +76,14 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
     let notices: Vec<String> = engine.notices();
     let info = engine.info();
     let starts = releases(p, job.start, job.runs, job.spread);
-    let runs = engine.ensemble(p, &starts, job.stepping.dt, job.stepping.steps(), 1)?;
+    let runs = engine.ensemble(
+        p,
+        &starts,
+        job.stepping.dt,
+        job.stepping.steps(),
+        1,
+        monitor,
+    )?;
     let positions: Vec<Vec<Bobs>> = runs
         .iter()
         .map(|r| {
@@ -97,7 +107,8 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
     expose(&mut film, &positions, &colors, dt, 0, usize::MAX);
     let rgb = develop(&film, speed, &positions, &colors, None, n)?;
     let meta = render::provenance(command, &info);
-    render::write_png(&job.output, job.size, job.size, &rgb, &meta)?;
+    let mut files = Outputs::new();
+    files.png(&job.output, job.size, job.size, &rgb, &meta)?;
     if let Some(path) = &job.data {
         let samples = positions[0].len();
         let flat: Vec<f32> = positions
@@ -105,11 +116,12 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
             .flatten()
             .flat_map(|q| [q.0 as f32, q.1 as f32, q.2 as f32, q.3 as f32])
             .collect();
-        render::write_npy_shaped(path, &[n as u64, samples as u64, 4], &flat)?;
+        files.npy_shaped(path, &[n as u64, samples as u64, 4], &flat)?;
     }
     if let Some(path) = &job.gif {
-        write_gif(path, job, &positions, &colors, speed, monitor)?;
+        write_gif(&mut files, path, job, &positions, &colors, speed, monitor)?;
     }
+    files.commit(monitor)?;
     Ok(TracesSummary {
         runs: n,
         exposure: job.stepping.t_max,
@@ -186,6 +198,7 @@ fn reference_speed(positions: &[Vec<Bobs>], dt: f64) -> f64 {
 }
 
 fn write_gif(
+    files: &mut Outputs,
     path: &Path,
     job: &TracesJob,
     positions: &[Vec<Bobs>],
@@ -223,7 +236,7 @@ fn write_gif(
         monitor.advance(1);
     }
     monitor.finish();
-    render::write_gif(
+    files.gif(
         path,
         view.size,
         view.size,

@@ -3,11 +3,12 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use super::check_extension;
+use super::check_output;
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
-use crate::render;
+use crate::monitor::Monitor;
+use crate::render::Outputs;
 use crate::spec::{self, Stepping};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -54,18 +55,33 @@ pub const COLUMNS: &str = "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,diss
 pub fn run(
     job: &TrajectoryJob,
     command: String,
+    monitor: &Monitor,
     stdout: &mut dyn Write,
 ) -> Result<TrajectorySummary> {
     spec::validate_params(&job.params)?;
     spec::validate_stepping(&job.stepping)?;
+    spec::validate_stability(&job.params, &job.stepping)?;
     spec::validate_start(&job.start)?;
+    spec::validate_speeds(
+        &job.params,
+        &job.stepping,
+        job.start.omega1,
+        job.start.omega2,
+    )?;
     let stride = job.stride()?;
     if let Some(path) = &job.output {
-        check_extension("output", path, "csv")?;
+        check_output("output", path, "csv")?;
     }
     let engine = Engine::new(job.backend)?;
-    let notices: Vec<String> = engine.notices();
-    let (states, dissipated) = engine.trajectory(&job.params, job.start, job.stepping)?;
+    let mut notices: Vec<String> = engine.notices();
+    let (states, dissipated) = engine.trajectory(&job.params, job.start, job.stepping, monitor)?;
+    let finite = |s: &State| s.to_array().iter().all(|v| v.is_finite());
+    if let Some(k) = states.iter().position(|s| !finite(s)) {
+        notices.push(format!(
+            "warning: the state is NaN or infinite from t = {} s on: the integration blew up (a smaller time step may help)",
+            k as f64 * job.stepping.dt
+        ));
+    }
     let p = &job.params;
     let dt = job.stepping.dt;
     let write = |w: &mut dyn Write| -> Result<()> {
@@ -92,7 +108,11 @@ pub fn run(
         Ok(())
     };
     match &job.output {
-        Some(path) => render::write_atomic(path, |w| write(w))?,
+        Some(path) => {
+            let mut files = Outputs::new();
+            files.write(path, |w| write(w))?;
+            files.commit(monitor)?;
+        }
         None => write(stdout)?,
     }
     Ok(TrajectorySummary {

@@ -110,7 +110,7 @@ impl PhysicalArgs {
 #[derive(Args, Debug, Clone)]
 pub struct GridArgs {
     /// Grid size: N (square) or WxH, one pendulum per pixel.
-    #[arg(long, default_value = "512", value_parser = parse_size)]
+    #[arg(long, default_value = "512", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: (u32, u32),
     /// theta1 range along x, MIN:MAX in rad (`pi` is understood: -pi:pi).
     #[arg(long, default_value = "-pi:pi", value_parser = parse_range, allow_hyphen_values = true)]

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::parse::{parse_number, parse_u32};
 use super::say;
 use crate::app::bench::{self, BenchJob};
 use crate::error::Result;
@@ -12,20 +13,20 @@ use crate::monitor::Monitor;
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
     /// Grid side (FLIP-512: 512).
-    #[arg(long, default_value = "512")]
+    #[arg(long, default_value = "512", value_parser = parse_u32, allow_hyphen_values = true)]
     pub size: u32,
     /// Grid side for the CPU rows (steps per second do not depend on it; the f64 CPU path
     /// is slow enough that 512 would dominate the run).
-    #[arg(long, default_value = "256")]
+    #[arg(long, default_value = "256", value_parser = parse_u32, allow_hyphen_values = true)]
     pub cpu_size: u32,
     /// Simulated time (s).
-    #[arg(long, default_value = "20")]
+    #[arg(long, default_value = "20", value_parser = parse_number, allow_hyphen_values = true)]
     pub t_max: f64,
     /// RK4 time step (s).
-    #[arg(long, default_value = "0.01")]
+    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
     pub dt: f64,
     /// Repetitions of every configuration, interleaved; the median is reported.
-    #[arg(long, default_value = "3")]
+    #[arg(long, default_value = "3", value_parser = parse_u32, allow_hyphen_values = true)]
     pub repeat: u32,
     /// Skip the CPU rows.
     #[arg(long)]
@@ -63,6 +64,15 @@ impl BenchArgs {
 
 pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     let job = args.job();
+    // Before the minutes of GPU and CPU rows, not after them.
+    if let Some(dir) = &job.peers
+        && !dir.join("common.py").is_file()
+    {
+        return Err(crate::Error::invalid(
+            "peers",
+            format!("{} holds no peer scripts (no common.py)", dir.display()),
+        ));
+    }
     let r = bench::run(&job, monitor)?;
     say(&r.notices);
     eprintln!("GPU: {}", r.adapter);

@@ -5,13 +5,19 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, backend_parser};
-use super::parse::parse_number;
+use super::parse::{parse_number, parse_usize};
 use super::{command_line, say};
 use crate::app::fit::{self, FitJob};
 use crate::engine::Backend;
 use crate::error::Result;
+use crate::monitor::Monitor;
 
 #[derive(Args, Debug, Clone)]
+#[command(mut_arg("m1", |a| a.help("Upper bob mass (kg) [default: the lab preset's]")))]
+#[command(mut_arg("m2", |a| a.help("Lower bob mass (kg) [default: the lab preset's]")))]
+#[command(mut_arg("l1", |a| a.help("Upper arm length (m) [default: fitted to the data]")))]
+#[command(mut_arg("l2", |a| a.help("Lower arm length (m) [default: fitted to the data]")))]
+#[command(mut_arg("preset", |a| a.help("A named set of parameters [default: lab, unless --params is given]")))]
 pub struct FitArgs {
     /// CSV of tracked positions: header with t, x1, y1, x2, y2 (s, m; y up); # comments.
     pub file: PathBuf,
@@ -20,19 +26,19 @@ pub struct FitArgs {
     pub output: PathBuf,
     /// Time (s) to start the model fit (the report: 0.8 s, where dx2/dt ~ 0); the nearest
     /// data row is used.
-    #[arg(long, default_value = "0.8", value_parser = parse_number)]
+    #[arg(long, default_value = "0.8", value_parser = parse_number, allow_hyphen_values = true)]
     pub start: f64,
     /// Length of data (s) the model is fitted to.
-    #[arg(long, default_value = "1.5", value_parser = parse_number)]
+    #[arg(long, default_value = "1.5", value_parser = parse_number, allow_hyphen_values = true)]
     pub window: f64,
     /// Position tolerance (m) for "the model agrees with the measurement".
-    #[arg(long, default_value = "0.03", value_parser = parse_number)]
+    #[arg(long, default_value = "0.03", value_parser = parse_number, allow_hyphen_values = true)]
     pub tolerance: f64,
     /// Size of the candidate ensemble of the model fit.
-    #[arg(long, default_value = "65536")]
+    #[arg(long, default_value = "65536", value_parser = parse_usize, allow_hyphen_values = true)]
     pub candidates: usize,
     /// Velocity error (m/s) of each mass, for the energy error bars (the report: 0.1).
-    #[arg(long, default_value = "0.1", value_parser = parse_number)]
+    #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
     pub velocity_error: f64,
     #[command(flatten)]
     pub physical: PhysicalArgs,
@@ -57,9 +63,9 @@ impl FitArgs {
     }
 }
 
-pub fn run(args: &FitArgs) -> Result<()> {
+pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<()> {
     let job = args.job();
-    let s = fit::run(&job, command_line::fit(&job))?;
+    let s = fit::run(&job, command_line::fit(&job), monitor)?;
     say(&s.notices);
     eprintln!(
         "pivot ({:.4}, {:.4}) m, l1 {:.4} ± {:.4} m, l2 {:.4} ± {:.4} m; energy a exp(b t): a {:.3} J, b {:.4} 1/s (chi2/dof {:.2}); inverse square chi2/dof {:.2}: {} fits better; model from t = {} s agrees within {} m until {} s ({:.2} s) -> {}",

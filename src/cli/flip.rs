@@ -61,18 +61,28 @@ impl FlipArgs {
     }
 }
 
+/// ", N pixels NaN (...)" when there are any.
+pub fn nan_note(nan: usize) -> String {
+    if nan == 0 {
+        String::new()
+    } else {
+        format!(", {nan} pixels NaN (the integration left the numbers; green in the PNG)")
+    }
+}
+
 pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
     let job = args.job()?;
     let s = flip::run(&job, command_line::flip(&job), monitor)?;
     say(&s.notices);
     eprintln!(
-        "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s -> {}",
+        "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s{} -> {}",
         s.width,
         s.height,
         s.place,
         s.seconds,
         100.0 * s.flipped,
         s.t_max,
+        nan_note(s.nan),
         s.output.display()
     );
     Ok(())

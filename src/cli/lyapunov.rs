@@ -25,7 +25,7 @@ pub enum MethodArg {
 #[derive(Args, Debug, Clone)]
 pub struct LyapunovArgs {
     /// Grid size: N (square) or WxH, one pendulum per pixel.
-    #[arg(long, default_value = "512", value_parser = parse_size)]
+    #[arg(long, default_value = "512", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: (u32, u32),
     /// theta1 range along x, MIN:MAX in rad; or one angle for a single-point convergence run.
     #[arg(long, default_value = "-pi:pi", value_parser = parse_angles, allow_hyphen_values = true)]
@@ -48,6 +48,7 @@ pub struct LyapunovArgs {
     /// Renormalisation interval (s), a multiple of dt.
     #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
     pub renorm: f64,
+    /// How the divergence of nearby starts is measured.
     #[arg(long, value_enum, default_value = "tangent")]
     pub method: MethodArg,
     /// Twin separation (Euclidean in theta1, omega1, theta2, omega2), for --method twin.
@@ -171,13 +172,14 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
             let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
             say(&s.notices);
             eprintln!(
-                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s), colour range {:.2}..{:.2} /s -> {}",
+                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s){}, colour range {:.2}..{:.2} /s -> {}",
                 s.width,
                 s.height,
                 s.place,
                 s.seconds,
                 100.0 * s.chaotic,
                 s.t_max,
+                super::flip::nan_note(s.nan),
                 s.range.0,
                 s.range.1,
                 s.output.display()

@@ -61,6 +61,40 @@ pub enum Command {
     Info,
     /// Throughput of the GPU and CPU paths on FLIP-512, optionally beside the peers.
     Bench(bench::BenchArgs),
+    /// A shell completion script on standard output, e.g.
+    /// `chaoscope completions bash > ~/.local/share/bash-completion/completions/chaoscope`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::Cli;
+
+    /// Every flag and argument of every command says what it is.
+    #[test]
+    fn every_flag_has_help() {
+        let cli = Cli::command();
+        let missing: Vec<String> = cli
+            .get_subcommands()
+            .flat_map(|sub| {
+                sub.get_arguments()
+                    .filter(|a| {
+                        let id = a.get_id().as_str();
+                        let help = a.get_help().map(|h| h.to_string()).unwrap_or_default();
+                        !["help", "version"].contains(&id) && help.trim().is_empty()
+                    })
+                    .map(|a| format!("{} {}", sub.get_name(), a.get_id()))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        assert!(missing.is_empty(), "flags without help: {missing:?}");
+    }
 }
 
 /// The job a parsed command line describes (for checking that a stored command line
@@ -89,6 +123,7 @@ impl Command {
             Command::Fit(_) => "fit",
             Command::Info => "info",
             Command::Bench(_) => "bench",
+            Command::Completions { .. } => "completions",
         }
     }
 
@@ -102,7 +137,7 @@ impl Command {
             Command::Traces(a) => Job::Traces(a.job()?),
             Command::Phase(a) => Job::Phase(a.job()?),
             Command::Fit(a) => Job::Fit(a.job()),
-            Command::Info | Command::Bench(_) => return Ok(None),
+            Command::Info | Command::Bench(_) | Command::Completions { .. } => return Ok(None),
         }))
     }
 }
@@ -121,13 +156,23 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
     let result = match &cli.command {
         Command::Flip(args) => flip::run(args, monitor),
         Command::Lyapunov(args) => lyapunov::run(args, monitor),
-        Command::Trajectory(args) => trajectory::run(args),
+        Command::Trajectory(args) => trajectory::run(args, monitor),
         Command::Sweep(args) => sweep::run(args, monitor),
         Command::Traces(args) => traces::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
-        Command::Fit(args) => fit::run(args),
+        Command::Fit(args) => fit::run(args, monitor),
         Command::Info => info::run(),
         Command::Bench(args) => bench::run(args, monitor),
+        Command::Completions { shell } => {
+            use clap::CommandFactory;
+            clap_complete::generate(
+                *shell,
+                &mut Cli::command(),
+                "chaoscope",
+                &mut std::io::stdout(),
+            );
+            Ok(())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,8 +6,20 @@ use clap::builder::{PossibleValuesParser, TypedValueParser};
 use crate::app::sweep::{Param, Vary};
 use crate::spec::{Range, Spread};
 
+/// A value that is really the next flag: its own value was left out (`--l1 --cw 2`).
+fn not_a_flag(s: &str) -> Result<(), String> {
+    if s.trim_start().starts_with("--") {
+        Err(format!(
+            "the value is missing (found the flag `{s}` instead)"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// A number, or a multiple or fraction of pi: `1.5`, `-pi`, `pi/2`, `2pi`, `-0.5*pi`, `3pi/4`.
 pub fn parse_number(s: &str) -> Result<f64, String> {
+    not_a_flag(s)?;
     let t = s.trim().to_ascii_lowercase();
     if let Some(i) = t.find("pi") {
         let (head, tail) = (&t[..i], &t[i + 2..]);
@@ -35,6 +47,7 @@ pub fn parse_number(s: &str) -> Result<f64, String> {
 
 /// `MIN:MAX`.
 pub fn parse_range(s: &str) -> Result<Range, String> {
+    not_a_flag(s)?;
     let (a, b) = s
         .split_once(':')
         .ok_or_else(|| format!("`{s}` must be MIN:MAX, e.g. -pi:pi"))?;
@@ -46,6 +59,7 @@ pub fn parse_range(s: &str) -> Result<Range, String> {
 
 /// `N` (square) or `WxH`.
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    not_a_flag(s)?;
     let side = |v: &str| {
         v.trim()
             .parse::<u32>()
@@ -59,6 +73,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 /// `A` or `A,B` (one value for both).
 pub fn parse_pair(s: &str) -> Result<(f64, f64), String> {
+    not_a_flag(s)?;
     match s.split_once(',') {
         Some((a, b)) => Ok((parse_number(a)?, parse_number(b)?)),
         None => parse_number(s).map(|v| (v, v)),
@@ -67,6 +82,7 @@ pub fn parse_pair(s: &str) -> Result<(f64, f64), String> {
 
 /// An angle (rad, `pi` understood) or a position error with a unit: `5mm`, `0.5cm`, `0.005m`.
 pub fn parse_spread(s: &str) -> Result<Spread, String> {
+    not_a_flag(s)?;
     let t = s.trim();
     for (suffix, factor) in [("mm", 1e-3), ("cm", 1e-2), ("m", 1.0)] {
         if let Some(v) = t.strip_suffix(suffix) {
@@ -82,6 +98,7 @@ pub fn parse_spread(s: &str) -> Result<Spread, String> {
 
 /// `PARAM=FROM:TO`.
 pub fn parse_vary(s: &str) -> Result<Vary, String> {
+    not_a_flag(s)?;
     let (name, range) = s
         .split_once('=')
         .ok_or_else(|| format!("`{s}` must be PARAM=FROM:TO, e.g. m2/m1=0.5:2"))?;
@@ -103,6 +120,7 @@ pub fn parse_vary(s: &str) -> Result<Vary, String> {
 
 /// `THETA1,THETA2`.
 pub fn parse_point(s: &str) -> Result<(f64, f64), String> {
+    not_a_flag(s)?;
     let (a, b) = s
         .split_once(',')
         .ok_or_else(|| format!("`{s}` must be THETA1,THETA2"))?;
@@ -122,6 +140,28 @@ pub fn parse_angles(s: &str) -> Result<Angles, String> {
     } else {
         parse_number(s).map(Angles::Point)
     }
+}
+
+/// A whole number >= 0 that fits `T`: negative ones are read and refused here, by clap with
+/// the flag's name, rather than taken for flags.
+fn parse_whole<T: TryFrom<i128>>(s: &str) -> Result<T, String> {
+    not_a_flag(s)?;
+    let n = s
+        .trim()
+        .parse::<i128>()
+        .map_err(|_| format!("`{s}` is not a whole number"))?;
+    if n < 0 {
+        return Err(format!("{n} is negative; it must be 0 or more"));
+    }
+    T::try_from(n).map_err(|_| format!("{n} is too large"))
+}
+
+pub fn parse_u32(s: &str) -> Result<u32, String> {
+    parse_whole(s)
+}
+
+pub fn parse_usize(s: &str) -> Result<usize, String> {
+    parse_whole(s)
 }
 
 /// One of the library's named choices (`values`, named by `name`), listed in the help.

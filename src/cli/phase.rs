@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, StepArgs, backend_parser, colormap_parser};
-use super::parse::{parse_number, parse_spread};
+use super::parse::{parse_number, parse_spread, parse_u32};
 use super::{command_line, say};
 use crate::app::phase::{self, PhaseJob};
 use crate::engine::Backend;
@@ -32,15 +32,15 @@ pub struct PhaseArgs {
     #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
     pub omega2: f64,
     /// Number of runs (starts spread as for `traces`); their time densities add up.
-    #[arg(long, default_value = "1")]
+    #[arg(long, default_value = "1", value_parser = parse_u32, allow_hyphen_values = true)]
     pub runs: u32,
     /// Distance between the runs' starts: rad, or a position error with a unit (5mm).
-    #[arg(long, default_value = "0.01", value_parser = parse_spread)]
+    #[arg(long, default_value = "0.01", value_parser = parse_spread, allow_hyphen_values = true)]
     pub spread: Spread,
     #[command(flatten)]
     pub step: StepArgs,
     /// Side of each panel (px).
-    #[arg(long, default_value = "600")]
+    #[arg(long, default_value = "600", value_parser = parse_u32, allow_hyphen_values = true)]
     pub size: u32,
     /// The single pendulum (length l1): libration and rotation orbits and the separatrix
     /// that divides them, the report's figure 4.

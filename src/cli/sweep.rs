@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
-use super::parse::{parse_number, parse_point, parse_vary};
+use super::parse::{parse_number, parse_point, parse_u32, parse_vary};
 use super::{command_line, say};
 use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
 use crate::engine::Backend;
@@ -32,23 +32,23 @@ pub struct SweepArgs {
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "zoom")]
     pub zoom_to: Option<(f64, f64)>,
     /// Total magnification of the last frame over the first.
-    #[arg(long, value_parser = parse_number, requires = "zoom_to")]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true, requires = "zoom_to")]
     pub zoom: Option<f64>,
     /// Number of frames.
-    #[arg(long, default_value = "24")]
+    #[arg(long, default_value = "24", value_parser = parse_u32, allow_hyphen_values = true)]
     pub frames: u32,
     /// Frames per second of the animation.
-    #[arg(long, default_value = "8", value_parser = parse_number)]
+    #[arg(long, default_value = "8", value_parser = parse_number, allow_hyphen_values = true)]
     pub fps: f64,
     #[command(flatten)]
     pub grid: GridArgs,
     #[command(flatten)]
     pub step: StepArgs,
     /// Lyapunov frames: renormalisation interval (s).
-    #[arg(long, default_value = "0.1", value_parser = parse_number)]
+    #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
     pub renorm: f64,
     /// Lyapunov frames: top of the colour range (1/s), the same for every frame.
-    #[arg(long, default_value = "2", value_parser = parse_number)]
+    #[arg(long, default_value = "2", value_parser = parse_number, allow_hyphen_values = true)]
     pub ftle_max: f64,
     #[command(flatten)]
     pub physical: PhysicalArgs,

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, StartArgs, backend_parser};
-use super::parse::{parse_number, parse_spread};
+use super::parse::{parse_number, parse_spread, parse_u32};
 use super::{command_line, say};
 use crate::app::traces::{self, TracesJob};
 use crate::engine::Backend;
@@ -18,10 +18,10 @@ pub struct TracesArgs {
     #[command(flatten)]
     pub start: StartArgs,
     /// Number of releases.
-    #[arg(long, default_value = "3")]
+    #[arg(long, default_value = "3", value_parser = parse_u32, allow_hyphen_values = true)]
     pub runs: u32,
     /// Distance between releases: rad (0.01) or a position error (5mm, the report's).
-    #[arg(long, default_value = "5mm", value_parser = parse_spread)]
+    #[arg(long, default_value = "5mm", value_parser = parse_spread, allow_hyphen_values = true)]
     pub spread: Spread,
     /// Exposure time (s): the report's photographs were 3.2 s.
     #[arg(long, default_value = "3.2", value_parser = parse_number, allow_hyphen_values = true)]
@@ -30,7 +30,7 @@ pub struct TracesArgs {
     #[arg(long, default_value = "0.001", value_parser = parse_number, allow_hyphen_values = true)]
     pub dt: f64,
     /// Picture side (px).
-    #[arg(long, default_value = "1024")]
+    #[arg(long, default_value = "1024", value_parser = parse_u32, allow_hyphen_values = true)]
     pub size: u32,
     #[command(flatten)]
     pub physical: PhysicalArgs,

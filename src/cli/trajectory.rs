@@ -10,6 +10,7 @@ use super::{command_line, say};
 use crate::app::trajectory::{self, TrajectoryJob};
 use crate::engine::Backend;
 use crate::error::Result;
+use crate::monitor::Monitor;
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("10")))]
@@ -44,10 +45,10 @@ impl TrajectoryArgs {
     }
 }
 
-pub fn run(args: &TrajectoryArgs) -> Result<()> {
+pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<()> {
     let job = args.job()?;
     let command = command_line::trajectory(&job);
-    let s = trajectory::run(&job, command, &mut std::io::stdout().lock())?;
+    let s = trajectory::run(&job, command, monitor, &mut std::io::stdout().lock())?;
     say(&s.notices);
     Ok(())
 }

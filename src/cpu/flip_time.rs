@@ -10,7 +10,8 @@ use crate::monitor::Monitor;
 use crate::spec::{FlipSpec, Stepping};
 
 /// Time (s) until |theta1| or |theta2| first exceeds pi, located inside the step by cubic
-/// Hermite interpolation; +inf if that does not happen by `t_max`. With `early_exit`, starts
+/// Hermite interpolation; +inf if that does not happen by `t_max`, NaN if the state becomes
+/// infinite or NaN first. With `early_exit`, starts
 /// below the no-flip energy are not integrated at all.
 pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool) -> f64 {
     if early_exit && p.energy(&start) < p.no_flip_threshold(f64::EPSILON) {
@@ -52,8 +53,11 @@ pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool
     }
     if flip <= stepping.t_max {
         flip
-    } else {
+    } else if y.to_array().iter().all(|v| v.is_finite()) {
         f64::INFINITY
+    } else {
+        // The state left the numbers (the step blew up): no flip time, not "never".
+        f64::NAN
     }
 }
 

@@ -265,14 +265,22 @@ pub fn trajectory_with_work(
     start: State,
     dt: f64,
     steps: u32,
-) -> (Vec<State>, Vec<f64>) {
+    monitor: &Monitor,
+) -> Result<(Vec<State>, Vec<f64>)> {
     let (mut states, mut work) = (vec![start], vec![0.0]);
-    for _ in 0..steps {
+    monitor.start("steps", steps as u64);
+    for k in 0..steps {
+        // Progress and Ctrl-C every 2^16 steps (about 10 ms).
+        if k % (1 << 16) == 0 {
+            monitor.check()?;
+            monitor.advance((steps - k).min(1 << 16) as u64);
+        }
         let (next, w) = rk4_step_with_work(p, states.last().expect("start"), dt);
         states.push(next);
         work.push(work.last().expect("start") + w);
     }
-    (states, work)
+    monitor.finish();
+    Ok((states, work))
 }
 
 /// States at t = 0, dt, 2 dt, ... n dt (n + 1 states).

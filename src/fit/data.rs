@@ -27,6 +27,8 @@ fn bad(path: &Path, line: usize, what: String) -> Error {
 pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| Error::invalid("file", format!("cannot read {}: {e}", path.display())))?;
+    // A byte-order mark (as some spreadsheets write) is not part of the first column's name.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut lines = text
         .lines()
         .enumerate()
@@ -139,6 +141,26 @@ pub fn fit_pivot(frames: &[Frame]) -> Result<Pivot> {
         (r, j)
     };
     let fit = least_squares(residuals, DVector::from_vec(vec![cx, cy, r]), 100);
+    // The upper mass swings on an arc around the pivot: positions that span only a sliver of
+    // a circle (or a line) give no pivot, only a far-away guess. Ask for an arc that the
+    // radius does not dwarf: a bounding box whose diagonal is at least 1/20 of it.
+    let (x, y) = (frames.iter().map(|f| f.x1), frames.iter().map(|f| f.y1));
+    let extent = |v: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+        hi - lo
+    };
+    let spread = extent(&mut x.clone()).hypot(extent(&mut y.clone()));
+    if !(fit.params[2].is_finite() && spread >= 0.05 * fit.params[2]) {
+        return Err(Error::invalid(
+            "file",
+            format!(
+                "the upper mass's positions span {spread:.3} m, too little of a circle (radius {:.3} m) to locate the pivot: they must swing through an arc",
+                fit.params[2]
+            ),
+        ));
+    }
     Ok(Pivot {
         x: fit.params[0],
         y: fit.params[1],

@@ -9,6 +9,7 @@ use crate::cpu;
 use crate::engine::Engine;
 use crate::error::Result;
 use crate::model::{Params, State};
+use crate::monitor::Monitor;
 
 /// Simulation steps per data interval (~1/300 s for 1/3 s frames).
 const SUBSTEPS: u32 = 100;
@@ -124,6 +125,7 @@ pub fn fit_model(
     angles: &[(f64, f64)],
     spec: &ModelFitSpec,
     engine: &Engine,
+    monitor: &Monitor,
 ) -> Result<ModelFit> {
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     let data = measured(frames, pivot);
@@ -178,7 +180,7 @@ pub fn fit_model(
     let mut best = (f64::INFINITY, guess, 0.0);
     for &c in &dampings {
         let p = with_damping(&spec.params, c, c);
-        let runs = engine.ensemble(&p, &starts, dt, n_sub, SUBSTEPS)?;
+        let runs = engine.ensemble(&p, &starts, dt, n_sub, SUBSTEPS, monitor)?;
         for (s, run) in starts.iter().zip(&runs) {
             let sim: Vec<[f64; 4]> = run.iter().map(|y| positions(&p, y)).collect();
             let e = cost(&sim);

@@ -5,7 +5,7 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::render;
+use crate::render::{self, Outputs};
 
 fn err<E: std::fmt::Debug>(e: E) -> Error {
     Error::plot(e)
@@ -17,21 +17,30 @@ const SIMULATED: RGBColor = RGBColor(214, 39, 40);
 const FIT_A: RGBColor = RGBColor(31, 119, 180);
 const FIT_B: RGBColor = RGBColor(44, 160, 44);
 
+/// An axis range over the finite `values`, padded by `pad` of its span; 0..1 when there are
+/// none or their span overflows (plotters never ends on a non-finite range).
 fn range(values: impl Iterator<Item = f64>, pad: f64) -> std::ops::Range<f64> {
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
-    let m = ((hi - lo) * pad).max(1e-9);
-    (lo - m)..(hi + m)
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    let m = ((hi - lo) * pad).max(1e-9 * (1.0 + lo.abs().max(hi.abs())));
+    if (lo - m).is_finite() && (hi + m).is_finite() && lo <= hi {
+        (lo - m)..(hi + m)
+    } else {
+        0.0..1.0
+    }
 }
 
-fn save(path: &Path, w: u32, h: u32, rgb: &[u8], title: &str) -> Result<()> {
-    render::write_png(path, w, h, rgb, &[("Title".into(), title.into())])
+fn save(out: &mut Outputs, path: &Path, w: u32, h: u32, rgb: &[u8], title: &str) -> Result<()> {
+    out.png(path, w, h, rgb, &[("Title".into(), title.into())])
 }
 
 /// Measured (dots) and simulated (line) x1, y1, x2, y2 over time up to `t_end`, one panel
 /// each.
 pub fn positions(
+    out: &mut Outputs,
     path: &Path,
     t: &[f64],
     measured: &[[f64; 4]],
@@ -95,11 +104,12 @@ pub fn positions(
         }
         root.present().map_err(err)?;
     }
-    save(path, w, h, &rgb, "measured and simulated positions")
+    save(out, path, w, h, &rgb, "measured and simulated positions")
 }
 
 /// Energy with error bars and both decay fits.
 pub fn energy(
+    out: &mut Outputs,
     path: &Path,
     t: &[f64],
     e: &[f64],
@@ -171,11 +181,11 @@ pub fn energy(
             .map_err(err)?;
         root.present().map_err(err)?;
     }
-    save(path, w, h, &rgb, "energy and decay fits")
+    save(out, path, w, h, &rgb, "energy and decay fits")
 }
 
 /// omega against theta for both arms, as measured (central differences).
-pub fn phase(path: &Path, arms: [&[(f64, f64)]; 2]) -> Result<()> {
+pub fn phase(out: &mut Outputs, path: &Path, arms: [&[(f64, f64)]; 2]) -> Result<()> {
     render::register_font();
     let (w, h) = (1200u32, 550u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
@@ -216,5 +226,5 @@ pub fn phase(path: &Path, arms: [&[(f64, f64)]; 2]) -> Result<()> {
         }
         root.present().map_err(err)?;
     }
-    save(path, w, h, &rgb, "measured phase portraits")
+    save(out, path, w, h, &rgb, "measured phase portraits")
 }

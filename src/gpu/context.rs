@@ -29,9 +29,26 @@ impl GpuContext {
 
     async fn new_async() -> Result<Self> {
         let instance = instance();
-        let adapter = wgpu::util::initialize_adapter_from_env_or_default(&instance, None)
-            .await
-            .map_err(|_| Error::NoAdapter)?;
+        // As wgpu::util::initialize_adapter_from_env_or_default, which panics when no adapter
+        // has the name asked for: here that is no adapter, and `auto` falls back.
+        let adapter = match std::env::var("WGPU_ADAPTER_NAME") {
+            Ok(name) => {
+                let name = name.to_lowercase();
+                instance
+                    .enumerate_adapters(wgpu::Backends::all())
+                    .await
+                    .into_iter()
+                    .find(|a| a.get_info().name.to_lowercase().contains(&name))
+                    .ok_or(Error::NoAdapter)?
+            }
+            Err(_) => instance
+                .request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::from_env().unwrap_or_default(),
+                    ..Default::default()
+                })
+                .await
+                .map_err(|_| Error::NoAdapter)?,
+        };
         let limits = adapter.limits();
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {

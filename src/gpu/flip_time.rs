@@ -2,7 +2,9 @@
 //! inside the tiled loop of `tiled.rs`.
 
 use super::context::{GpuContext, map_read, read_f32s};
-use super::layout::{FLIP_BYTES_PER_PIXEL, FLIP_TIME_WGSL, GpuParams, GpuPendulum, NEVER};
+use super::layout::{
+    FLIP_BYTES_PER_PIXEL, FLIP_TIME_WGSL, GpuParams, GpuPendulum, NEVER, NONFINITE,
+};
 use super::pipeline::{
     Variants, bind_group, layouts, params_buffer, record_dispatch, shader_module, storage_buffer,
 };
@@ -172,7 +174,9 @@ impl FlipTimeKernel {
             Ok(times
                 .into_iter()
                 .map(|t| {
-                    if t == NEVER || t > t_max {
+                    if t == NONFINITE {
+                        f32::NAN
+                    } else if t == NEVER || t > t_max {
                         f32::INFINITY
                     } else {
                         t

@@ -13,6 +13,9 @@ pub const WORKGROUP_SIZE: u32 = 64;
 /// The flip-time sentinel for "has not flipped" inside the shader (times are never negative).
 pub const NEVER: f32 = -1.0;
 
+/// The flip-time sentinel for "the state became infinite or NaN before any flip".
+pub const NONFINITE: f32 = -2.0;
+
 /// Mirror of WGSL `Pendulum`: the state y = (theta1, omega1, theta2, omega2) and the cos and
 /// sin of the angles carried along, u = (cos theta1, sin theta1, cos theta2, sin theta2).
 /// The flip kernel stores one per pixel (`states[2 i]`, `states[2 i + 1]`), trajectories
@@ -92,29 +95,35 @@ pub struct GpuParams {
 const _: () = assert!(std::mem::size_of::<GpuParams>() == 144);
 
 impl GpuParams {
-    /// The coefficients are formed in f64 and rounded once.
+    /// The coefficients are formed in f64 and rounded once. Everything measured in mass
+    /// (inertias, torques, energies, masses) is scaled by the power of two nearest 1 / A: the
+    /// motion does not depend on the mass scale, and f32 then holds any mass without
+    /// overflow or underflow. A power of two scales exactly, so results keep every bit.
     pub fn new(p: &Params, dt: f64) -> Self {
         let i = p.inertia();
+        let s = (-i.a.log2().round()).exp2();
+        let m = |x: f64| (x * s) as f32;
         let [drag_bob1, drag_bob2, drag_rod1, drag_rod2] = p.losses.drag_factors();
+        let (mass_total, mass_lower) = p.moving_mass();
         GpuParams {
-            a: i.a as f32,
-            b: i.b as f32,
-            c: i.c as f32,
-            p: i.p as f32,
-            q: i.q as f32,
+            a: m(i.a),
+            b: m(i.b),
+            c: m(i.c),
+            p: m(i.p),
+            q: m(i.q),
             l1: p.l1 as f32,
             l2: p.l2 as f32,
             dt: dt as f32,
-            no_flip_energy: p.no_flip_threshold(f32::EPSILON as f64) as f32,
-            joint1: p.losses.joint1 as f32,
-            joint2: p.losses.joint2 as f32,
-            drag_bob1: drag_bob1 as f32,
-            drag_bob2: drag_bob2 as f32,
-            drag_rod1: drag_rod1 as f32,
-            drag_rod2: drag_rod2 as f32,
+            no_flip_energy: m(p.no_flip_threshold(f32::EPSILON as f64)),
+            joint1: m(p.losses.joint1),
+            joint2: m(p.losses.joint2),
+            drag_bob1: m(drag_bob1),
+            drag_bob2: m(drag_bob2),
+            drag_rod1: m(drag_rod1),
+            drag_rod2: m(drag_rod2),
             g: p.g as f32,
-            mass_total: p.moving_mass().0 as f32,
-            mass_lower: p.moving_mass().1 as f32,
+            mass_total: m(mass_total),
+            mass_lower: m(mass_lower),
             bearing: (p.losses.bearing * p.losses.bearing_radius) as f32,
             ..Default::default()
         }
@@ -136,7 +145,7 @@ impl GpuParams {
 /// Full WGSL source of a kernel: Rust constants, then `common.wgsl`, then the kernel file.
 pub fn shader_source(kernel: &str) -> String {
     format!(
-        "const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst NEVER: f32 = {NEVER:?};\n{}\n{}",
+        "const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst NEVER: f32 = {NEVER:?};\nconst NONFINITE: f32 = {NONFINITE:?};\n{}\n{}",
         include_str!("../../shaders/common.wgsl"),
         kernel
     )

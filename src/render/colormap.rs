@@ -48,6 +48,10 @@ impl FlipColors {
 /// The colour of never-flipped pixels: black, below the darkest gradient colour used.
 pub const NEVER_RGB: [u8; 3] = [0, 0, 0];
 
+/// The colour of pixels whose result is NaN (the integration left the numbers): a pure
+/// green that none of the colour maps' ends or the "never" black resemble.
+pub const NAN_RGB: [u8; 3] = [0, 255, 0];
+
 /// The colour maps `--colormap` offers (colorgrad presets): sequential ones for times and
 /// exponents, cyclic ones (sinebow, rainbow) for angles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,6 +135,8 @@ pub fn flip_colors(field: &Field, colors: FlipColors) -> Vec<u8> {
             let c = if t.is_finite() {
                 let u = ((f64::from(t).max(colors.t_lo).ln() - lo) / (hi - lo)).clamp(0.0, 1.0);
                 table[(u * (LUT_SIZE - 1) as f64).round() as usize]
+            } else if t.is_nan() {
+                NAN_RGB
             } else {
                 NEVER_RGB
             };
@@ -170,12 +176,12 @@ pub fn ftle_colors(field: &Field, range: (f32, f32), colormap: Colormap) -> Vec<
     rgb.par_chunks_mut(3)
         .zip(field.data.par_iter())
         .for_each(|(px, &x)| {
-            let u = if x.is_nan() {
-                0.0
+            if x.is_nan() {
+                px.copy_from_slice(&NAN_RGB);
             } else {
-                ((x - lo) / (hi - lo)).clamp(0.0, 1.0)
-            };
-            px.copy_from_slice(&table[(u * (LUT_SIZE - 1) as f32).round() as usize]);
+                let u = ((x - lo) / (hi - lo)).clamp(0.0, 1.0);
+                px.copy_from_slice(&table[(u * (LUT_SIZE - 1) as f32).round() as usize]);
+            }
         });
     rgb
 }

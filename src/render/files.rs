@@ -1,32 +1,261 @@
-//! Atomic writes of PNG and .npy files.
+//! Atomic writes of PNG, .npy, GIF and text files, one file or a set: each is written to a
+//! temporary file beside its destination (created with the user's umask) and renamed into
+//! place only when every file of the set is complete, so no half-written or half-updated
+//! output is left behind, not even on a second Ctrl-C ([`remove_pending`]).
 
+use std::borrow::Cow;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use crate::error::{Error, Result};
 use crate::field::Field;
+use crate::monitor::Monitor;
 
-/// Writes `path` through a temporary file in the same directory, renamed into place only
-/// when `write` has succeeded; on any error (or a panic) the temporary file is removed.
+/// Temporary files being written, for removal when the process is stopped hard.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary file still being written: for a signal handler that is about to
+/// exit the process.
+pub fn remove_pending() {
+    if let Ok(pending) = PENDING.lock() {
+        for path in pending.iter() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// A temporary file, listed in PENDING while it exists.
+struct Staged {
+    tmp: tempfile::NamedTempFile,
+    path: PathBuf,
+}
+
+impl Staged {
+    fn new(dir: &Path) -> std::io::Result<Self> {
+        // Mode 0666 at creation, so the user's umask applies (tempfile's default is 0600,
+        // which the rename would keep).
+        #[allow(unused_mut)]
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(".chaoscope-");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let tmp = builder.tempfile_in(dir)?;
+        let path = tmp.path().to_path_buf();
+        PENDING.lock().expect("pending list").push(path.clone());
+        Ok(Staged { tmp, path })
+    }
+
+    fn persist(self, to: &Path) -> std::io::Result<()> {
+        // Drop (which forgets the path) runs when `self` goes out of scope; the file is
+        // renamed through a borrow of it.
+        std::fs::rename(self.tmp.path(), to)
+    }
+}
+
+fn forget(path: &Path) {
+    if let Ok(mut pending) = PENDING.lock() {
+        pending.retain(|p| p != path);
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        // The NamedTempFile removes the file itself (unless persisted).
+        forget(&self.path);
+    }
+}
+
+/// An error about the file at `path`.
+fn file_error(path: &Path, e: std::io::Error) -> Error {
+    Error::File {
+        path: path.to_path_buf(),
+        source: e,
+    }
+}
+
+/// Files written as a set: staged one by one, renamed into place together by
+/// [`Outputs::commit`]; dropped uncommitted, they leave nothing.
+#[derive(Default)]
+pub struct Outputs {
+    staged: Vec<(Staged, PathBuf)>,
+}
+
+impl Outputs {
+    pub fn new() -> Self {
+        Outputs::default()
+    }
+
+    /// Stages `path`, written by `write`.
+    pub fn write(
+        &mut self,
+        path: &Path,
+        write: impl FnOnce(&mut BufWriter<&std::fs::File>) -> Result<()>,
+    ) -> Result<()> {
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        std::fs::create_dir_all(dir).map_err(|e| file_error(dir, e))?;
+        let staged = Staged::new(dir).map_err(|e| file_error(dir, e))?;
+        {
+            let mut w = BufWriter::new(staged.tmp.as_file());
+            write(&mut w).map_err(|e| match e {
+                Error::Io(e) => file_error(path, e),
+                e => e,
+            })?;
+            w.flush().map_err(|e| file_error(path, e))?;
+        }
+        self.staged.push((staged, path.to_path_buf()));
+        Ok(())
+    }
+
+    /// An 8-bit RGB PNG with tEXt chunks (keyword, text).
+    pub fn png(
+        &mut self,
+        path: &Path,
+        width: u32,
+        height: u32,
+        rgb: &[u8],
+        text: &[(String, String)],
+    ) -> Result<()> {
+        self.write(path, |w| {
+            encode_png(w, path, (width, height), 1, None, text, |_| {
+                Ok(Cow::Borrowed(rgb))
+            })
+        })
+    }
+
+    /// An animated PNG (APNG, lossless) of `count` RGB frames of `size`, made one at a time
+    /// by `frame(k)`, `delay_ms` per frame, looping forever; viewers without APNG support
+    /// show the first frame.
+    pub fn apng(
+        &mut self,
+        path: &Path,
+        size: (u32, u32),
+        count: usize,
+        delay_ms: u16,
+        text: &[(String, String)],
+        mut frame: impl FnMut(usize) -> Result<Vec<u8>>,
+    ) -> Result<()> {
+        self.write(path, |w| {
+            encode_png(w, path, size, count, Some(delay_ms), text, |k| {
+                frame(k).map(Cow::Owned)
+            })
+        })
+    }
+
+    /// float32 array of shape (height, width), C order, row 0 = top of the image.
+    pub fn npy(&mut self, path: &Path, field: &Field) -> Result<()> {
+        self.npy_shaped(
+            path,
+            &[field.height as u64, field.width as u64],
+            &field.data,
+        )
+    }
+
+    /// float32 array of any `shape`, C order.
+    pub fn npy_shaped(&mut self, path: &Path, shape: &[u64], data: &[f32]) -> Result<()> {
+        use npyz::WriterBuilder;
+        self.write(path, |w| {
+            let mut npy = npyz::WriteOptions::new()
+                .default_dtype()
+                .shape(shape)
+                .writer(w)
+                .begin_nd()?;
+            npy.extend(data.iter().copied())?;
+            npy.finish()?;
+            Ok(())
+        })
+    }
+
+    /// An animated GIF of equally sized RGB frames (each quantised to its own 256-colour
+    /// palette), `delay_cs` hundredths of a second per frame, looping forever.
+    pub fn gif(
+        &mut self,
+        path: &Path,
+        width: u32,
+        height: u32,
+        frames: &[Vec<u8>],
+        delay_cs: u16,
+    ) -> Result<()> {
+        let gif_err = |e: gif::EncodingError| match e {
+            gif::EncodingError::Io(e) => file_error(path, e),
+            e => Error::format(path, e),
+        };
+        let (w, h) = (
+            u16::try_from(width)
+                .map_err(|_| Error::invalid("size", "GIF frames are at most 65535 pixels wide"))?,
+            u16::try_from(height)
+                .map_err(|_| Error::invalid("size", "GIF frames are at most 65535 pixels high"))?,
+        );
+        self.write(path, |out| {
+            let mut encoder = gif::Encoder::new(out, w, h, &[]).map_err(gif_err)?;
+            encoder.set_repeat(gif::Repeat::Infinite).map_err(gif_err)?;
+            for rgb in frames {
+                // Speed 10: NeuQuant's usual trade of palette quality for time.
+                let mut frame = gif::Frame::from_rgb_speed(w, h, rgb, 10);
+                frame.delay = delay_cs;
+                encoder.write_frame(&frame).map_err(gif_err)?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Renames every staged file into place, unless the user asked to stop: then nothing is.
+    pub fn commit(self, monitor: &Monitor) -> Result<()> {
+        monitor.check()?;
+        self.commit_now()
+    }
+
+    fn commit_now(self) -> Result<()> {
+        for (staged, path) in self.staged {
+            staged.persist(&path).map_err(|e| file_error(&path, e))?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes `path` atomically (a set of one).
 pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&std::fs::File>) -> Result<()>,
 ) -> Result<()> {
-    let dir = match path.parent() {
+    let mut set = Outputs::new();
+    set.write(path, write)?;
+    set.commit_now()
+}
+
+/// That `path` can be written: its nearest existing ancestor is a directory that takes
+/// files (the rest is made when the file is written), and `path` is not a directory.
+/// Checked before any work, creating nothing; the error names `field`.
+pub fn check_writable(field: &'static str, path: &Path) -> Result<()> {
+    let mut dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    std::fs::create_dir_all(dir)?;
-    let tmp = tempfile::Builder::new()
-        .prefix(".chaoscope-")
-        .tempfile_in(dir)?;
-    {
-        let mut w = BufWriter::new(tmp.as_file());
-        write(&mut w)?;
-        w.flush()?;
+    while !dir.exists() {
+        dir = match dir.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
     }
-    tmp.persist(path).map_err(|e| Error::Io(e.error))?;
-    Ok(())
+    let problem = if path.is_dir() {
+        Some("is a directory".to_string())
+    } else if !dir.is_dir() {
+        Some(format!("{} is not a directory", dir.display()))
+    } else {
+        Staged::new(dir)
+            .err()
+            .map(|e| format!("cannot write in {}: {e}", dir.display()))
+    };
+    match problem {
+        Some(p) => Err(Error::invalid(field, format!("{}: {p}", path.display()))),
+        None => Ok(()),
+    }
 }
 
 /// An 8-bit RGB PNG with tEXt chunks (keyword, text).
@@ -37,27 +266,32 @@ pub fn write_png(
     rgb: &[u8],
     text: &[(String, String)],
 ) -> Result<()> {
-    encode_png(path, width, height, &[rgb], None, text)
+    let mut set = Outputs::new();
+    set.png(path, width, height, rgb, text)?;
+    set.commit_now()
 }
 
-/// RGB frames as a PNG, animated (APNG, `delay_ms` a frame, looping) when `delay_ms` is given.
-fn encode_png(
+/// RGB frames as a PNG into `w`, animated (APNG, `delay_ms` a frame, looping) when
+/// `delay_ms` is given; `path` names the file in errors.
+fn encode_png<'a>(
+    w: &mut BufWriter<&std::fs::File>,
     path: &Path,
-    width: u32,
-    height: u32,
-    frames: &[&[u8]],
+    (width, height): (u32, u32),
+    count: usize,
     delay_ms: Option<u16>,
     text: &[(String, String)],
+    mut frame: impl FnMut(usize) -> Result<Cow<'a, [u8]>>,
 ) -> Result<()> {
-    let png_err = |e: png::EncodingError| Error::format(path, e);
-    write_atomic(path, |w| {
+    let png_err = |e: png::EncodingError| match e {
+        png::EncodingError::IoError(e) => file_error(path, e),
+        e => Error::format(path, e),
+    };
+    {
         let mut encoder = png::Encoder::new(w, width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         if let Some(delay) = delay_ms {
-            encoder
-                .set_animated(frames.len() as u32, 0)
-                .map_err(png_err)?;
+            encoder.set_animated(count as u32, 0).map_err(png_err)?;
             encoder.set_frame_delay(delay, 1000).map_err(png_err)?;
         }
         for (key, value) in text {
@@ -66,35 +300,25 @@ fn encode_png(
                 .map_err(png_err)?;
         }
         let mut writer = encoder.write_header().map_err(png_err)?;
-        for frame in frames {
-            writer.write_image_data(frame).map_err(png_err)?;
+        for k in 0..count {
+            writer.write_image_data(&frame(k)?).map_err(png_err)?;
         }
         writer.finish().map_err(png_err)
-    })
+    }
 }
 
 /// float32 array of shape (height, width), C order, row 0 = top of the image.
 pub fn write_npy(path: &Path, field: &Field) -> Result<()> {
-    write_npy_shaped(
-        path,
-        &[field.height as u64, field.width as u64],
-        &field.data,
-    )
+    let mut set = Outputs::new();
+    set.npy(path, field)?;
+    set.commit_now()
 }
 
 /// float32 array of any `shape`, C order.
 pub fn write_npy_shaped(path: &Path, shape: &[u64], data: &[f32]) -> Result<()> {
-    use npyz::WriterBuilder;
-    write_atomic(path, |w| {
-        let mut npy = npyz::WriteOptions::new()
-            .default_dtype()
-            .shape(shape)
-            .writer(w)
-            .begin_nd()?;
-        npy.extend(data.iter().copied())?;
-        npy.finish()?;
-        Ok(())
-    })
+    let mut set = Outputs::new();
+    set.npy_shaped(path, shape, data)?;
+    set.commit_now()
 }
 
 /// A decoded 8-bit RGB PNG: width, height, pixels and its tEXt chunks.
@@ -107,7 +331,7 @@ pub struct Png {
 
 pub fn read_png(path: &Path) -> Result<Png> {
     let err = |e: png::DecodingError| Error::format(path, e);
-    let file = std::io::BufReader::new(std::fs::File::open(path)?);
+    let file = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| file_error(path, e))?);
     let mut reader = png::Decoder::new(file).read_info().map_err(err)?;
     let mut rgb = vec![0; reader.output_buffer_size().unwrap_or(0)];
     let frame = reader.next_frame(&mut rgb).map_err(err)?;
@@ -129,20 +353,6 @@ pub fn read_png(path: &Path) -> Result<Png> {
     })
 }
 
-/// An animated PNG (APNG, lossless) of equally sized RGB frames, `delay_ms` per frame,
-/// looping forever; viewers without APNG support show the first frame.
-pub fn write_apng(
-    path: &Path,
-    width: u32,
-    height: u32,
-    frames: &[Vec<u8>],
-    delay_ms: u16,
-    text: &[(String, String)],
-) -> Result<()> {
-    let frames: Vec<&[u8]> = frames.iter().map(Vec::as_slice).collect();
-    encode_png(path, width, height, &frames, Some(delay_ms), text)
-}
-
 /// An animated GIF of equally sized RGB frames (each quantised to its own 256-colour
 /// palette), `delay_cs` hundredths of a second per frame, looping forever.
 pub fn write_gif(
@@ -152,22 +362,7 @@ pub fn write_gif(
     frames: &[Vec<u8>],
     delay_cs: u16,
 ) -> Result<()> {
-    let gif_err = |e: gif::EncodingError| Error::format(path, e);
-    let (w, h) = (
-        u16::try_from(width)
-            .map_err(|_| Error::invalid("size", "GIF frames are at most 65535 pixels wide"))?,
-        u16::try_from(height)
-            .map_err(|_| Error::invalid("size", "GIF frames are at most 65535 pixels high"))?,
-    );
-    write_atomic(path, |out| {
-        let mut encoder = gif::Encoder::new(out, w, h, &[]).map_err(gif_err)?;
-        encoder.set_repeat(gif::Repeat::Infinite).map_err(gif_err)?;
-        for rgb in frames {
-            // Speed 10: NeuQuant's usual trade of palette quality for time.
-            let mut frame = gif::Frame::from_rgb_speed(w, h, rgb, 10);
-            frame.delay = delay_cs;
-            encoder.write_frame(&frame).map_err(gif_err)?;
-        }
-        Ok(())
-    })
+    let mut set = Outputs::new();
+    set.gif(path, width, height, frames, delay_cs)?;
+    set.commit_now()
 }

@@ -12,10 +12,11 @@ pub use annotate::{
     Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks, register_font,
 };
 pub use colormap::{
-    Colormap, FlipColors, NEVER_RGB, flip_colors, ftle_colors, ftle_range, ftle_table,
+    Colormap, FlipColors, NAN_RGB, NEVER_RGB, flip_colors, ftle_colors, ftle_range, ftle_table,
 };
 pub use exposure::{Bobs, Film, View, draw_arms};
 pub use files::{
-    Png, read_png, write_apng, write_atomic, write_gif, write_npy, write_npy_shaped, write_png,
+    Outputs, Png, check_writable, read_png, remove_pending, write_atomic, write_gif, write_npy,
+    write_npy_shaped, write_png,
 };
 pub use maps::{Picture, PictureSpec, flip_picture, lyapunov_picture, provenance};
