@@ -209,8 +209,13 @@ impl Engine {
         stride: u32,
         monitor: &Monitor,
     ) -> Result<Vec<Vec<State>>> {
-        let per_chunk =
-            (STEPS_PER_DISPATCH / steps.max(1) as u64).clamp(1, starts.len().max(1) as u64);
+        // A GPU dispatch's worth of pendulum-steps a chunk; on the CPU a sixteenth (~0.1 s).
+        let budget = if self.gpu.is_some() {
+            STEPS_PER_DISPATCH
+        } else {
+            STEPS_PER_DISPATCH / 16
+        };
+        let per_chunk = (budget / steps.max(1) as u64).clamp(1, starts.len().max(1) as u64);
         monitor.start("runs", starts.len() as u64);
         let mut runs = Vec::with_capacity(starts.len());
         for chunk in starts.chunks(per_chunk as usize) {

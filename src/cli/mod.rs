@@ -142,6 +142,50 @@ impl Command {
     }
 }
 
+impl Cli {
+    /// Parses `args` (the program name first) as `Cli::try_parse_from` does, after one
+    /// check of its own: a flag that takes a value followed directly by another flag of the
+    /// command. Numbers may start with `-` (`-pi`), so clap would take `--cw` in
+    /// `--l1 --cw 2` as the value of `--l1` and then stop at the stray `2` without naming
+    /// `--l1`; this names it.
+    pub fn parse_args<I, T>(args: I) -> Result<Cli, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        use clap::CommandFactory;
+        let args: Vec<std::ffi::OsString> = args.into_iter().map(Into::into).collect();
+        let mut command = Cli::command();
+        let words: Vec<String> = args
+            .iter()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        if let Some(sub) = words.get(1).and_then(|name| command.find_subcommand(name)) {
+            let takes_value = |long: &str| {
+                sub.get_arguments()
+                    .find(|a| a.get_long() == Some(long))
+                    .map(|a| a.get_action().takes_values())
+            };
+            for pair in words[2..].windows(2) {
+                let (Some(flag), Some(next)) =
+                    (pair[0].strip_prefix("--"), pair[1].strip_prefix("--"))
+                else {
+                    continue;
+                };
+                if takes_value(flag) == Some(true) && takes_value(next).is_some() {
+                    return Err(command.error(
+                        clap::error::ErrorKind::InvalidValue,
+                        format!(
+                            "a value is required for '--{flag}' but none was supplied (found the flag '--{next}' instead)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Cli::try_parse_from(args)
+    }
+}
+
 /// Notices from a run, one a line.
 fn say(notices: &[String]) {
     for n in notices {
