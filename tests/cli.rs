@@ -328,3 +328,52 @@ fn bench_reports_every_mode_of_both_paths() {
         "{text}"
     );
 }
+
+#[test]
+fn json_summaries_on_stdout() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("j.png");
+    let out = chaoscope()
+        .args([
+            "flip",
+            "--size",
+            "16",
+            "--t-max",
+            "2",
+            "--backend",
+            "cpu",
+            "--json",
+            "--output",
+        ])
+        .arg(&png)
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let v: serde_json::Value = serde_json::from_slice(&out).expect("one JSON object");
+    assert_eq!(v["command"], "flip");
+    assert_eq!(v["width"], 16);
+    assert_eq!(v["files"][0], png.display().to_string());
+    assert!(
+        v["flipped"]
+            .as_f64()
+            .is_some_and(|f| (0.0..=1.0).contains(&f))
+    );
+    assert!(v["seconds"].as_f64().is_some());
+    let out = chaoscope()
+        .args(["info", "--json"])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let v: serde_json::Value = serde_json::from_slice(&out).expect("one JSON object");
+    assert!(v["adapters"].is_array(), "{v}");
+    // Without --output the CSV itself is on standard output: no room for JSON.
+    chaoscope()
+        .args(["trajectory", "--theta1", "1", "--theta2", "1", "--json"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--json"));
+}

@@ -41,7 +41,7 @@ pub struct BenchJob {
 }
 
 /// One row of the report: the median of the repetitions of one path and mode.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Row {
     pub path: String,
     pub mode: &'static str,
@@ -49,7 +49,7 @@ pub struct Row {
     pub steps_per_s: f64,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct BenchReport {
     pub adapter: String,
     pub rows: Vec<Row>,

@@ -38,7 +38,7 @@ pub struct FitJob {
     pub backend: Backend,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct FitSummary {
     pub pivot: (f64, f64),
     /// (value, error) of each arm length (m).
@@ -52,6 +52,8 @@ pub struct FitSummary {
     pub agrees_until: f64,
     pub tolerance: f64,
     pub output: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -250,6 +252,16 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
         agrees_until: fit.agrees_until,
         tolerance: job.tolerance,
         output: out.clone(),
+        files: [
+            "positions.png",
+            "energy.png",
+            "phase.png",
+            "derived.csv",
+            "summary.json",
+        ]
+        .iter()
+        .map(|f| out.join(f))
+        .collect(),
         notices,
     })
 }

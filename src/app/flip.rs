@@ -32,7 +32,7 @@ impl FlipJob {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct FlipSummary {
     pub width: u32,
     pub height: u32,
@@ -45,6 +45,8 @@ pub struct FlipSummary {
     pub nan: usize,
     pub t_max: f64,
     pub output: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -78,6 +80,10 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         nan: field.data.iter().filter(|t| t.is_nan()).count(),
         t_max: job.spec.stepping.t_max,
         output: job.output.clone(),
+        files: [Some(job.output.clone()), job.data.clone()]
+            .into_iter()
+            .flatten()
+            .collect(),
         notices,
     })
 }

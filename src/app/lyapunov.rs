@@ -27,7 +27,7 @@ pub struct LyapunovMapJob {
     pub data: Option<PathBuf>,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct LyapunovMapSummary {
     pub width: u32,
     pub height: u32,
@@ -41,6 +41,8 @@ pub struct LyapunovMapSummary {
     /// The colour range (1/s).
     pub range: (f32, f32),
     pub output: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -102,6 +104,10 @@ pub fn run_map(
         t_max: job.spec.stepping.t_max,
         range,
         output: job.output.clone(),
+        files: [Some(job.output.clone()), job.data.clone()]
+            .into_iter()
+            .flatten()
+            .collect(),
         notices,
     })
 }
@@ -116,12 +122,14 @@ pub struct LyapunovPointJob {
     pub output: Option<PathBuf>,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct LyapunovPointSummary {
     pub t_max: f64,
     /// The exponent at t-max (1/s).
     pub ftle: f64,
     pub output: Option<PathBuf>,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -166,6 +174,7 @@ pub fn run_point(
         t_max: job.spec.stepping.t_max,
         ftle: trace.last(),
         output: job.output.clone(),
+        files: job.output.iter().cloned().collect(),
         notices,
     })
 }

@@ -51,9 +51,11 @@ impl PhaseJob {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct PhaseSummary {
     pub output: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -76,6 +78,7 @@ pub fn run(job: &PhaseJob, command: String, monitor: &Monitor) -> Result<PhaseSu
     files.commit(monitor)?;
     Ok(PhaseSummary {
         output: job.output.clone(),
+        files: vec![job.output.clone()],
         notices,
     })
 }

@@ -211,13 +211,15 @@ fn frame_path(dir: &Path, k: u32) -> PathBuf {
     dir.join(format!("frame_{k:04}.png"))
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct SweepSummary {
     pub frames: usize,
     /// Frames kept from an earlier, interrupted run of the same sweep.
     pub kept: usize,
     pub output: PathBuf,
     pub animation: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -322,6 +324,10 @@ pub fn run(
         frames: frames.len(),
         kept,
         output: job.output.clone(),
+        files: (0..frames.len())
+            .map(|k| frame_path(&job.output, k as u32))
+            .chain([animation.clone()])
+            .collect(),
         animation,
         notices,
     })

@@ -52,12 +52,14 @@ impl TracesJob {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct TracesSummary {
     pub runs: usize,
     pub exposure: f64,
     pub place: String,
     pub output: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -127,6 +129,10 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
         exposure: job.stepping.t_max,
         place: info.place().to_string(),
         output: job.output.clone(),
+        files: [Some(job.output.clone()), job.data.clone(), job.gif.clone()]
+            .into_iter()
+            .flatten()
+            .collect(),
         notices,
     })
 }

@@ -42,10 +42,12 @@ impl TrajectoryJob {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct TrajectorySummary {
     pub rows: usize,
     pub output: Option<PathBuf>,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
 
@@ -118,6 +120,7 @@ pub fn run(
     Ok(TrajectorySummary {
         rows: states.len().div_ceil(stride as usize),
         output: job.output.clone(),
+        files: job.output.iter().cloned().collect(),
         notices,
     })
 }

@@ -62,7 +62,7 @@ impl BenchArgs {
     }
 }
 
-pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &BenchArgs, monitor: &Monitor, as_json: bool) -> Result<serde_json::Value> {
     let job = args.job();
     // Before the minutes of GPU and CPU rows, not after them.
     if let Some(dir) = &job.peers
@@ -75,6 +75,9 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     }
     let r = bench::run(&job, monitor)?;
     say(&r.notices);
+    if as_json {
+        return super::json(&r);
+    }
     eprintln!("GPU: {}", r.adapter);
     println!(
         "FLIP-{} (RK4, dt {}, t_max {} s): medians of {} interleaved runs; cpu rows scaled from n={}",
@@ -105,5 +108,5 @@ pub fn run(args: &BenchArgs, monitor: &Monitor) -> Result<()> {
     for line in &r.ratios {
         println!("{line}");
     }
-    Ok(())
+    super::json(&r)
 }

@@ -6,7 +6,7 @@ use clap::Args;
 
 use super::args::{PhysicalArgs, backend_parser};
 use super::parse::{parse_number, parse_usize};
-use super::{command_line, say};
+use super::{command_line, json, say};
 use crate::app::fit::{self, FitJob};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -63,7 +63,7 @@ impl FitArgs {
     }
 }
 
-pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
     let s = fit::run(&job, command_line::fit(&job), monitor)?;
     say(&s.notices);
@@ -86,5 +86,5 @@ pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<()> {
         s.agrees_until - s.t0,
         s.output.display()
     );
-    Ok(())
+    json(&s)
 }

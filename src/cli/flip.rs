@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
-use super::{command_line, say};
+use super::{command_line, json, say};
 use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -70,7 +70,7 @@ pub fn nan_note(nan: usize) -> String {
     }
 }
 
-pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let s = flip::run(&job, command_line::flip(&job), monitor)?;
     say(&s.notices);
@@ -85,5 +85,5 @@ pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<()> {
         nan_note(s.nan),
         s.output.display()
     );
-    Ok(())
+    json(&s)
 }

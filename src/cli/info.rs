@@ -1,43 +1,81 @@
-//! `chaoscope info`: the adapters wgpu sees, the one a run would take, its limits.
+//! `chaoscope info`: the adapters wgpu sees, the one a run would take, its backend, limits
+//! and features.
+
+use serde_json::json;
 
 use crate::error::Result;
 use crate::gpu;
 
-pub fn run() -> Result<()> {
-    let adapters = gpu::list_adapters();
-    println!("adapters found: {}", adapters.len());
-    for a in &adapters {
-        let i = a.get_info();
-        println!(
-            "  - {} ({:?}, {:?}, driver {} {})",
-            i.name, i.backend, i.device_type, i.driver, i.driver_info
-        );
-    }
-    match gpu::GpuContext::new() {
-        Ok(ctx) => {
-            println!("chosen: {}", ctx.adapter_name());
-            let l = &ctx.limits;
+pub fn run(as_json: bool) -> Result<serde_json::Value> {
+    let adapters: Vec<_> = gpu::list_adapters()
+        .iter()
+        .map(|a| {
+            let i = a.get_info();
+            json!({
+                "name": i.name, "backend": format!("{:?}", i.backend),
+                "device_type": format!("{:?}", i.device_type),
+                "driver": i.driver, "driver_info": i.driver_info,
+            })
+        })
+        .collect();
+    let chosen = gpu::GpuContext::new().map(|ctx| {
+        let l = &ctx.limits;
+        let f = ctx.adapter_features;
+        json!({
+            "adapter": ctx.adapter_name(),
+            "backend": format!("{:?}", ctx.info.backend),
+            "max_storage_buffer_binding_size": l.max_storage_buffer_binding_size,
+            "max_buffer_size": l.max_buffer_size,
+            "max_compute_workgroups_per_dimension": l.max_compute_workgroups_per_dimension,
+            "max_compute_invocations_per_workgroup": l.max_compute_invocations_per_workgroup,
+            "shader_f64": f.contains(wgpu::Features::SHADER_F64),
+            "features": format!("{f:?}"),
+        })
+    });
+    if !as_json {
+        println!("adapters found: {}", adapters.len());
+        for a in &adapters {
             println!(
-                "  max_storage_buffer_binding_size: {} MiB",
-                l.max_storage_buffer_binding_size >> 20
+                "  - {} ({}, {}, driver {} {})",
+                a["name"].as_str().unwrap_or(""),
+                a["backend"].as_str().unwrap_or(""),
+                a["device_type"].as_str().unwrap_or(""),
+                a["driver"].as_str().unwrap_or(""),
+                a["driver_info"].as_str().unwrap_or("")
             );
-            println!("  max_buffer_size: {} MiB", l.max_buffer_size >> 20);
-            println!(
-                "  max_compute_workgroups_per_dimension: {}",
-                l.max_compute_workgroups_per_dimension
-            );
-            println!(
-                "  max_compute_invocations_per_workgroup: {}",
-                l.max_compute_invocations_per_workgroup
-            );
-            let f = ctx.adapter_features;
-            println!(
-                "  adapter supports SHADER_F64: {}",
-                f.contains(wgpu::Features::SHADER_F64)
-            );
-            println!("  adapter features: {f:?}");
         }
-        Err(e) => println!("chosen: none ({e}); maps run on the CPU"),
+        match &chosen {
+            Ok(c) => {
+                println!(
+                    "chosen: {} (backend {})",
+                    c["adapter"].as_str().unwrap_or(""),
+                    c["backend"].as_str().unwrap_or("")
+                );
+                println!(
+                    "  max_storage_buffer_binding_size: {} MiB",
+                    c["max_storage_buffer_binding_size"].as_u64().unwrap_or(0) >> 20
+                );
+                println!(
+                    "  max_buffer_size: {} MiB",
+                    c["max_buffer_size"].as_u64().unwrap_or(0) >> 20
+                );
+                for key in [
+                    "max_compute_workgroups_per_dimension",
+                    "max_compute_invocations_per_workgroup",
+                ] {
+                    println!("  {key}: {}", c[key]);
+                }
+                println!("  adapter supports SHADER_F64: {}", c["shader_f64"]);
+                println!(
+                    "  adapter features: {}",
+                    c["features"].as_str().unwrap_or("")
+                );
+            }
+            Err(e) => println!("chosen: none ({e}); maps run on the CPU"),
+        }
     }
-    Ok(())
+    Ok(json!({
+        "adapters": adapters,
+        "chosen": chosen.ok(),
+    }))
 }

@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 
 use super::args::{PhysicalArgs, PictureArgs, backend_parser};
 use super::parse::{Angles, parse_angles, parse_number, parse_size};
-use super::{command_line, say};
+use super::{command_line, json, say};
 use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
@@ -166,7 +166,7 @@ impl LyapunovArgs {
     }
 }
 
-pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     match args.job()? {
         LyapunovJob::Map(job) => {
             let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
@@ -184,6 +184,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
                 s.range.1,
                 s.output.display()
             );
+            json(&s)
         }
         LyapunovJob::Point(job) => {
             let command = command_line::lyapunov_point(&job);
@@ -197,7 +198,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<()> {
                     path.display()
                 );
             }
+            json(&s)
         }
     }
-    Ok(())
 }

@@ -34,6 +34,10 @@ pub use lyapunov::LyapunovJob;
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// Also print the run's summary (figures, files written, where it ran, seconds) as one
+    /// JSON object on standard output, for scripts and notebooks.
+    #[arg(long, global = true)]
+    pub json: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -186,6 +190,18 @@ impl Cli {
     }
 }
 
+fn json_needs_output() -> crate::Error {
+    crate::Error::invalid(
+        "json",
+        "needs --output here: without it the CSV itself goes to standard output",
+    )
+}
+
+/// A run's summary as JSON.
+fn json(summary: &impl serde::Serialize) -> crate::Result<serde_json::Value> {
+    serde_json::to_value(summary).map_err(|e| crate::Error::Format(format!("summary: {e}")))
+}
+
 /// Notices from a run, one a line.
 fn say(notices: &[String]) {
     for n in notices {
@@ -197,7 +213,11 @@ fn say(notices: &[String]) {
 /// an interruption 130, other failures 1.
 pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
     let command = cli.command.name();
+    let started = std::time::Instant::now();
     let result = match &cli.command {
+        // Their CSV goes to standard output without --output: no room for JSON there too.
+        Command::Trajectory(a) if cli.json && a.output.is_none() => Err(json_needs_output()),
+        Command::Lyapunov(a) if cli.json && a.output.is_none() => Err(json_needs_output()),
         Command::Flip(args) => flip::run(args, monitor),
         Command::Lyapunov(args) => lyapunov::run(args, monitor),
         Command::Trajectory(args) => trajectory::run(args, monitor),
@@ -205,8 +225,8 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Traces(args) => traces::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
         Command::Fit(args) => fit::run(args, monitor),
-        Command::Info => info::run(),
-        Command::Bench(args) => bench::run(args, monitor),
+        Command::Info => info::run(cli.json),
+        Command::Bench(args) => bench::run(args, monitor, cli.json),
         Command::Completions { shell } => {
             use clap::CommandFactory;
             clap_complete::generate(
@@ -215,9 +235,20 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
                 "chaoscope",
                 &mut std::io::stdout(),
             );
-            Ok(())
+            Ok(serde_json::Value::Null)
         }
     };
+    let result = result.map(|mut summary| {
+        if cli.json && !summary.is_null() {
+            if let Some(object) = summary.as_object_mut() {
+                object.insert("command".into(), command.into());
+                object
+                    .entry("seconds")
+                    .or_insert(started.elapsed().as_secs_f64().into());
+            }
+            println!("{summary}");
+        }
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Error::InvalidSpec { field, reason }) => {

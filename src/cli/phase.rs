@@ -6,7 +6,7 @@ use clap::Args;
 
 use super::args::{PhysicalArgs, StepArgs, backend_parser, colormap_parser};
 use super::parse::{parse_number, parse_spread, parse_u32};
-use super::{command_line, say};
+use super::{command_line, json, say};
 use crate::app::phase::{self, PhaseJob};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -81,10 +81,10 @@ impl PhaseArgs {
     }
 }
 
-pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let s = phase::run(&job, command_line::phase(&job), monitor)?;
     say(&s.notices);
     eprintln!("phase portrait -> {}", s.output.display());
-    Ok(())
+    json(&s)
 }

@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
 use super::parse::{parse_number, parse_point, parse_u32, parse_vary};
-use super::{command_line, say};
+use super::{command_line, json, say};
 use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -88,7 +88,7 @@ impl SweepArgs {
     }
 }
 
-pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let s = sweep::run(
         &job,
@@ -104,5 +104,5 @@ pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<()> {
         s.output.display(),
         s.animation.display()
     );
-    Ok(())
+    json(&s)
 }

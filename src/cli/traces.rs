@@ -6,7 +6,7 @@ use clap::Args;
 
 use super::args::{PhysicalArgs, StartArgs, backend_parser};
 use super::parse::{parse_number, parse_spread, parse_u32};
-use super::{command_line, say};
+use super::{command_line, json, say};
 use crate::app::traces::{self, TracesJob};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -68,7 +68,7 @@ impl TracesArgs {
     }
 }
 
-pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let s = traces::run(&job, command_line::traces(&job), monitor)?;
     say(&s.notices);
@@ -79,5 +79,5 @@ pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<()> {
         s.place,
         s.output.display()
     );
-    Ok(())
+    json(&s)
 }

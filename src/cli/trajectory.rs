@@ -6,7 +6,7 @@ use clap::Args;
 
 use super::args::{PhysicalArgs, StartArgs, StepArgs, backend_parser};
 use super::parse::parse_number;
-use super::{command_line, say};
+use super::{command_line, json, say};
 use crate::app::trajectory::{self, TrajectoryJob};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -45,10 +45,10 @@ impl TrajectoryArgs {
     }
 }
 
-pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<()> {
+pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let command = command_line::trajectory(&job);
     let s = trajectory::run(&job, command, monitor, &mut std::io::stdout().lock())?;
     say(&s.notices);
-    Ok(())
+    json(&s)
 }
