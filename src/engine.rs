@@ -198,8 +198,7 @@ impl Engine {
     }
 
     /// Trajectories of all `starts` over `steps` steps of `dt`, keeping the start and every
-    /// `stride`-th state (GPU: one invocation per run; CPU: runs in parallel). Runs go in
-    /// chunks of bounded work, with progress and Ctrl-C between them.
+    /// `stride`-th state (GPU: one invocation per run; CPU: runs in parallel), all at once.
     pub fn ensemble(
         &self,
         p: &Params,
@@ -209,29 +208,65 @@ impl Engine {
         stride: u32,
         monitor: &Monitor,
     ) -> Result<Vec<Vec<State>>> {
-        // A GPU dispatch's worth of pendulum-steps a chunk; on the CPU a sixteenth (~0.1 s).
+        let mut runs = Vec::with_capacity(starts.len());
+        self.ensemble_each(p, starts, dt, steps, stride, monitor, |_, chunk| {
+            runs.extend(chunk);
+            Ok(())
+        })?;
+        Ok(runs)
+    }
+
+    /// Runs per chunk of an ensemble: at most a dispatch's worth of pendulum-steps (on the
+    /// CPU a sixteenth, ~0.1 s) and [`ENSEMBLE_CHUNK_STATES`] kept states, at least one run.
+    pub fn ensemble_chunk(&self, runs: usize, steps: u32, stride: u32) -> usize {
         let budget = if self.gpu.is_some() {
             STEPS_PER_DISPATCH
         } else {
             STEPS_PER_DISPATCH / 16
         };
-        let per_chunk = (budget / steps.max(1) as u64).clamp(1, starts.len().max(1) as u64);
+        let by_work = budget / steps.max(1) as u64;
+        let by_memory = ENSEMBLE_CHUNK_STATES / (steps / stride.max(1) + 1) as u64;
+        by_work.min(by_memory).clamp(1, runs.max(1) as u64) as usize
+    }
+
+    /// As [`Engine::ensemble`], handing each chunk of runs (in order, with the index of its
+    /// first run) to `each` as it is done: memory holds one chunk, whatever the number of
+    /// runs. Progress and Ctrl-C between chunks.
+    #[allow(clippy::too_many_arguments)]
+    pub fn ensemble_each(
+        &self,
+        p: &Params,
+        starts: &[State],
+        dt: f64,
+        steps: u32,
+        stride: u32,
+        monitor: &Monitor,
+        mut each: impl FnMut(usize, Vec<Vec<State>>) -> Result<()>,
+    ) -> Result<()> {
+        let per_chunk = self.ensemble_chunk(starts.len(), steps, stride);
         monitor.start("runs", starts.len() as u64);
-        let mut runs = Vec::with_capacity(starts.len());
-        for chunk in starts.chunks(per_chunk as usize) {
+        for (k, chunk) in starts.chunks(per_chunk).enumerate() {
             monitor.check()?;
-            match &self.gpu {
-                Some(k) => runs.extend(k.trajectory().run(&k.ctx, p, chunk, dt, steps, stride)?),
-                None => runs.par_extend(chunk.par_iter().map(|s| {
-                    cpu::trajectory(p, *s, dt, steps)
-                        .into_iter()
-                        .step_by(stride as usize)
-                        .collect::<Vec<_>>()
-                })),
-            }
+            let runs = match &self.gpu {
+                Some(g) => g.trajectory().run(&g.ctx, p, chunk, dt, steps, stride)?,
+                None => chunk
+                    .par_iter()
+                    .map(|s| {
+                        cpu::trajectory(p, *s, dt, steps)
+                            .into_iter()
+                            .step_by(stride as usize)
+                            .collect::<Vec<_>>()
+                    })
+                    .collect(),
+            };
+            each(k * per_chunk, runs)?;
             monitor.advance(chunk.len() as u64);
         }
         monitor.finish();
-        Ok(runs)
+        Ok(())
     }
 }
+
+/// Most states an ensemble chunk keeps (32 bytes each on the host, 16 in the GPU buffer):
+/// 128 MiB, within every device's storage binding.
+pub const ENSEMBLE_CHUNK_STATES: u64 = 1 << 22;

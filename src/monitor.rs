@@ -11,18 +11,28 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::error::{Error, Result};
 
-/// Seconds between log lines when stderr is not a terminal.
-const LOG_EVERY: Duration = Duration::from_secs(10);
+/// Seconds between log lines when stderr is not a terminal, unless the environment's
+/// CHAOSCOPE_PROGRESS_SECONDS says otherwise.
+fn log_every() -> Duration {
+    std::env::var("CHAOSCOPE_PROGRESS_SECONDS")
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .map_or(Duration::from_secs(10), Duration::from_secs_f64)
+}
 
 #[derive(Clone)]
 pub struct Monitor {
     bar: ProgressBar,
     /// Log lines instead of a bar (stderr is not a terminal).
     log: Option<Arc<Mutex<LogState>>>,
+    /// The current phase's whole work, when a caller knows it (see `estimate`).
+    estimate: Arc<Mutex<Option<f64>>>,
     cancel: Arc<AtomicBool>,
 }
 
 struct LogState {
+    every: Duration,
     phase: String,
     total: u64,
     done: u64,
@@ -36,6 +46,7 @@ impl Monitor {
         Monitor {
             bar: ProgressBar::hidden(),
             log: None,
+            estimate: Arc::default(),
             cancel: Arc::new(AtomicBool::new(false)),
         }
     }
@@ -51,6 +62,7 @@ impl Monitor {
             },
             log: logs.then(|| {
                 Arc::new(Mutex::new(LogState {
+                    every: log_every(),
                     phase: String::new(),
                     total: 0,
                     done: 0,
@@ -58,6 +70,7 @@ impl Monitor {
                     last: Instant::now(),
                 }))
             }),
+            estimate: Arc::default(),
             cancel,
         }
     }
@@ -67,6 +80,7 @@ impl Monitor {
         Monitor {
             bar: ProgressBar::hidden(),
             log: None,
+            estimate: Arc::default(),
             cancel: self.cancel.clone(),
         }
     }
@@ -89,12 +103,42 @@ impl Monitor {
         {
             let now = Instant::now();
             *s = LogState {
+                every: s.every,
                 phase: message.to_string(),
                 total,
                 done: 0,
                 started: now,
                 last: now,
             };
+        }
+    }
+
+    /// Says how much work the next phase will take in all, when known better than its
+    /// running estimate (`start` keeps it for the phase it starts).
+    pub fn estimate(&self, units: f64) {
+        if let Ok(mut e) = self.estimate.lock() {
+            *e = Some(units);
+        }
+    }
+
+    /// The whole phase's estimated work, if one was given.
+    pub fn estimated(&self) -> Option<f64> {
+        self.estimate.lock().ok().and_then(|e| *e)
+    }
+
+    /// Work done so far in this phase.
+    pub fn position(&self) -> u64 {
+        self.bar.position()
+    }
+
+    /// Sets the phase's total to the work done so far plus `units` still expected.
+    pub fn expect(&self, units: u64) {
+        let done = self.bar.position();
+        self.bar.set_length(done + units);
+        if let Some(log) = &self.log
+            && let Ok(mut s) = log.lock()
+        {
+            s.total = s.done + units;
         }
     }
 
@@ -105,7 +149,7 @@ impl Monitor {
         {
             s.done = (s.done + units).min(s.total);
             let now = Instant::now();
-            if now - s.last >= LOG_EVERY {
+            if now - s.last >= s.every {
                 s.last = now;
                 let elapsed = (now - s.started).as_secs_f64();
                 let fraction = s.done as f64 / s.total.max(1) as f64;
@@ -127,6 +171,9 @@ impl Monitor {
 
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+        if let Ok(mut e) = self.estimate.lock() {
+            *e = None;
+        }
     }
 
     /// Err(Interrupted) once the user asked to stop.

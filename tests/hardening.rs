@@ -581,3 +581,30 @@ fn completions_and_the_bench_peers_directory() {
         "checked before timing"
     );
 }
+
+/// The memory estimate reads the process's own limit (here `ulimit -v`), not only what the
+/// machine has free: a map that cannot fit is refused before any work.
+#[cfg(unix)]
+#[test]
+fn a_map_larger_than_the_process_may_take_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let bin = assert_cmd::cargo::cargo_bin("chaoscope");
+    let started = Instant::now();
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 1300000 && exec \"$0\" flip --size 16384 --backend cpu --output \"$1\"")
+        .arg(&bin)
+        .arg(dir.path().join("big.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--size") && stderr.contains("MiB"),
+        "{stderr}"
+    );
+    assert!(
+        started.elapsed() < Duration::from_secs(5),
+        "refused before the work"
+    );
+}

@@ -408,3 +408,66 @@ fn phase_portraits_render_both_arms_and_the_single_pendulum() {
         assert!(text(&png, "chaoscope:command").starts_with("chaoscope phase"));
     }
 }
+
+/// More releases than one chunk holds are streamed (two passes, nothing kept): the .npy still
+/// holds every run exactly as the CPU integrates it, and the GIF every frame.
+#[test]
+fn many_releases_stream_through_bounded_memory() {
+    use chaoscope::model::{Params, State};
+    use chaoscope::spec::{Spread, releases};
+    let dir = tempfile::tempdir().unwrap();
+    let (npy, gif_path) = (dir.path().join("r.npy"), dir.path().join("r.gif"));
+    // 2500 runs of 500 steps: the CPU takes 2^20 pendulum-steps a chunk, 2097 runs.
+    chaoscope()
+        .args([
+            "traces",
+            "--theta1",
+            "2.4",
+            "--theta2",
+            "2",
+            "--runs",
+            "2500",
+            "--exposure",
+            "0.5",
+        ])
+        .args([
+            "--spread",
+            "0.01",
+            "--size",
+            "64",
+            "--backend",
+            "cpu",
+            "--output",
+        ])
+        .arg(dir.path().join("r.png"))
+        .arg("--data")
+        .arg(&npy)
+        .arg("--gif")
+        .arg(&gif_path)
+        .assert()
+        .success();
+    let (shape, data) = read_npy(&npy);
+    assert_eq!(shape, vec![2500, 501, 4]);
+    let p = Params::default();
+    let starts = releases(&p, State::at_rest(2.4, 2.0), 2500, Spread::Radians(0.01));
+    for k in [0, 2096, 2097, 2499] {
+        let run = chaoscope::cpu::trajectory(&p, starts[k], 0.001, 500);
+        for (i, s) in run.iter().enumerate().step_by(50) {
+            let q = p.positions(s);
+            let at = (k * 501 + i) * 4;
+            assert_eq!(
+                &data[at..at + 4],
+                &[q.x1 as f32, q.y1 as f32, q.x2 as f32, q.y2 as f32],
+                "run {k}, sample {i}"
+            );
+        }
+    }
+    let mut decoder = gif::DecodeOptions::new()
+        .read_info(std::fs::File::open(&gif_path).unwrap())
+        .unwrap();
+    let mut frames = 0;
+    while decoder.read_next_frame().unwrap().is_some() {
+        frames += 1;
+    }
+    assert_eq!(frames, 13, "25 frames a second of exposure");
+}

@@ -91,14 +91,7 @@ fn double_pendulum_portraits(
 ) -> Result<(Vec<u8>, u32, u32)> {
     let p = &job.params;
     let starts = releases(p, job.start, job.runs, job.spread);
-    let runs = engine.ensemble(
-        p,
-        &starts,
-        job.stepping.dt,
-        job.stepping.steps(),
-        1,
-        monitor,
-    )?;
+    let (dt, steps) = (job.stepping.dt, job.stepping.steps());
     let pick = |arm: usize, s: &State| {
         if arm == 0 {
             (s.theta1, s.omega1)
@@ -106,6 +99,39 @@ fn double_pendulum_portraits(
             (s.theta2, s.omega2)
         }
     };
+    // Streamed, so memory holds one chunk of runs however many there are: a first pass finds
+    // each arm's largest |omega| (the panels' scale), a second adds the densities up. With
+    // a single chunk the runs are kept from the first pass instead of integrated again.
+    let single = engine.ensemble_chunk(starts.len(), steps, 1) >= starts.len();
+    let mut peak = [0.0f64; 2];
+    let mut kept = Vec::new();
+    engine.ensemble_each(p, &starts, dt, steps, 1, monitor, |_, runs| {
+        for (arm, peak) in peak.iter_mut().enumerate() {
+            let w = runs.iter().flatten().map(|s| pick(arm, s).1.abs());
+            *peak = w.fold(*peak, f64::max);
+        }
+        if single {
+            kept = runs;
+        }
+        Ok(())
+    })?;
+    let w_max = peak.map(|w| omega_extent(std::iter::once(w)));
+    let mut fields = [0, 1].map(|_| Field::new(job.size, job.size, 0.0));
+    let mut add = |runs: Vec<Vec<State>>| {
+        for (arm, field) in fields.iter_mut().enumerate() {
+            let arm_runs: Vec<Vec<(f64, f64)>> = runs
+                .iter()
+                .map(|r| r.iter().map(|s| pick(arm, s)).collect())
+                .collect();
+            add_phase_density(field, &arm_runs, dt, w_max[arm]);
+        }
+        Ok(())
+    };
+    if single {
+        add(kept)?;
+    } else {
+        engine.ensemble_each(p, &starts, dt, steps, 1, monitor, |_, runs| add(runs))?;
+    }
     let s = &job.start;
     let subtitle = format!(
         "{} run(s) from θ ({}, {}) rad, ω ({}, {}) rad/s · {} s · m {} / {} kg · l {} / {} m",
@@ -121,20 +147,15 @@ fn double_pendulum_portraits(
         p.l2
     );
     let mut panels = Vec::new();
-    for arm in 0..2 {
-        let arm_runs: Vec<Vec<(f64, f64)>> = runs
-            .iter()
-            .map(|r| r.iter().map(|s| pick(arm, s)).collect())
-            .collect();
-        let w_max = omega_extent(runs.iter().flatten().map(|s| pick(arm, s).1));
-        let field = phase_density(&arm_runs, job.stepping.dt, job.size, w_max);
+    for (arm, field) in fields.iter().enumerate() {
+        let w_max = w_max[arm];
         let (title, labels) = if arm == 0 {
             ("Upper arm: ω1 (rad/s) against θ1", ("θ1 (rad)", "ω1"))
         } else {
             ("Lower arm: ω2 (rad/s) against θ2", ("θ2 (rad)", "ω2"))
         };
         panels.push(phase_panel(
-            &field,
+            field,
             w_max,
             colormap,
             title.into(),
@@ -150,9 +171,15 @@ fn double_pendulum_portraits(
 /// omega from `w_max` (top) to `-w_max` along y. Each step's time is spread along the segment
 /// between its end points (at most half a cell apart), so fast stretches draw lines, not dots.
 pub fn phase_density(runs: &[Vec<(f64, f64)>], dt: f64, size: u32, w_max: f64) -> Field {
-    use std::f64::consts::PI;
     let mut field = Field::new(size, size, 0.0);
-    let n = size as f64;
+    add_phase_density(&mut field, runs, dt, w_max);
+    field
+}
+
+/// Adds the time `runs` spend per cell to `field` (as [`phase_density`]), run by run.
+pub fn add_phase_density(field: &mut Field, runs: &[Vec<(f64, f64)>], dt: f64, w_max: f64) {
+    use std::f64::consts::PI;
+    let n = field.width as f64;
     let to_cell = |theta: f64, omega: f64| {
         let t = (theta + PI).rem_euclid(2.0 * PI) - PI;
         (
@@ -184,7 +211,6 @@ pub fn phase_density(runs: &[Vec<(f64, f64)>], dt: f64, size: u32, w_max: f64) -
             }
         }
     }
-    field
 }
 
 /// A density panel: log of the time per cell over three decades below the maximum,

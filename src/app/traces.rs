@@ -1,7 +1,7 @@
 //! `traces`: the lab report's long-exposure light trails of releases from "the same" start
 //! (figures 7-9), and an animated GIF of the pendulums swinging and parting.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use super::{check_count, check_output};
 use crate::engine::{Backend, Engine};
@@ -78,50 +78,14 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
     let notices: Vec<String> = engine.notices();
     let info = engine.info();
     let starts = releases(p, job.start, job.runs, job.spread);
-    let runs = engine.ensemble(
-        p,
-        &starts,
-        job.stepping.dt,
-        job.stepping.steps(),
-        1,
-        monitor,
-    )?;
-    let positions: Vec<Vec<Bobs>> = runs
-        .iter()
-        .map(|r| {
-            r.iter()
-                .map(|s| {
-                    let q = p.positions(s);
-                    (q.x1, q.y1, q.x2, q.y2)
-                })
-                .collect()
-        })
-        .collect();
-    let view = View {
-        size: job.size,
-        reach: 1.08 * (p.l1 + p.l2),
-    };
-    let n = positions.len();
+    let n = starts.len();
     let colors: Vec<[u8; 3]> = (0..n).map(|k| run_color(k, n)).collect();
-    let dt = job.stepping.dt;
-    let speed = reference_speed(&positions, dt);
-    let mut film = Film::new(view);
-    expose(&mut film, &positions, &colors, dt, 0, usize::MAX);
-    let rgb = develop(&film, speed, &positions, &colors, None, n)?;
     let meta = render::provenance(command, &info);
     let mut files = Outputs::new();
-    files.png(&job.output, job.size, job.size, &rgb, &meta)?;
-    if let Some(path) = &job.data {
-        let samples = positions[0].len();
-        let flat: Vec<f32> = positions
-            .iter()
-            .flatten()
-            .flat_map(|q| [q.0 as f32, q.1 as f32, q.2 as f32, q.3 as f32])
-            .collect();
-        files.npy_shaped(path, &[n as u64, samples as u64, 4], &flat)?;
-    }
-    if let Some(path) = &job.gif {
-        write_gif(&mut files, path, job, &positions, &colors, speed, monitor)?;
+    if engine.ensemble_chunk(n, job.stepping.steps(), 1) >= n {
+        all_at_once(job, &engine, &starts, &colors, &meta, &mut files, monitor)?;
+    } else {
+        streamed(job, &engine, &starts, &colors, &meta, &mut files, monitor)?;
     }
     files.commit(monitor)?;
     Ok(TracesSummary {
@@ -135,6 +99,225 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
             .collect(),
         notices,
     })
+}
+
+fn bobs(p: &crate::model::Params, s: &State) -> Bobs {
+    let q = p.positions(s);
+    (q.x1, q.y1, q.x2, q.y2)
+}
+
+fn view(job: &TracesJob, size: u32) -> View {
+    View {
+        size,
+        reach: 1.08 * (job.params.l1 + job.params.l2),
+    }
+}
+
+/// The GIF's frames: 25 a second; frame f (from 1) shows the samples before `upto(f)`.
+const FPS: f64 = 25.0;
+
+fn gif_frames(job: &TracesJob) -> usize {
+    ((job.stepping.t_max * FPS).round() as usize).max(1)
+}
+
+fn upto(f: usize, frames: usize, samples: usize) -> usize {
+    ((f as f64 / frames as f64) * (samples - 1) as f64).round() as usize + 1
+}
+
+/// Every run in memory at once (an ensemble that fits one chunk).
+fn all_at_once(
+    job: &TracesJob,
+    engine: &Engine,
+    starts: &[State],
+    colors: &[[u8; 3]],
+    meta: &[(String, String)],
+    files: &mut Outputs,
+    monitor: &Monitor,
+) -> Result<()> {
+    let p = &job.params;
+    let (dt, steps) = (job.stepping.dt, job.stepping.steps());
+    let runs = engine.ensemble(p, starts, dt, steps, 1, monitor)?;
+    let positions: Vec<Vec<Bobs>> = runs
+        .iter()
+        .map(|r| r.iter().map(|s| bobs(p, s)).collect())
+        .collect();
+    let n = positions.len();
+    let speed = reference_speed(&positions, dt);
+    let mut film = Film::new(view(job, job.size));
+    expose(&mut film, &positions, colors, dt, 0, usize::MAX);
+    let rgb = develop(&film, speed, &positions, colors, None, n)?;
+    files.png(&job.output, job.size, job.size, &rgb, meta)?;
+    if let Some(path) = &job.data {
+        let samples = positions[0].len();
+        let flat: Vec<f32> = positions
+            .iter()
+            .flatten()
+            .flat_map(|q| [q.0 as f32, q.1 as f32, q.2 as f32, q.3 as f32])
+            .collect();
+        files.npy_shaped(path, &[n as u64, samples as u64, 4], &flat)?;
+    }
+    if let Some(path) = &job.gif {
+        let gview = view(job, job.size.min(480));
+        let (frames, samples) = (gif_frames(job), positions[0].len());
+        monitor.start("gif", frames as u64);
+        // One film, exposed a frame's worth further each time, each frame encoded as made.
+        let mut film = Film::new(gview);
+        let mut exposed = 0;
+        files.gif_from(path, (gview.size, gview.size), frames, delay_cs(), |k| {
+            monitor.check()?;
+            let upto = upto(k + 1, frames, samples);
+            expose(&mut film, &positions, colors, dt, exposed, upto);
+            exposed = upto - 1;
+            monitor.advance(1);
+            // Arms of at most 50 runs, or the picture is all arms.
+            develop(&film, speed, &positions, colors, Some(upto - 1), n.min(50))
+        })?;
+        monitor.finish();
+    }
+    Ok(())
+}
+
+fn delay_cs() -> u16 {
+    (100.0 / FPS).round() as u16
+}
+
+/// Runs in chunks, none kept: memory holds one chunk, the films and the GIF's per-frame
+/// films, whatever the number of runs. Two passes: the first finds the bin of a
+/// histogram that holds the median lower-bob speed, the second exposes the films, writes
+/// the .npy as it goes and keeps the speeds in that bin, from which the median comes out
+/// exactly as from all the speeds at once.
+fn streamed(
+    job: &TracesJob,
+    engine: &Engine,
+    starts: &[State],
+    colors: &[[u8; 3]],
+    meta: &[(String, String)],
+    files: &mut Outputs,
+    monitor: &Monitor,
+) -> Result<()> {
+    let p = &job.params;
+    let (dt, steps) = (job.stepping.dt, job.stepping.steps());
+    let (n, samples) = (starts.len(), steps as usize + 1);
+    let gview = view(job, job.size.min(480));
+    let frames = gif_frames(job);
+    if job.gif.is_some() {
+        let film_bytes = (gview.size as u64).pow(2) * 12;
+        spec::check_memory("gif", frames as u64 * film_bytes, "the GIF's films")?;
+    }
+    // Log-spaced speed bins over 1e-9 .. 1e9 m/s.
+    const BINS: usize = 1 << 16;
+    let bin = |v: f64| {
+        let u = (v.max(1e-9).log10() + 9.0) / 18.0 * BINS as f64;
+        if u.is_nan() {
+            0
+        } else {
+            u.clamp(0.0, (BINS - 1) as f64) as usize
+        }
+    };
+    let speeds = |pos: &[Bobs]| -> Vec<f64> {
+        pos.windows(2)
+            .map(|w| ((w[1].2 - w[0].2).powi(2) + (w[1].3 - w[0].3).powi(2)).sqrt() / dt)
+            .collect()
+    };
+    let mut histogram = vec![0u64; BINS];
+    engine.ensemble_each(p, starts, dt, steps, 1, monitor, |_, runs| {
+        for run in &runs {
+            let pos: Vec<Bobs> = run.iter().map(|s| bobs(p, s)).collect();
+            for v in speeds(&pos) {
+                histogram[bin(v)] += 1;
+            }
+        }
+        Ok(())
+    })?;
+    // The median's rank among all speeds (as select_nth_unstable at len / 2), and its bin.
+    let total: u64 = histogram.iter().sum();
+    let mid = total / 2;
+    let (mut median_bin, mut before) = (0, 0);
+    for (b, &count) in histogram.iter().enumerate() {
+        if before + count > mid {
+            median_bin = b;
+            break;
+        }
+        before += count;
+    }
+    let mut film = Film::new(view(job, job.size));
+    let mut increments: Vec<Film> = match job.gif {
+        Some(_) => (0..frames).map(|_| Film::new(gview)).collect(),
+        None => Vec::new(),
+    };
+    let arms_shown = n.min(50);
+    let mut arms: Vec<Vec<Bobs>> = Vec::new();
+    let mut candidates = Vec::new();
+    let mut second_pass = |sink: &mut dyn FnMut(&[f32]) -> Result<()>| {
+        engine.ensemble_each(p, starts, dt, steps, 1, monitor, |first, runs| {
+            for (j, run) in runs.iter().enumerate() {
+                let k = first + j;
+                let pos: Vec<Bobs> = run.iter().map(|s| bobs(p, s)).collect();
+                candidates.extend(speeds(&pos).into_iter().filter(|&v| bin(v) == median_bin));
+                let (one, color) = (std::slice::from_ref(&pos), &colors[k..=k]);
+                expose(&mut film, one, color, dt, 0, usize::MAX);
+                let mut exposed = 0;
+                for (f, increment) in increments.iter_mut().enumerate() {
+                    let upto = upto(f + 1, frames, samples);
+                    expose(increment, one, color, dt, exposed, upto);
+                    exposed = upto - 1;
+                }
+                if k < arms_shown && !increments.is_empty() {
+                    arms.push(
+                        (1..=frames)
+                            .map(|f| pos[upto(f, frames, samples) - 1])
+                            .collect(),
+                    );
+                }
+                let flat: Vec<f32> = pos
+                    .iter()
+                    .flat_map(|q| [q.0 as f32, q.1 as f32, q.2 as f32, q.3 as f32])
+                    .collect();
+                sink(&flat)?;
+            }
+            Ok(())
+        })
+    };
+    match &job.data {
+        Some(path) => files.write(path, |w| {
+            use npyz::WriterBuilder;
+            let mut npy = npyz::WriteOptions::new()
+                .default_dtype()
+                .shape(&[n as u64, samples as u64, 4])
+                .writer(w)
+                .begin_nd()?;
+            second_pass(&mut |flat| {
+                npy.extend(flat.iter().copied())?;
+                Ok(())
+            })?;
+            npy.finish()?;
+            Ok(())
+        })?,
+        None => second_pass(&mut |_| Ok(()))?,
+    }
+    let speed = if candidates.is_empty() {
+        1.0
+    } else {
+        let rank = (mid - before) as usize;
+        let (_, median, _) = candidates.select_nth_unstable_by(rank, f64::total_cmp);
+        (2.0 * *median).max(1e-3)
+    };
+    // The photograph: trails, and every run's arms at its release, grey and faint.
+    let released: Vec<Vec<Bobs>> = starts.iter().map(|s| vec![bobs(p, s)]).collect();
+    let rgb = develop(&film, speed, &released, colors, None, n)?;
+    files.png(&job.output, job.size, job.size, &rgb, meta)?;
+    if let Some(path) = &job.gif {
+        monitor.start("gif", frames as u64);
+        let mut shown = Film::new(gview);
+        files.gif_from(path, (gview.size, gview.size), frames, delay_cs(), |f| {
+            monitor.check()?;
+            shown.add(&increments[f]);
+            monitor.advance(1);
+            develop(&shown, speed, &arms, colors, Some(f), arms_shown)
+        })?;
+        monitor.finish();
+    }
+    Ok(())
 }
 
 /// Exposes the lower bobs' trails between samples `from` and `to` (exclusive) onto `film`.
@@ -201,52 +384,4 @@ fn reference_speed(positions: &[Vec<Bobs>], dt: f64) -> f64 {
     let mid = speeds.len() / 2;
     let (_, median, _) = speeds.select_nth_unstable_by(mid, f64::total_cmp);
     (2.0 * *median).max(1e-3)
-}
-
-fn write_gif(
-    files: &mut Outputs,
-    path: &Path,
-    job: &TracesJob,
-    positions: &[Vec<Bobs>],
-    colors: &[[u8; 3]],
-    speed: f64,
-    monitor: &Monitor,
-) -> Result<()> {
-    const FPS: f64 = 25.0;
-    let p = &job.params;
-    let view = View {
-        size: job.size.min(480),
-        reach: 1.08 * (p.l1 + p.l2),
-    };
-    let samples = positions[0].len();
-    let frames = ((job.stepping.t_max * FPS).round() as usize).max(1);
-    monitor.start("gif", frames as u64);
-    let mut rgb = Vec::with_capacity(frames);
-    // One film, exposed a frame's worth further each time.
-    let mut film = Film::new(view);
-    let mut exposed = 0;
-    for f in 1..=frames {
-        monitor.check()?;
-        let upto = ((f as f64 / frames as f64) * (samples - 1) as f64).round() as usize + 1;
-        expose(&mut film, positions, colors, job.stepping.dt, exposed, upto);
-        exposed = upto - 1;
-        // Arms of at most 50 runs, or the picture is all arms.
-        rgb.push(develop(
-            &film,
-            speed,
-            positions,
-            colors,
-            Some(upto - 1),
-            positions.len().min(50),
-        )?);
-        monitor.advance(1);
-    }
-    monitor.finish();
-    files.gif(
-        path,
-        view.size,
-        view.size,
-        &rgb,
-        (100.0 / FPS).round() as u16,
-    )
 }

@@ -12,7 +12,7 @@ use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
-use crate::spec::FlipSpec;
+use crate::spec::{FlipSpec, Grid, Range};
 
 pub struct FlipTimeKernel {
     /// (flip_init, flip_time) per kind of loss and early exit.
@@ -33,6 +33,51 @@ struct Buffers {
 }
 
 const PENDULUM_BYTES: u64 = std::mem::size_of::<GpuPendulum>() as u64;
+
+/// Maps integrating more pixels than this estimate their work from a sample first.
+const ESTIMATE_ABOVE: u64 = 1 << 20;
+
+/// Every 16th start each way of the part of `spec`'s grid that is integrated.
+fn sample_spec(spec: &FlipSpec) -> FlipSpec {
+    let g = &spec.grid;
+    let rows = spec.rows_to_integrate();
+    let grid = Grid {
+        width: (g.width / 16).max(1),
+        height: (rows / 16).max(1),
+        theta2: Range {
+            min: g.theta2.max - rows as f64 * g.theta2_step(),
+            max: g.theta2.max,
+        },
+        ..*g
+    };
+    FlipSpec {
+        grid,
+        use_symmetry: false,
+        ..*spec
+    }
+}
+
+/// Mean pendulum-steps a start of `sample` took: to its flip, all of them if it never
+/// flipped (or blew up), none if it lay below the no-flip energy.
+fn work_per_pixel(spec: &FlipSpec, sample: &Field) -> f64 {
+    let steps = spec.stepping.steps() as f64;
+    let threshold = spec.params.no_flip_threshold(f32::EPSILON as f64);
+    let g = sample_spec(spec).grid;
+    let total: f64 = (0..g.height)
+        .flat_map(|row| (0..g.width).map(move |col| (col, row)))
+        .map(|(col, row)| {
+            let t = sample.get(col, row) as f64;
+            if t.is_finite() {
+                (t / spec.stepping.dt).ceil().clamp(1.0, steps)
+            } else if spec.params.energy(&g.start(col, row)) < threshold {
+                0.0
+            } else {
+                steps
+            }
+        })
+        .sum();
+    total / g.pixels() as f64
+}
 
 impl FlipTimeKernel {
     pub fn new(ctx: &GpuContext) -> Self {
@@ -121,6 +166,14 @@ impl FlipTimeKernel {
     /// device's storage bindings allow.
     pub fn run(&self, ctx: &GpuContext, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
         let max = max_pixels(ctx, PENDULUM_BYTES, FLIP_BYTES_PER_PIXEL);
+        // Large early-exit maps first integrate a sparse sample of their starts (1 in 256),
+        // whose work per pixel foretells the whole map's: the progress bar's ETA then holds
+        // from the start instead of following the flips' uneven waves.
+        let pixels = spec.rows_to_integrate() as u64 * spec.grid.width as u64;
+        if spec.early_exit && pixels > ESTIMATE_ABOVE {
+            let sample = self.run_tiled(ctx, &sample_spec(spec), &monitor.quiet(), max)?;
+            monitor.estimate(work_per_pixel(spec, &sample) * pixels as f64);
+        }
         self.run_tiled(ctx, spec, monitor, max)
     }
 
@@ -144,7 +197,7 @@ impl FlipTimeKernel {
         let bufs = self.buffers(ctx, tiling.capacity());
         let base = GpuParams::new(&spec.params, spec.stepping.dt).with_grid(&grid);
         let t_max = spec.stepping.t_max as f32;
-        map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows| {
+        map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows, later| {
             let pixels = rows * grid.width;
             let mut params = GpuParams {
                 row0,
@@ -157,9 +210,11 @@ impl FlipTimeKernel {
             let mut a_to_b = true;
             time_loop(
                 total_steps,
+                pixels,
                 active,
                 1,
                 None,
+                later,
                 monitor,
                 |step0, steps, active| {
                     params.step0 = step0;

@@ -112,7 +112,7 @@ impl LyapunovKernel {
         let t_end = total_steps as f64 * spec.stepping.dt;
         // A convergence run reads the log sum back after every renormalisation.
         let max_steps = trace.is_some().then_some(base.interval);
-        map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows| {
+        map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows, later| {
             let pixels = rows * grid.width;
             let mut params = GpuParams {
                 row0,
@@ -124,8 +124,10 @@ impl LyapunovKernel {
             time_loop(
                 total_steps,
                 pixels,
+                pixels,
                 STEP_COST,
                 max_steps,
+                later,
                 monitor,
                 |step0, steps, active| {
                     params.step0 = step0;

@@ -12,6 +12,10 @@ use crate::spec::Grid;
 /// GPU, so no dispatch holds the device long enough to trip a driver watchdog.
 pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
 
+/// Fewest steps a dispatch takes (its per-pixel bookkeeping, the active list, costs about
+/// a step; spread over a few steps it would rival the steps themselves).
+const MIN_STEPS: u64 = 16;
+
 /// A grid cut into tiles of whole rows that fit the device: at most `max_pixels` pixels each.
 pub struct Tiling {
     pub width: u32,
@@ -53,20 +57,25 @@ pub fn max_pixels(ctx: &GpuContext, largest: u64, total: u64) -> u64 {
     (ctx.max_binding() / largest).min(ctx.limits.max_buffer_size / total)
 }
 
-/// The map of `grid` whose top `rows` rows are computed tile by tile by `tile(row0, rows)`
-/// (the values of those rows, row-major); the rest is mirrored from them. Progress counts
-/// `steps` a tile.
+/// The map of `grid` whose top `rows` rows are computed tile by tile by `tile(row0, rows,
+/// later)` (the values of those rows, row-major; `later` is the number of pixels in the
+/// tiles after it, for the progress estimate); the rest is mirrored from them. Progress
+/// counts pendulum-steps ([`time_loop`] estimates what is left).
 pub fn map_tiles(
     grid: &Grid,
     tiling: &Tiling,
     steps: u32,
     monitor: &Monitor,
-    mut tile: impl FnMut(u32, u32) -> Result<Vec<f32>>,
+    mut tile: impl FnMut(u32, u32, u64) -> Result<Vec<f32>>,
 ) -> Result<Field> {
-    monitor.start("gpu", tiling.count() as u64 * steps as u64);
+    monitor.start(
+        "gpu",
+        tiling.height as u64 * tiling.width as u64 * steps as u64,
+    );
     let mut field = Field::new(grid.width, grid.height, 0.0);
     for (row0, rows) in tiling.tiles() {
-        let values = tile(row0, rows)?;
+        let later = (tiling.height - row0 - rows) as u64 * tiling.width as u64;
+        let values = tile(row0, rows, later)?;
         let start = row0 as usize * grid.width as usize;
         field.data[start..start + values.len()].copy_from_slice(&values);
     }
@@ -79,25 +88,75 @@ pub fn map_tiles(
 /// `steps` steps from `step0` and returns how many are still active, until `total` steps are
 /// done or none is. Each dispatch holds at most STEPS_PER_DISPATCH / `cost` pendulum-steps
 /// (`cost`: plain steps a step costs), and at most `max_steps` steps when given.
+///
+/// Progress counts pendulum-steps. What is left is estimated from the work itself: the
+/// still-active pixels run until they flip, at the rate at which they flipped over the last
+/// quarter of the steps so far (survival exp(-h k) over the steps left; h = 0 when none
+/// flipped), and the `later` pixels of the tiles still to come cost what this tile's pixels
+/// cost on average.
+#[allow(clippy::too_many_arguments)]
 pub fn time_loop(
     total: u32,
+    pixels: u32,
     mut active: u32,
     cost: u64,
     max_steps: Option<u32>,
+    later: u64,
     monitor: &Monitor,
     mut dispatch: impl FnMut(u32, u32, u32) -> Result<u32>,
 ) -> Result<()> {
     let mut step0 = 0;
-    while step0 < total && active > 0 {
+    let mut done = 0u64;
+    let mut hazard = 0.0f64;
+    // (step, active) after each dispatch, for the flip rate over a window.
+    let mut history = vec![(0u32, active)];
+    loop {
+        let left = (total - step0) as f64;
+        let per_active = if hazard > 0.0 {
+            (1.0 - (-hazard * left).exp()) / hazard
+        } else {
+            left
+        };
+        let tile_left = active as f64 * per_active;
+        let per_pixel = (done as f64 + tile_left) / pixels.max(1) as f64;
+        let guess = tile_left + later as f64 * per_pixel;
+        // A sample's estimate of the whole work, where there is one, within what must and
+        // what can still come.
+        let left = match monitor.estimated() {
+            Some(whole) => {
+                let most = active as f64 * left + later as f64 * total as f64;
+                (whole - monitor.position() as f64).clamp(active as f64, most.max(active as f64))
+            }
+            None => guess,
+        };
+        monitor.expect(left as u64);
+        if step0 >= total || active == 0 {
+            break;
+        }
         monitor.check()?;
-        let bounded = (STEPS_PER_DISPATCH / cost / active as u64).max(1);
+        let bounded = (STEPS_PER_DISPATCH / cost / active as u64).max(MIN_STEPS / cost);
         let steps = bounded
             .min(max_steps.unwrap_or(u32::MAX) as u64)
             .min((total - step0) as u64) as u32;
+        let before = active;
         active = dispatch(step0, steps, active)?;
         step0 += steps;
-        monitor.advance(steps as u64);
+        let work = before as u64 * steps as u64;
+        done += work;
+        monitor.advance(work);
+        let _ = before;
+        history.push((step0, active));
+        // The latest point at least a quarter of the steps so far back (or the start).
+        let (then, was) = *history
+            .iter()
+            .rev()
+            .find(|(k, _)| *k <= step0 - step0 / 4)
+            .unwrap_or(&history[0]);
+        hazard = match (active, step0 - then) {
+            (0, _) => f64::INFINITY,
+            (_, 0) => 0.0,
+            (_, window) => (was as f64 / active as f64).ln() / window as f64,
+        };
     }
-    monitor.advance((total - step0) as u64);
     Ok(())
 }

@@ -88,6 +88,15 @@ impl Film {
         }
     }
 
+    /// Adds the light of `other` (a film of the same view).
+    pub fn add(&mut self, other: &Film) {
+        for (a, b) in self.light.iter_mut().zip(&other.light) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        }
+    }
+
     /// 8-bit RGB: 1 - exp(-gain * light) per channel. `gain` is set so that a bob crossing a
     /// pixel at `speed` m/s gives half brightness.
     pub fn develop(&self, speed: f64) -> Vec<u8> {

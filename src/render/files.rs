@@ -182,6 +182,21 @@ impl Outputs {
         frames: &[Vec<u8>],
         delay_cs: u16,
     ) -> Result<()> {
+        self.gif_from(path, (width, height), frames.len(), delay_cs, |k| {
+            Ok(frames[k].clone())
+        })
+    }
+
+    /// As [`Outputs::gif`], with `count` frames made one at a time by `frame(k)` (memory of
+    /// one frame).
+    pub fn gif_from(
+        &mut self,
+        path: &Path,
+        (width, height): (u32, u32),
+        count: usize,
+        delay_cs: u16,
+        mut frame: impl FnMut(usize) -> Result<Vec<u8>>,
+    ) -> Result<()> {
         let gif_err = |e: gif::EncodingError| match e {
             gif::EncodingError::Io(e) => file_error(path, e),
             e => Error::format(path, e),
@@ -195,9 +210,9 @@ impl Outputs {
         self.write(path, |out| {
             let mut encoder = gif::Encoder::new(out, w, h, &[]).map_err(gif_err)?;
             encoder.set_repeat(gif::Repeat::Infinite).map_err(gif_err)?;
-            for rgb in frames {
+            for k in 0..count {
                 // Speed 10: NeuQuant's usual trade of palette quality for time.
-                let mut frame = gif::Frame::from_rgb_speed(w, h, rgb, 10);
+                let mut frame = gif::Frame::from_rgb_speed(w, h, &frame(k)?, 10);
                 frame.delay = delay_cs;
                 encoder.write_frame(&frame).map_err(gif_err)?;
             }
