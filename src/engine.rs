@@ -171,7 +171,7 @@ impl Engine {
                 };
                 k.lyapunov(spec.method).convergence(&k.ctx, &one, monitor)
             }
-            None => Ok(cpu::ftle(spec, start)),
+            None => cpu::ftle_monitored(spec, start, monitor),
         }
     }
 

@@ -132,6 +132,57 @@ fn ctrl_c_and_sigterm_stop_long_commands_without_leaving_files() {
     let data = data.to_str().unwrap();
     let cases: Vec<(&str, Vec<&str>, bool)> = vec![
         (
+            "TERM",
+            vec![
+                "traces",
+                "--theta1",
+                "2",
+                "--theta2",
+                "2",
+                "--runs",
+                "100000",
+                "--backend",
+                "cpu",
+                "--output",
+                "@/a.png",
+                "--gif",
+                "@/a.gif",
+            ],
+            false,
+        ),
+        (
+            "INT",
+            vec![
+                "phase",
+                "--runs",
+                "100000",
+                "--backend",
+                "cpu",
+                "--output",
+                "@/a.png",
+            ],
+            false,
+        ),
+        (
+            "TERM",
+            vec![
+                "lyapunov",
+                "--theta1",
+                "2",
+                "--theta2",
+                "2",
+                "--dt",
+                "1e-4",
+                "--t-max",
+                "1000",
+                "--backend",
+                "cpu",
+                "--output",
+                "@/a.csv",
+            ],
+            false,
+        ),
+        (
             "INT",
             vec![
                 "flip",

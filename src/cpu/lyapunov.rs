@@ -49,6 +49,11 @@ fn norm(v: &[f64; 4]) -> f64 {
 /// The largest FTLE of one start by `spec`'s method and renormalisation interval, with its
 /// running estimate at every renormalisation.
 pub fn ftle(spec: &LyapunovSpec, start: State) -> Convergence {
+    ftle_monitored(spec, start, &Monitor::hidden()).expect("never cancelled")
+}
+
+/// As [`ftle`], with progress (steps) and Ctrl-C at every renormalisation.
+pub fn ftle_monitored(spec: &LyapunovSpec, start: State, monitor: &Monitor) -> Result<Convergence> {
     let p = &spec.params;
     let dt = spec.stepping.dt;
     let steps = spec.stepping.steps();
@@ -56,12 +61,15 @@ pub fn ftle(spec: &LyapunovSpec, start: State) -> Convergence {
     let mut out = Convergence::default();
     let mut log_sum = 0.0;
     let mut y = start.to_array();
+    monitor.start("steps", steps as u64);
     match spec.method {
         Method::Tangent => {
             let mut v = TANGENT_START;
             for k in 1..=steps {
                 (y, v) = tangent_step(p, &y, &v, dt);
                 if k % every == 0 || k == steps {
+                    monitor.check()?;
+                    monitor.advance(every.min(k) as u64);
                     let n = norm(&v);
                     log_sum += n.ln();
                     v = v.map(|x| x / n);
@@ -77,6 +85,8 @@ pub fn ftle(spec: &LyapunovSpec, start: State) -> Convergence {
                 a = rk4_step(p, &a, dt);
                 twin = rk4_step(p, &State::from_array(twin), dt).to_array();
                 if k % every == 0 || k == steps {
+                    monitor.check()?;
+                    monitor.advance(every.min(k) as u64);
                     let y = a.to_array();
                     let d: [f64; 4] = std::array::from_fn(|i| twin[i] - y[i]);
                     let n = norm(&d);
@@ -88,7 +98,8 @@ pub fn ftle(spec: &LyapunovSpec, start: State) -> Convergence {
             }
         }
     }
-    out
+    monitor.finish();
+    Ok(out)
 }
 
 /// All four Lyapunov exponents (1/s, descending) over `spec`'s time: four tangent vectors

@@ -6,7 +6,7 @@ mod flip_time;
 mod lyapunov;
 
 pub use flip_time::{flip_map, flip_time};
-pub use lyapunov::{ftle, ftle_map, lyapunov_spectrum};
+pub use lyapunov::{ftle, ftle_map, ftle_monitored, lyapunov_spectrum};
 
 use nalgebra::{Matrix2, Matrix4, RealField, Vector2, Vector4};
 use num_dual::DualSVec64;
