@@ -53,7 +53,8 @@ fn a_fit_on_absurd_time_steps_ends() {
         );
     }
     std::fs::write(&csv, text).unwrap();
-    // It used to loop forever plotting a non-finite energy range; any clean end will do.
+    // It used to loop forever plotting a non-finite energy range; now the file is refused
+    // (any clean end would do).
     let out = chaoscope()
         .arg("fit")
         .arg(&csv)

@@ -63,7 +63,9 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
     check_within("tolerance", job.tolerance, 1e-4, 1.0)?;
     check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
     check_count("candidates", job.candidates as u64, 64, 4_000_000)?;
-    check_within("start", job.start, f64::MIN, f64::MAX)?;
+    if !job.start.is_finite() {
+        return Err(Error::invalid("start", "must be a finite time (s)"));
+    }
     check_writable("output", &job.output.join("summary.json"))?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();

@@ -10,7 +10,7 @@ use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::render::{self, Colormap, Outputs, PictureSpec};
+use crate::render::{self, Colormap, PictureSpec};
 use crate::spec::{self, LyapunovSpec, Method};
 
 /// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
@@ -162,14 +162,7 @@ pub fn run_point(
         }
         Ok(())
     };
-    match &job.output {
-        Some(path) => {
-            let mut files = Outputs::new();
-            files.write(path, |w| write(w))?;
-            files.commit(monitor)?;
-        }
-        None => write(stdout)?,
-    }
+    super::write_text(job.output.as_deref(), stdout, monitor, write)?;
     Ok(LyapunovPointSummary {
         t_max: job.spec.stepping.t_max,
         ftle: trace.last(),

@@ -41,6 +41,23 @@ pub fn write_map(
     files.commit(monitor)
 }
 
+/// A CSV (or any text) into `output`, atomically, or to `stdout` when there is none.
+pub fn write_text(
+    output: Option<&Path>,
+    stdout: &mut dyn std::io::Write,
+    monitor: &Monitor,
+    write: impl Fn(&mut dyn std::io::Write) -> Result<()>,
+) -> Result<()> {
+    match output {
+        Some(path) => {
+            let mut files = Outputs::new();
+            files.write(path, |w| write(w))?;
+            files.commit(monitor)
+        }
+        None => write(stdout),
+    }
+}
+
 /// An output file `path` given as `field`: the right extension and a place it can be
 /// written, checked before any work.
 pub fn check_output(field: &'static str, path: &Path, ext: &str) -> Result<()> {

@@ -101,6 +101,13 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
     })
 }
 
+/// Positions as the .npy holds them: x1, y1, x2, y2 in f32, sample after sample.
+fn flat(positions: &[Bobs]) -> impl Iterator<Item = f32> + '_ {
+    positions
+        .iter()
+        .flat_map(|q| [q.0 as f32, q.1 as f32, q.2 as f32, q.3 as f32])
+}
+
 fn bobs(p: &crate::model::Params, s: &State) -> Bobs {
     let q = p.positions(s);
     (q.x1, q.y1, q.x2, q.y2)
@@ -149,12 +156,8 @@ fn all_at_once(
     files.png(&job.output, job.size, job.size, &rgb, meta)?;
     if let Some(path) = &job.data {
         let samples = positions[0].len();
-        let flat: Vec<f32> = positions
-            .iter()
-            .flatten()
-            .flat_map(|q| [q.0 as f32, q.1 as f32, q.2 as f32, q.3 as f32])
-            .collect();
-        files.npy_shaped(path, &[n as u64, samples as u64, 4], &flat)?;
+        let data: Vec<f32> = positions.iter().flat_map(|run| flat(run)).collect();
+        files.npy_shaped(path, &[n as u64, samples as u64, 4], &data)?;
     }
     if let Some(path) = &job.gif {
         let gview = view(job, job.size.min(480));
@@ -269,11 +272,7 @@ fn streamed(
                             .collect(),
                     );
                 }
-                let flat: Vec<f32> = pos
-                    .iter()
-                    .flat_map(|q| [q.0 as f32, q.1 as f32, q.2 as f32, q.3 as f32])
-                    .collect();
-                sink(&flat)?;
+                sink(&flat(&pos).collect::<Vec<_>>())?;
             }
             Ok(())
         })

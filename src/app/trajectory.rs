@@ -8,7 +8,6 @@ use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::render::Outputs;
 use crate::spec::{self, Stepping};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -109,14 +108,7 @@ pub fn run(
         }
         Ok(())
     };
-    match &job.output {
-        Some(path) => {
-            let mut files = Outputs::new();
-            files.write(path, |w| write(w))?;
-            files.commit(monitor)?;
-        }
-        None => write(stdout)?,
-    }
+    super::write_text(job.output.as_deref(), stdout, monitor, write)?;
     Ok(TrajectorySummary {
         rows: states.len().div_ceil(stride as usize),
         output: job.output.clone(),

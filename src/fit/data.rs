@@ -18,6 +18,9 @@ pub struct Frame {
     pub y2: f64,
 }
 
+/// Smallest time step (s) between tracked rows.
+const MIN_TIME_STEP: f64 = 1e-6;
+
 fn bad(path: &Path, line: usize, what: String) -> Error {
     Error::invalid("file", format!("{}:{line}: {what}", path.display()))
 }
@@ -81,6 +84,20 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
                 path,
                 n,
                 format!("time {} does not increase (previous row: {prev})", v[0]),
+            ));
+        }
+        // Tracked frames come from a camera: steps below a microsecond are a unit mistake,
+        // and their velocities and energies overflow.
+        if let Some(prev) = frames.last().map(|f: &Frame| f.t)
+            && v[0] - prev < MIN_TIME_STEP
+        {
+            return Err(bad(
+                path,
+                n,
+                format!(
+                    "time step {:e} s from the previous row is below {MIN_TIME_STEP:e} s: are the times in seconds?",
+                    v[0] - prev
+                ),
             ));
         }
         frames.push(Frame {
