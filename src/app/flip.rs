@@ -3,12 +3,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{check_output, write_map};
+use super::{MapFiles, check_output, write_map};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::render::{self, PictureSpec};
 use crate::spec::FlipSpec;
+use crate::verdict;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlipJob {
@@ -19,6 +20,10 @@ pub struct FlipJob {
     pub output: PathBuf,
     /// Raw flip times (s) as float32 .npy, shape (height, width), inf = never.
     pub data: Option<PathBuf>,
+    /// The verdict ([`crate::verdict`]) as uint8 .npy, the layout of `data`: 1 resolved.
+    pub resolved: Option<PathBuf>,
+    /// Draw the pixels the verdict cannot resolve in grey.
+    pub show_unresolved: bool,
 }
 
 impl FlipJob {
@@ -27,6 +32,20 @@ impl FlipJob {
         check_output("output", &self.output, "png")?;
         if let Some(data) = &self.data {
             check_output("data", data, "npy")?;
+        }
+        if let Some(path) = &self.resolved {
+            check_output("resolved", path, "npy")?;
+        }
+        if self.resolved.is_some() || self.show_unresolved {
+            // The verdict's map takes twice the steps.
+            crate::spec::validate_stepping(&verdict::finer_flip(&self.spec).stepping).map_err(
+                |e| match e {
+                    crate::Error::InvalidSpec { reason, .. } => {
+                        crate::Error::invalid("dt", format!("the verdict's half step: {reason}"))
+                    }
+                    e => e,
+                },
+            )?;
         }
         Ok(())
     }
@@ -43,6 +62,8 @@ pub struct FlipSummary {
     pub flipped: f64,
     /// Pixels whose state became infinite or NaN before flipping (NaN in the data).
     pub nan: usize,
+    /// The fraction of the pixels resolved, when the verdict was asked for.
+    pub resolved: Option<f64>,
     pub t_max: f64,
     pub output: PathBuf,
     /// Every file written.
@@ -59,14 +80,33 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
     notices.extend(f64_notice(&engine, &job.spec.grid));
     let info = engine.map_info(&job.spec.grid);
     let field = engine.flip_map(&job.spec, monitor)?;
-    let picture = render::flip_picture(&field, &job.spec, &job.picture)?;
+    let mask = if job.resolved.is_some() || job.show_unresolved {
+        let finer = engine.flip_map(&verdict::finer_flip(&job.spec), monitor)?;
+        Some(verdict::mask(&field, &finer, verdict::flip_times_agree))
+    } else {
+        None
+    };
+    let shown = mask.as_deref().filter(|_| job.show_unresolved);
+    let picture = render::flip_picture(&field, &job.spec, &job.picture, shown)?;
     let meta = render::provenance(command, &info);
+    let rule = shown
+        .map(|_| {
+            (
+                "chaoscope:resolved-rule".to_string(),
+                verdict::FLIP_RULE.to_string(),
+            )
+        })
+        .into_iter()
+        .collect();
     write_map(
         &picture,
         meta,
-        Vec::new(),
-        &job.output,
-        job.data.as_deref(),
+        rule,
+        MapFiles {
+            png: &job.output,
+            data: job.data.as_deref(),
+            resolved: job.resolved.as_deref().zip(mask.as_deref()),
+        },
         &field,
         monitor,
     )?;
@@ -78,12 +118,17 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         seconds: started.elapsed().as_secs_f64(),
         flipped: flipped as f64 / field.data.len() as f64,
         nan: field.data.iter().filter(|t| t.is_nan()).count(),
+        resolved: mask.as_deref().map(verdict::fraction),
         t_max: job.spec.stepping.t_max,
         output: job.output.clone(),
-        files: [Some(job.output.clone()), job.data.clone()]
-            .into_iter()
-            .flatten()
-            .collect(),
+        files: [
+            Some(job.output.clone()),
+            job.data.clone(),
+            job.resolved.clone(),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
         notices,
     })
 }

@@ -5,13 +5,14 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{check_output, write_map};
+use super::{MapFiles, check_output, write_map};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::render::{self, Colormap, PictureSpec};
 use crate::spec::{self, LyapunovSpec, Method};
+use crate::verdict;
 
 /// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
 /// below ln(1 + K t) / t, about 0.27 /s at 20 s (tests/lyapunov.rs).
@@ -25,6 +26,10 @@ pub struct LyapunovMapJob {
     pub output: PathBuf,
     /// Raw exponents (1/s) as float32 .npy, shape (height, width).
     pub data: Option<PathBuf>,
+    /// The verdict ([`crate::verdict`]) as uint8 .npy, the layout of `data`: 1 resolved.
+    pub resolved: Option<PathBuf>,
+    /// Draw the pixels the verdict cannot resolve in grey.
+    pub show_unresolved: bool,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -37,6 +42,8 @@ pub struct LyapunovMapSummary {
     pub chaotic: f64,
     /// Pixels whose exponent is NaN (the integration left the numbers).
     pub nan: usize,
+    /// The fraction of the pixels resolved, when the verdict was asked for.
+    pub resolved: Option<f64>,
     pub t_max: f64,
     /// The colour range (1/s).
     pub range: (f32, f32),
@@ -66,6 +73,12 @@ pub fn run_map(
     if let Some(data) = &job.data {
         check_output("data", data, "npy")?;
     }
+    if let Some(path) = &job.resolved {
+        check_output("resolved", path, "npy")?;
+    }
+    if job.resolved.is_some() || job.show_unresolved {
+        verdict::finer_lyapunov(&job.spec).validate()?;
+    }
     let started = Instant::now();
     let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
@@ -74,7 +87,14 @@ pub fn run_map(
     let info = engine.map_info(&job.spec.grid);
     let field = engine.lyapunov_map(&job.spec, monitor)?;
     let range = render::ftle_range(&field);
-    let picture = render::lyapunov_picture(&field, &job.spec, range, &job.picture)?;
+    let mask = if job.resolved.is_some() || job.show_unresolved {
+        let finer = engine.lyapunov_map(&verdict::finer_lyapunov(&job.spec), monitor)?;
+        Some(verdict::mask(&field, &finer, verdict::exponents_agree))
+    } else {
+        None
+    };
+    let shown = mask.as_deref().filter(|_| job.show_unresolved);
+    let picture = render::lyapunov_picture(&field, &job.spec, range, &job.picture, shown)?;
     let colour_range = (
         "chaoscope:colour-range".into(),
         format!(
@@ -84,12 +104,19 @@ pub fn run_map(
             job.picture.colormap.unwrap_or(Colormap::Magma).name()
         ),
     );
+    let mut extra = vec![colour_range];
+    if shown.is_some() {
+        extra.push(("chaoscope:resolved-rule".into(), verdict::FTLE_RULE.into()));
+    }
     write_map(
         &picture,
         render::provenance(command, &info),
-        vec![colour_range],
-        &job.output,
-        job.data.as_deref(),
+        extra,
+        MapFiles {
+            png: &job.output,
+            data: job.data.as_deref(),
+            resolved: job.resolved.as_deref().zip(mask.as_deref()),
+        },
         &field,
         monitor,
     )?;
@@ -101,13 +128,18 @@ pub fn run_map(
         seconds: started.elapsed().as_secs_f64(),
         chaotic: chaotic as f64 / field.data.len() as f64,
         nan: field.data.iter().filter(|x| x.is_nan()).count(),
+        resolved: mask.as_deref().map(verdict::fraction),
         t_max: job.spec.stepping.t_max,
         range,
         output: job.output.clone(),
-        files: [Some(job.output.clone()), job.data.clone()]
-            .into_iter()
-            .flatten()
-            .collect(),
+        files: [
+            Some(job.output.clone()),
+            job.data.clone(),
+            job.resolved.clone(),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
         notices,
     })
 }

@@ -19,14 +19,20 @@ use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::render::{Outputs, Picture, check_writable};
 
+/// Where a map's files go: the PNG, and the raw values and the verdict's mask when asked.
+pub struct MapFiles<'a> {
+    pub png: &'a Path,
+    pub data: Option<&'a Path>,
+    pub resolved: Option<(&'a Path, &'a [u8])>,
+}
+
 /// A map's files, as a set: the picture as PNG with its provenance, where the map sits in it
-/// and `extra` text, and the raw values as .npy when asked.
+/// and `extra` text, the raw values as .npy and the verdict's mask as .npy when asked.
 pub fn write_map(
     picture: &Picture,
     provenance: Vec<(String, String)>,
     extra: Vec<(String, String)>,
-    output: &Path,
-    data: Option<&Path>,
+    to: MapFiles,
     field: &Field,
     monitor: &Monitor,
 ) -> Result<()> {
@@ -34,9 +40,12 @@ pub fn write_map(
     meta.extend(picture.metadata());
     meta.extend(extra);
     let mut files = Outputs::new();
-    files.png(output, picture.width, picture.height, &picture.rgb, &meta)?;
-    if let Some(data) = data {
+    files.png(to.png, picture.width, picture.height, &picture.rgb, &meta)?;
+    if let Some(data) = to.data {
         files.npy(data, field)?;
+    }
+    if let Some((path, mask)) = to.resolved {
+        files.mask(path, field.width, field.height, mask)?;
     }
     files.commit(monitor)
 }

@@ -361,11 +361,11 @@ fn render_frame(
     match map {
         FrameMap::Flip(spec) => {
             let field = engine.flip_map(spec, monitor)?;
-            render::flip_picture(&field, spec, &job.picture)
+            render::flip_picture(&field, spec, &job.picture, None)
         }
         FrameMap::Lyapunov(spec) => {
             let field = engine.lyapunov_map(spec, monitor)?;
-            render::lyapunov_picture(&field, spec, (0.0, job.ftle_max as f32), &job.picture)
+            render::lyapunov_picture(&field, spec, (0.0, job.ftle_max as f32), &job.picture, None)
         }
     }
 }

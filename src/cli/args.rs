@@ -209,3 +209,17 @@ impl PictureArgs {
         }
     }
 }
+
+/// Which pixels are resolved: the map again at half the step, compared pixel by pixel
+/// (flip times within 1 % or 0.02 s, exponents within 5 % or 0.02 /s). Costs the map twice
+/// more.
+#[derive(Args, Debug, Clone, Default)]
+pub struct VerdictArgs {
+    /// Write the verdict as uint8 .npy, the layout of --data: 1 where the pixel is resolved.
+    #[arg(long)]
+    pub resolved: Option<PathBuf>,
+    /// Draw the pixels that are not resolved in grey (and say so in the PNG's metadata and
+    /// an annotated map's subtitle).
+    #[arg(long)]
+    pub show_unresolved: bool,
+}

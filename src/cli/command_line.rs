@@ -137,7 +137,11 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
 }
 
 pub fn flip(job: &FlipJob) -> String {
-    flip_map(&job.spec, job.backend, &job.picture)
+    flip_map(&job.spec, job.backend, &job.picture) + show_unresolved(job.show_unresolved)
+}
+
+fn show_unresolved(on: bool) -> &'static str {
+    if on { " --show-unresolved" } else { "" }
 }
 
 fn method(m: Method) -> String {
@@ -165,7 +169,7 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
 }
 
 pub fn lyapunov_map(job: &LyapunovMapJob) -> String {
-    lyapunov_map_of(&job.spec, job.backend, &job.picture)
+    lyapunov_map_of(&job.spec, job.backend, &job.picture) + show_unresolved(job.show_unresolved)
 }
 
 pub fn lyapunov_point(job: &LyapunovPointJob) -> String {

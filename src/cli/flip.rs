@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
+use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, VerdictArgs, backend_parser};
 use super::{command_line, json, say};
 use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
@@ -31,6 +31,8 @@ pub struct FlipArgs {
     /// Raw flip times (s) as float32 .npy, shape (height, width), row 0 = top, inf = never.
     #[arg(long)]
     pub data: Option<PathBuf>,
+    #[command(flatten)]
+    pub verdict: VerdictArgs,
     /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts,
     /// no mirrored half).
     #[arg(long)]
@@ -57,8 +59,17 @@ impl FlipArgs {
             picture: self.picture.spec(),
             output: self.output.clone(),
             data: self.data.clone(),
+            resolved: self.verdict.resolved.clone(),
+            show_unresolved: self.verdict.show_unresolved,
         })
     }
+}
+
+/// ", X % resolved (rule)" when the verdict was asked for.
+pub fn resolved_note(resolved: Option<f64>, rule: &str) -> String {
+    resolved
+        .map(|f| format!(", {:.1} % resolved ({rule})", 100.0 * f))
+        .unwrap_or_default()
 }
 
 /// ", N pixels NaN (...)" when there are any.
@@ -75,7 +86,7 @@ pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let s = flip::run(&job, command_line::flip(&job), monitor)?;
     say(&s.notices);
     eprintln!(
-        "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s{} -> {}",
+        "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s{}{} -> {}",
         s.width,
         s.height,
         s.place,
@@ -83,6 +94,10 @@ pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         100.0 * s.flipped,
         s.t_max,
         nan_note(s.nan),
+        resolved_note(
+            s.resolved,
+            "the same map at half the step within 1 % or 0.02 s"
+        ),
         s.output.display()
     );
     json(&s)

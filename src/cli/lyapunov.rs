@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use super::args::{PhysicalArgs, PictureArgs, backend_parser};
+use super::args::{PhysicalArgs, PictureArgs, VerdictArgs, backend_parser};
 use super::parse::{Angles, parse_angles, parse_number, parse_size};
 use super::{command_line, json, say};
 use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
@@ -70,6 +70,8 @@ pub struct LyapunovArgs {
     #[arg(long)]
     pub data: Option<PathBuf>,
     #[command(flatten)]
+    pub verdict: VerdictArgs,
+    #[command(flatten)]
     pub picture: PictureArgs,
 }
 
@@ -119,6 +121,8 @@ impl LyapunovArgs {
                         .clone()
                         .unwrap_or_else(|| PathBuf::from("out/lyapunov.png")),
                     data: self.data.clone(),
+                    resolved: self.verdict.resolved.clone(),
+                    show_unresolved: self.verdict.show_unresolved,
                 }))
             }
             (Angles::Point(theta1), Angles::Point(theta2)) => {
@@ -126,6 +130,12 @@ impl LyapunovArgs {
                     return Err(Error::invalid(
                         "data",
                         "is for maps; a single-point run writes its CSV to --output",
+                    ));
+                }
+                if self.verdict.resolved.is_some() || self.verdict.show_unresolved {
+                    return Err(Error::invalid(
+                        "resolved",
+                        "is for maps; a single-point run's convergence CSV shows its own",
                     ));
                 }
                 let start = State {
@@ -172,7 +182,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
             say(&s.notices);
             eprintln!(
-                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s){}, colour range {:.2}..{:.2} /s -> {}",
+                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s){}{}, colour range {:.2}..{:.2} /s -> {}",
                 s.width,
                 s.height,
                 s.place,
@@ -180,6 +190,10 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
                 100.0 * s.chaotic,
                 s.t_max,
                 super::flip::nan_note(s.nan),
+                super::flip::resolved_note(
+                    s.resolved,
+                    "the same map at half the step within 5 % or 0.02 /s"
+                ),
                 s.range.0,
                 s.range.1,
                 s.output.display()

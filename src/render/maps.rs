@@ -124,22 +124,54 @@ fn physics_line(p: &Params, grid: &Grid) -> String {
 }
 
 /// The flip map as a picture.
-pub fn flip_picture(field: &Field, spec: &FlipSpec, picture: &PictureSpec) -> Result<Picture> {
+/// The colour of pixels the verdict could not resolve (`--show-unresolved`): mid grey, apart
+/// from every colour map's ends, the "never" black and the NaN green.
+pub const UNRESOLVED_RGB: [u8; 3] = [128, 128, 128];
+
+/// Paints the pixels whose `mask` entry is 0 in [`UNRESOLVED_RGB`].
+fn mark_unresolved(rgb: &mut [u8], mask: Option<&[u8]>) {
+    if let Some(mask) = mask {
+        for (px, &m) in rgb.chunks_exact_mut(3).zip(mask) {
+            if m == 0 {
+                px.copy_from_slice(&UNRESOLVED_RGB);
+            }
+        }
+    }
+}
+
+/// The subtitle's note on unresolved pixels, when they are shown.
+fn unresolved_note(mask: Option<&[u8]>) -> &'static str {
+    if mask.is_some() {
+        " · grey: not resolved at this step"
+    } else {
+        ""
+    }
+}
+
+/// The flip map as a picture; with `unresolved`, the pixels whose mask is 0 in grey.
+pub fn flip_picture(
+    field: &Field,
+    spec: &FlipSpec,
+    picture: &PictureSpec,
+    unresolved: Option<&[u8]>,
+) -> Result<Picture> {
     let colors = FlipColors {
         t_lo: (spec.params.l1 / spec.params.g).sqrt(),
         t_max: spec.stepping.t_max,
         colormap: picture.colormap.unwrap_or(Colormap::Inferno),
     };
-    let rgb = flip_colors(field, colors);
+    let mut rgb = flip_colors(field, colors);
+    mark_unresolved(&mut rgb, unresolved);
     frame(field, rgb, picture.annotate, || {
         let (x, y) = axes(&spec.grid);
         let (colors_, ticks) = colors.bar();
         Annotation {
             title: "Time until an arm first flips over".into(),
             subtitle: format!(
-                "{} · RK4 dt {} s",
+                "{} · RK4 dt {} s{}",
                 physics_line(&spec.params, &spec.grid),
-                spec.stepping.dt
+                spec.stepping.dt,
+                unresolved_note(unresolved)
             ),
             x,
             y,
@@ -159,9 +191,11 @@ pub fn lyapunov_picture(
     spec: &LyapunovSpec,
     range: (f32, f32),
     picture: &PictureSpec,
+    unresolved: Option<&[u8]>,
 ) -> Result<Picture> {
     let colormap = picture.colormap.unwrap_or(Colormap::Magma);
-    let rgb = ftle_colors(field, range, colormap);
+    let mut rgb = ftle_colors(field, range, colormap);
+    mark_unresolved(&mut rgb, unresolved);
     frame(field, rgb, picture.annotate, || {
         let (x, y) = axes(&spec.grid);
         let (lo, hi) = (range.0 as f64, range.1 as f64);
@@ -175,10 +209,11 @@ pub fn lyapunov_picture(
                 spec.stepping.t_max
             ),
             subtitle: format!(
-                "{} · RK4 dt {} s · renormalised every {} s",
+                "{} · RK4 dt {} s · renormalised every {} s{}",
                 physics_line(&spec.params, &spec.grid),
                 spec.stepping.dt,
-                spec.renorm
+                spec.renorm,
+                unresolved_note(unresolved)
             ),
             x,
             y,

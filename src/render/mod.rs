@@ -19,4 +19,4 @@ pub use files::{
     Outputs, Png, check_writable, read_png, remove_pending, write_atomic, write_gif, write_npy,
     write_npy_shaped, write_png,
 };
-pub use maps::{Picture, PictureSpec, flip_picture, lyapunov_picture, provenance};
+pub use maps::{Picture, PictureSpec, UNRESOLVED_RGB, flip_picture, lyapunov_picture, provenance};
