@@ -269,8 +269,8 @@ fn energy(c: Coeffs, y: vec4<f32>) -> f32 {
 // states (angle, angular velocity) reaches |angle| = pi. Needs |ta| <= pi < |tb|.
 fn hermite_crossing(ta: f32, wa: f32, tb: f32, wb: f32, h: f32) -> f32 {
     let sgn = sign(tb);
-    var lo = 0.0;
-    var hi = 1.0;
+    var lo: f32 = 0.0;
+    var hi: f32 = 1.0;
     for (var i = 0; i < 24; i++) {
         let s = 0.5 * (lo + hi);
         let s2 = s * s;

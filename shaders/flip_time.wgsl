@@ -73,7 +73,7 @@ fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         p = next;
     }
     if flipped {
-        var s = 1.0;
+        var s: f32 = 1.0;
         if abs(after.x) > PI {
             s = min(s, hermite_crossing(before.x, before.y, after.x, after.y, dt));
         }

@@ -10,7 +10,7 @@ use crate::field::{Convergence, Field};
 use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Range, Stepping};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Precision, Range, Stepping};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
@@ -115,8 +115,8 @@ impl Engine {
         }
     }
 
-    /// The path a map over `grid` takes: the GPU unless neighbouring pixels are closer than
-    /// f32 resolves ([`Grid::needs_f64`]), which run on the CPU in f64.
+    /// The path a divergence map over `grid` takes: the GPU (f32) unless neighbouring
+    /// pixels are closer than f32 resolves ([`Grid::needs_f64`]): those run on the CPU in f64.
     pub fn map_info(&self, grid: &Grid) -> RunInfo {
         match self.map_gpu(grid) {
             Some(_) => self.info(),
@@ -128,10 +128,36 @@ impl Engine {
         self.gpu.as_ref().filter(|_| !grid.needs_f64())
     }
 
+    /// The GPU and the precision a flip map runs in: f64 when asked for or when the grid is
+    /// finer than f32 resolves, if the adapter has f64; None for the CPU (f64).
+    fn flip_gpu(&self, spec: &FlipSpec) -> Option<(&Kernels, Precision)> {
+        let k = self.gpu.as_ref()?;
+        if spec.precision == Precision::F32 && !spec.grid.needs_f64() {
+            Some((k, Precision::F32))
+        } else if k.ctx.has_f64() {
+            Some((k, Precision::F64))
+        } else {
+            None
+        }
+    }
+
+    /// The path a flip map takes ("gpu f64" for the f64 kernel).
+    pub fn flip_info(&self, spec: &FlipSpec) -> RunInfo {
+        match self.flip_gpu(spec) {
+            Some((_, Precision::F32)) => self.info(),
+            Some((_, Precision::F64)) => RunInfo {
+                backend: "gpu f64",
+                ..self.info()
+            },
+            None => RunInfo::CPU,
+        }
+    }
+
     /// The flip-time map of a validated `spec`.
     pub fn flip_map(&self, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-        match self.map_gpu(&spec.grid) {
-            Some(k) => k.flip().run(&k.ctx, spec, monitor),
+        match self.flip_gpu(spec) {
+            Some((k, Precision::F32)) => k.flip().run(&k.ctx, spec, monitor),
+            Some((k, Precision::F64)) => k.flip64().run(&k.ctx, spec, monitor),
             None => cpu::flip_map(spec, monitor),
         }
     }

@@ -173,6 +173,27 @@ pub fn releases(p: &Params, start: State, runs: u32, spread: Spread) -> Vec<Stat
         .collect()
 }
 
+/// The floating-point precision a GPU kernel integrates in (the CPU path is always f64).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Precision {
+    /// The default: every GPU, fastest.
+    #[default]
+    F32,
+    /// Needs an adapter with f64 (`Features::SHADER_F64`; lavapipe has it).
+    F64,
+}
+
+impl Precision {
+    pub const ALL: [Precision; 2] = [Precision::F32, Precision::F64];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        }
+    }
+}
+
 /// A flip-time map: for every start, the time until either arm first flips over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FlipSpec {
@@ -185,6 +206,9 @@ pub struct FlipSpec {
     /// Integrate only the top half of a point-symmetric grid and mirror it (same map, half
     /// the work). Off for benchmarks of raw throughput and for checking the symmetry.
     pub use_symmetry: bool,
+    /// The GPU's precision (the CPU is always f64); grids finer than f32 resolves run in
+    /// f64 whatever is asked.
+    pub precision: Precision,
 }
 
 /// Largest number of steps one run may take (the step counter is a u32 on the GPU, and f32
@@ -199,6 +223,7 @@ impl FlipSpec {
             stepping,
             early_exit: true,
             use_symmetry: true,
+            precision: Precision::F32,
         }
     }
 

@@ -1,7 +1,9 @@
 //! No GPU needed: every shader parses and validates with naga, and the WGSL structs match
 //! their Rust mirrors in size and member offsets.
 
-use chaoscope::gpu::layout::{GpuLyapunovSlot, GpuParams, GpuPendulum, all_shaders};
+use chaoscope::gpu::layout::{
+    GpuLyapunovSlot, GpuParams, GpuParams64, GpuPendulum, GpuPendulum64, all_shaders,
+};
 use wgpu::naga;
 
 fn module(name: &str, source: &str) -> naga::Module {
@@ -9,7 +11,8 @@ fn module(name: &str, source: &str) -> naga::Module {
         .unwrap_or_else(|e| panic!("{name}.wgsl does not parse:\n{}", e.emit_to_string(source)));
     naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::empty(),
+        // f64 for the f64 kernels (the device asks for SHADER_F64 when it runs them).
+        naga::valid::Capabilities::FLOAT64,
     )
     .validate(&module)
     .unwrap_or_else(|e| panic!("{name}.wgsl does not validate: {e:?}"));
@@ -58,15 +61,24 @@ fn params_struct_matches_its_rust_mirror() {
         mass_total, mass_lower, bearing,
         width, height, rows, row0, step0, steps, count, interval, total_steps,
         twin_eps, _pad0);
+    // The f64 mirror's explicit padding (_pad_a, _pad_b) is implicit in WGSL.
+    let rust64 = rust_offsets!(GpuParams64;
+        a, b, c, p, q, l1, l2, dt, theta1_mid, theta1_half_step, theta2_mid, theta2_half_step,
+        omega1,
+        omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
+        mass_total, mass_lower, bearing,
+        width, height, rows, row0, step0, steps, count, interval, total_steps,
+        twin_eps, _pad0);
     for (name, source) in all_shaders() {
         let (wgsl, span) = wgsl_struct(&module(name, &source), "Params");
+        let (rust, size) = if name.ends_with("_f64") {
+            (&rust64, std::mem::size_of::<GpuParams64>())
+        } else {
+            (&rust, std::mem::size_of::<GpuParams>())
+        };
+        assert_eq!(span as usize, size, "{name}: size of Params");
         assert_eq!(
-            span as usize,
-            std::mem::size_of::<GpuParams>(),
-            "{name}: size of Params"
-        );
-        assert_eq!(
-            wgsl, rust,
+            &wgsl, rust,
             "{name}: members and offsets of Params (WGSL left, Rust right)"
         );
     }
@@ -76,16 +88,18 @@ fn params_struct_matches_its_rust_mirror() {
 #[test]
 fn storage_structs_match_their_rust_mirrors() {
     let pendulum = rust_offsets!(GpuPendulum; y, u);
+    let pendulum64 = rust_offsets!(GpuPendulum64; y, u);
     let slot = rust_offsets!(GpuLyapunovSlot; a, b);
     for (name, source) in all_shaders() {
         let module = module(name, &source);
         let (wgsl, span) = wgsl_struct(&module, "Pendulum");
-        assert_eq!(
-            span as usize,
-            std::mem::size_of::<GpuPendulum>(),
-            "{name}: Pendulum"
-        );
-        assert_eq!(wgsl, pendulum, "{name}: members and offsets of Pendulum");
+        let (rust, size) = if name.ends_with("_f64") {
+            (&pendulum64, std::mem::size_of::<GpuPendulum64>())
+        } else {
+            (&pendulum, std::mem::size_of::<GpuPendulum>())
+        };
+        assert_eq!(span as usize, size, "{name}: Pendulum");
+        assert_eq!(&wgsl, rust, "{name}: members and offsets of Pendulum");
         if name == "lyapunov" {
             let (wgsl, span) = wgsl_struct(&module, "LyapunovSlot");
             assert_eq!(

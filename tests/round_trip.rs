@@ -113,6 +113,7 @@ fn flip_maps_round_trip() {
             "--omega1",
             "-1",
         ],
+        vec!["--size", "10", "--t-max", "2", "--precision", "f64"],
     ]
     .into_iter()
     .enumerate()

@@ -250,7 +250,7 @@ pub fn run(
     let mut notices: Vec<String> = engine.notices();
     if let (Some(_), Some(k)) = (engine.gpu(), frames.iter().position(|f| f.grid.needs_f64())) {
         notices.push(format!(
-            "note: from frame {k} on the pixel step is below {F32_MIN_PIXEL_STEP:.1e} rad, finer than f32 resolves near pi; those frames run on the CPU in f64"
+            "note: from frame {k} on the pixel step is below {F32_MIN_PIXEL_STEP:.1e} rad, finer than f32 resolves near pi; those frames run in f64 (flip maps on a GPU with f64, else on the CPU)"
         ));
     }
     std::fs::create_dir_all(&job.output)?;
@@ -260,13 +260,16 @@ pub fn run(
     for (k, frame) in frames.iter().enumerate() {
         monitor.check()?;
         let path = frame_path(&job.output, k as u32);
-        let info = engine.map_info(&frame.grid);
-        let on = if info.backend == "gpu" {
+        let map = frame_map(job, frame);
+        let info = match &map {
+            FrameMap::Flip(spec) => engine.flip_info(spec),
+            FrameMap::Lyapunov(spec) => engine.map_info(&spec.grid),
+        };
+        let on = if info.backend.starts_with("gpu") {
             Backend::Gpu
         } else {
             Backend::Cpu
         };
-        let map = frame_map(job, frame);
         let command = frame_command(&map, on, &job.picture);
         if path.exists() {
             // Resume: keep a finished frame of the same sweep; refuse to mix sweeps.

@@ -14,7 +14,7 @@ use crate::engine::Backend;
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::PictureSpec;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Spread, Stepping};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Precision, Spread, Stepping};
 
 /// The flags that reproduce `p` exactly.
 pub fn params(p: &Params) -> String {
@@ -132,6 +132,9 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
         out += " --full";
     } else if !spec.use_symmetry {
         out += " --no-symmetry";
+    }
+    if spec.precision != Precision::F32 {
+        out += &format!(" --precision {}", spec.precision.name());
     }
     out + &picture(pic)
 }

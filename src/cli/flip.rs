@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, VerdictArgs, backend_parser};
+use super::parse::one_of;
 use super::{command_line, json, say};
 use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
-use crate::spec::FlipSpec;
+use crate::spec::{FlipSpec, Precision};
 
 #[derive(Args, Debug, Clone)]
 pub struct FlipArgs {
@@ -41,6 +42,10 @@ pub struct FlipArgs {
     /// from rest) instead of mirroring the top half: the same map, twice the work.
     #[arg(long)]
     pub no_symmetry: bool,
+    /// The GPU's floating-point precision: f32 (fastest) or f64 (an adapter with f64, e.g.
+    /// lavapipe; elsewhere auto runs f64 on the CPU). The CPU is always f64.
+    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Precision,
 }
 
 impl FlipArgs {
@@ -49,6 +54,7 @@ impl FlipArgs {
             spec: FlipSpec {
                 early_exit: !self.full,
                 use_symmetry: !(self.full || self.no_symmetry),
+                precision: self.precision,
                 ..FlipSpec::new(
                     self.physical.sources().resolve()?,
                     self.grid.grid(),

@@ -9,7 +9,7 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
-    /// What the adapter could offer (the device requests none of it yet).
+    /// What the adapter could offer (the device requests SHADER_F64 of it when offered).
     pub adapter_features: wgpu::Features,
     /// Errors raised outside an error scope, kept so that a run fails instead of going on
     /// with garbage.
@@ -50,10 +50,12 @@ impl GpuContext {
                 .map_err(|_| Error::NoAdapter)?,
         };
         let limits = adapter.limits();
+        // f64 kernels run where the adapter offers f64; the f32 ones need nothing.
+        let features = adapter.features() & wgpu::Features::SHADER_F64;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("chaoscope"),
-                required_features: wgpu::Features::empty(),
+                required_features: features,
                 required_limits: limits.clone(),
                 ..Default::default()
             })
@@ -73,6 +75,11 @@ impl GpuContext {
             adapter_features: adapter.features(),
             uncaptured,
         })
+    }
+
+    /// Whether the device runs f64 kernels (`Features::SHADER_F64`).
+    pub fn has_f64(&self) -> bool {
+        self.device.features().contains(wgpu::Features::SHADER_F64)
     }
 
     /// One line naming the adapter, for notices and PNG metadata.

@@ -1,20 +1,22 @@
 //! Drives `shaders/flip_time.wgsl`: keeps the still-active pixels of a tile in a dense list,
 //! inside the tiled loop of `tiled.rs`.
 
-use super::context::{GpuContext, map_read, read_f32s};
+use super::context::{GpuContext, map_read, read_buffer};
 use super::layout::{
-    FLIP_BYTES_PER_PIXEL, FLIP_TIME_WGSL, GpuParams, GpuPendulum, NEVER, NONFINITE,
+    FLIP_TIME_WGSL, GpuParams, GpuParams64, GpuPendulum, GpuPendulum64, NEVER, NONFINITE,
+    TileParams, shader_source, shader_source_f64,
 };
 use super::pipeline::{
-    Variants, bind_group, layouts, params_buffer, record_dispatch, shader_module, storage_buffer,
+    Variants, bind_group, layouts, module_of, params_buffer_of, record_dispatch, storage_buffer,
 };
 use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, Range};
+use crate::spec::{FlipSpec, Grid, Precision, Range};
 
 pub struct FlipTimeKernel {
+    precision: Precision,
     /// (flip_init, flip_time) per kind of loss and early exit.
     pipelines: Variants,
     layout: wgpu::BindGroupLayout,
@@ -32,7 +34,31 @@ struct Buffers {
     b_to_a: wgpu::BindGroup,
 }
 
-const PENDULUM_BYTES: u64 = std::mem::size_of::<GpuPendulum>() as u64;
+/// Bytes per pixel of the pendulum, the flip time and the params, in `precision`.
+fn sizes(precision: Precision) -> (u64, u64, u64) {
+    use std::mem::size_of;
+    match precision {
+        Precision::F32 => (
+            size_of::<GpuPendulum>() as u64,
+            4,
+            size_of::<GpuParams>() as u64,
+        ),
+        Precision::F64 => (
+            size_of::<GpuPendulum64>() as u64,
+            8,
+            size_of::<GpuParams64>() as u64,
+        ),
+    }
+}
+
+/// t-max as the kernel compares flip times with it: in f32 the f32 t-max (as before f64
+/// kernels existed, so f32 maps keep their bits), in f64 t-max itself.
+fn t_max_of(t_max: f64, precision: Precision) -> f64 {
+    match precision {
+        Precision::F32 => t_max as f32 as f64,
+        Precision::F64 => t_max,
+    }
+}
 
 /// Maps integrating more pixels than this estimate their work from a sample first.
 const ESTIMATE_ABOVE: u64 = 1 << 20;
@@ -80,11 +106,22 @@ fn work_per_pixel(spec: &FlipSpec, sample: &Field) -> f64 {
 }
 
 impl FlipTimeKernel {
+    /// The f32 kernel.
     pub fn new(ctx: &GpuContext) -> Self {
-        let module = shader_module(ctx, "flip_time.wgsl", FLIP_TIME_WGSL);
+        Self::with_precision(ctx, Precision::F32)
+    }
+
+    /// The kernel in `precision` (f64 needs a context with `GpuContext::has_f64`).
+    pub fn with_precision(ctx: &GpuContext, precision: Precision) -> Self {
+        let source = match precision {
+            Precision::F32 => shader_source(FLIP_TIME_WGSL),
+            Precision::F64 => shader_source_f64(FLIP_TIME_WGSL),
+        };
+        let module = module_of(ctx, "flip_time.wgsl", source);
         let (layout, pipeline_layout) =
             layouts(ctx, "flip_time", &[false, false, true, false, false]);
         let kernel = FlipTimeKernel {
+            precision,
             pipelines: Variants::new(
                 module,
                 pipeline_layout,
@@ -100,9 +137,10 @@ impl FlipTimeKernel {
     }
 
     fn buffers(&self, ctx: &GpuContext, capacity: u64) -> Buffers {
-        let params = params_buffer(ctx);
-        let states = storage_buffer(ctx, "states", capacity * PENDULUM_BYTES);
-        let times = storage_buffer(ctx, "times", capacity * 4);
+        let (pendulum, time, params) = sizes(self.precision);
+        let params = params_buffer_of(ctx, params);
+        let states = storage_buffer(ctx, "states", capacity * pendulum);
+        let times = storage_buffer(ctx, "times", capacity * time);
         let list_a = storage_buffer(ctx, "active list a", capacity * 4);
         let list_b = storage_buffer(ctx, "active list b", capacity * 4);
         let counter = storage_buffer(ctx, "counter", 4);
@@ -136,7 +174,7 @@ impl FlipTimeKernel {
         bufs: &Buffers,
         pipeline: &wgpu::ComputePipeline,
         bind_group: &wgpu::BindGroup,
-        params: &GpuParams,
+        params: &impl TileParams,
         read_count: bool,
     ) -> Result<u32> {
         ctx.queue
@@ -148,7 +186,7 @@ impl FlipTimeKernel {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("flip"),
             });
-        record_dispatch(&mut encoder, pipeline, bind_group, params.count);
+        record_dispatch(&mut encoder, pipeline, bind_group, params.count());
         if read_count {
             encoder.copy_buffer_to_buffer(&bufs.counter, 0, &bufs.counter_read, 0, 4);
         }
@@ -158,14 +196,16 @@ impl FlipTimeKernel {
             Ok(u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")))
         } else {
             ctx.wait()?;
-            Ok(params.count)
+            Ok(params.count())
         }
     }
 
     /// The flip-time map of `spec` (s, +inf = never flipped), in tiles as large as the
     /// device's storage bindings allow.
     pub fn run(&self, ctx: &GpuContext, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-        let max = max_pixels(ctx, PENDULUM_BYTES, FLIP_BYTES_PER_PIXEL);
+        let (pendulum, time, _) = sizes(self.precision);
+        // The pendulum, the flip time and two active-list entries a pixel.
+        let max = max_pixels(ctx, pendulum, pendulum + time + 8);
         // Large early-exit maps first integrate a sparse sample of their starts (1 in 256),
         // whose work per pixel foretells the whole map's: the progress bar's ETA then holds
         // from the start instead of following the flips' uneven waves.
@@ -185,6 +225,37 @@ impl FlipTimeKernel {
         monitor: &Monitor,
         max_pixels: u64,
     ) -> Result<Field> {
+        let (p, dt, grid) = (&spec.params, spec.stepping.dt, &spec.grid);
+        match self.precision {
+            Precision::F32 => {
+                let base = GpuParams::new(p, dt).with_grid(grid);
+                self.integrate(ctx, spec, monitor, max_pixels, base, |bytes| {
+                    bytemuck::pod_collect_to_vec::<u8, f32>(bytes)
+                        .into_iter()
+                        .map(|t| t as f64)
+                        .collect()
+                })
+            }
+            Precision::F64 => {
+                let base = GpuParams64::new(p, dt).with_grid(grid);
+                self.integrate(ctx, spec, monitor, max_pixels, base, |bytes| {
+                    bytemuck::pod_collect_to_vec::<u8, f64>(bytes)
+                })
+            }
+        }
+    }
+
+    /// The tiled loop with `base` params (either precision); `times` reads a tile's flip
+    /// times from the bytes of its buffer.
+    fn integrate(
+        &self,
+        ctx: &GpuContext,
+        spec: &FlipSpec,
+        monitor: &Monitor,
+        max_pixels: u64,
+        base: impl TileParams,
+        times: impl Fn(&[u8]) -> Vec<f64>,
+    ) -> Result<Field> {
         let grid = spec.grid;
         let [init, advance] = self
             .pipelines
@@ -195,16 +266,12 @@ impl FlipTimeKernel {
         let total_steps = spec.stepping.steps();
         let tiling = Tiling::new(grid.width, spec.rows_to_integrate(), max_pixels);
         let bufs = self.buffers(ctx, tiling.capacity());
-        let base = GpuParams::new(&spec.params, spec.stepping.dt).with_grid(&grid);
-        let t_max = spec.stepping.t_max as f32;
+        let t_max = spec.stepping.t_max;
+        let time_bytes = sizes(self.precision).1;
         map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows, later| {
             let pixels = rows * grid.width;
-            let mut params = GpuParams {
-                row0,
-                rows,
-                count: pixels,
-                ..base
-            };
+            let mut params = base;
+            params.set_tile(row0, rows, pixels);
             let listed = self.dispatch(ctx, &bufs, init, &bufs.b_to_a, &params, spec.early_exit)?;
             let active = if spec.early_exit { listed } else { pixels };
             let mut a_to_b = true;
@@ -217,24 +284,22 @@ impl FlipTimeKernel {
                 later,
                 monitor,
                 |step0, steps, active| {
-                    params.step0 = step0;
-                    params.steps = steps;
-                    params.count = active;
+                    params.set_steps(step0, steps, active);
                     let bind = if a_to_b { &bufs.a_to_b } else { &bufs.b_to_a };
                     a_to_b = !a_to_b;
                     self.dispatch(ctx, &bufs, advance, bind, &params, spec.early_exit)
                 },
             )?;
-            let times = read_f32s(ctx, &bufs.times, pixels as u64)?;
-            Ok(times
+            let bytes = read_buffer(ctx, &bufs.times, pixels as u64 * time_bytes)?;
+            Ok(times(&bytes)
                 .into_iter()
                 .map(|t| {
-                    if t == NONFINITE {
+                    if t == NONFINITE as f64 {
                         f32::NAN
-                    } else if t == NEVER || t > t_max {
+                    } else if t == NEVER as f64 || t > t_max_of(t_max, self.precision) {
                         f32::INFINITY
                     } else {
-                        t
+                        t as f32
                     }
                 })
                 .collect())

@@ -36,11 +36,6 @@ pub struct GpuLyapunovSlot {
     pub b: GpuPendulum,
 }
 
-/// Bytes of a flip map's tile per pixel: its pendulum, flip time and two active-list entries.
-pub const FLIP_BYTES_PER_PIXEL: u64 = (std::mem::size_of::<GpuPendulum>()
-    + std::mem::size_of::<f32>()
-    + 2 * std::mem::size_of::<u32>()) as u64;
-
 /// Bytes of a divergence map's tile per pixel: its slot and log-stretch sum.
 pub const LYAPUNOV_BYTES_PER_PIXEL: u64 =
     (std::mem::size_of::<GpuLyapunovSlot>() + std::mem::size_of::<f32>()) as u64;
@@ -94,53 +89,146 @@ pub struct GpuParams {
 // A uniform buffer's size must be a multiple of 16 bytes.
 const _: () = assert!(std::mem::size_of::<GpuParams>() == 144);
 
-impl GpuParams {
-    /// The coefficients are formed in f64 and rounded once. Everything measured in mass
-    /// (inertias, torques, energies, masses) is scaled by the power of two nearest 1 / A: the
-    /// motion does not depend on the mass scale, and f32 then holds any mass without
-    /// overflow or underflow. A power of two scales exactly, so results keep every bit.
-    pub fn new(p: &Params, dt: f64) -> Self {
-        let i = p.inertia();
-        let s = (-i.a.log2().round()).exp2();
-        let m = |x: f64| (x * s) as f32;
-        let [drag_bob1, drag_bob2, drag_rod1, drag_rod2] = p.losses.drag_factors();
-        let (mass_total, mass_lower) = p.moving_mass();
-        GpuParams {
-            a: m(i.a),
-            b: m(i.b),
-            c: m(i.c),
-            p: m(i.p),
-            q: m(i.q),
-            l1: p.l1 as f32,
-            l2: p.l2 as f32,
-            dt: dt as f32,
-            no_flip_energy: m(p.no_flip_threshold(f32::EPSILON as f64)),
-            joint1: m(p.losses.joint1),
-            joint2: m(p.losses.joint2),
-            drag_bob1: m(drag_bob1),
-            drag_bob2: m(drag_bob2),
-            drag_rod1: m(drag_rod1),
-            drag_rod2: m(drag_rod2),
-            g: p.g as f32,
-            mass_total: m(mass_total),
-            mass_lower: m(mass_lower),
-            bearing: (p.losses.bearing * p.losses.bearing_radius) as f32,
-            ..Default::default()
+/// `new` (physics and step) and `with_grid` (the grid) of a params mirror whose floats are
+/// `$float`, `$eps` its machine epsilon (the margin of the no-flip energy).
+macro_rules! params_constructors {
+    ($float:ty, $eps:expr) => {
+        /// The coefficients are formed in f64 and rounded once. Everything measured in mass
+        /// (inertias, torques, energies, masses) is scaled by the power of two nearest 1 / A:
+        /// the motion does not depend on the mass scale, and f32 then holds any mass without
+        /// overflow or underflow. A power of two scales exactly, so results keep every bit.
+        pub fn new(p: &Params, dt: f64) -> Self {
+            let i = p.inertia();
+            let s = (-i.a.log2().round()).exp2();
+            let m = |x: f64| (x * s) as $float;
+            let [drag_bob1, drag_bob2, drag_rod1, drag_rod2] = p.losses.drag_factors();
+            let (mass_total, mass_lower) = p.moving_mass();
+            Self {
+                a: m(i.a),
+                b: m(i.b),
+                c: m(i.c),
+                p: m(i.p),
+                q: m(i.q),
+                l1: p.l1 as $float,
+                l2: p.l2 as $float,
+                dt: dt as $float,
+                no_flip_energy: m(p.no_flip_threshold($eps)),
+                joint1: m(p.losses.joint1),
+                joint2: m(p.losses.joint2),
+                drag_bob1: m(drag_bob1),
+                drag_bob2: m(drag_bob2),
+                drag_rod1: m(drag_rod1),
+                drag_rod2: m(drag_rod2),
+                g: p.g as $float,
+                mass_total: m(mass_total),
+                mass_lower: m(mass_lower),
+                bearing: (p.losses.bearing * p.losses.bearing_radius) as $float,
+                ..Default::default()
+            }
         }
-    }
 
-    pub fn with_grid(mut self, g: &Grid) -> Self {
-        self.theta1_mid = g.theta1.mid() as f32;
-        self.theta1_half_step = (0.5 * g.theta1_step()) as f32;
-        self.theta2_mid = g.theta2.mid() as f32;
-        self.theta2_half_step = (0.5 * g.theta2_step()) as f32;
-        self.omega1 = g.omega1 as f32;
-        self.omega2 = g.omega2 as f32;
-        self.width = g.width;
-        self.height = g.height;
-        self
-    }
+        pub fn with_grid(mut self, g: &Grid) -> Self {
+            self.theta1_mid = g.theta1.mid() as $float;
+            self.theta1_half_step = (0.5 * g.theta1_step()) as $float;
+            self.theta2_mid = g.theta2.mid() as $float;
+            self.theta2_half_step = (0.5 * g.theta2_step()) as $float;
+            self.omega1 = g.omega1 as $float;
+            self.omega2 = g.omega2 as $float;
+            self.width = g.width;
+            self.height = g.height;
+            self
+        }
+    };
 }
+
+impl GpuParams {
+    params_constructors!(f32, f32::EPSILON as f64);
+}
+
+/// Mirror of WGSL `Params` in the f64 kernels ([`shader_source_f64`]): the same members
+/// with f64 in place of f32, laid out by WGSL's rules (f64 aligned to 8 bytes; the padding
+/// made explicit for Pod).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuParams64 {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+    pub p: f64,
+    pub q: f64,
+    pub l1: f64,
+    pub l2: f64,
+    pub dt: f64,
+    pub theta1_mid: f64,
+    pub theta1_half_step: f64,
+    pub theta2_mid: f64,
+    pub theta2_half_step: f64,
+    pub omega1: f64,
+    pub omega2: f64,
+    pub no_flip_energy: f64,
+    pub joint1: f64,
+    pub joint2: f64,
+    pub drag_bob1: f64,
+    pub drag_bob2: f64,
+    pub drag_rod1: f64,
+    pub drag_rod2: f64,
+    pub g: f64,
+    pub mass_total: f64,
+    pub mass_lower: f64,
+    pub bearing: f64,
+    pub width: u32,
+    pub height: u32,
+    pub rows: u32,
+    pub row0: u32,
+    pub step0: u32,
+    pub steps: u32,
+    pub count: u32,
+    pub interval: u32,
+    pub total_steps: u32,
+    pub _pad_a: u32,
+    pub twin_eps: f64,
+    pub _pad0: u32,
+    pub _pad_b: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<GpuParams64>() == 256);
+
+impl GpuParams64 {
+    params_constructors!(f64, f64::EPSILON);
+}
+
+/// Mirror of WGSL `Pendulum` in the f64 kernels.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPendulum64 {
+    pub y: [f64; 4],
+    pub u: [f64; 4],
+}
+
+/// The tile counters of a kernel's params, whichever its precision.
+pub trait TileParams: Pod {
+    fn set_tile(&mut self, row0: u32, rows: u32, count: u32);
+    fn set_steps(&mut self, step0: u32, steps: u32, count: u32);
+    fn count(&self) -> u32;
+}
+
+macro_rules! tile_params {
+    ($t:ty) => {
+        impl TileParams for $t {
+            fn set_tile(&mut self, row0: u32, rows: u32, count: u32) {
+                (self.row0, self.rows, self.count) = (row0, rows, count);
+            }
+            fn set_steps(&mut self, step0: u32, steps: u32, count: u32) {
+                (self.step0, self.steps, self.count) = (step0, steps, count);
+            }
+            fn count(&self) -> u32 {
+                self.count
+            }
+        }
+    };
+}
+tile_params!(GpuParams);
+tile_params!(GpuParams64);
 
 /// Full WGSL source of a kernel: Rust constants, then `common.wgsl`, then the kernel file.
 pub fn shader_source(kernel: &str) -> String {
@@ -155,10 +243,127 @@ pub const FLIP_TIME_WGSL: &str = include_str!("../../shaders/flip_time.wgsl");
 pub const TRAJECTORY_WGSL: &str = include_str!("../../shaders/trajectory.wgsl");
 pub const LYAPUNOV_WGSL: &str = include_str!("../../shaders/lyapunov.wgsl");
 
+/// The f64 twin of `shader_source(kernel)`: the same WGSL with f64 for f32, and the few
+/// pieces that f32 writes for its own precision written again: (sin, cos) by a longer
+/// polynomial (SPIR-V's built-in trigonometry is f32 only: on lavapipe it returns garbage for
+/// f64), the energy from that (sin, cos), the finiteness test, pi and the Gauss nodes to f64
+/// precision, and the Hermite bisection to f64's 53 bits. Needs `Features::SHADER_F64`.
+pub fn shader_source_f64(kernel: &str) -> String {
+    let mut s = shader_source(kernel);
+    for (name, body) in [
+        ("sincos", SINCOS_F64),
+        ("energy", ENERGY_F64),
+        ("is_finite4", IS_FINITE4_F64),
+    ] {
+        s = replace_fn(&s, name, body);
+    }
+    for (from, to) in [
+        (
+            "const PI: f32 = 3.14159265358979;",
+            "const PI: f32 = 3.141592653589793;",
+        ),
+        (
+            "vec3<f32>(0.1127016654, 0.5, 0.8872983346)",
+            "vec3<f32>(0.1127016653792583, 0.5, 0.8872983346207417)",
+        ),
+        (
+            "vec3<f32>(0.2777777778, 0.4444444444, 0.2777777778)",
+            "vec3<f32>(0.2777777777777778, 0.4444444444444444, 0.2777777777777778)",
+        ),
+        (
+            "for (var i = 0; i < 24; i++) {",
+            "for (var i = 0; i < 53; i++) {",
+        ),
+    ] {
+        assert!(s.contains(from), "f64 source: `{from}` not found");
+        s = s.replace(from, to);
+    }
+    replace_word(&s, "f32", "f64")
+}
+
+/// `source` with the function `name` (from `fn name(` to its closing brace at the start of a
+/// line) replaced by `body`.
+fn replace_fn(source: &str, name: &str, body: &str) -> String {
+    let start = source
+        .find(&format!("fn {name}("))
+        .unwrap_or_else(|| panic!("no fn {name} in the shader"));
+    let end = start + source[start..].find("\n}\n").expect("a closing brace") + 3;
+    format!(
+        "{}{}{}",
+        &source[..start],
+        body.trim_end(),
+        &source[end - 1..]
+    )
+}
+
+/// `source` with the whole word `from` replaced by `to`.
+fn replace_word(source: &str, from: &str, to: &str) -> String {
+    let word = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let mut out = String::with_capacity(source.len());
+    let mut rest = source;
+    while let Some(i) = rest.find(from) {
+        let before = rest[..i].chars().next_back();
+        let after = rest[i + from.len()..].chars().next();
+        out.push_str(&rest[..i]);
+        if before.is_some_and(word) || after.is_some_and(word) {
+            out.push_str(from);
+        } else {
+            out.push_str(to);
+        }
+        rest = &rest[i + from.len()..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// (sin x, cos x) in f64: x = q pi/2 + r with pi/2 in three parts (Cody-Waite, fdlibm's
+/// constants), Taylor polynomials to r^17 and r^18 on |r| <= pi/4 (the next terms are below
+/// 1e-19), the quadrant q mod 4. tests/precision.rs measures it against Rust's sin and cos.
+const SINCOS_F64: &str = "fn sincos(x: f32) -> vec2<f32> {
+    let q = round(x * 0.6366197723675814);
+    let r = fma(-q, 2.0222662487111665e-21, fma(-q, 6.077100506303966e-11, fma(-q, 1.5707963267341256, x)));
+    let r2 = r * r;
+    var s: f32 = 2.8114572543455206e-15;
+    s = fma(s, r2, -7.647163731819816e-13);
+    s = fma(s, r2, 1.6059043836821613e-10);
+    s = fma(s, r2, -2.505210838544172e-8);
+    s = fma(s, r2, 2.7557319223985893e-6);
+    s = fma(s, r2, -1.984126984126984e-4);
+    s = fma(s, r2, 8.333333333333333e-3);
+    s = fma(s, r2, -1.6666666666666666e-1);
+    s = fma(s * r2, r, r);
+    var c: f32 = -1.5619206968586225e-16;
+    c = fma(c, r2, 4.779477332387385e-14);
+    c = fma(c, r2, -1.1470745597729725e-11);
+    c = fma(c, r2, 2.08767569878681e-9);
+    c = fma(c, r2, -2.755731922398589e-7);
+    c = fma(c, r2, 2.48015873015873e-5);
+    c = fma(c, r2, -1.388888888888889e-3);
+    c = fma(c, r2, 4.1666666666666664e-2);
+    c = fma(c * r2, r2, fma(-0.5, r2, 1.0));
+    let quadrant = i32(q) & 3;
+    let sc = select(vec2<f32>(s, c), vec2<f32>(c, -s), (quadrant & 1) != 0);
+    return select(sc, -sc, (quadrant & 2) != 0);
+}";
+
+const ENERGY_F64: &str = "fn energy(c: Coeffs, y: vec4<f32>) -> f32 {
+    let a = sincos(y.x);
+    let b = sincos(y.z);
+    let cd = a.y * b.y + a.x * b.x;
+    let kinetic = 0.5 * c.a * y.y * y.y + 0.5 * c.b * y.w * y.w + c.c * y.y * y.w * cd;
+    return kinetic - c.p * a.y - c.q * b.y;
+}";
+
+/// NaN fails every comparison, infinities fail this one.
+const IS_FINITE4_F64: &str = "fn is_finite4(v: vec4<f32>) -> bool {
+    return all(abs(v) <= vec4<f32>(1.7976931348623157e308));
+}";
+
 /// Every kernel's full source, named, for validation.
 pub fn all_shaders() -> Vec<(&'static str, String)> {
     vec![
         ("flip_time", shader_source(FLIP_TIME_WGSL)),
+        ("flip_time_f64", shader_source_f64(FLIP_TIME_WGSL)),
         ("trajectory", shader_source(TRAJECTORY_WGSL)),
         ("lyapunov", shader_source(LYAPUNOV_WGSL)),
     ]

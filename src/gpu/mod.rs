@@ -11,18 +11,19 @@ mod trajectory;
 
 use std::sync::OnceLock;
 
-pub use context::{GpuContext, list_adapters};
+pub use context::{GpuContext, list_adapters, read_buffer};
 pub use flip_time::FlipTimeKernel;
 pub use lyapunov::{JacobianKernel, LyapunovKernel};
 pub use tiled::STEPS_PER_DISPATCH;
 pub use trajectory::TrajectoryKernel;
 
-use crate::spec::Method;
+use crate::spec::{Method, Precision};
 
 /// A context and its kernels, each built on first use and kept.
 pub struct Kernels {
     pub ctx: GpuContext,
     flip: OnceLock<FlipTimeKernel>,
+    flip64: OnceLock<FlipTimeKernel>,
     tangent: OnceLock<LyapunovKernel>,
     twin: OnceLock<LyapunovKernel>,
     trajectory: OnceLock<TrajectoryKernel>,
@@ -34,6 +35,7 @@ impl Kernels {
         Kernels {
             ctx,
             flip: OnceLock::new(),
+            flip64: OnceLock::new(),
             tangent: OnceLock::new(),
             twin: OnceLock::new(),
             trajectory: OnceLock::new(),
@@ -43,6 +45,12 @@ impl Kernels {
 
     pub fn flip(&self) -> &FlipTimeKernel {
         self.flip.get_or_init(|| FlipTimeKernel::new(&self.ctx))
+    }
+
+    /// The f64 flip kernel (the context must have f64).
+    pub fn flip64(&self) -> &FlipTimeKernel {
+        self.flip64
+            .get_or_init(|| FlipTimeKernel::with_precision(&self.ctx, Precision::F64))
     }
 
     pub fn lyapunov(&self, method: Method) -> &LyapunovKernel {

@@ -5,10 +5,15 @@ use super::layout::{WORKGROUP_SIZE, shader_source};
 use crate::error::Result;
 
 pub fn shader_module(ctx: &GpuContext, label: &str, kernel: &str) -> wgpu::ShaderModule {
+    module_of(ctx, label, shader_source(kernel))
+}
+
+/// A module of a full WGSL source (e.g. `layout::shader_source_f64`).
+pub fn module_of(ctx: &GpuContext, label: &str, source: String) -> wgpu::ShaderModule {
     ctx.device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(shader_source(kernel).into()),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
         })
 }
 
@@ -168,9 +173,14 @@ pub fn storage_buffer(ctx: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer
 
 /// A uniform buffer for the kernels' `Params`.
 pub fn params_buffer(ctx: &GpuContext) -> wgpu::Buffer {
+    params_buffer_of(ctx, std::mem::size_of::<super::layout::GpuParams>() as u64)
+}
+
+/// A uniform buffer of `bytes` for a kernel's params (f64 kernels' are larger).
+pub fn params_buffer_of(ctx: &GpuContext, bytes: u64) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("params"),
-        size: std::mem::size_of::<super::layout::GpuParams>() as u64,
+        size: bytes,
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })

@@ -1,0 +1,132 @@
+//! f64 on the GPU: its own sin and cos against Rust's, and its maps against the f64 CPU's.
+
+mod common;
+
+use chaoscope::cpu;
+use chaoscope::gpu::{FlipTimeKernel, GpuContext, layout::shader_source_f64};
+use chaoscope::model::Params;
+use chaoscope::monitor::Monitor;
+use chaoscope::spec::{FlipSpec, Grid, Precision, Stepping};
+
+fn spec(n: u32, t_max: f64, dt: f64) -> FlipSpec {
+    FlipSpec::new(Params::default(), Grid::square(n), Stepping { dt, t_max })
+}
+
+fn f64_gpu() -> Option<GpuContext> {
+    let ctx = common::gpu()?;
+    assert!(
+        ctx.has_f64(),
+        "lavapipe offers SHADER_F64; this adapter does not"
+    );
+    Some(ctx)
+}
+
+/// The f64 shaders' `sincos` at `xs`, through a kernel of its own.
+fn gpu_sincos(ctx: &GpuContext, xs: &[f64]) -> Vec<[f64; 2]> {
+    const KERNEL: &str = "
+@group(0) @binding(0) var<storage, read_write> data: array<vec2<f32>>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x < arrayLength(&data) {
+        data[gid.x] = sincos(data[gid.x].x);
+    }
+}";
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("sincos"),
+            source: wgpu::ShaderSource::Wgsl(shader_source_f64(KERNEL).into()),
+        });
+    let pipeline = ctx
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("sincos"),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+    let input: Vec<f64> = xs.iter().flat_map(|&x| [x, 0.0]).collect();
+    let bytes = (input.len() * 8) as u64;
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    ctx.queue
+        .write_buffer(&buffer, 0, bytemuck::cast_slice(&input));
+    let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buffer.as_entire_binding(),
+        }],
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups((xs.len() as u32).div_ceil(64), 1, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let out: Vec<f64> =
+        bytemuck::pod_collect_to_vec(&chaoscope::gpu::read_buffer(ctx, &buffer, bytes).unwrap());
+    out.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
+}
+
+#[test]
+fn f64_sin_and_cos_are_within_a_few_ulps_of_rusts() {
+    let Some(ctx) = f64_gpu() else { return };
+    // The starts' angles (|theta| <= pi) and well beyond, densely and at the quadrant edges.
+    let mut xs: Vec<f64> = (0..20001).map(|k| -10.0 + 1e-3 * k as f64).collect();
+    xs.extend((-8..=8).map(|q| q as f64 * std::f64::consts::FRAC_PI_2));
+    let got = gpu_sincos(&ctx, &xs);
+    let ulps = |a: f64, b: f64| ((a - b).abs() / f64::EPSILON).max(0.0);
+    let worst = xs
+        .iter()
+        .zip(&got)
+        .map(|(&x, &[s, c])| ulps(s, x.sin()).max(ulps(c, x.cos())))
+        .fold(0.0f64, f64::max);
+    eprintln!("f64 sincos: worst {worst:.2} ulp (of 1) over |x| <= 10");
+    // Cody-Waite with three parts of pi/2 and degree-17/18 polynomials: a few roundings.
+    assert!(worst <= 4.0, "{worst} ulp");
+}
+
+#[test]
+fn f64_gpu_flip_maps_match_the_f64_cpu() {
+    let Some(ctx) = f64_gpu() else { return };
+    let kernel = FlipTimeKernel::with_precision(&ctx, Precision::F64);
+    // At dt 0.001 the GPU's carried cos and sin (an O(dt^4) different discretisation than the
+    // CPU's angles) and the two formulas' round-off differ by far less than the f32 in which
+    // flip times are stored (2.4e-7 s at 3 s).
+    let s = spec(64, 3.0, 0.001);
+    let gpu = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
+    let cpu = cpu::flip_map(&s, &Monitor::hidden()).unwrap();
+    let mut worst = 0.0f64;
+    for (g, c) in gpu.data.iter().zip(&cpu.data) {
+        assert_eq!(g.is_infinite(), c.is_infinite(), "{g} vs {c}");
+        if g.is_finite() {
+            worst = worst.max((*g as f64 - *c as f64).abs());
+        }
+    }
+    assert!(worst <= 1e-6, "{worst} s");
+    // And f32 is visibly coarser on the same map (its round-off, amplified by the chaos).
+    let f32_map = FlipTimeKernel::new(&ctx)
+        .run(&ctx, &s, &Monitor::hidden())
+        .unwrap();
+    let worst32 = f32_map
+        .data
+        .iter()
+        .zip(&cpu.data)
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .map(|(a, b)| (*a as f64 - *b as f64).abs())
+        .fold(0.0f64, f64::max);
+    eprintln!("flip times vs CPU f64 at dt 0.001, 3 s: f64 GPU {worst:e} s, f32 GPU {worst32:e} s");
+    assert!(worst32 > 10.0 * worst.max(1e-7), "{worst32} vs {worst}");
+}
