@@ -57,6 +57,8 @@ impl RunInfo {
 pub struct Engine {
     gpu: Option<Kernels>,
     notice: Option<String>,
+    /// The precision of trajectories and ensembles on the GPU (maps carry their own).
+    precision: Precision,
 }
 
 impl Engine {
@@ -78,6 +80,7 @@ impl Engine {
         Ok(Engine {
             gpu: gpu.map(Kernels::new),
             notice,
+            precision: Precision::F32,
         })
     }
 
@@ -86,6 +89,35 @@ impl Engine {
         Engine {
             gpu: Some(Kernels::new(ctx)),
             notice: None,
+            precision: Precision::F32,
+        }
+    }
+
+    /// Trajectories and ensembles in `precision` on the GPU. f64 on an adapter without it:
+    /// an error naming `precision` when the GPU was asked for, else the CPU (f64) with a note.
+    pub fn with_precision(mut self, precision: Precision, backend: Backend) -> Result<Self> {
+        self.precision = precision;
+        if let Some(k) = &self.gpu
+            && precision == Precision::F64
+            && !k.ctx.has_f64()
+        {
+            let reason = format!(
+                "f64: the GPU adapter {} has no f64 (SHADER_F64); use the CPU backend (f64) or auto",
+                k.ctx.adapter_name()
+            );
+            if backend == Backend::Gpu {
+                return Err(Error::invalid("precision", reason));
+            }
+            self.notice = Some(format!("note: {reason}; running on the CPU"));
+            self.gpu = None;
+        }
+        Ok(self)
+    }
+
+    fn trajectory_kernel(k: &Kernels, precision: Precision) -> &crate::gpu::TrajectoryKernel {
+        match precision {
+            Precision::F32 => k.trajectory(),
+            Precision::F64 => k.trajectory64(),
         }
     }
 
@@ -108,7 +140,10 @@ impl Engine {
     pub fn info(&self) -> RunInfo {
         match &self.gpu {
             Some(k) => RunInfo {
-                backend: "gpu",
+                backend: match self.precision {
+                    Precision::F32 => "gpu",
+                    Precision::F64 => "gpu f64",
+                },
                 adapter: Some(k.ctx.adapter_name()),
             },
             None => RunInfo::CPU,
@@ -144,10 +179,12 @@ impl Engine {
     /// The path a flip map takes ("gpu f64" for the f64 kernel).
     pub fn flip_info(&self, spec: &FlipSpec) -> RunInfo {
         match self.flip_gpu(spec) {
-            Some((_, Precision::F32)) => self.info(),
-            Some((_, Precision::F64)) => RunInfo {
-                backend: "gpu f64",
-                ..self.info()
+            Some((k, precision)) => RunInfo {
+                backend: match precision {
+                    Precision::F32 => "gpu",
+                    Precision::F64 => "gpu f64",
+                },
+                adapter: Some(k.ctx.adapter_name()),
             },
             None => RunInfo::CPU,
         }
@@ -212,8 +249,7 @@ impl Engine {
         let steps = stepping.steps();
         match &self.gpu {
             Some(k) => {
-                let states = k
-                    .trajectory()
+                let states = Self::trajectory_kernel(k, self.precision)
                     .run(&k.ctx, p, &[start], stepping.dt, steps, 1)?
                     .remove(0);
                 let work = cpu::dissipated_along(p, &states, stepping.dt);
@@ -274,7 +310,8 @@ impl Engine {
         for (k, chunk) in starts.chunks(per_chunk).enumerate() {
             monitor.check()?;
             let runs = match &self.gpu {
-                Some(g) => g.trajectory().run(&g.ctx, p, chunk, dt, steps, stride)?,
+                Some(g) => Self::trajectory_kernel(g, self.precision)
+                    .run(&g.ctx, p, chunk, dt, steps, stride)?,
                 None => chunk
                     .par_iter()
                     .map(|s| {

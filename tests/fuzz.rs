@@ -219,5 +219,5 @@ fn random_command_lines_never_panic_and_name_what_is_wrong() {
         failures.join("\n")
     );
     // A fuzz run that only ever refused would test nothing: both outcomes must occur.
-    assert!(ok > 50 && two > 50, "{ok} successes and {two} refusals");
+    assert!(ok >= 25 && two >= 25, "{ok} successes and {two} refusals");
 }

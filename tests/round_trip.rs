@@ -233,6 +233,28 @@ fn trajectories_round_trip() {
         &[Path::new("--output"), &csv2],
         &[(&csv, &csv2)],
     );
+    if common::gpu().is_some_and(|c| c.has_f64()) {
+        let (csv, csv2) = (dir.path().join("c.csv"), dir.path().join("d.csv"));
+        round_trip(
+            &[
+                "trajectory",
+                "--theta1",
+                "1",
+                "--theta2",
+                "2",
+                "--t-max",
+                "0.5",
+                "--backend",
+                "gpu",
+                "--precision",
+                "f64",
+            ],
+            &[Path::new("--output"), &csv],
+            || first_line(&csv),
+            &[Path::new("--output"), &csv2],
+            &[(&csv, &csv2)],
+        );
+    }
 }
 
 #[test]

@@ -15,7 +15,7 @@ use crate::field::Field;
 use crate::gpu::{FlipTimeKernel, GpuContext, LyapunovKernel};
 use crate::model::Params;
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Stepping};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Precision, Stepping};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchJob {
@@ -74,6 +74,9 @@ struct Sample {
 /// (`early-all`, `full`: every pixel integrated, the raw throughput) and with the mirrored
 /// half of the symmetric grid (`early`: the map as users get it, `full-half`).
 const MODES: [&str; 4] = ["early", "early-all", "full", "full-half"];
+
+/// The f64 kernel's rows: the map as users get it, and every pixel every step.
+const MODES_F64: [&str; 2] = ["early", "full"];
 
 fn problem_steps(field: &Field, spec: &FlipSpec) -> f64 {
     let steps = spec.stepping.steps() as f64;
@@ -221,6 +224,15 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
     for mode in MODES {
         kernel.run(&ctx, &spec(32, args, mode), &quiet)?; // warm-up: shader compile
     }
+    // The f64 kernel where the adapter has f64: the map as users get it and every step.
+    let kernel64 = ctx
+        .has_f64()
+        .then(|| FlipTimeKernel::with_precision(&ctx, Precision::F64));
+    if let Some(k) = &kernel64 {
+        for mode in MODES_F64 {
+            k.run(&ctx, &spec(32, args, mode), &quiet)?;
+        }
+    }
     let lyapunov = LyapunovKernel::new(&ctx, Method::Tangent);
     lyapunov.run(&ctx, &ftle_spec(32, args), &quiet)?;
     let mut samples: Vec<Sample> = Vec::new();
@@ -237,6 +249,18 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
                 name: format!("chaoscope gpu f32 ({})", ctx.info.name),
                 mode,
                 wall_s,
+                pendulum_steps: problem_steps(&field, &s),
+            });
+        }
+        for mode in kernel64.iter().flat_map(|_| MODES_F64) {
+            let k = kernel64.as_ref().expect("f64 kernel");
+            let s = spec(args.size, args, mode);
+            let t0 = Instant::now();
+            let field = k.run(&ctx, &s, &quiet)?;
+            samples.push(Sample {
+                name: format!("chaoscope gpu f64 ({})", ctx.info.name),
+                mode,
+                wall_s: t0.elapsed().as_secs_f64(),
                 pendulum_steps: problem_steps(&field, &s),
             });
         }
@@ -303,9 +327,19 @@ fn ratios(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     let gpu_rate = |mode: &str| {
         rows.iter()
-            .find(|r| r.path.starts_with("chaoscope gpu") && r.mode == mode)
+            .find(|r| r.path.starts_with("chaoscope gpu f32") && r.mode == mode)
             .map(|r| r.steps_per_s)
     };
+    let f64_rate = rows
+        .iter()
+        .find(|r| r.path.starts_with("chaoscope gpu f64") && r.mode == "full")
+        .map(|r| r.steps_per_s);
+    if let (Some(full), Some(f64_full)) = (gpu_rate("full"), f64_rate) {
+        out.push(format!(
+            "f64: the GPU's f64 kernel runs {:.2}x the f32 kernel's pendulum-steps/s (every step)",
+            f64_full / full
+        ));
+    }
     if let (Some(full), Some(ftle)) = (gpu_rate("full"), gpu_rate("ftle")) {
         out.push(format!(
             "ftle: a tangent step (state + variational equations) costs {:.2} plain RK4 steps on the GPU",
@@ -320,7 +354,7 @@ fn ratios(rows: &[Row]) -> Vec<String> {
     ] {
         let ours = rows
             .iter()
-            .find(|r| r.path.starts_with("chaoscope gpu") && r.mode == mode);
+            .find(|r| r.path.starts_with("chaoscope gpu f32") && r.mode == mode);
         let best_peer = rows
             .iter()
             .filter(|r| r.path.starts_with("peer") && r.mode == peer_mode && r.wall_s.is_finite())

@@ -8,7 +8,7 @@ use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{self, Stepping};
+use crate::spec::{self, Precision, Stepping};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrajectoryJob {
@@ -18,6 +18,8 @@ pub struct TrajectoryJob {
     /// Output interval (s), a whole multiple of dt; None: every step.
     pub every: Option<f64>,
     pub backend: Backend,
+    /// The GPU's precision (the CPU is always f64).
+    pub precision: Precision,
     /// The CSV; None writes to the `stdout` given to [`run`].
     pub output: Option<PathBuf>,
 }
@@ -73,7 +75,7 @@ pub fn run(
     if let Some(path) = &job.output {
         check_output("output", path, "csv")?;
     }
-    let engine = Engine::new(job.backend)?;
+    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     let (states, dissipated) = engine.trajectory(&job.params, job.start, job.stepping, monitor)?;
     let finite = |s: &State| s.to_array().iter().all(|v| v.is_finite());

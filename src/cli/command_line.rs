@@ -199,6 +199,9 @@ pub fn trajectory(job: &TrajectoryJob) -> String {
     if let Some(every) = job.every {
         out += &format!(" --every {every}");
     }
+    if job.precision != Precision::F32 {
+        out += &format!(" --precision {}", job.precision.name());
+    }
     out
 }
 

@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, StartArgs, StepArgs, backend_parser};
-use super::parse::parse_number;
+use super::parse::{one_of, parse_number};
 use super::{command_line, json, say};
 use crate::app::trajectory::{self, TrajectoryJob};
 use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
+use crate::spec::Precision;
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("10")))]
@@ -22,9 +23,12 @@ pub struct TrajectoryArgs {
     /// Output interval (s), a multiple of dt; default every step.
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub every: Option<f64>,
-    /// cpu (f64, the default), gpu (f32) or auto.
+    /// cpu (f64, the default), gpu or auto.
     #[arg(long, default_value = "cpu", value_parser = backend_parser())]
     pub backend: Backend,
+    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
+    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Precision,
     #[command(flatten)]
     pub physical: PhysicalArgs,
     /// CSV to write; standard output if absent.
@@ -40,6 +44,7 @@ impl TrajectoryArgs {
             stepping: self.step.stepping(),
             every: self.every,
             backend: self.backend,
+            precision: self.precision,
             output: self.output.clone(),
         })
     }

@@ -364,6 +364,7 @@ pub fn all_shaders() -> Vec<(&'static str, String)> {
     vec![
         ("flip_time", shader_source(FLIP_TIME_WGSL)),
         ("flip_time_f64", shader_source_f64(FLIP_TIME_WGSL)),
+        ("trajectory_f64", shader_source_f64(TRAJECTORY_WGSL)),
         ("trajectory", shader_source(TRAJECTORY_WGSL)),
         ("lyapunov", shader_source(LYAPUNOV_WGSL)),
     ]

@@ -27,6 +27,7 @@ pub struct Kernels {
     tangent: OnceLock<LyapunovKernel>,
     twin: OnceLock<LyapunovKernel>,
     trajectory: OnceLock<TrajectoryKernel>,
+    trajectory64: OnceLock<TrajectoryKernel>,
     jacobian: OnceLock<JacobianKernel>,
 }
 
@@ -39,6 +40,7 @@ impl Kernels {
             tangent: OnceLock::new(),
             twin: OnceLock::new(),
             trajectory: OnceLock::new(),
+            trajectory64: OnceLock::new(),
             jacobian: OnceLock::new(),
         }
     }
@@ -64,6 +66,12 @@ impl Kernels {
     pub fn trajectory(&self) -> &TrajectoryKernel {
         self.trajectory
             .get_or_init(|| TrajectoryKernel::new(&self.ctx))
+    }
+
+    /// The f64 trajectory kernel (the context must have f64).
+    pub fn trajectory64(&self) -> &TrajectoryKernel {
+        self.trajectory64
+            .get_or_init(|| TrajectoryKernel::with_precision(&self.ctx, Precision::F64))
     }
 
     pub fn jacobian(&self) -> &JacobianKernel {
