@@ -321,6 +321,31 @@ fn traces_and_phase_portraits_round_trip() {
         &[Path::new("--output"), &png2],
         &[(&png, &png2)],
     );
+    if common::gpu().is_some_and(|c| c.has_f64()) {
+        let (png, png2) = (d("f.png"), d("f2.png"));
+        round_trip(
+            &[
+                "traces",
+                "--theta1",
+                "2",
+                "--theta2",
+                "2",
+                "--exposure",
+                "0.3",
+                "--size",
+                "32",
+                "--backend",
+                "gpu",
+                "--precision",
+                "f64",
+            ],
+            &[Path::new("--output"), &png],
+            || png_text(&png, "chaoscope:command"),
+            &[Path::new("--output"), &png2],
+            &[(&png, &png2)],
+        );
+        assert_eq!(png_text(&png, "chaoscope:backend"), "gpu f64");
+    }
 }
 
 #[test]

@@ -15,6 +15,7 @@ use crate::fit::{
 use crate::monitor::Monitor;
 use crate::params::{ParamSources, Preset};
 use crate::render::{Outputs, check_writable};
+use crate::spec::Precision;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitJob {
@@ -36,6 +37,8 @@ pub struct FitJob {
     /// lengths from the data unless given.
     pub params: ParamSources,
     pub backend: Backend,
+    /// The GPU's precision for the ensemble search (the refinement is f64 on the CPU).
+    pub precision: Precision,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -112,7 +115,7 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
         tolerance: job.tolerance,
         candidates: job.candidates,
     };
-    let engine = Engine::new(job.backend)?;
+    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices: Vec<String> = engine.notices();
     let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, &engine, monitor)?;
 

@@ -10,7 +10,7 @@ use crate::field::Field;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::render::{self, Colormap, Outputs};
-use crate::spec::{self, Spread, Stepping, releases};
+use crate::spec::{self, Precision, Spread, Stepping, releases};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhaseJob {
@@ -26,6 +26,8 @@ pub struct PhaseJob {
     /// The single pendulum (length l1) instead of the double.
     pub single: bool,
     pub backend: Backend,
+    /// The GPU's precision (the CPU is always f64).
+    pub precision: Precision,
     /// Default inferno.
     pub colormap: Option<Colormap>,
     pub output: PathBuf,
@@ -67,7 +69,7 @@ pub fn run(job: &PhaseJob, command: String, monitor: &Monitor) -> Result<PhaseSu
         let (rgb, w, h) = single_pendulum_portrait(job, colormap)?;
         (rgb, w, h, RunInfo::CPU, Vec::new())
     } else {
-        let engine = Engine::new(job.backend)?;
+        let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
         let notices: Vec<String> = engine.notices();
         let (rgb, w, h) = double_pendulum_portraits(job, &engine, colormap, monitor)?;
         (rgb, w, h, engine.info(), notices)

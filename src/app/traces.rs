@@ -9,7 +9,7 @@ use crate::error::Result;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::render::{self, Bobs, Colormap, Film, Outputs, View};
-use crate::spec::{self, Spread, Stepping, releases};
+use crate::spec::{self, Precision, Spread, Stepping, releases};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct TracesJob {
@@ -23,6 +23,8 @@ pub struct TracesJob {
     /// Picture side (px).
     pub size: u32,
     pub backend: Backend,
+    /// The GPU's precision (the CPU is always f64).
+    pub precision: Precision,
     pub output: PathBuf,
     /// An animated GIF of the pendulums.
     pub gif: Option<PathBuf>,
@@ -74,7 +76,7 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
     job.validate()?;
     monitor.check()?;
     let p = &job.params;
-    let engine = Engine::new(job.backend)?;
+    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices: Vec<String> = engine.notices();
     let info = engine.info();
     let starts = releases(p, job.start, job.runs, job.spread);

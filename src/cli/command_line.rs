@@ -133,9 +133,7 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
     } else if !spec.use_symmetry {
         out += " --no-symmetry";
     }
-    if spec.precision != Precision::F32 {
-        out += &format!(" --precision {}", spec.precision.name());
-    }
+    out += precision(spec.precision);
     out + &picture(pic)
 }
 
@@ -199,10 +197,7 @@ pub fn trajectory(job: &TrajectoryJob) -> String {
     if let Some(every) = job.every {
         out += &format!(" --every {every}");
     }
-    if job.precision != Precision::F32 {
-        out += &format!(" --precision {}", job.precision.name());
-    }
-    out
+    out + precision(job.precision)
 }
 
 fn spread(s: Spread) -> String {
@@ -226,7 +221,15 @@ pub fn traces(job: &TracesJob) -> String {
     if job.backend != Backend::Auto {
         out += &format!(" --backend {}", job.backend.name());
     }
-    out
+    out + precision(job.precision)
+}
+
+/// ` --precision f64` when not f32, the default.
+fn precision(p: Precision) -> &'static str {
+    match p {
+        Precision::F32 => "",
+        Precision::F64 => " --precision f64",
+    }
 }
 
 /// `phase`'s default spread, left out of its command.
@@ -256,7 +259,7 @@ pub fn phase(job: &PhaseJob) -> String {
         if job.backend != Backend::Auto {
             out += &format!(" --backend {}", job.backend.name());
         }
-        out
+        out + precision(job.precision)
     };
     if let Some(c) = job.colormap {
         out += &format!(" --colormap {}", c.name());
@@ -311,5 +314,5 @@ pub fn fit(job: &FitJob) -> String {
         job.velocity_error,
         sources(&job.params),
         job.backend.name()
-    )
+    ) + precision(job.precision)
 }

@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, backend_parser};
-use super::parse::{parse_number, parse_usize};
+use super::parse::{one_of, parse_number, parse_usize};
 use super::{command_line, json, say};
 use crate::app::fit::{self, FitJob};
 use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
+use crate::spec::Precision;
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("m1", |a| a.help("Upper bob mass (kg) [default: the lab preset's]")))]
@@ -45,6 +46,9 @@ pub struct FitArgs {
     /// auto, gpu or cpu (f64).
     #[arg(long, default_value = "auto", value_parser = backend_parser())]
     pub backend: Backend,
+    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
+    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Precision,
 }
 
 impl FitArgs {
@@ -59,6 +63,7 @@ impl FitArgs {
             velocity_error: self.velocity_error,
             params: self.physical.sources(),
             backend: self.backend,
+            precision: self.precision,
         }
     }
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, StepArgs, backend_parser, colormap_parser};
-use super::parse::{parse_number, parse_spread, parse_u32};
+use super::parse::{one_of, parse_number, parse_spread, parse_u32};
 use super::{command_line, json, say};
 use crate::app::phase::{self, PhaseJob};
 use crate::engine::Backend;
@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::render::Colormap;
-use crate::spec::Spread;
+use crate::spec::{Precision, Spread};
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("60")))]
@@ -51,6 +51,9 @@ pub struct PhaseArgs {
     /// auto, gpu or cpu (f64).
     #[arg(long, default_value = "auto", value_parser = backend_parser())]
     pub backend: Backend,
+    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
+    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Precision,
     /// Colour map of the densities (default inferno).
     #[arg(long, value_parser = colormap_parser())]
     pub colormap: Option<Colormap>,
@@ -75,6 +78,7 @@ impl PhaseArgs {
             size: self.size,
             single: self.single,
             backend: self.backend,
+            precision: self.precision,
             colormap: self.colormap,
             output: self.output.clone(),
         })

@@ -5,13 +5,13 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, StartArgs, backend_parser};
-use super::parse::{parse_number, parse_spread, parse_u32};
+use super::parse::{one_of, parse_number, parse_spread, parse_u32};
 use super::{command_line, json, say};
 use crate::app::traces::{self, TracesJob};
 use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
-use crate::spec::{Spread, Stepping};
+use crate::spec::{Precision, Spread, Stepping};
 
 #[derive(Args, Debug, Clone)]
 pub struct TracesArgs {
@@ -37,6 +37,9 @@ pub struct TracesArgs {
     /// auto, gpu or cpu (f64).
     #[arg(long, default_value = "auto", value_parser = backend_parser())]
     pub backend: Backend,
+    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
+    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Precision,
     /// PNG to write.
     #[arg(long, default_value = "out/traces.png")]
     pub output: PathBuf,
@@ -61,6 +64,7 @@ impl TracesArgs {
             },
             size: self.size,
             backend: self.backend,
+            precision: self.precision,
             output: self.output.clone(),
             gif: self.gif.clone(),
             data: self.data.clone(),
