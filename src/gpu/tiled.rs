@@ -144,7 +144,6 @@ pub fn time_loop(
         let work = before as u64 * steps as u64;
         done += work;
         monitor.advance(work);
-        let _ = before;
         history.push((step0, active));
         // The latest point at least a quarter of the steps so far back (or the start).
         let (then, was) = *history
