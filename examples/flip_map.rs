@@ -30,7 +30,7 @@ fn main() -> Result<(), chaoscope::Error> {
     let readme = read_png("docs/flip.png".as_ref())?;
     println!(
         "{} backend: {:.1} % of starts flip within 30 s -> {}; pixels {} docs/flip.png",
-        engine.map_info(&spec.grid).backend,
+        engine.map_info(&spec.grid, spec.precision).backend,
         100.0 * flipped,
         out.display(),
         if readme.rgb == picture.rgb {

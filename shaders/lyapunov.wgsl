@@ -254,7 +254,19 @@ fn twin_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             // method is the default. max() keeps a collapsed twin finite.
             let n = max(length(d), 1e-30);
             log_sum += log(n / eps);
-            b = pendulum_from(a.y + d * (eps / n));
+            // The twin's cos and sin are a's carried ones rotated by the angle offsets, so
+            // the two stay consistent: fresh ones would differ from a's by the carried
+            // values' own discretisation error, which an f64 twin 1e-8 away would read.
+            let yb = a.y + d * (eps / n);
+            let r1 = sincos(yb.x - a.y.x);
+            let r2 = sincos(yb.z - a.y.z);
+            let ub = vec4<f32>(
+                a.u.x * r1.y - a.u.y * r1.x,
+                a.u.y * r1.y + a.u.x * r1.x,
+                a.u.z * r2.y - a.u.w * r2.x,
+                a.u.w * r2.y + a.u.z * r2.x,
+            );
+            b = Pendulum(yb, ub);
         }
     }
     states[4u * i] = a.y;

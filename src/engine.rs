@@ -150,24 +150,11 @@ impl Engine {
         }
     }
 
-    /// The path a divergence map over `grid` takes: the GPU (f32) unless neighbouring
-    /// pixels are closer than f32 resolves ([`Grid::needs_f64`]): those run on the CPU in f64.
-    pub fn map_info(&self, grid: &Grid) -> RunInfo {
-        match self.map_gpu(grid) {
-            Some(_) => self.info(),
-            None => RunInfo::CPU,
-        }
-    }
-
-    fn map_gpu(&self, grid: &Grid) -> Option<&Kernels> {
-        self.gpu.as_ref().filter(|_| !grid.needs_f64())
-    }
-
-    /// The GPU and the precision a flip map runs in: f64 when asked for or when the grid is
-    /// finer than f32 resolves, if the adapter has f64; None for the CPU (f64).
-    fn flip_gpu(&self, spec: &FlipSpec) -> Option<(&Kernels, Precision)> {
+    /// The GPU and the precision a map runs in: f64 when asked for or when the grid is finer
+    /// than f32 resolves, if the adapter has f64; None for the CPU (f64).
+    fn map_gpu(&self, grid: &Grid, precision: Precision) -> Option<(&Kernels, Precision)> {
         let k = self.gpu.as_ref()?;
-        if spec.precision == Precision::F32 && !spec.grid.needs_f64() {
+        if precision == Precision::F32 && !grid.needs_f64() {
             Some((k, Precision::F32))
         } else if k.ctx.has_f64() {
             Some((k, Precision::F64))
@@ -176,9 +163,10 @@ impl Engine {
         }
     }
 
-    /// The path a flip map takes ("gpu f64" for the f64 kernel).
-    pub fn flip_info(&self, spec: &FlipSpec) -> RunInfo {
-        match self.flip_gpu(spec) {
+    /// The path a map over `grid` asked for in `precision` takes ("gpu f64" for the f64
+    /// kernels).
+    pub fn map_info(&self, grid: &Grid, precision: Precision) -> RunInfo {
+        match self.map_gpu(grid, precision) {
             Some((k, precision)) => RunInfo {
                 backend: match precision {
                     Precision::F32 => "gpu",
@@ -192,7 +180,7 @@ impl Engine {
 
     /// The flip-time map of a validated `spec`.
     pub fn flip_map(&self, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-        match self.flip_gpu(spec) {
+        match self.map_gpu(&spec.grid, spec.precision) {
             Some((k, Precision::F32)) => k.flip().run(&k.ctx, spec, monitor),
             Some((k, Precision::F64)) => k.flip64().run(&k.ctx, spec, monitor),
             None => cpu::flip_map(spec, monitor),
@@ -201,8 +189,10 @@ impl Engine {
 
     /// The divergence (FTLE) map of a validated `spec`.
     pub fn lyapunov_map(&self, spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-        match self.map_gpu(&spec.grid) {
-            Some(k) => k.lyapunov(spec.method).run(&k.ctx, spec, monitor),
+        match self.map_gpu(&spec.grid, spec.precision) {
+            Some((k, precision)) => k
+                .lyapunov(spec.method, precision)
+                .run(&k.ctx, spec, monitor),
             None => cpu::ftle_map(spec, monitor),
         }
     }
@@ -232,7 +222,12 @@ impl Engine {
                     },
                     ..*spec
                 };
-                k.lyapunov(spec.method).convergence(&k.ctx, &one, monitor)
+                let precision = match k.ctx.has_f64() {
+                    true => spec.precision,
+                    false => Precision::F32,
+                };
+                k.lyapunov(spec.method, precision)
+                    .convergence(&k.ctx, &one, monitor)
             }
             None => cpu::ftle_monitored(spec, start, monitor),
         }

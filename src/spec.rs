@@ -274,6 +274,8 @@ pub struct LyapunovSpec {
     /// is even), so mirrored starts get the same exponent bit for bit. Twins are not mirrored
     /// (the twin of -y sits at -y + eps, the mirror of y - eps, not of y + eps).
     pub use_symmetry: bool,
+    /// The GPU's precision (the CPU is always f64); grids finer than f32 resolves run in f64.
+    pub precision: Precision,
 }
 
 impl LyapunovSpec {

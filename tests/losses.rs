@@ -256,6 +256,7 @@ fn divergence_maps_carry_the_damping_on_both_paths() {
         method: chaoscope::spec::Method::Tangent,
         renorm: 0.1,
         use_symmetry: true,
+        precision: chaoscope::spec::Precision::F32,
     };
     let c = cpu::ftle_map(&spec, &Monitor::hidden()).unwrap();
     let g = gpu::LyapunovKernel::new(&ctx, spec.method)

@@ -124,6 +124,7 @@ fn ftle_spec(size: u32, args: &BenchJob) -> LyapunovSpec {
         method: Method::Tangent,
         renorm: 0.1,
         use_symmetry: false,
+        precision: Precision::F32,
     }
 }
 

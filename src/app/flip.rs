@@ -5,10 +5,10 @@ use std::time::Instant;
 
 use super::{MapFiles, check_output, write_map};
 use crate::engine::{Backend, Engine};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::render::{self, PictureSpec};
-use crate::spec::{FlipSpec, Precision};
+use crate::spec::FlipSpec;
 use crate::verdict;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -77,27 +77,14 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
     let started = Instant::now();
     let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
-    if let Some(k) = engine.gpu()
-        && job.spec.precision == Precision::F64
-        && !k.ctx.has_f64()
-    {
-        let reason = format!(
-            "f64: the GPU adapter {} has no f64 (SHADER_F64); use --backend cpu (f64) or auto",
-            k.ctx.adapter_name()
-        );
-        if job.backend == Backend::Gpu {
-            return Err(Error::invalid("precision", reason));
-        }
-        notices.push(format!("note: {reason}; the map runs on the CPU in f64"));
-    }
-    let info = engine.flip_info(&job.spec);
-    if engine.gpu().is_some() && job.spec.precision == Precision::F32 && job.spec.grid.needs_f64() {
-        notices.push(format!(
-            "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the {} in f64",
-            crate::spec::F32_MIN_PIXEL_STEP,
-            if info.backend == "cpu" { "CPU" } else { "GPU" }
-        ));
-    }
+    let info = engine.map_info(&job.spec.grid, job.spec.precision);
+    notices.extend(super::precision_notices(
+        &engine,
+        job.backend,
+        job.spec.precision,
+        &job.spec.grid,
+        &info,
+    )?);
     let field = engine.flip_map(&job.spec, monitor)?;
     let mask = if job.resolved.is_some() || job.show_unresolved {
         let finer = engine.flip_map(&verdict::finer_flip(&job.spec), monitor)?;

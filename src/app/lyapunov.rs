@@ -83,8 +83,14 @@ pub fn run_map(
     let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     notices.extend(twin_notice(&engine, &job.spec));
-    notices.extend(f64_notice(&engine, &job.spec.grid));
-    let info = engine.map_info(&job.spec.grid);
+    let info = engine.map_info(&job.spec.grid, job.spec.precision);
+    notices.extend(super::precision_notices(
+        &engine,
+        job.backend,
+        job.spec.precision,
+        &job.spec.grid,
+        &info,
+    )?);
     let field = engine.lyapunov_map(&job.spec, monitor)?;
     let range = render::ftle_range(&field);
     let mask = if job.resolved.is_some() || job.show_unresolved {
@@ -201,16 +207,5 @@ pub fn run_point(
         output: job.output.clone(),
         files: job.output.iter().cloned().collect(),
         notices,
-    })
-}
-
-/// Said when a map that would run on the GPU runs on the CPU in f64 instead (the
-/// divergence maps have no f64 GPU kernel yet).
-fn f64_notice(engine: &Engine, grid: &crate::spec::Grid) -> Option<String> {
-    (engine.gpu().is_some() && grid.needs_f64()).then(|| {
-        format!(
-            "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the CPU in f64",
-            crate::spec::F32_MIN_PIXEL_STEP
-        )
     })
 }

@@ -14,10 +14,12 @@ pub mod trajectory;
 
 use std::path::Path;
 
+use crate::engine::{Backend, Engine, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::render::{Outputs, Picture, check_writable};
+use crate::spec::{Grid, Precision};
 
 /// Where a map's files go: the PNG, and the raw values and the verdict's mask when asked.
 pub struct MapFiles<'a> {
@@ -48,6 +50,40 @@ pub fn write_map(
         files.mask(path, field.width, field.height, mask)?;
     }
     files.commit(monitor)
+}
+
+/// What a map's precision means on this engine: f64 asked of a GPU without it is an error
+/// naming `precision` when the GPU was asked for, else a note that the CPU runs it; a grid
+/// finer than f32 resolves gets a note saying where it runs in f64 (`info`).
+pub fn precision_notices(
+    engine: &Engine,
+    backend: Backend,
+    precision: Precision,
+    grid: &Grid,
+    info: &RunInfo,
+) -> Result<Vec<String>> {
+    let mut notices = Vec::new();
+    if let Some(k) = engine.gpu()
+        && precision == Precision::F64
+        && !k.ctx.has_f64()
+    {
+        let reason = format!(
+            "f64: the GPU adapter {} has no f64 (SHADER_F64); use the CPU backend (f64) or auto",
+            k.ctx.adapter_name()
+        );
+        if backend == Backend::Gpu {
+            return Err(Error::invalid("precision", reason));
+        }
+        notices.push(format!("note: {reason}; the map runs on the CPU in f64"));
+    }
+    if engine.gpu().is_some() && precision == Precision::F32 && grid.needs_f64() {
+        notices.push(format!(
+            "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the {} in f64",
+            crate::spec::F32_MIN_PIXEL_STEP,
+            if info.backend == "cpu" { "CPU" } else { "GPU" }
+        ));
+    }
+    Ok(notices)
 }
 
 /// A CSV (or any text) into `output`, atomically, or to `stdout` when there is none.

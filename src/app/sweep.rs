@@ -10,7 +10,7 @@ use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::render::{self, Picture, PictureSpec};
 use crate::spec::{
-    self, F32_MIN_PIXEL_STEP, FlipSpec, Grid, LyapunovSpec, Method, Range, Stepping,
+    self, F32_MIN_PIXEL_STEP, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping,
 };
 
 /// Which map each frame shows.
@@ -262,8 +262,8 @@ pub fn run(
         let path = frame_path(&job.output, k as u32);
         let map = frame_map(job, frame);
         let info = match &map {
-            FrameMap::Flip(spec) => engine.flip_info(spec),
-            FrameMap::Lyapunov(spec) => engine.map_info(&spec.grid),
+            FrameMap::Flip(spec) => engine.map_info(&spec.grid, spec.precision),
+            FrameMap::Lyapunov(spec) => engine.map_info(&spec.grid, spec.precision),
         };
         let on = if info.backend.starts_with("gpu") {
             Backend::Gpu
@@ -344,6 +344,7 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
         method: Method::Tangent,
         renorm: job.renorm,
         use_symmetry: true,
+        precision: Precision::F32,
     }
 }
 

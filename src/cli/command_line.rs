@@ -166,6 +166,7 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
     if !spec.use_symmetry {
         out += " --no-symmetry";
     }
+    out += precision(spec.precision);
     out + &picture(pic)
 }
 
@@ -183,7 +184,7 @@ pub fn lyapunov_point(job: &LyapunovPointJob) -> String {
         method(s.method),
         params(&s.params),
         job.backend.name()
-    )
+    ) + precision(s.precision)
 }
 
 pub fn trajectory(job: &TrajectoryJob) -> String {

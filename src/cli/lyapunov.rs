@@ -5,14 +5,14 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use super::args::{PhysicalArgs, PictureArgs, VerdictArgs, backend_parser};
-use super::parse::{Angles, parse_angles, parse_number, parse_size};
+use super::parse::{Angles, one_of, parse_angles, parse_number, parse_size};
 use super::{command_line, json, say};
 use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::spec::{Grid, LyapunovSpec, Method, Range, Stepping};
+use crate::spec::{Grid, LyapunovSpec, Method, Precision, Range, Stepping};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MethodArg {
@@ -58,6 +58,9 @@ pub struct LyapunovArgs {
     /// mirroring the top half: the same map, twice the work.
     #[arg(long)]
     pub no_symmetry: bool,
+    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
+    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Precision,
     #[command(flatten)]
     pub physical: PhysicalArgs,
     /// auto, gpu or cpu. Default: auto for a map, cpu (f64) for a single point.
@@ -97,6 +100,7 @@ impl LyapunovArgs {
             },
             renorm: self.renorm,
             use_symmetry: !self.no_symmetry,
+            precision: self.precision,
         })
     }
 

@@ -257,6 +257,11 @@ pub fn shader_source_f64(kernel: &str) -> String {
     ] {
         s = replace_fn(&s, name, body);
     }
+    // The divergence kernel's log stretches: SPIR-V's log is f32 only as well.
+    if s.contains("+= log(") {
+        s = s.replace("+= log(", "+= ln64(");
+        s.push_str(LN_F64);
+    }
     for (from, to) in [
         (
             "const PI: f32 = 3.14159265358979;",
@@ -354,6 +359,52 @@ const ENERGY_F64: &str = "fn energy(c: Coeffs, y: vec4<f32>) -> f32 {
     return kinetic - c.p * a.y - c.q * b.y;
 }";
 
+/// ln x in f64: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(s) with
+/// s = (m - 1) / (m + 1), |s| <= 0.1716, by its series to s^23 (the next term is below
+/// 1e-21), plus e ln 2 in two parts (fdlibm's). tests/precision.rs measures it.
+const LN_F64: &str = "
+fn ln64(x: f32) -> f32 {
+    // x = m 2^e with m in [1, 2), by exact powers of two 2^512, 2^256, ... 2^1 (naga's f64
+    // frexp returns an i64, which would need SHADER_INT64, and its bitcast of f64 to a pair
+    // of u32 is not available). Positive, normal x.
+    var m = x;
+    var e: f32 = 0.0;
+    var power: f32 = 1.3407807929942597e154;
+    var k: f32 = 512.0;
+    for (var i = 0; i < 10; i++) {
+        if m >= power {
+            m = m / power;
+            e = e + k;
+        }
+        if m * power < 2.0 {
+            m = m * power;
+            e = e - k;
+        }
+        power = sqrt(power);
+        k = 0.5 * k;
+    }
+    if m > 1.4142135623730951 {
+        m = 0.5 * m;
+        e = e + 1.0;
+    }
+    let s = (m - 1.0) / (m + 1.0);
+    let s2 = s * s;
+    var p: f32 = 0.043478260869565216;
+    p = fma(p, s2, 0.047619047619047616);
+    p = fma(p, s2, 0.05263157894736842);
+    p = fma(p, s2, 0.058823529411764705);
+    p = fma(p, s2, 0.06666666666666667);
+    p = fma(p, s2, 0.07692307692307693);
+    p = fma(p, s2, 0.09090909090909091);
+    p = fma(p, s2, 0.1111111111111111);
+    p = fma(p, s2, 0.14285714285714285);
+    p = fma(p, s2, 0.2);
+    p = fma(p, s2, 0.3333333333333333);
+    let ln_m = 2.0 * s + 2.0 * s * s2 * p;
+    return fma(e, 0.6931471803691238, fma(e, 1.9082149292705877e-10, ln_m));
+}
+";
+
 /// NaN fails every comparison, infinities fail this one.
 const IS_FINITE4_F64: &str = "fn is_finite4(v: vec4<f32>) -> bool {
     return all(abs(v) <= vec4<f32>(1.7976931348623157e308));
@@ -365,6 +416,7 @@ pub fn all_shaders() -> Vec<(&'static str, String)> {
         ("flip_time", shader_source(FLIP_TIME_WGSL)),
         ("flip_time_f64", shader_source_f64(FLIP_TIME_WGSL)),
         ("trajectory_f64", shader_source_f64(TRAJECTORY_WGSL)),
+        ("lyapunov_f64", shader_source_f64(LYAPUNOV_WGSL)),
         ("trajectory", shader_source(TRAJECTORY_WGSL)),
         ("lyapunov", shader_source(LYAPUNOV_WGSL)),
     ]

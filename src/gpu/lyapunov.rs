@@ -1,17 +1,21 @@
 //! Drives `shaders/lyapunov.wgsl`: divergence maps inside the tiled loop of `tiled.rs`, every
 //! pixel integrating the whole run; and single-start convergence runs.
 
-use super::context::{GpuContext, read_f32s};
-use super::layout::{GpuLyapunovSlot, GpuParams, LYAPUNOV_BYTES_PER_PIXEL, LYAPUNOV_WGSL};
+use super::context::{GpuContext, read_buffer, read_f32s};
+use super::layout::{
+    GpuLyapunovSlot, GpuParams, GpuParams64, LYAPUNOV_WGSL, TileParams, shader_source,
+    shader_source_f64,
+};
 use super::pipeline::{
-    Variants, bind_group, dispatch_and_wait, layouts, params_buffer, shader_module, storage_buffer,
+    Variants, bind_group, dispatch_and_wait, layouts, module_of, params_buffer, params_buffer_of,
+    shader_module, storage_buffer,
 };
 use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::{Convergence, Field};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{LyapunovSpec, Method};
+use crate::spec::{LyapunovSpec, Method, Precision};
 
 /// A tangent step costs about this many plain steps (BENCH.md), so dispatches hold fewer.
 const STEP_COST: u64 = 3;
@@ -19,21 +23,40 @@ const STEP_COST: u64 = 3;
 const SLOT_BYTES: u64 = std::mem::size_of::<GpuLyapunovSlot>() as u64;
 
 pub struct LyapunovKernel {
+    precision: Precision,
     /// (init, advance) of the method per kind of loss.
     pipelines: Variants,
     layout: wgpu::BindGroupLayout,
 }
 
+/// Bytes per pixel of the slot and the log sum, and of the params, in `precision`.
+fn sizes(precision: Precision) -> (u64, u64, u64) {
+    match precision {
+        Precision::F32 => (SLOT_BYTES, 4, std::mem::size_of::<GpuParams>() as u64),
+        Precision::F64 => (2 * SLOT_BYTES, 8, std::mem::size_of::<GpuParams64>() as u64),
+    }
+}
+
 impl LyapunovKernel {
     /// Compiles the entry points of `method` only (lavapipe compiles each pipeline anew).
     pub fn new(ctx: &GpuContext, method: Method) -> Self {
-        let module = shader_module(ctx, "lyapunov.wgsl", LYAPUNOV_WGSL);
+        Self::with_precision(ctx, method, Precision::F32)
+    }
+
+    /// The kernel of `method` in `precision` (f64 needs a context with f64).
+    pub fn with_precision(ctx: &GpuContext, method: Method, precision: Precision) -> Self {
+        let source = match precision {
+            Precision::F32 => shader_source(LYAPUNOV_WGSL),
+            Precision::F64 => shader_source_f64(LYAPUNOV_WGSL),
+        };
+        let module = module_of(ctx, "lyapunov.wgsl", source);
         let (layout, pipeline_layout) = layouts(ctx, "lyapunov", &[false, false]);
         let entries: &'static [&'static str] = match method {
             Method::Tangent => &["tangent_init", "tangent_advance"],
             Method::Twin { .. } => &["twin_init", "twin_advance"],
         };
         let kernel = LyapunovKernel {
+            precision,
             pipelines: Variants::new(module, pipeline_layout, entries, None),
             layout,
         };
@@ -43,7 +66,8 @@ impl LyapunovKernel {
 
     /// The FTLE map of `spec` (1/s at t-max).
     pub fn run(&self, ctx: &GpuContext, spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-        let max = max_pixels(ctx, SLOT_BYTES, LYAPUNOV_BYTES_PER_PIXEL);
+        let (slot, sum, _) = sizes(self.precision);
+        let max = max_pixels(ctx, slot, slot + sum);
         self.run_tiled(ctx, spec, monitor, max)
     }
 
@@ -77,7 +101,54 @@ impl LyapunovKernel {
         spec: &LyapunovSpec,
         monitor: &Monitor,
         max_pixels: u64,
+        trace: Option<&mut Convergence>,
+    ) -> Result<Field> {
+        let (p, dt, grid) = (&spec.params, spec.stepping.dt, &spec.grid);
+        let (interval, total_steps) = (spec.renorm_steps(), spec.stepping.steps());
+        let eps = match spec.method {
+            Method::Twin { eps } => eps,
+            Method::Tangent => 0.0,
+        };
+        match self.precision {
+            Precision::F32 => {
+                let base = GpuParams {
+                    interval,
+                    total_steps,
+                    twin_eps: eps as f32,
+                    ..GpuParams::new(p, dt).with_grid(grid)
+                };
+                self.integrate_with(ctx, spec, monitor, max_pixels, trace, base, |b| {
+                    bytemuck::pod_collect_to_vec::<u8, f32>(b)
+                        .into_iter()
+                        .map(f64::from)
+                        .collect()
+                })
+            }
+            Precision::F64 => {
+                let base = GpuParams64 {
+                    interval,
+                    total_steps,
+                    twin_eps: eps,
+                    ..GpuParams64::new(p, dt).with_grid(grid)
+                };
+                self.integrate_with(ctx, spec, monitor, max_pixels, trace, base, |b| {
+                    bytemuck::pod_collect_to_vec::<u8, f64>(b)
+                })
+            }
+        }
+    }
+
+    /// The tiled loop with `base` params; `sums` reads log sums from their buffer's bytes.
+    #[allow(clippy::too_many_arguments)]
+    fn integrate_with(
+        &self,
+        ctx: &GpuContext,
+        spec: &LyapunovSpec,
+        monitor: &Monitor,
+        max_pixels: u64,
         mut trace: Option<&mut Convergence>,
+        base: impl TileParams,
+        sums: impl Fn(&[u8]) -> Vec<f64>,
     ) -> Result<Field> {
         let grid = spec.grid;
         let [init, advance] = self.pipelines.get(ctx, spec.params.losses.kinds(), false) else {
@@ -86,40 +157,27 @@ impl LyapunovKernel {
         let total_steps = spec.stepping.steps();
         let tiling = Tiling::new(grid.width, spec.rows_to_integrate(), max_pixels);
         let capacity = tiling.capacity();
-        let params_buf = params_buffer(ctx);
-        let states = storage_buffer(ctx, "states", capacity * SLOT_BYTES);
-        let log_sums = storage_buffer(ctx, "log sums", capacity * 4);
+        let (slot, sum_bytes, params_bytes) = sizes(self.precision);
+        let params_buf = params_buffer_of(ctx, params_bytes);
+        let states = storage_buffer(ctx, "states", capacity * slot);
+        let log_sums = storage_buffer(ctx, "log sums", capacity * sum_bytes);
         let bind = bind_group(
             ctx,
             "lyapunov",
             &self.layout,
             &[&params_buf, &states, &log_sums],
         );
-        let dispatch = |pipeline: &wgpu::ComputePipeline, params: &GpuParams| {
-            ctx.queue
-                .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
-            dispatch_and_wait(ctx, pipeline, &bind, params.count)
-        };
-        let base = GpuParams {
-            interval: spec.renorm_steps(),
-            total_steps,
-            twin_eps: match spec.method {
-                Method::Twin { eps } => eps as f32,
-                Method::Tangent => 0.0,
-            },
-            ..GpuParams::new(&spec.params, spec.stepping.dt).with_grid(&grid)
+        let dispatch = |pipeline: &wgpu::ComputePipeline, params: &dyn TileParamsBytes| {
+            ctx.queue.write_buffer(&params_buf, 0, params.bytes());
+            dispatch_and_wait(ctx, pipeline, &bind, params.active())
         };
         let t_end = total_steps as f64 * spec.stepping.dt;
         // A convergence run reads the log sum back after every renormalisation.
-        let max_steps = trace.is_some().then_some(base.interval);
+        let max_steps = trace.is_some().then_some(spec.renorm_steps());
         map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows, later| {
             let pixels = rows * grid.width;
-            let mut params = GpuParams {
-                row0,
-                rows,
-                count: pixels,
-                ..base
-            };
+            let mut params = base;
+            params.set_tile(row0, rows, pixels);
             dispatch(init, &params)?;
             time_loop(
                 total_steps,
@@ -130,24 +188,38 @@ impl LyapunovKernel {
                 later,
                 monitor,
                 |step0, steps, active| {
-                    params.step0 = step0;
-                    params.steps = steps;
+                    params.set_steps(step0, steps, pixels);
                     dispatch(advance, &params)?;
                     if let Some(trace) = trace.as_deref_mut() {
-                        let log_sum = read_f32s(ctx, &log_sums, 1)?[0];
+                        let log_sum = sums(&read_buffer(ctx, &log_sums, sum_bytes)?)[0];
                         let t = (step0 + steps) as f64 * spec.stepping.dt;
                         trace.t.push(t);
-                        trace.ftle.push(log_sum as f64 / t);
+                        trace.ftle.push(log_sum / t);
                     }
                     Ok(active)
                 },
             )?;
-            let sums = read_f32s(ctx, &log_sums, pixels as u64)?;
-            Ok(sums
+            let all = sums(&read_buffer(ctx, &log_sums, pixels as u64 * sum_bytes)?);
+            Ok(all
                 .into_iter()
-                .map(|log_sum| (log_sum as f64 / t_end) as f32)
+                .map(|log_sum| (log_sum / t_end) as f32)
                 .collect())
         })
+    }
+}
+
+/// Params as the bytes a dispatch writes, and how many invocations it runs.
+trait TileParamsBytes {
+    fn bytes(&self) -> &[u8];
+    fn active(&self) -> u32;
+}
+
+impl<T: TileParams> TileParamsBytes for T {
+    fn bytes(&self) -> &[u8] {
+        bytemuck::bytes_of(self)
+    }
+    fn active(&self) -> u32 {
+        self.count()
     }
 }
 

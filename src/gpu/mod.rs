@@ -24,8 +24,8 @@ pub struct Kernels {
     pub ctx: GpuContext,
     flip: OnceLock<FlipTimeKernel>,
     flip64: OnceLock<FlipTimeKernel>,
-    tangent: OnceLock<LyapunovKernel>,
-    twin: OnceLock<LyapunovKernel>,
+    /// Tangent and twin, f32 and f64.
+    lyapunov: [OnceLock<LyapunovKernel>; 4],
     trajectory: OnceLock<TrajectoryKernel>,
     trajectory64: OnceLock<TrajectoryKernel>,
     jacobian: OnceLock<JacobianKernel>,
@@ -37,8 +37,7 @@ impl Kernels {
             ctx,
             flip: OnceLock::new(),
             flip64: OnceLock::new(),
-            tangent: OnceLock::new(),
-            twin: OnceLock::new(),
+            lyapunov: Default::default(),
             trajectory: OnceLock::new(),
             trajectory64: OnceLock::new(),
             jacobian: OnceLock::new(),
@@ -55,12 +54,14 @@ impl Kernels {
             .get_or_init(|| FlipTimeKernel::with_precision(&self.ctx, Precision::F64))
     }
 
-    pub fn lyapunov(&self, method: Method) -> &LyapunovKernel {
+    /// The divergence kernel of `method` in `precision` (f64: the context must have it).
+    pub fn lyapunov(&self, method: Method, precision: Precision) -> &LyapunovKernel {
         let slot = match method {
-            Method::Tangent => &self.tangent,
-            Method::Twin { .. } => &self.twin,
-        };
-        slot.get_or_init(|| LyapunovKernel::new(&self.ctx, method))
+            Method::Tangent => 0,
+            Method::Twin { .. } => 1,
+        } + 2 * (precision == Precision::F64) as usize;
+        self.lyapunov[slot]
+            .get_or_init(|| LyapunovKernel::with_precision(&self.ctx, method, precision))
     }
 
     pub fn trajectory(&self) -> &TrajectoryKernel {
