@@ -93,22 +93,30 @@ impl Engine {
         }
     }
 
-    /// Trajectories and ensembles in `precision` on the GPU. f64 on an adapter without it:
-    /// an error naming `precision` when the GPU was asked for, else the CPU (f64) with a note.
+    /// f64 asked of a GPU without it: an error naming `precision` when the GPU was asked
+    /// for (`backend`), else the note to give, the work then running on the CPU in f64.
+    pub fn check_f64(&self, precision: Precision, backend: Backend) -> Result<Option<String>> {
+        match &self.gpu {
+            Some(k) if precision == Precision::F64 && !k.ctx.has_f64() => {
+                let reason = format!(
+                    "f64: the GPU adapter {} has no f64 (SHADER_F64); use the CPU backend (f64) or auto",
+                    k.ctx.adapter_name()
+                );
+                if backend == Backend::Gpu {
+                    return Err(Error::invalid("precision", reason));
+                }
+                Ok(Some(format!("note: {reason}; it runs on the CPU in f64")))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Trajectories and ensembles in `precision` on the GPU ([`Engine::check_f64`] decides
+    /// what f64 on an adapter without it means).
     pub fn with_precision(mut self, precision: Precision, backend: Backend) -> Result<Self> {
         self.precision = precision;
-        if let Some(k) = &self.gpu
-            && precision == Precision::F64
-            && !k.ctx.has_f64()
-        {
-            let reason = format!(
-                "f64: the GPU adapter {} has no f64 (SHADER_F64); use the CPU backend (f64) or auto",
-                k.ctx.adapter_name()
-            );
-            if backend == Backend::Gpu {
-                return Err(Error::invalid("precision", reason));
-            }
-            self.notice = Some(format!("note: {reason}; running on the CPU"));
+        if let Some(note) = self.check_f64(precision, backend)? {
+            self.notice = Some(note);
             self.gpu = None;
         }
         Ok(self)

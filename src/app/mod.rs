@@ -62,20 +62,7 @@ pub fn precision_notices(
     grid: &Grid,
     info: &RunInfo,
 ) -> Result<Vec<String>> {
-    let mut notices = Vec::new();
-    if let Some(k) = engine.gpu()
-        && precision == Precision::F64
-        && !k.ctx.has_f64()
-    {
-        let reason = format!(
-            "f64: the GPU adapter {} has no f64 (SHADER_F64); use the CPU backend (f64) or auto",
-            k.ctx.adapter_name()
-        );
-        if backend == Backend::Gpu {
-            return Err(Error::invalid("precision", reason));
-        }
-        notices.push(format!("note: {reason}; the map runs on the CPU in f64"));
-    }
+    let mut notices: Vec<String> = engine.check_f64(precision, backend)?.into_iter().collect();
     if engine.gpu().is_some() && precision == Precision::F32 && grid.needs_f64() {
         notices.push(format!(
             "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the {} in f64",
