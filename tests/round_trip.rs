@@ -20,8 +20,10 @@ fn job(args: &[String]) -> Job {
         .expect("a command that makes files");
     let none = PathBuf::new;
     match &mut job {
-        Job::Flip(j) => (j.output, j.data, j.resolved) = (none(), None, None),
-        Job::Lyapunov(LyapunovJob::Map(j)) => (j.output, j.data, j.resolved) = (none(), None, None),
+        Job::Flip(j) => (j.files.output, j.files.data, j.files.resolved) = (none(), None, None),
+        Job::Lyapunov(LyapunovJob::Map(j)) => {
+            (j.files.output, j.files.data, j.files.resolved) = (none(), None, None)
+        }
         Job::Lyapunov(LyapunovJob::Point(j)) => j.output = None,
         Job::Trajectory(j) => j.output = None,
         Job::Sweep(j) => j.output = none(),

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{MapFiles, check_output, write_map};
+use super::{MapOutputs, check_finer, write_map};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
@@ -16,36 +16,16 @@ pub struct FlipJob {
     pub spec: FlipSpec,
     pub backend: Backend,
     pub picture: PictureSpec,
-    /// The PNG.
-    pub output: PathBuf,
-    /// Raw flip times (s) as float32 .npy, shape (height, width), inf = never.
-    pub data: Option<PathBuf>,
-    /// The verdict ([`crate::verdict`]) as uint8 .npy, the layout of `data`: 1 resolved.
-    pub resolved: Option<PathBuf>,
-    /// Draw the pixels the verdict cannot resolve in grey.
-    pub show_unresolved: bool,
+    /// The PNG, the raw flip times (s; inf = never), the verdict.
+    pub files: MapOutputs,
 }
 
 impl FlipJob {
     pub fn validate(&self) -> Result<()> {
         self.spec.validate()?;
-        check_output("output", &self.output, "png")?;
-        if let Some(data) = &self.data {
-            check_output("data", data, "npy")?;
-        }
-        if let Some(path) = &self.resolved {
-            check_output("resolved", path, "npy")?;
-        }
-        if self.resolved.is_some() || self.show_unresolved {
-            // The verdict's map takes twice the steps.
-            crate::spec::validate_stepping(&verdict::finer_flip(&self.spec).stepping).map_err(
-                |e| match e {
-                    crate::Error::InvalidSpec { reason, .. } => {
-                        crate::Error::invalid("dt", format!("the verdict's half step: {reason}"))
-                    }
-                    e => e,
-                },
-            )?;
+        self.files.validate()?;
+        if self.files.wants_verdict() {
+            check_finer(verdict::finer_flip(&self.spec).validate())?;
         }
         Ok(())
     }
@@ -86,13 +66,13 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         &info,
     )?);
     let field = engine.flip_map(&job.spec, monitor)?;
-    let mask = if job.resolved.is_some() || job.show_unresolved {
+    let mask = if job.files.wants_verdict() {
         let finer = engine.flip_map(&verdict::finer_flip(&job.spec), monitor)?;
         Some(verdict::mask(&field, &finer, verdict::flip_times_agree))
     } else {
         None
     };
-    let shown = mask.as_deref().filter(|_| job.show_unresolved);
+    let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let picture = render::flip_picture(&field, &job.spec, &job.picture, shown)?;
     let meta = render::provenance(command, &info);
     let rule = shown
@@ -108,12 +88,9 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         &picture,
         meta,
         rule,
-        MapFiles {
-            png: &job.output,
-            data: job.data.as_deref(),
-            resolved: job.resolved.as_deref().zip(mask.as_deref()),
-        },
+        &job.files,
         &field,
+        mask.as_deref(),
         monitor,
     )?;
     let flipped = field.data.iter().filter(|t| t.is_finite()).count();
@@ -126,15 +103,8 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         nan: field.data.iter().filter(|t| t.is_nan()).count(),
         resolved: mask.as_deref().map(verdict::fraction),
         t_max: job.spec.stepping.t_max,
-        output: job.output.clone(),
-        files: [
-            Some(job.output.clone()),
-            job.data.clone(),
-            job.resolved.clone(),
-        ]
-        .into_iter()
-        .flatten()
-        .collect(),
+        output: job.files.output.clone(),
+        files: job.files.files(),
         notices,
     })
 }

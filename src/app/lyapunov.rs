@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{MapFiles, check_output, write_map};
+use super::{MapOutputs, check_finer, check_output, write_map};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::model::State;
@@ -23,13 +23,8 @@ pub struct LyapunovMapJob {
     pub spec: LyapunovSpec,
     pub backend: Backend,
     pub picture: PictureSpec,
-    pub output: PathBuf,
-    /// Raw exponents (1/s) as float32 .npy, shape (height, width).
-    pub data: Option<PathBuf>,
-    /// The verdict ([`crate::verdict`]) as uint8 .npy, the layout of `data`: 1 resolved.
-    pub resolved: Option<PathBuf>,
-    /// Draw the pixels the verdict cannot resolve in grey.
-    pub show_unresolved: bool,
+    /// The PNG, the raw exponents (1/s), the verdict.
+    pub files: MapOutputs,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -69,15 +64,9 @@ pub fn run_map(
     monitor: &Monitor,
 ) -> Result<LyapunovMapSummary> {
     job.spec.validate()?;
-    check_output("output", &job.output, "png")?;
-    if let Some(data) = &job.data {
-        check_output("data", data, "npy")?;
-    }
-    if let Some(path) = &job.resolved {
-        check_output("resolved", path, "npy")?;
-    }
-    if job.resolved.is_some() || job.show_unresolved {
-        verdict::finer_lyapunov(&job.spec).validate()?;
+    job.files.validate()?;
+    if job.files.wants_verdict() {
+        check_finer(verdict::finer_lyapunov(&job.spec).validate())?;
     }
     let started = Instant::now();
     let engine = Engine::new(job.backend)?;
@@ -93,13 +82,13 @@ pub fn run_map(
     )?);
     let field = engine.lyapunov_map(&job.spec, monitor)?;
     let range = render::ftle_range(&field);
-    let mask = if job.resolved.is_some() || job.show_unresolved {
+    let mask = if job.files.wants_verdict() {
         let finer = engine.lyapunov_map(&verdict::finer_lyapunov(&job.spec), monitor)?;
         Some(verdict::mask(&field, &finer, verdict::exponents_agree))
     } else {
         None
     };
-    let shown = mask.as_deref().filter(|_| job.show_unresolved);
+    let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let picture = render::lyapunov_picture(&field, &job.spec, range, &job.picture, shown)?;
     let colour_range = (
         "chaoscope:colour-range".into(),
@@ -118,12 +107,9 @@ pub fn run_map(
         &picture,
         render::provenance(command, &info),
         extra,
-        MapFiles {
-            png: &job.output,
-            data: job.data.as_deref(),
-            resolved: job.resolved.as_deref().zip(mask.as_deref()),
-        },
+        &job.files,
         &field,
+        mask.as_deref(),
         monitor,
     )?;
     let chaotic = field.data.iter().filter(|&&x| x > CHAOTIC_FTLE).count();
@@ -137,15 +123,8 @@ pub fn run_map(
         resolved: mask.as_deref().map(verdict::fraction),
         t_max: job.spec.stepping.t_max,
         range,
-        output: job.output.clone(),
-        files: [
-            Some(job.output.clone()),
-            job.data.clone(),
-            job.resolved.clone(),
-        ]
-        .into_iter()
-        .flatten()
-        .collect(),
+        output: job.files.output.clone(),
+        files: job.files.files(),
         notices,
     })
 }

@@ -12,7 +12,7 @@ pub mod sweep;
 pub mod traces;
 pub mod trajectory;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::engine::{Backend, Engine, RunInfo};
 use crate::error::{Error, Result};
@@ -21,32 +21,86 @@ use crate::monitor::Monitor;
 use crate::render::{Outputs, Picture, check_writable};
 use crate::spec::{Grid, Precision};
 
-/// Where a map's files go: the PNG, and the raw values and the verdict's mask when asked.
-pub struct MapFiles<'a> {
-    pub png: &'a Path,
-    pub data: Option<&'a Path>,
-    pub resolved: Option<(&'a Path, &'a [u8])>,
+/// Where a map's files go, and whether it carries the verdict ([`crate::verdict`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapOutputs {
+    /// The PNG.
+    pub output: PathBuf,
+    /// The raw values as float32 .npy, shape (height, width).
+    pub data: Option<PathBuf>,
+    /// The verdict as uint8 .npy, the layout of `data`: 1 resolved.
+    pub resolved: Option<PathBuf>,
+    /// Draw the pixels the verdict cannot resolve in grey.
+    pub show_unresolved: bool,
+}
+
+impl MapOutputs {
+    /// Every path the right kind and writable, before any work.
+    pub fn validate(&self) -> Result<()> {
+        check_output("output", &self.output, "png")?;
+        if let Some(data) = &self.data {
+            check_output("data", data, "npy")?;
+        }
+        if let Some(path) = &self.resolved {
+            check_output("resolved", path, "npy")?;
+        }
+        Ok(())
+    }
+
+    /// Whether the map is made a second time for the verdict.
+    pub fn wants_verdict(&self) -> bool {
+        self.resolved.is_some() || self.show_unresolved
+    }
+
+    /// The files a run writes.
+    pub fn files(&self) -> Vec<PathBuf> {
+        [
+            Some(self.output.clone()),
+            self.data.clone(),
+            self.resolved.clone(),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+}
+
+/// The verdict's map (half the step) checked as the map was: its errors say so.
+pub fn check_finer(finer: Result<()>) -> Result<()> {
+    finer.map_err(|e| match e {
+        Error::InvalidSpec { field, reason } => {
+            Error::invalid(field, format!("the verdict's half step: {reason}"))
+        }
+        e => e,
+    })
 }
 
 /// A map's files, as a set: the picture as PNG with its provenance, where the map sits in it
-/// and `extra` text, the raw values as .npy and the verdict's mask as .npy when asked.
+/// and `extra` text, the raw values as .npy and the verdict's `mask` as .npy when asked.
 pub fn write_map(
     picture: &Picture,
     provenance: Vec<(String, String)>,
     extra: Vec<(String, String)>,
-    to: MapFiles,
+    to: &MapOutputs,
     field: &Field,
+    mask: Option<&[u8]>,
     monitor: &Monitor,
 ) -> Result<()> {
     let mut meta = provenance;
     meta.extend(picture.metadata());
     meta.extend(extra);
     let mut files = Outputs::new();
-    files.png(to.png, picture.width, picture.height, &picture.rgb, &meta)?;
-    if let Some(data) = to.data {
+    files.png(
+        &to.output,
+        picture.width,
+        picture.height,
+        &picture.rgb,
+        &meta,
+    )?;
+    if let Some(data) = &to.data {
         files.npy(data, field)?;
     }
-    if let Some((path, mask)) = to.resolved {
+    if let (Some(path), Some(mask)) = (&to.resolved, mask) {
         files.mask(path, field.width, field.height, mask)?;
     }
     files.commit(monitor)

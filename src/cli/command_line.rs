@@ -138,7 +138,7 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
 }
 
 pub fn flip(job: &FlipJob) -> String {
-    flip_map(&job.spec, job.backend, &job.picture) + show_unresolved(job.show_unresolved)
+    flip_map(&job.spec, job.backend, &job.picture) + show_unresolved(job.files.show_unresolved)
 }
 
 fn show_unresolved(on: bool) -> &'static str {
@@ -171,7 +171,8 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
 }
 
 pub fn lyapunov_map(job: &LyapunovMapJob) -> String {
-    lyapunov_map_of(&job.spec, job.backend, &job.picture) + show_unresolved(job.show_unresolved)
+    lyapunov_map_of(&job.spec, job.backend, &job.picture)
+        + show_unresolved(job.files.show_unresolved)
 }
 
 pub fn lyapunov_point(job: &LyapunovPointJob) -> String {

@@ -7,6 +7,7 @@ use clap::Args;
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, VerdictArgs, backend_parser};
 use super::parse::one_of;
 use super::{command_line, json, say};
+use crate::app::MapOutputs;
 use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -63,10 +64,12 @@ impl FlipArgs {
             },
             backend: self.backend,
             picture: self.picture.spec(),
-            output: self.output.clone(),
-            data: self.data.clone(),
-            resolved: self.verdict.resolved.clone(),
-            show_unresolved: self.verdict.show_unresolved,
+            files: MapOutputs {
+                output: self.output.clone(),
+                data: self.data.clone(),
+                resolved: self.verdict.resolved.clone(),
+                show_unresolved: self.verdict.show_unresolved,
+            },
         })
     }
 }

@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use super::args::{PhysicalArgs, PictureArgs, VerdictArgs, backend_parser};
 use super::parse::{Angles, one_of, parse_angles, parse_number, parse_size};
 use super::{command_line, json, say};
+use crate::app::MapOutputs;
 use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
@@ -120,13 +121,15 @@ impl LyapunovArgs {
                     spec: self.spec(grid)?,
                     backend: self.backend.unwrap_or(Backend::Auto),
                     picture: self.picture.spec(),
-                    output: self
-                        .output
-                        .clone()
-                        .unwrap_or_else(|| PathBuf::from("out/lyapunov.png")),
-                    data: self.data.clone(),
-                    resolved: self.verdict.resolved.clone(),
-                    show_unresolved: self.verdict.show_unresolved,
+                    files: MapOutputs {
+                        output: self
+                            .output
+                            .clone()
+                            .unwrap_or_else(|| PathBuf::from("out/lyapunov.png")),
+                        data: self.data.clone(),
+                        resolved: self.verdict.resolved.clone(),
+                        show_unresolved: self.verdict.show_unresolved,
+                    },
                 }))
             }
             (Angles::Point(theta1), Angles::Point(theta2)) => {

@@ -36,10 +36,6 @@ pub struct GpuLyapunovSlot {
     pub b: GpuPendulum,
 }
 
-/// Bytes of a divergence map's tile per pixel: its slot and log-stretch sum.
-pub const LYAPUNOV_BYTES_PER_PIXEL: u64 =
-    (std::mem::size_of::<GpuLyapunovSlot>() + std::mem::size_of::<f32>()) as u64;
-
 /// Mirror of WGSL `Params`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -159,21 +159,16 @@ impl Outputs {
 
     /// A uint8 mask of shape (height, width), C order (1 = resolved).
     pub fn mask(&mut self, path: &Path, width: u32, height: u32, mask: &[u8]) -> Result<()> {
-        use npyz::WriterBuilder;
-        self.write(path, |w| {
-            let mut npy = npyz::WriteOptions::new()
-                .default_dtype()
-                .shape(&[height as u64, width as u64])
-                .writer(w)
-                .begin_nd()?;
-            npy.extend(mask.iter().copied())?;
-            npy.finish()?;
-            Ok(())
-        })
+        self.npy_shaped(path, &[height as u64, width as u64], mask)
     }
 
-    /// float32 array of any `shape`, C order.
-    pub fn npy_shaped(&mut self, path: &Path, shape: &[u64], data: &[f32]) -> Result<()> {
+    /// An array of any `shape` (float32, uint8...), C order.
+    pub fn npy_shaped<T: npyz::AutoSerialize + Copy>(
+        &mut self,
+        path: &Path,
+        shape: &[u64],
+        data: &[T],
+    ) -> Result<()> {
         use npyz::WriterBuilder;
         self.write(path, |w| {
             let mut npy = npyz::WriteOptions::new()
