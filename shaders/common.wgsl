@@ -56,7 +56,12 @@ struct Params {
     interval: u32,
     total_steps: u32,
     twin_eps: f32,
+    // Adaptive steps: relative and absolute tolerance, the run's end time (s).
+    rtol: f32,
+    atol: f32,
+    t_max: f32,
     _pad0: u32,
+    _pad1: u32,
 }
 
 // Set per pipeline (src/gpu/pipeline.rs, src/model.rs `Losses::kinds`): each kind of loss is

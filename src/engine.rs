@@ -10,7 +10,7 @@ use crate::field::{Convergence, Field};
 use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Precision, Range, Stepping};
+use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Precision, Range, Stepping};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
@@ -139,6 +139,12 @@ impl Engine {
         self.notice.iter().cloned().collect()
     }
 
+    /// Whether f64 maps run here without leaving the chosen path: on the CPU, or on a GPU
+    /// with f64.
+    pub fn has_f64(&self) -> bool {
+        self.gpu.as_ref().is_none_or(|k| k.ctx.has_f64())
+    }
+
     /// The GPU and its kernels, if this engine has one.
     pub fn gpu(&self) -> Option<&Kernels> {
         self.gpu.as_ref()
@@ -191,6 +197,7 @@ impl Engine {
         match self.map_gpu(&spec.grid, spec.precision) {
             Some((k, Precision::F32)) => k.flip().run(&k.ctx, spec, monitor),
             Some((k, Precision::F64)) => k.flip64().run(&k.ctx, spec, monitor),
+            None if spec.integrator != Integrator::Rk4 => cpu::flip_map_adaptive(spec, monitor),
             None => cpu::flip_map(spec, monitor),
         }
     }

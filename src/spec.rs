@@ -194,6 +194,68 @@ impl Precision {
     }
 }
 
+/// How each pendulum is stepped in time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Integrator {
+    /// Classic fourth-order Runge-Kutta at the fixed step `dt`, the flip located by cubic
+    /// Hermite interpolation.
+    #[default]
+    Rk4,
+    /// Dormand-Prince 5(4), each pendulum with its own steps: a step is kept when its
+    /// error estimate is within `atol + rtol |y|` (per component, RMS over the state);
+    /// `dt` is the first and the largest step. The flip is located on the method's
+    /// fourth-order dense output.
+    Dp54 { rtol: f64, atol: f64 },
+}
+
+impl Integrator {
+    pub const NAMES: [&'static str; 2] = ["rk4", "dp54"];
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Integrator::Rk4 => "rk4",
+            Integrator::Dp54 { .. } => "dp54",
+        }
+    }
+
+    /// The tolerances of an adaptive method.
+    pub fn tolerances(&self) -> Option<(f64, f64)> {
+        match *self {
+            Integrator::Rk4 => None,
+            Integrator::Dp54 { rtol, atol } => Some((rtol, atol)),
+        }
+    }
+
+    /// Tolerances in range for `precision`, else an error naming `rtol` or `atol`: f32
+    /// cannot follow a relative tolerance below ~100 of its epsilon, f64 below ~100 of its.
+    pub fn validate(&self, precision: Precision) -> Result<()> {
+        let Some((rtol, atol)) = self.tolerances() else {
+            return Ok(());
+        };
+        let least = match precision {
+            Precision::F32 => MIN_TOLERANCE_F32,
+            Precision::F64 => MIN_TOLERANCE_F64,
+        };
+        for (field, v) in [("rtol", rtol), ("atol", atol)] {
+            if !(v.is_finite() && (least..=1e-2).contains(&v)) {
+                return Err(Error::invalid(
+                    field,
+                    format!(
+                        "{v:e} must be between {least:e} and 1e-2 in {} (use --precision f64 for tighter tolerances)",
+                        precision.name()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Tightest tolerances an adaptive run may ask for in each precision: ~100 epsilon, so the
+/// error estimate is not round-off.
+pub const MIN_TOLERANCE_F32: f64 = 1e-5;
+pub const MIN_TOLERANCE_F64: f64 = 1e-13;
+
 /// A flip-time map: for every start, the time until either arm first flips over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FlipSpec {
@@ -209,6 +271,7 @@ pub struct FlipSpec {
     /// The GPU's precision (the CPU is always f64); grids finer than f32 resolves run in
     /// f64 whatever is asked.
     pub precision: Precision,
+    pub integrator: Integrator,
 }
 
 /// Largest number of steps one run may take (the step counter is a u32 on the GPU, and f32
@@ -224,6 +287,7 @@ impl FlipSpec {
             early_exit: true,
             use_symmetry: true,
             precision: Precision::F32,
+            integrator: Integrator::Rk4,
         }
     }
 
@@ -240,6 +304,8 @@ impl FlipSpec {
         validate_params(&self.params)?;
         validate_grid(&self.grid)?;
         validate_stepping(&self.stepping)?;
+        // The f64 range here; the f32 GPU's own is checked where the engine has picked it.
+        self.integrator.validate(Precision::F64)?;
         validate_stability(&self.params, &self.stepping)?;
         validate_speeds(
             &self.params,

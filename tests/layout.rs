@@ -2,7 +2,8 @@
 //! their Rust mirrors in size and member offsets.
 
 use chaoscope::gpu::layout::{
-    GpuLyapunovSlot, GpuParams, GpuParams64, GpuPendulum, GpuPendulum64, all_shaders,
+    GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuLyapunovSlot, GpuParams, GpuParams64, GpuPendulum,
+    GpuPendulum64, all_shaders,
 };
 use wgpu::naga;
 
@@ -60,15 +61,15 @@ fn params_struct_matches_its_rust_mirror() {
         omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
         mass_total, mass_lower, bearing,
         width, height, rows, row0, step0, steps, count, interval, total_steps,
-        twin_eps, _pad0);
-    // The f64 mirror's explicit padding (_pad_a, _pad_b) is implicit in WGSL.
+        twin_eps, rtol, atol, t_max, _pad0, _pad1);
+    // The f64 mirror's explicit padding (_pad_a) is implicit in WGSL.
     let rust64 = rust_offsets!(GpuParams64;
         a, b, c, p, q, l1, l2, dt, theta1_mid, theta1_half_step, theta2_mid, theta2_half_step,
         omega1,
         omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
         mass_total, mass_lower, bearing,
         width, height, rows, row0, step0, steps, count, interval, total_steps,
-        twin_eps, _pad0);
+        twin_eps, rtol, atol, t_max, _pad0, _pad1);
     for (name, source) in all_shaders() {
         let (wgsl, span) = wgsl_struct(&module(name, &source), "Params");
         let (rust, size) = if name.ends_with("_f64") {
@@ -108,6 +109,22 @@ fn storage_structs_match_their_rust_mirrors() {
                 "LyapunovSlot"
             );
             assert_eq!(wgsl, slot, "members and offsets of LyapunovSlot");
+        }
+        if name.starts_with("flip_adaptive") {
+            let (wgsl, span) = wgsl_struct(&module, "AdaptiveSlot");
+            let (rust, size) = if name.ends_with("_f64") {
+                (
+                    rust_offsets!(GpuAdaptiveSlot64; y, u, clock),
+                    std::mem::size_of::<GpuAdaptiveSlot64>(),
+                )
+            } else {
+                (
+                    rust_offsets!(GpuAdaptiveSlot; y, u, clock),
+                    std::mem::size_of::<GpuAdaptiveSlot>(),
+                )
+            };
+            assert_eq!(span as usize, size, "{name}: AdaptiveSlot");
+            assert_eq!(wgsl, rust, "{name}: members and offsets of AdaptiveSlot");
         }
     }
 }

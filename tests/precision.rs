@@ -12,15 +12,6 @@ fn spec(n: u32, t_max: f64, dt: f64) -> FlipSpec {
     FlipSpec::new(Params::default(), Grid::square(n), Stepping { dt, t_max })
 }
 
-fn f64_gpu() -> Option<GpuContext> {
-    let ctx = common::gpu()?;
-    assert!(
-        ctx.has_f64(),
-        "lavapipe offers SHADER_F64; this adapter does not"
-    );
-    Some(ctx)
-}
-
 /// The f64 shaders' `sincos` at `xs`, through a kernel of its own.
 fn gpu_sincos(ctx: &GpuContext, xs: &[f64]) -> Vec<[f64; 2]> {
     gpu_eval(ctx, xs, "data[gid.x] = sincos(data[gid.x].x);")
@@ -96,7 +87,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
 
 #[test]
 fn f64_sin_and_cos_are_within_a_few_ulps_of_rusts() {
-    let Some(ctx) = f64_gpu() else { return };
+    let Some(ctx) = common::f64_gpu() else { return };
     // The starts' angles (|theta| <= pi) and well beyond, densely and at the quadrant edges.
     let mut xs: Vec<f64> = (0..20001).map(|k| -10.0 + 1e-3 * k as f64).collect();
     xs.extend((-8..=8).map(|q| q as f64 * std::f64::consts::FRAC_PI_2));
@@ -114,7 +105,7 @@ fn f64_sin_and_cos_are_within_a_few_ulps_of_rusts() {
 
 #[test]
 fn f64_gpu_flip_maps_match_the_f64_cpu() {
-    let Some(ctx) = f64_gpu() else { return };
+    let Some(ctx) = common::f64_gpu() else { return };
     let kernel = FlipTimeKernel::with_precision(&ctx, Precision::F64);
     // At dt 0.001 the GPU's carried cos and sin (an O(dt^4) different discretisation than the
     // CPU's angles) and the two formulas' round-off differ by far less than the f32 in which
@@ -168,7 +159,7 @@ fn gpu_cpu_difference(ctx: &GpuContext, p: &Params, precision: Precision, dt: f6
 
 #[test]
 fn f64_gpu_trajectories_match_the_f64_cpu() {
-    let Some(ctx) = f64_gpu() else { return };
+    let Some(ctx) = common::f64_gpu() else { return };
     for (p, what) in [
         (Params::default(), "point masses"),
         (common::rods_and_every_loss(), "rods and every loss"),
@@ -193,7 +184,7 @@ fn f64_gpu_trajectories_match_the_f64_cpu() {
 
 #[test]
 fn f64_logarithm_is_within_a_few_ulps_of_rusts() {
-    let Some(ctx) = f64_gpu() else { return };
+    let Some(ctx) = common::f64_gpu() else { return };
     // Log stretches of renormalisations: around 1, and far out both ways.
     let mut xs: Vec<f64> = (1..20000).map(|k| 1e-3 * k as f64).collect();
     xs.extend((-300..=300).map(|k| 1.7f64.powi(k)));
@@ -212,7 +203,7 @@ fn f64_logarithm_is_within_a_few_ulps_of_rusts() {
 fn f64_gpu_divergence_maps_match_the_f64_cpu() {
     use chaoscope::gpu::LyapunovKernel;
     use chaoscope::spec::{LyapunovSpec, Method};
-    let Some(ctx) = f64_gpu() else { return };
+    let Some(ctx) = common::f64_gpu() else { return };
     for method in [Method::Tangent, Method::Twin { eps: 1e-8 }] {
         let spec = LyapunovSpec {
             params: Params::default(),

@@ -116,6 +116,17 @@ fn flip_maps_round_trip() {
             "-1",
         ],
         vec!["--size", "10", "--t-max", "2", "--precision", "f64"],
+        vec!["--size", "10", "--t-max", "3", "--accurate"],
+        vec![
+            "--size",
+            "10",
+            "--t-max",
+            "3",
+            "--integrator",
+            "dp54",
+            "--atol",
+            "1e-4",
+        ],
     ]
     .into_iter()
     .enumerate()

@@ -8,7 +8,7 @@ use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::render::{self, PictureSpec};
-use crate::spec::FlipSpec;
+use crate::spec::{FlipSpec, Precision};
 use crate::verdict;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -25,7 +25,7 @@ impl FlipJob {
         self.spec.validate()?;
         self.files.validate()?;
         if self.files.wants_verdict() {
-            check_finer(verdict::finer_flip(&self.spec).validate())?;
+            check_finer(verdict::finer_flip(&self.spec, true).validate())?;
         }
         Ok(())
     }
@@ -44,6 +44,8 @@ pub struct FlipSummary {
     pub nan: usize,
     /// The fraction of the pixels resolved, when the verdict was asked for.
     pub resolved: Option<f64>,
+    /// How the verdict's finer map differs, in a few words.
+    pub rule: String,
     pub t_max: f64,
     pub output: PathBuf,
     /// Every file written.
@@ -65,9 +67,16 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         &job.spec.grid,
         &info,
     )?);
+    if info.backend == "gpu" {
+        job.spec.integrator.validate(Precision::F32)?;
+    }
+    let finer = verdict::finer_flip(&job.spec, engine.has_f64());
+    if job.files.wants_verdict() && engine.map_info(&finer.grid, finer.precision).backend == "gpu" {
+        check_finer(finer.integrator.validate(Precision::F32))?;
+    }
     let field = engine.flip_map(&job.spec, monitor)?;
     let mask = if job.files.wants_verdict() {
-        let finer = engine.flip_map(&verdict::finer_flip(&job.spec), monitor)?;
+        let finer = engine.flip_map(&finer, monitor)?;
         Some(verdict::mask(&field, &finer, verdict::flip_times_agree))
     } else {
         None
@@ -79,7 +88,7 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         .map(|_| {
             (
                 "chaoscope:resolved-rule".to_string(),
-                verdict::FLIP_RULE.to_string(),
+                verdict::flip_rule(&job.spec, &finer),
             )
         })
         .into_iter()
@@ -102,6 +111,7 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         flipped: flipped as f64 / field.data.len() as f64,
         nan: field.data.iter().filter(|t| t.is_nan()).count(),
         resolved: mask.as_deref().map(verdict::fraction),
+        rule: verdict::flip_rule_short(&job.spec, &finer),
         t_max: job.spec.stepping.t_max,
         output: job.files.output.clone(),
         files: job.files.files(),

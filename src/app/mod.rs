@@ -65,11 +65,12 @@ impl MapOutputs {
     }
 }
 
-/// The verdict's map (half the step) checked as the map was: its errors say so.
+/// The verdict's map (half the step, a tenth of the tolerances) checked as the map was: its
+/// errors say so.
 pub fn check_finer(finer: Result<()>) -> Result<()> {
     finer.map_err(|e| match e {
         Error::InvalidSpec { field, reason } => {
-            Error::invalid(field, format!("the verdict's half step: {reason}"))
+            Error::invalid(field, format!("the verdict's finer map: {reason}"))
         }
         e => e,
     })

@@ -2,9 +2,13 @@
 //! (not the shader's closed form, so agreement checks the physics as well as the port),
 //! classic RK4, rayon over pixels. Also the backend for machines without a GPU.
 
+mod adaptive;
 mod flip_time;
 mod lyapunov;
 
+pub use adaptive::{
+    Adaptive, DP54, Stall, Step, flip_map_adaptive, flip_time_adaptive, step_factor,
+};
 pub use flip_time::{flip_map, flip_time};
 pub use lyapunov::{ftle, ftle_map, ftle_monitored, lyapunov_spectrum};
 

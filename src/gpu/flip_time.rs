@@ -3,22 +3,24 @@
 
 use super::context::{GpuContext, map_read, read_buffer};
 use super::layout::{
-    FLIP_TIME_WGSL, GpuParams, GpuParams64, GpuPendulum, GpuPendulum64, NEVER, NONFINITE,
-    TileParams, shader_source, shader_source_f64,
+    FLIP_ADAPTIVE_WGSL, FLIP_TIME_WGSL, GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuParams, GpuParams64,
+    GpuPendulum, GpuPendulum64, NEVER, NONFINITE, TileParams, shader_source, shader_source_f64,
 };
 use super::pipeline::{
     Variants, bind_group, layouts, module_of, params_buffer_of, record_dispatch, storage_buffer,
 };
-use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
+use super::tiled::{Tiling, adaptive_loop, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, Precision, Range};
+use crate::spec::{FlipSpec, Grid, Integrator, MAX_STEPS, Precision, Range};
 
 pub struct FlipTimeKernel {
     precision: Precision,
     /// (flip_init, flip_time) per kind of loss and early exit.
     pipelines: Variants,
+    /// (flip_adaptive_init, flip_adaptive), the same.
+    adaptive: Variants,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -34,17 +36,28 @@ struct Buffers {
     b_to_a: wgpu::BindGroup,
 }
 
-/// Bytes per pixel of the pendulum, the flip time and the params, in `precision`.
-fn sizes(precision: Precision) -> (u64, u64, u64) {
+/// Bytes per pixel of the pendulum (with its clock when `adaptive`), the flip time and the
+/// params, in `precision`.
+fn sizes(precision: Precision, adaptive: bool) -> (u64, u64, u64) {
     use std::mem::size_of;
-    match precision {
-        Precision::F32 => (
+    match (precision, adaptive) {
+        (Precision::F32, false) => (
             size_of::<GpuPendulum>() as u64,
             4,
             size_of::<GpuParams>() as u64,
         ),
-        Precision::F64 => (
+        (Precision::F32, true) => (
+            size_of::<GpuAdaptiveSlot>() as u64,
+            4,
+            size_of::<GpuParams>() as u64,
+        ),
+        (Precision::F64, false) => (
             size_of::<GpuPendulum64>() as u64,
+            8,
+            size_of::<GpuParams64>() as u64,
+        ),
+        (Precision::F64, true) => (
+            size_of::<GpuAdaptiveSlot64>() as u64,
             8,
             size_of::<GpuParams64>() as u64,
         ),
@@ -113,19 +126,26 @@ impl FlipTimeKernel {
 
     /// The kernel in `precision` (f64 needs a context with `GpuContext::has_f64`).
     pub fn with_precision(ctx: &GpuContext, precision: Precision) -> Self {
-        let source = match precision {
-            Precision::F32 => shader_source(FLIP_TIME_WGSL),
-            Precision::F64 => shader_source_f64(FLIP_TIME_WGSL),
+        let source = |kernel| match precision {
+            Precision::F32 => shader_source(kernel),
+            Precision::F64 => shader_source_f64(kernel),
         };
-        let module = module_of(ctx, "flip_time.wgsl", source);
+        let module = module_of(ctx, "flip_time.wgsl", source(FLIP_TIME_WGSL));
+        let adaptive = module_of(ctx, "flip_adaptive.wgsl", source(FLIP_ADAPTIVE_WGSL));
         let (layout, pipeline_layout) =
             layouts(ctx, "flip_time", &[false, false, true, false, false]);
         let kernel = FlipTimeKernel {
             precision,
             pipelines: Variants::new(
                 module,
-                pipeline_layout,
+                pipeline_layout.clone(),
                 &["flip_init", "flip_time"],
+                Some("EARLY_EXIT"),
+            ),
+            adaptive: Variants::new(
+                adaptive,
+                pipeline_layout,
+                &["flip_adaptive_init", "flip_adaptive"],
                 Some("EARLY_EXIT"),
             ),
             layout,
@@ -136,8 +156,8 @@ impl FlipTimeKernel {
         kernel
     }
 
-    fn buffers(&self, ctx: &GpuContext, capacity: u64) -> Buffers {
-        let (pendulum, time, params) = sizes(self.precision);
+    fn buffers(&self, ctx: &GpuContext, capacity: u64, adaptive: bool) -> Buffers {
+        let (pendulum, time, params) = sizes(self.precision, adaptive);
         let params = params_buffer_of(ctx, params);
         let states = storage_buffer(ctx, "states", capacity * pendulum);
         let times = storage_buffer(ctx, "times", capacity * time);
@@ -203,14 +223,15 @@ impl FlipTimeKernel {
     /// The flip-time map of `spec` (s, +inf = never flipped), in tiles as large as the
     /// device's storage bindings allow.
     pub fn run(&self, ctx: &GpuContext, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-        let (pendulum, time, _) = sizes(self.precision);
+        let adaptive = spec.integrator != Integrator::Rk4;
+        let (pendulum, time, _) = sizes(self.precision, adaptive);
         // The pendulum, the flip time and two active-list entries a pixel.
         let max = max_pixels(ctx, pendulum, pendulum + time + 8);
         // Large early-exit maps first integrate a sparse sample of their starts (1 in 256),
         // whose work per pixel foretells the whole map's: the progress bar's ETA then holds
         // from the start instead of following the flips' uneven waves.
         let pixels = spec.rows_to_integrate() as u64 * spec.grid.width as u64;
-        if spec.early_exit && pixels > ESTIMATE_ABOVE {
+        if spec.early_exit && !adaptive && pixels > ESTIMATE_ABOVE {
             let sample = self.run_tiled(ctx, &sample_spec(spec), &monitor.quiet(), max)?;
             monitor.estimate(work_per_pixel(spec, &sample) * pixels as f64);
         }
@@ -226,9 +247,16 @@ impl FlipTimeKernel {
         max_pixels: u64,
     ) -> Result<Field> {
         let (p, dt, grid) = (&spec.params, spec.stepping.dt, &spec.grid);
+        let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
+        let t_max = spec.stepping.t_max;
         match self.precision {
             Precision::F32 => {
-                let base = GpuParams::new(p, dt).with_grid(grid);
+                let base = GpuParams {
+                    rtol: rtol as f32,
+                    atol: atol as f32,
+                    t_max: t_max as f32,
+                    ..GpuParams::new(p, dt).with_grid(grid)
+                };
                 self.integrate(ctx, spec, monitor, max_pixels, base, |bytes| {
                     bytemuck::pod_collect_to_vec::<u8, f32>(bytes)
                         .into_iter()
@@ -237,7 +265,12 @@ impl FlipTimeKernel {
                 })
             }
             Precision::F64 => {
-                let base = GpuParams64::new(p, dt).with_grid(grid);
+                let base = GpuParams64 {
+                    rtol,
+                    atol,
+                    t_max,
+                    ..GpuParams64::new(p, dt).with_grid(grid)
+                };
                 self.integrate(ctx, spec, monitor, max_pixels, base, |bytes| {
                     bytemuck::pod_collect_to_vec::<u8, f64>(bytes)
                 })
@@ -257,39 +290,60 @@ impl FlipTimeKernel {
         times: impl Fn(&[u8]) -> Vec<f64>,
     ) -> Result<Field> {
         let grid = spec.grid;
-        let [init, advance] = self
-            .pipelines
-            .get(ctx, spec.params.losses.kinds(), spec.early_exit)
-        else {
+        let adaptive = spec.integrator != Integrator::Rk4;
+        let variants = if adaptive {
+            &self.adaptive
+        } else {
+            &self.pipelines
+        };
+        let [init, advance] = variants.get(ctx, spec.params.losses.kinds(), spec.early_exit) else {
             unreachable!("two entry points")
         };
         let total_steps = spec.stepping.steps();
         let tiling = Tiling::new(grid.width, spec.rows_to_integrate(), max_pixels);
-        let bufs = self.buffers(ctx, tiling.capacity());
+        let bufs = self.buffers(ctx, tiling.capacity(), adaptive);
         let t_max = spec.stepping.t_max;
-        let time_bytes = sizes(self.precision).1;
+        let time_bytes = sizes(self.precision, adaptive).1;
         map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows, later| {
             let pixels = rows * grid.width;
             let mut params = base;
             params.set_tile(row0, rows, pixels);
-            let listed = self.dispatch(ctx, &bufs, init, &bufs.b_to_a, &params, spec.early_exit)?;
-            let active = if spec.early_exit { listed } else { pixels };
+            // The adaptive kernel lists every pixel it integrates, early exit or not.
+            let read_count = spec.early_exit || adaptive;
+            let listed = self.dispatch(ctx, &bufs, init, &bufs.b_to_a, &params, read_count)?;
+            let active = if read_count { listed } else { pixels };
+            if adaptive {
+                // The attempts a pixel may take in all (the kernel's `total_steps`).
+                params.set_total(MAX_STEPS);
+            }
             let mut a_to_b = true;
-            time_loop(
-                total_steps,
-                pixels,
-                active,
-                1,
-                None,
-                later,
-                monitor,
-                |step0, steps, active| {
-                    params.set_steps(step0, steps, active);
-                    let bind = if a_to_b { &bufs.a_to_b } else { &bufs.b_to_a };
-                    a_to_b = !a_to_b;
-                    self.dispatch(ctx, &bufs, advance, bind, &params, spec.early_exit)
-                },
-            )?;
+            let mut advance_by = |step0, steps, active| {
+                params.set_steps(step0, steps, active);
+                let bind = if a_to_b { &bufs.a_to_b } else { &bufs.b_to_a };
+                a_to_b = !a_to_b;
+                self.dispatch(ctx, &bufs, advance, bind, &params, read_count)
+            };
+            if adaptive {
+                adaptive_loop(
+                    pixels,
+                    active,
+                    total_steps,
+                    later,
+                    monitor,
+                    |steps, active| advance_by(0, steps, active),
+                )?;
+            } else {
+                time_loop(
+                    total_steps,
+                    pixels,
+                    active,
+                    1,
+                    None,
+                    later,
+                    monitor,
+                    advance_by,
+                )?;
+            }
             let bytes = read_buffer(ctx, &bufs.times, pixels as u64 * time_bytes)?;
             Ok(times(&bytes)
                 .into_iter()

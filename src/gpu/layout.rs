@@ -36,6 +36,25 @@ pub struct GpuLyapunovSlot {
     pub b: GpuPendulum,
 }
 
+/// Mirror of WGSL `AdaptiveSlot` (shaders/flip_adaptive.wgsl), one per pixel of an adaptive
+/// map: the pendulum and its clock, (t, the next step's size, attempts so far, unused).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuAdaptiveSlot {
+    pub y: [f32; 4],
+    pub u: [f32; 4],
+    pub clock: [f32; 4],
+}
+
+/// Mirror of WGSL `AdaptiveSlot` in the f64 kernels.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuAdaptiveSlot64 {
+    pub y: [f64; 4],
+    pub u: [f64; 4],
+    pub clock: [f64; 4],
+}
+
 /// Mirror of WGSL `Params`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -79,11 +98,16 @@ pub struct GpuParams {
     pub interval: u32,
     pub total_steps: u32,
     pub twin_eps: f32,
+    /// Adaptive steps: relative and absolute tolerance, the run's end time (s).
+    pub rtol: f32,
+    pub atol: f32,
+    pub t_max: f32,
     pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 // A uniform buffer's size must be a multiple of 16 bytes.
-const _: () = assert!(std::mem::size_of::<GpuParams>() == 144);
+const _: () = assert!(std::mem::size_of::<GpuParams>() == 160);
 
 /// `new` (physics and step) and `with_grid` (the grid) of a params mirror whose floats are
 /// `$float`, `$eps` its machine epsilon (the margin of the no-flip energy).
@@ -183,11 +207,15 @@ pub struct GpuParams64 {
     pub total_steps: u32,
     pub _pad_a: u32,
     pub twin_eps: f64,
+    pub rtol: f64,
+    pub atol: f64,
+    pub t_max: f64,
     pub _pad0: u32,
-    pub _pad_b: u32,
+    pub _pad1: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<GpuParams64>() == 256);
+// WGSL's size of the struct (its alignment, 8); the buffer is rounded up to 16 bytes.
+const _: () = assert!(std::mem::size_of::<GpuParams64>() == 280);
 
 impl GpuParams64 {
     params_constructors!(f64, f64::EPSILON);
@@ -205,6 +233,7 @@ pub struct GpuPendulum64 {
 pub trait TileParams: Pod {
     fn set_tile(&mut self, row0: u32, rows: u32, count: u32);
     fn set_steps(&mut self, step0: u32, steps: u32, count: u32);
+    fn set_total(&mut self, total_steps: u32);
     fn count(&self) -> u32;
 }
 
@@ -216,6 +245,9 @@ macro_rules! tile_params {
             }
             fn set_steps(&mut self, step0: u32, steps: u32, count: u32) {
                 (self.step0, self.steps, self.count) = (step0, steps, count);
+            }
+            fn set_total(&mut self, total_steps: u32) {
+                self.total_steps = total_steps;
             }
             fn count(&self) -> u32 {
                 self.count
@@ -238,6 +270,7 @@ pub fn shader_source(kernel: &str) -> String {
 pub const FLIP_TIME_WGSL: &str = include_str!("../../shaders/flip_time.wgsl");
 pub const TRAJECTORY_WGSL: &str = include_str!("../../shaders/trajectory.wgsl");
 pub const LYAPUNOV_WGSL: &str = include_str!("../../shaders/lyapunov.wgsl");
+pub const FLIP_ADAPTIVE_WGSL: &str = include_str!("../../shaders/flip_adaptive.wgsl");
 
 /// The f64 twin of `shader_source(kernel)`: the same WGSL with f64 for f32, and the few
 /// pieces that f32 writes for its own precision written again: (sin, cos) by a longer
@@ -411,6 +444,8 @@ pub fn all_shaders() -> Vec<(&'static str, String)> {
     vec![
         ("flip_time", shader_source(FLIP_TIME_WGSL)),
         ("flip_time_f64", shader_source_f64(FLIP_TIME_WGSL)),
+        ("flip_adaptive", shader_source(FLIP_ADAPTIVE_WGSL)),
+        ("flip_adaptive_f64", shader_source_f64(FLIP_ADAPTIVE_WGSL)),
         ("trajectory_f64", shader_source_f64(TRAJECTORY_WGSL)),
         ("lyapunov_f64", shader_source_f64(LYAPUNOV_WGSL)),
         ("trajectory", shader_source(TRAJECTORY_WGSL)),

@@ -180,7 +180,8 @@ pub fn params_buffer(ctx: &GpuContext) -> wgpu::Buffer {
 pub fn params_buffer_of(ctx: &GpuContext, bytes: u64) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("params"),
-        size: bytes,
+        // Uniform buffers come in multiples of 16 bytes.
+        size: bytes.next_multiple_of(16),
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })

@@ -159,3 +159,43 @@ pub fn time_loop(
     }
     Ok(())
 }
+
+/// An adaptive tile's loop: `dispatch(attempts, active)` gives each of the `active` pixels up
+/// to `attempts` more step attempts and returns how many still run, until none does (each
+/// pixel ends by itself: at t-max, at its flip, or stalled, within MAX_STEPS attempts).
+///
+/// Progress counts pendulum-attempts. Each pixel is first expected to take `guess` attempts
+/// (t-max over the largest step); pixels still running past that are expected to need a
+/// quarter of what they took so far, and the `later` pixels of the tiles still to come what
+/// this tile's took on average.
+pub fn adaptive_loop(
+    pixels: u32,
+    mut active: u32,
+    guess: u32,
+    later: u64,
+    monitor: &Monitor,
+    mut dispatch: impl FnMut(u32, u32) -> Result<u32>,
+) -> Result<()> {
+    // A DP54 attempt costs six evaluations of the rate where an RK4 step costs four.
+    const COST: u64 = 2;
+    let mut taken = 0u64;
+    let mut done = 0u64;
+    loop {
+        let per_active = (guess as f64 - taken as f64)
+            .max(0.25 * taken as f64)
+            .max(1.0);
+        let per_pixel = (done as f64 + active as f64 * per_active) / pixels.max(1) as f64;
+        monitor.expect((active as f64 * per_active + later as f64 * per_pixel) as u64);
+        if active == 0 {
+            break;
+        }
+        monitor.check()?;
+        let attempts = (STEPS_PER_DISPATCH / COST / active as u64).clamp(MIN_STEPS, 1 << 20);
+        let before = active;
+        active = dispatch(attempts as u32, active)?;
+        taken += attempts;
+        done += before as u64 * attempts;
+        monitor.advance(before as u64 * attempts);
+    }
+    Ok(())
+}

@@ -104,6 +104,16 @@ pub fn gpu() -> Option<GpuContext> {
     }
 }
 
+/// A GPU adapter with f64 (`gpu`'s rules); lavapipe has it, so under CI its absence fails.
+pub fn f64_gpu() -> Option<GpuContext> {
+    let ctx = gpu()?;
+    assert!(
+        ctx.has_f64(),
+        "lavapipe offers SHADER_F64; this adapter does not"
+    );
+    Some(ctx)
+}
+
 /// Writes a failing map comparison as PNGs to out/test-failures/ and returns their paths.
 pub fn dump_maps(name: &str, maps: &[(&str, &chaoscope::Field)], t_max: f64) -> String {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("out/test-failures");
