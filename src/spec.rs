@@ -99,12 +99,21 @@ impl Grid {
     pub fn needs_f64(&self) -> bool {
         self.theta1_step().min(self.theta2_step()) < F32_MIN_PIXEL_STEP
     }
+
+    /// Whether neighbouring pixels are closer than even f64 resolves near |theta| = pi
+    /// ([`F64_MIN_PIXEL_STEP`]): the map is computed, but no pixel of it is resolved.
+    pub fn beyond_f64(&self) -> bool {
+        self.theta1_step().min(self.theta2_step()) < F64_MIN_PIXEL_STEP
+    }
 }
 
 /// Smallest angle step between pixels that f32 still resolves near |theta| = pi: 16 ulp of
 /// pi (ulp = 2.4e-7), so neighbouring pixels start from distinct f32 angles with room for
 /// the arithmetic that forms them.
 pub const F32_MIN_PIXEL_STEP: f64 = 16.0 * 2.384185791015625e-7;
+
+/// The same for f64: 16 ulp of pi (ulp = 4.4e-16).
+pub const F64_MIN_PIXEL_STEP: f64 = 16.0 * 4.440892098500626e-16;
 
 /// Fixed-step time integration from t = 0 to `t_max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -250,6 +259,19 @@ impl Integrator {
         Ok(())
     }
 }
+
+/// What `--accurate` stands for: the recommended settings for a flip map right on >= 99.5 %
+/// of its pixels (measured on a 256 x 256, 30 s map: 99.84 % against a converged reference,
+/// 1.9x the time of the f32 RK4 map at dt 0.01 on lavapipe): f64, DP54 at rtol = atol =
+/// 1e-9, steps of at most 0.05 s.
+pub const ACCURATE: (Precision, Integrator, f64) = (
+    Precision::F64,
+    Integrator::Dp54 {
+        rtol: 1e-9,
+        atol: 1e-9,
+    },
+    0.05,
+);
 
 /// Tightest tolerances an adaptive run may ask for in each precision: ~100 epsilon, so the
 /// error estimate is not round-off.

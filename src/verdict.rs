@@ -6,7 +6,7 @@
 //! step's error (issue 11's measurements).
 
 use crate::field::Field;
-use crate::spec::{FlipSpec, Integrator, LyapunovSpec, Precision, Stepping};
+use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Precision, Stepping};
 
 /// Flip times agree within this fraction of the time ...
 pub const FLIP_RELATIVE: f64 = 0.01;
@@ -65,6 +65,17 @@ pub fn mask(map: &Field, finer: &Field, agree: fn(f32, f32) -> bool) -> Vec<u8> 
         .zip(&finer.data)
         .map(|(&a, &b)| agree(a, b) as u8)
         .collect()
+}
+
+/// The verdict on a map over `grid`: [`mask`], except that no pixel is resolved on a grid
+/// finer than f64 resolves (neighbouring pixels start from the same numbers: the map no
+/// longer measures the starts it names).
+pub fn grid_mask(grid: &Grid, map: &Field, finer: &Field, agree: fn(f32, f32) -> bool) -> Vec<u8> {
+    let mut out = mask(map, finer, agree);
+    if grid.beyond_f64() {
+        out.fill(0);
+    }
+    out
 }
 
 /// The fraction of resolved pixels.

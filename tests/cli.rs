@@ -311,6 +311,7 @@ fn bench_reports_every_mode_of_both_paths() {
     let out = chaoscope()
         .args(["bench", "--size", "32", "--cpu-size", "8", "--t-max", "0.5"])
         .args(["--repeat", "1", "--no-ftle"])
+        .args(["--accurate-size", "16", "--accurate-t-max", "3"])
         .assert()
         .success()
         .get_output()
@@ -328,6 +329,14 @@ fn bench_reports_every_mode_of_both_paths() {
         text.lines().any(|l| l.starts_with("chaoscope cpu")),
         "{text}"
     );
+    // The accurate-map rows, each with the share of its pixels the reference confirms.
+    for path in ["chaoscope --accurate", "chaoscope gpu f32 rk4"] {
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with(path) && l.contains(" accurate ") && l.ends_with('%')),
+            "no accurate row for {path}:\n{text}"
+        );
+    }
 }
 
 #[test]

@@ -578,6 +578,8 @@ fn negative_and_missing_values_name_the_flag() {
         (&["fit", "x.csv", "--tolerance", "-1"], "--tolerance"),
         (&["bench", "--repeat", "-1"], "--repeat"),
         (&["bench", "--size", "-1"], "--size"),
+        (&["bench", "--accurate-t-max", "-1"], "--accurate-t-max"),
+        (&["flip", "--integrator", "dp54", "--rtol", "-1"], "--rtol"),
         (&["flip", "--l1", "--cw", "2"], "--l1"),
         (&["flip", "--dt", "--t-max", "2"], "--dt"),
     ];

@@ -193,3 +193,39 @@ fn divergence_maps_have_a_verdict_and_points_refuse_one() {
         .code(2)
         .stderr(predicates::str::contains("--resolved"));
 }
+
+/// Past what f64 resolves (pixels closer than 16 ulp of pi) the map is made, but the verdict
+/// vouches for no pixel, and says why.
+#[test]
+fn the_verdict_resolves_nothing_finer_than_f64() {
+    let dir = tempfile::tempdir().unwrap();
+    let mask = dir.path().join("m.npy");
+    chaoscope()
+        .args([
+            "flip",
+            "--size",
+            "8",
+            "--t-max",
+            "3",
+            "--backend",
+            "cpu",
+            "--theta1",
+            "2:2.00000000000001",
+            "--theta2",
+            "1:1.00000000000001",
+            "--output",
+        ])
+        .arg(dir.path().join("m.png"))
+        .arg("--resolved")
+        .arg(&mask)
+        .assert()
+        .success()
+        .stderr(predicates::str::contains("finer than even f64"))
+        .stderr(predicates::str::contains("0.0 % resolved"));
+    let bytes = std::fs::read(&mask).unwrap();
+    let values = npyz::NpyFile::new(&bytes[..])
+        .unwrap()
+        .into_vec::<u8>()
+        .unwrap();
+    assert!(values.len() == 64 && values.iter().all(|&m| m == 0));
+}

@@ -15,7 +15,9 @@ use crate::field::Field;
 use crate::gpu::{FlipTimeKernel, GpuContext, LyapunovKernel};
 use crate::model::Params;
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Precision, Stepping};
+use crate::spec::{
+    ACCURATE, FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Stepping,
+};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchJob {
@@ -38,6 +40,9 @@ pub struct BenchJob {
     pub python: String,
     /// Peers to run, as SCRIPT[:ARCH] (e.g. taichi:vulkan, numba), in f32.
     pub peer: Vec<String>,
+    /// Grid side of the "accurate map" rows (0: none) and their simulated time (s).
+    pub accurate_size: u32,
+    pub accurate_t_max: f64,
 }
 
 /// One row of the report: the median of the repetitions of one path and mode.
@@ -46,7 +51,10 @@ pub struct Row {
     pub path: String,
     pub mode: &'static str,
     pub wall_s: f64,
+    /// NaN (null in JSON) for adaptive steps, which have no fixed count.
     pub steps_per_s: f64,
+    /// "accurate" rows: the fraction of pixels matching the converged reference.
+    pub right: Option<f64>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -66,6 +74,7 @@ struct Sample {
     mode: &'static str,
     wall_s: f64,
     pendulum_steps: f64,
+    right: Option<f64>,
 }
 
 /// Pendulum-steps the benchmark's problem needs, as the peers count them: every pixel up to
@@ -145,6 +154,7 @@ fn ftle_samples(
         mode: "ftle",
         wall_s: t0.elapsed().as_secs_f64(),
         pendulum_steps: s.grid.pixels() as f64 * s.stepping.steps() as f64,
+        right: None,
     });
     if !args.no_cpu {
         let n = (args.cpu_size / 2).max(1);
@@ -157,12 +167,37 @@ fn ftle_samples(
             mode: "ftle",
             wall_s: t0.elapsed().as_secs_f64() * scale,
             pendulum_steps: s.grid.pixels() as f64 * s.stepping.steps() as f64 * scale,
+            right: None,
         });
     }
     Ok(out)
 }
 
-fn run_peer(args: &BenchJob, dir: &PathBuf, peer: &str, full: bool) -> Result<Sample> {
+/// What a peer is asked to run.
+struct PeerRun<'a> {
+    n: u32,
+    t_max: f64,
+    dt: f64,
+    full: bool,
+    f64: bool,
+    /// Where it writes its map.
+    out: Option<&'a std::path::Path>,
+}
+
+impl<'a> PeerRun<'a> {
+    fn flip512(args: &BenchJob, full: bool) -> Self {
+        PeerRun {
+            n: args.size,
+            t_max: args.t_max,
+            dt: args.dt,
+            full,
+            f64: false,
+            out: None,
+        }
+    }
+}
+
+fn run_peer(args: &BenchJob, dir: &PathBuf, peer: &str, run: &PeerRun) -> Result<Sample> {
     let (script, arch) = peer
         .split_once(':')
         .map_or((peer, None), |(s, a)| (s, Some(a)));
@@ -173,15 +208,18 @@ fn run_peer(args: &BenchJob, dir: &PathBuf, peer: &str, full: bool) -> Result<Sa
     }
     cmd.args([
         "--n",
-        &args.size.to_string(),
+        &run.n.to_string(),
         "--t-max",
-        &args.t_max.to_string(),
+        &run.t_max.to_string(),
         "--dt",
-        &args.dt.to_string(),
-        "--f32",
+        &run.dt.to_string(),
+        if run.f64 { "--f64" } else { "--f32" },
     ]);
-    if full {
+    if run.full {
         cmd.arg("--full");
+    }
+    if let Some(out) = run.out {
+        cmd.arg("--out").arg(out);
     }
     let out = cmd.output()?;
     let text = String::from_utf8_lossy(&out.stdout);
@@ -206,11 +244,126 @@ fn run_peer(args: &BenchJob, dir: &PathBuf, peer: &str, full: bool) -> Result<Sa
             .unwrap_or(f64::NAN)
     };
     Ok(Sample {
-        name: format!("peer {peer} f32"),
-        mode: if full { "full" } else { "early" },
+        name: format!("peer {peer} {}", if run.f64 { "f64" } else { "f32" }),
+        mode: if run.full { "full" } else { "early" },
         wall_s: field("wall_s"),
         pendulum_steps: field("pendulum_steps"),
+        right: None,
     })
+}
+
+/// The "accurate map" problem (issue 11): the default pendulum over the full grid at
+/// `accurate_size`, `accurate_t_max`.
+fn accurate_problem(
+    args: &BenchJob,
+    precision: Precision,
+    integrator: Integrator,
+    dt: f64,
+) -> FlipSpec {
+    FlipSpec {
+        precision,
+        integrator,
+        ..FlipSpec::new(
+            Params::default(),
+            Grid::square(args.accurate_size),
+            Stepping {
+                dt,
+                t_max: args.accurate_t_max,
+            },
+        )
+    }
+}
+
+/// The converged reference of the accurate-map problem: the f64 CPU's DP54 at rtol 1e-12
+/// (at 256^2 and 30 s the GPU's f64 DP54 at 1e-12 agrees with it on every pixel).
+fn accurate_reference(args: &BenchJob, monitor: &Monitor) -> Result<Field> {
+    let tight = Integrator::Dp54 {
+        rtol: 1e-12,
+        atol: 1e-12,
+    };
+    cpu::flip_map_adaptive(
+        &accurate_problem(args, Precision::F64, tight, 0.05),
+        monitor,
+    )
+}
+
+/// The fraction of `map`'s pixels that match `reference` (the verdict's agreement rule).
+fn right(map: &[f32], reference: &Field) -> f64 {
+    crate::verdict::fraction(&crate::verdict::mask(
+        &Field {
+            data: map.to_vec(),
+            ..reference.clone()
+        },
+        reference,
+        crate::verdict::flip_times_agree,
+    ))
+}
+
+/// Steps at which the peers run the accurate-map problem in f64 RK4 (issue 11 measured
+/// numba: dt 0.005 right on 99.29 % of the pixels, 0.0025 on 99.77 %).
+const PEER_ACCURATE_DT: [f64; 2] = [0.005, 0.0025];
+
+/// One repetition of the accurate-map rows: today's f32 RK4 map at dt `args.dt`, the
+/// `--accurate` map, and each peer in f64 at the steps of PEER_ACCURATE_DT, each with the
+/// fraction of its pixels that match `reference`.
+fn accurate_samples(
+    args: &BenchJob,
+    engine: &crate::engine::Engine,
+    reference: &Field,
+    quiet: &Monitor,
+    notices: &mut Vec<String>,
+) -> Result<Vec<Sample>> {
+    let mut out = Vec::new();
+    let (precision, integrator, dt) = ACCURATE;
+    for (name, spec) in [
+        (
+            format!("chaoscope gpu f32 rk4 dt {}", args.dt),
+            accurate_problem(args, Precision::F32, Integrator::Rk4, args.dt),
+        ),
+        (
+            "chaoscope --accurate (gpu f64 dp54)".to_string(),
+            accurate_problem(args, precision, integrator, dt),
+        ),
+    ] {
+        let t0 = Instant::now();
+        let field = engine.flip_map(&spec, quiet)?;
+        out.push(Sample {
+            name,
+            mode: "accurate",
+            wall_s: t0.elapsed().as_secs_f64(),
+            pendulum_steps: f64::NAN,
+            right: Some(right(&field.data, reference)),
+        });
+    }
+    if let Some(dir) = &args.peers {
+        let map = std::env::temp_dir().join(format!("chaoscope-bench-{}.npy", std::process::id()));
+        for peer in &args.peer {
+            for dt in PEER_ACCURATE_DT {
+                let run = PeerRun {
+                    n: args.accurate_size,
+                    t_max: args.accurate_t_max,
+                    dt,
+                    full: false,
+                    f64: true,
+                    out: Some(&map),
+                };
+                match run_peer(args, dir, peer, &run).and_then(|mut s| {
+                    let data = std::fs::read(&map)?;
+                    let npy = npyz::NpyFile::new(&data[..])?;
+                    s.right = Some(right(&npy.into_vec::<f32>()?, reference));
+                    s.name = format!("{} dt {dt}", s.name);
+                    s.mode = "accurate";
+                    s.pendulum_steps = f64::NAN;
+                    Ok(s)
+                }) {
+                    Ok(s) => out.push(s),
+                    Err(e) => notices.push(format!("peer {peer} (accurate map, dt {dt}): {e}")),
+                }
+            }
+        }
+        std::fs::remove_file(&map).ok();
+    }
+    Ok(out)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -219,6 +372,21 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
+    if args.accurate_size > 0 {
+        accurate_problem(args, Precision::F32, Integrator::Rk4, args.dt)
+            .validate()
+            .map_err(|e| match e {
+                Error::InvalidSpec { field, reason } => Error::invalid(
+                    match field {
+                        "t_max" => "accurate_t_max",
+                        "size" => "accurate_size",
+                        other => other,
+                    },
+                    reason,
+                ),
+                e => e,
+            })?;
+    }
     let quiet = Monitor::hidden();
     let ctx = GpuContext::new()?;
     let kernel = FlipTimeKernel::new(&ctx);
@@ -236,6 +404,26 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
     }
     let lyapunov = LyapunovKernel::new(&ctx, Method::Tangent);
     lyapunov.run(&ctx, &ftle_spec(32, args), &quiet)?;
+    // The accurate-map rows run through an engine (the paths users get), on a GPU with f64.
+    let accurate = if args.accurate_size > 0 && ctx.has_f64() {
+        let engine = crate::engine::Engine::on_gpu(GpuContext::new()?);
+        let small = BenchJob {
+            accurate_size: 16,
+            accurate_t_max: 1.0,
+            peers: None,
+            ..args.clone()
+        };
+        accurate_samples(
+            &small,
+            &engine,
+            &accurate_reference(&small, &quiet)?,
+            &quiet,
+            &mut Vec::new(),
+        )?;
+        Some((engine, accurate_reference(args, monitor)?))
+    } else {
+        None
+    };
     let mut samples: Vec<Sample> = Vec::new();
     let mut notices = Vec::new();
     monitor.start("bench", args.repeat as u64);
@@ -251,6 +439,7 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
                 mode,
                 wall_s,
                 pendulum_steps: problem_steps(&field, &s),
+                right: None,
             });
         }
         for mode in kernel64.iter().flat_map(|_| MODES_F64) {
@@ -263,6 +452,7 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
                 mode,
                 wall_s: t0.elapsed().as_secs_f64(),
                 pendulum_steps: problem_steps(&field, &s),
+                right: None,
             });
         }
         for early in [true, false] {
@@ -278,14 +468,24 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
                     mode,
                     wall_s: wall_s * scale,
                     pendulum_steps: problem_steps(&field, &s) * scale,
+                    right: None,
                 });
             }
             if !early && !args.no_ftle {
                 samples.extend(ftle_samples(args, &ctx, &lyapunov, &quiet)?);
             }
+            if !early && let Some((engine, reference)) = &accurate {
+                samples.extend(accurate_samples(
+                    args,
+                    engine,
+                    reference,
+                    &quiet,
+                    &mut notices,
+                )?);
+            }
             if let Some(dir) = &args.peers {
                 for peer in &args.peer {
-                    match run_peer(args, dir, peer, !early) {
+                    match run_peer(args, dir, peer, &PeerRun::flip512(args, !early)) {
                         Ok(s) => samples.push(s),
                         Err(e) => notices.push(format!("peer {peer}: {e}")),
                     }
@@ -311,6 +511,7 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
             mode,
             wall_s: wall,
             steps_per_s: steps / wall,
+            right: mine[0].right,
         });
     }
     let ratios = ratios(&rows);
@@ -346,6 +547,39 @@ fn ratios(rows: &[Row]) -> Vec<String> {
             "ftle: a tangent step (state + variational equations) costs {:.2} plain RK4 steps on the GPU",
             full / ftle
         ));
+    }
+    let accurate = |path: &str| {
+        rows.iter()
+            .find(|r| r.mode == "accurate" && r.path.starts_with(path))
+    };
+    if let (Some(a), Some(f32_map)) = (
+        accurate("chaoscope --accurate"),
+        accurate("chaoscope gpu f32 rk4"),
+    ) {
+        out.push(format!(
+            "accurate map: --accurate is right on {:.2} % of the pixels (f32 RK4: {:.2} %) in {:.2}x the f32 RK4 map's time",
+            100.0 * a.right.unwrap_or(f64::NAN),
+            100.0 * f32_map.right.unwrap_or(f64::NAN),
+            a.wall_s / f32_map.wall_s
+        ));
+        let right = a.right.unwrap_or(0.0);
+        let peer = rows
+            .iter()
+            .filter(|r| {
+                r.mode == "accurate"
+                    && r.path.starts_with("peer")
+                    && r.right.is_some_and(|p| p >= right.min(0.995))
+            })
+            .min_by(|x, y| x.wall_s.total_cmp(&y.wall_s));
+        match peer {
+            Some(p) => out.push(format!(
+                "accurate map: the fastest peer as right ({}, {:.2} %) takes {:.1}x --accurate's time",
+                p.path,
+                100.0 * p.right.unwrap_or(f64::NAN),
+                p.wall_s / a.wall_s
+            )),
+            None => out.push("accurate map: no peer run reached 99.5 % of the pixels".into()),
+        }
     }
     for (mode, peer_mode) in [
         ("early", "early"),

@@ -77,7 +77,12 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
     let field = engine.flip_map(&job.spec, monitor)?;
     let mask = if job.files.wants_verdict() {
         let finer = engine.flip_map(&finer, monitor)?;
-        Some(verdict::mask(&field, &finer, verdict::flip_times_agree))
+        Some(verdict::grid_mask(
+            &job.spec.grid,
+            &field,
+            &finer,
+            verdict::flip_times_agree,
+        ))
     } else {
         None
     };

@@ -84,7 +84,12 @@ pub fn run_map(
     let range = render::ftle_range(&field);
     let mask = if job.files.wants_verdict() {
         let finer = engine.lyapunov_map(&verdict::finer_lyapunov(&job.spec), monitor)?;
-        Some(verdict::mask(&field, &finer, verdict::exponents_agree))
+        Some(verdict::grid_mask(
+            &job.spec.grid,
+            &field,
+            &finer,
+            verdict::exponents_agree,
+        ))
     } else {
         None
     };

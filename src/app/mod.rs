@@ -125,6 +125,12 @@ pub fn precision_notices(
             if info.backend == "cpu" { "CPU" } else { "GPU" }
         ));
     }
+    if grid.beyond_f64() {
+        notices.push(format!(
+            "note: the pixel step is below {:.1e} rad, finer than even f64 resolves near pi: neighbouring pixels start from the same numbers, and the verdict (--resolved) marks every pixel unresolved",
+            crate::spec::F64_MIN_PIXEL_STEP
+        ));
+    }
     Ok(notices)
 }
 

@@ -12,7 +12,7 @@ use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Integrator, MIN_TOLERANCE_F32, Precision, Stepping};
+use crate::spec::{ACCURATE, FlipSpec, Integrator, MIN_TOLERANCE_F32, Precision, Stepping};
 
 #[derive(Args, Debug, Clone)]
 pub struct FlipArgs {
@@ -53,10 +53,10 @@ pub struct FlipArgs {
     pub integrator: String,
     /// dp54's relative tolerance per step [default: 1e-5 in f32 on the GPU, else 1e-9; 1e-5
     /// is the least f32 allows].
-    #[arg(long, value_parser = parse_number)]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub rtol: Option<f64>,
     /// dp54's absolute tolerance per step (rad, rad/s) [default: as --rtol].
-    #[arg(long, value_parser = parse_number)]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub atol: Option<f64>,
     /// The recommended settings for a map right on >= 99.5 % of its pixels: --precision f64
     /// --integrator dp54 --rtol 1e-9 --atol 1e-9 --dt 0.05 (the PNG records those flags).
@@ -64,22 +64,14 @@ pub struct FlipArgs {
     pub accurate: bool,
 }
 
-/// What `--accurate` stands for (README: "Which pixels are true").
-pub const ACCURATE_TOLERANCE: f64 = 1e-9;
-pub const ACCURATE_DT: f64 = 0.05;
-
 impl FlipArgs {
     /// The precision, integrator and stepping the flags ask for (`--accurate` spelt out).
     pub fn stepping(&self) -> Result<(Precision, Integrator, Stepping)> {
         let mut stepping = self.step.stepping();
         if self.accurate {
-            stepping.dt = ACCURATE_DT;
-            let tol = ACCURATE_TOLERANCE;
-            let integrator = Integrator::Dp54 {
-                rtol: tol,
-                atol: tol,
-            };
-            return Ok((Precision::F64, integrator, stepping));
+            let (precision, integrator, dt) = ACCURATE;
+            stepping.dt = dt;
+            return Ok((precision, integrator, stepping));
         }
         let integrator = match self.integrator.as_str() {
             "dp54" => {
