@@ -294,6 +294,35 @@ pub struct FlipSpec {
     /// f64 whatever is asked.
     pub precision: Precision,
     pub integrator: Integrator,
+    /// Only these rows of the grid (first, count): a unit of a store's work. The map then
+    /// holds just them (nothing mirrored).
+    pub band: Option<(u32, u32)>,
+}
+
+/// The rows a map run integrates and the field it gives: rows `first..first + count` of
+/// the grid; `whole`: the field is the whole grid, the rows below `count` mirrored from them
+/// (`first` is 0), else the field is just those rows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RowSpan {
+    pub first: u32,
+    pub count: u32,
+    pub whole: bool,
+}
+
+impl RowSpan {
+    /// The whole grid, `count` top rows integrated.
+    pub fn top(count: u32) -> Self {
+        RowSpan {
+            first: 0,
+            count,
+            whole: true,
+        }
+    }
+
+    /// Rows of the field this span gives on `grid`.
+    pub fn field_rows(&self, grid: &Grid) -> u32 {
+        if self.whole { grid.height } else { self.count }
+    }
 }
 
 /// Largest number of steps one run may take (the step counter is a u32 on the GPU, and f32
@@ -310,15 +339,27 @@ impl FlipSpec {
             use_symmetry: true,
             precision: Precision::F32,
             integrator: Integrator::Rk4,
+            band: None,
         }
     }
 
-    /// Rows to integrate (from the top): all, or the top half when the other half mirrors it.
+    /// Rows to integrate: the band's, or all from the top, or the top half when the other
+    /// half mirrors it.
     pub fn rows_to_integrate(&self) -> u32 {
-        if self.use_symmetry && self.grid.point_symmetric() {
-            self.grid.height.div_ceil(2)
-        } else {
-            self.grid.height
+        self.row_span().count
+    }
+
+    pub fn row_span(&self) -> RowSpan {
+        match self.band {
+            Some((first, count)) => RowSpan {
+                first,
+                count,
+                whole: false,
+            },
+            None if self.use_symmetry && self.grid.point_symmetric() => {
+                RowSpan::top(self.grid.height.div_ceil(2))
+            }
+            None => RowSpan::top(self.grid.height),
         }
     }
 
@@ -328,6 +369,18 @@ impl FlipSpec {
         validate_stepping(&self.stepping)?;
         // The f64 range here; the f32 GPU's own is checked where the engine has picked it.
         self.integrator.validate(Precision::F64)?;
+        if let Some((first, count)) = self.band
+            && (count == 0 || first as u64 + count as u64 > self.grid.height as u64)
+        {
+            return Err(Error::invalid(
+                "tile",
+                format!(
+                    "rows {first}..{} lie outside the grid's {} rows",
+                    first as u64 + count as u64,
+                    self.grid.height
+                ),
+            ));
+        }
         validate_stability(&self.params, &self.stepping)?;
         validate_speeds(
             &self.params,
@@ -374,6 +427,10 @@ impl LyapunovSpec {
         } else {
             self.grid.height
         }
+    }
+
+    pub fn row_span(&self) -> RowSpan {
+        RowSpan::top(self.rows_to_integrate())
     }
 
     /// Steps between renormalisations (the last interval may be shorter).

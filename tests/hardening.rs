@@ -105,26 +105,12 @@ fn stops_on(signal: &str, dir: &Path, args: &[&str], after: Duration, keeps: boo
         std::thread::sleep(Duration::from_millis(20));
     };
     assert_eq!(status.code(), Some(130), "{args:?} after {signal}");
-    let left = walk(dir);
+    let left = common::walk(dir);
     assert!(
         !left.iter().any(|f| f.contains(".chaoscope-")),
         "{args:?} left temporary files {left:?}"
     );
     assert!(keeps || left.is_empty(), "{args:?} left {left:?}");
-}
-
-/// Every file under `dir`.
-fn walk(dir: &Path) -> Vec<String> {
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(dir).unwrap() {
-        let path = e.unwrap().path();
-        if path.is_dir() {
-            out.extend(walk(&path));
-        } else {
-            out.push(path.display().to_string());
-        }
-    }
-    out
 }
 
 #[test]

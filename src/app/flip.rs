@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::{MapOutputs, check_finer, write_map};
-use crate::engine::{Backend, Engine};
-use crate::error::Result;
+use crate::engine::Backend;
+use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::render::{self, PictureSpec};
 use crate::spec::{FlipSpec, Precision};
@@ -18,6 +18,8 @@ pub struct FlipJob {
     pub picture: PictureSpec,
     /// The PNG, the raw flip times (s; inf = never), the verdict.
     pub files: MapOutputs,
+    /// With a .zarr store: compute only part `index` of `count` of it.
+    pub tile: Option<(u32, u32)>,
 }
 
 impl FlipJob {
@@ -26,6 +28,20 @@ impl FlipJob {
         self.files.validate()?;
         if self.files.wants_verdict() {
             check_finer(verdict::finer_flip(&self.spec, true).validate())?;
+        }
+        if let Some((index, count)) = self.tile {
+            if self.files.store().is_none() {
+                return Err(Error::invalid(
+                    "tile",
+                    "needs a store to fill: --data MAP.zarr",
+                ));
+            }
+            if count == 0 || index >= count {
+                return Err(Error::invalid(
+                    "tile",
+                    format!("{index}/{count}: INDEX/COUNT with 0 <= INDEX < COUNT"),
+                ));
+            }
         }
         Ok(())
     }
@@ -56,17 +72,12 @@ pub struct FlipSummary {
 /// Runs `job`; `command` (the line that reproduces it) goes into the PNG.
 pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSummary> {
     job.validate()?;
+    if let Some(store) = job.files.store() {
+        return run_store(job, store, command, monitor);
+    }
     let started = Instant::now();
-    let engine = Engine::new(job.backend)?;
-    let mut notices: Vec<String> = engine.notices();
-    let info = engine.map_info(&job.spec.grid, job.spec.precision);
-    notices.extend(super::precision_notices(
-        &engine,
-        job.backend,
-        job.spec.precision,
-        &job.spec.grid,
-        &info,
-    )?);
+    let (engine, info, notices) =
+        super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
     if info.backend == "gpu" {
         job.spec.integrator.validate(Precision::F32)?;
     }
@@ -120,6 +131,84 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         t_max: job.spec.stepping.t_max,
         output: job.files.output.clone(),
         files: job.files.files(),
+        notices,
+    })
+}
+
+/// `job` into its Zarr store at `path`, unit by unit (memory holds one), skipping the units
+/// already written: a failed or pre-empted task is simply run again.
+fn run_store(
+    job: &FlipJob,
+    path: &std::path::Path,
+    command: String,
+    monitor: &Monitor,
+) -> Result<FlipSummary> {
+    use crate::render::store::{self, MapStore, StoreInfo};
+    let started = Instant::now();
+    let (engine, info, mut notices) =
+        super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
+    if info.backend == "gpu" {
+        job.spec.integrator.validate(Precision::F32)?;
+    }
+    let (index, count) = job.tile.unwrap_or((0, 1));
+    let grid = job.spec.grid;
+    let ours = StoreInfo {
+        command,
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        tiles: count,
+        mirrored: store::pairs_mirrored(&grid, job.spec.use_symmetry && job.spec.early_exit),
+    };
+    let store = MapStore::create_or_open("data", path, &grid, &ours, ("flip time", "s"))?;
+    let all = store::units(grid.height, store.chunk_rows, store.info.mirrored);
+    let mut todo = Vec::new();
+    for unit in store::task_units(&all, index, count) {
+        let written = store.is_written(unit.chunk)?
+            && unit.mirror.map_or(Ok(true), |m| store.is_written(m))?;
+        if !written {
+            todo.push(unit);
+        }
+    }
+    let rows_of = |u: &store::Unit| {
+        let r = store.chunk_span(u.chunk).1 as u64;
+        r * (1 + u.mirror.is_some() as u64)
+    };
+    monitor.start("rows", todo.iter().map(rows_of).sum());
+    let (mut pixels, mut flipped, mut nan) = (0usize, 0usize, 0usize);
+    for unit in &todo {
+        monitor.check()?;
+        let spec = FlipSpec {
+            band: Some(store.chunk_span(unit.chunk)),
+            ..job.spec
+        };
+        let field = engine.flip_map(&spec, &monitor.quiet())?;
+        store.write_unit(*unit, &field)?;
+        let copies = 1 + unit.mirror.is_some() as usize;
+        pixels += field.data.len() * copies;
+        flipped += field.data.iter().filter(|t| t.is_finite()).count() * copies;
+        nan += field.data.iter().filter(|t| t.is_nan()).count() * copies;
+        monitor.advance(rows_of(unit));
+    }
+    monitor.finish();
+    let missing = store.missing()?.len();
+    if missing > 0 {
+        notices.push(format!(
+            "note: {missing} of the store's {} chunks are still to be computed (`chaoscope status {}`)",
+            store.chunks(),
+            path.display()
+        ));
+    }
+    Ok(FlipSummary {
+        width: grid.width,
+        height: grid.height,
+        place: info.place().to_string(),
+        seconds: started.elapsed().as_secs_f64(),
+        flipped: flipped as f64 / pixels.max(1) as f64,
+        nan,
+        resolved: None,
+        rule: String::new(),
+        t_max: job.spec.stepping.t_max,
+        output: path.to_path_buf(),
+        files: vec![path.to_path_buf()],
         notices,
     })
 }

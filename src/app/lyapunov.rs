@@ -69,17 +69,9 @@ pub fn run_map(
         check_finer(verdict::finer_lyapunov(&job.spec).validate())?;
     }
     let started = Instant::now();
-    let engine = Engine::new(job.backend)?;
-    let mut notices: Vec<String> = engine.notices();
+    let (engine, info, mut notices) =
+        super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
     notices.extend(twin_notice(&engine, &job.spec));
-    let info = engine.map_info(&job.spec.grid, job.spec.precision);
-    notices.extend(super::precision_notices(
-        &engine,
-        job.backend,
-        job.spec.precision,
-        &job.spec.grid,
-        &info,
-    )?);
     let field = engine.lyapunov_map(&job.spec, monitor)?;
     let range = render::ftle_range(&field);
     let mask = if job.files.wants_verdict() {

@@ -8,6 +8,7 @@ pub mod fit;
 pub mod flip;
 pub mod lyapunov;
 pub mod phase;
+pub mod store;
 pub mod sweep;
 pub mod traces;
 pub mod trajectory;
@@ -35,8 +36,25 @@ pub struct MapOutputs {
 }
 
 impl MapOutputs {
+    /// The Zarr store the map goes to (`data` ending in .zarr), if so.
+    pub fn store(&self) -> Option<&Path> {
+        self.data
+            .as_deref()
+            .filter(|p| p.extension().is_some_and(|e| e == "zarr"))
+    }
+
     /// Every path the right kind and writable, before any work.
     pub fn validate(&self) -> Result<()> {
+        if let Some(store) = self.store() {
+            if self.wants_verdict() {
+                return Err(Error::invalid(
+                    "resolved",
+                    "the verdict is not written to a .zarr store yet; use --data MAP.npy",
+                ));
+            }
+            let parent = store.parent().filter(|p| !p.as_os_str().is_empty());
+            return check_writable("data", &parent.unwrap_or(Path::new(".")).join(".probe"));
+        }
         check_output("output", &self.output, "png")?;
         if let Some(data) = &self.data {
             check_output("data", data, "npy")?;
@@ -105,6 +123,20 @@ pub fn write_map(
         files.mask(path, field.width, field.height, mask)?;
     }
     files.commit(monitor)
+}
+
+/// The engine for a map over `grid` in `precision` on `backend`, the path it takes, and the
+/// notices to give about both ([`precision_notices`]).
+pub fn map_engine(
+    backend: Backend,
+    precision: Precision,
+    grid: &Grid,
+) -> Result<(Engine, RunInfo, Vec<String>)> {
+    let engine = Engine::new(backend)?;
+    let mut notices = engine.notices();
+    let info = engine.map_info(grid, precision);
+    notices.extend(precision_notices(&engine, backend, precision, grid, &info)?);
+    Ok((engine, info, notices))
 }
 
 /// What a map's precision means on this engine: f64 asked of a GPU without it is an error

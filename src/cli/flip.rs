@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, VerdictArgs, backend_parser};
-use super::parse::{one_of, parse_number};
+use super::parse::{one_of, parse_number, parse_tile};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::flip::{self, FlipJob};
@@ -27,12 +27,18 @@ pub struct FlipArgs {
     pub backend: Backend,
     #[command(flatten)]
     pub picture: PictureArgs,
-    /// PNG to write.
-    #[arg(long, default_value = "out/flip.png")]
-    pub output: PathBuf,
-    /// Raw flip times (s) as float32 .npy, shape (height, width), row 0 = top, inf = never.
+    /// PNG to write [default: out/flip.png; none with a .zarr store: `chaoscope render`
+    /// makes it].
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// Raw flip times (s) as float32 .npy, shape (height, width), row 0 = top, inf = never;
+    /// or a Zarr v3 store MAP.zarr (written chunk by chunk, resumable, shared by --tile tasks).
     #[arg(long)]
     pub data: Option<PathBuf>,
+    /// Compute only part INDEX of COUNT of a .zarr store's map (whole chunks; tasks on
+    /// different machines fill one store), e.g. --tile $SLURM_ARRAY_TASK_ID/4.
+    #[arg(long, value_parser = parse_tile)]
+    pub tile: Option<(u32, u32)>,
     #[command(flatten)]
     pub verdict: VerdictArgs,
     /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts,
@@ -101,6 +107,16 @@ impl FlipArgs {
 
     pub fn job(&self) -> Result<FlipJob> {
         let (precision, integrator, stepping) = self.stepping()?;
+        let zarr = self
+            .data
+            .as_ref()
+            .is_some_and(|d| d.extension().is_some_and(|e| e == "zarr"));
+        if zarr && self.output.is_some() {
+            return Err(Error::invalid(
+                "output",
+                "a .zarr store's picture is made from the store: chaoscope render MAP.zarr --output PNG",
+            ));
+        }
         Ok(FlipJob {
             spec: FlipSpec {
                 early_exit: !self.full,
@@ -116,11 +132,15 @@ impl FlipArgs {
             backend: self.backend,
             picture: self.picture.spec(),
             files: MapOutputs {
-                output: self.output.clone(),
+                output: self
+                    .output
+                    .clone()
+                    .unwrap_or_else(|| PathBuf::from("out/flip.png")),
                 data: self.data.clone(),
                 resolved: self.verdict.resolved.clone(),
                 show_unresolved: self.verdict.show_unresolved,
             },
+            tile: self.tile,
         })
     }
 }

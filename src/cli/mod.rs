@@ -12,6 +12,7 @@ mod lyapunov;
 mod names;
 pub mod parse;
 mod phase;
+mod store;
 mod sweep;
 mod traces;
 mod trajectory;
@@ -61,6 +62,11 @@ pub enum Command {
     /// Fit the model to a camera's tracked positions: pivot, arm lengths, energies and their
     /// decay, the state and damping by a GPU ensemble search; plots and summary.json.
     Fit(fit::FitArgs),
+    /// What a Zarr store of a map (flip --data MAP.zarr) still lacks, and which --tile runs
+    /// would fill it.
+    Status(store::StatusArgs),
+    /// A PNG of a Zarr store's map, read band by band (optionally every n-th pixel).
+    Render(store::RenderArgs),
     /// GPU adapters found, the one chosen, its limits and features.
     Info,
     /// Throughput of the GPU and CPU paths on FLIP-512, optionally beside the peers.
@@ -125,6 +131,8 @@ impl Command {
             Command::Traces(_) => "traces",
             Command::Phase(_) => "phase",
             Command::Fit(_) => "fit",
+            Command::Status(_) => "status",
+            Command::Render(_) => "render",
             Command::Info => "info",
             Command::Bench(_) => "bench",
             Command::Completions { .. } => "completions",
@@ -141,7 +149,11 @@ impl Command {
             Command::Traces(a) => Job::Traces(a.job()?),
             Command::Phase(a) => Job::Phase(a.job()?),
             Command::Fit(a) => Job::Fit(a.job()),
-            Command::Info | Command::Bench(_) | Command::Completions { .. } => return Ok(None),
+            Command::Info
+            | Command::Bench(_)
+            | Command::Completions { .. }
+            | Command::Status(_)
+            | Command::Render(_) => return Ok(None),
         }))
     }
 }
@@ -225,6 +237,8 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Traces(args) => traces::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
         Command::Fit(args) => fit::run(args, monitor),
+        Command::Status(args) => store::status(args),
+        Command::Render(args) => store::render(args, monitor),
         Command::Info => info::run(cli.json),
         Command::Bench(args) => bench::run(args, monitor, cli.json),
         Command::Completions { shell } => {

@@ -156,6 +156,22 @@ fn parse_whole<T: TryFrom<i128>>(s: &str) -> Result<T, String> {
     T::try_from(n).map_err(|_| format!("{n} is too large"))
 }
 
+/// `INDEX/COUNT` of a tile: 0 <= INDEX < COUNT (Slurm's SLURM_ARRAY_TASK_ID and
+/// SLURM_ARRAY_TASK_COUNT, Kubernetes' JOB_COMPLETION_INDEX and the job's completions).
+pub fn parse_tile(s: &str) -> Result<(u32, u32), String> {
+    not_a_flag(s)?;
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("{s}: must be INDEX/COUNT, e.g. 0/4"))?;
+    let (i, n): (u32, u32) = (parse_whole(i)?, parse_whole(n)?);
+    if n == 0 || i >= n {
+        return Err(format!(
+            "{s}: INDEX/COUNT needs COUNT >= 1 and 0 <= INDEX < COUNT"
+        ));
+    }
+    Ok((i, n))
+}
+
 pub fn parse_u32(s: &str) -> Result<u32, String> {
     parse_whole(s)
 }

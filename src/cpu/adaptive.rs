@@ -300,8 +300,7 @@ pub fn flip_map_adaptive(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
         .integrator
         .tolerances()
         .expect("an adaptive integrator");
-    let rows = spec.rows_to_integrate();
-    let mut field = map_pixels(&spec.grid, rows, monitor, |start| {
+    map_pixels(&spec.grid, spec.row_span(), monitor, |start| {
         flip_time_adaptive(
             &spec.params,
             start,
@@ -311,9 +310,7 @@ pub fn flip_map_adaptive(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
             spec.early_exit,
         )
         .0 as f32
-    })?;
-    field.mirror_below(rows);
-    Ok(field)
+    })
 }
 
 #[cfg(test)]

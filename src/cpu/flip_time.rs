@@ -63,10 +63,7 @@ pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool
 
 /// The flip-time map of `spec` (s, +inf = never flipped), rows in parallel.
 pub fn flip_map(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-    let rows = spec.rows_to_integrate();
-    let mut field = map_pixels(&spec.grid, rows, monitor, |start| {
+    map_pixels(&spec.grid, spec.row_span(), monitor, |start| {
         flip_time(&spec.params, start, &spec.stepping, spec.early_exit) as f32
-    })?;
-    field.mirror_below(rows);
-    Ok(field)
+    })
 }

@@ -143,10 +143,7 @@ pub fn lyapunov_spectrum(spec: &LyapunovSpec, start: State) -> [f64; 4] {
 
 /// The FTLE map of `spec` (1/s at t-max), rows in parallel.
 pub fn ftle_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-    let rows = spec.rows_to_integrate();
-    let mut field = map_pixels(&spec.grid, rows, monitor, |start| {
+    map_pixels(&spec.grid, spec.row_span(), monitor, |start| {
         ftle(spec, start).last() as f32
-    })?;
-    field.mirror_below(rows);
-    Ok(field)
+    })
 }

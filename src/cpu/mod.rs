@@ -21,7 +21,7 @@ use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::Grid;
+use crate::spec::{Grid, RowSpan};
 
 /// Angular accelerations (rad/s^2) from the Lagrange equations M(q) q'' = f(q, q') + tau:
 ///
@@ -299,29 +299,33 @@ pub fn trajectory(p: &Params, start: State, dt: f64, steps: u32) -> Vec<State> {
     out
 }
 
-/// A map over `grid`: `value(start)` for every pixel of the top `rows` rows (the rest stay
-/// 0), rows in parallel on all cores, with progress and interruption.
+/// A map over the rows `span` of `grid`: `value(start)` for every pixel of its rows (the
+/// rest mirrored from them when the span is the whole grid), rows in parallel on all cores,
+/// with progress and interruption.
 pub fn map_pixels(
     grid: &Grid,
-    rows: u32,
+    span: RowSpan,
     monitor: &Monitor,
     value: impl Fn(State) -> f32 + Sync,
 ) -> Result<Field> {
-    let mut field = Field::new(grid.width, grid.height, 0.0);
-    monitor.start("cpu", rows as u64);
-    let computed = rows as usize * grid.width as usize;
+    let mut field = Field::new(grid.width, span.field_rows(grid), 0.0);
+    monitor.start("cpu", span.count as u64);
+    let computed = span.count as usize * grid.width as usize;
     field.data[..computed]
         .par_chunks_mut(grid.width as usize)
         .enumerate()
         .try_for_each(|(row, out)| {
             monitor.check()?;
             for (col, v) in out.iter_mut().enumerate() {
-                *v = value(grid.start(col as u32, row as u32));
+                *v = value(grid.start(col as u32, span.first + row as u32));
             }
             monitor.advance(1);
             Ok::<(), crate::error::Error>(())
         })?;
     monitor.finish();
+    if span.whole {
+        field.mirror_below(span.count);
+    }
     Ok(field)
 }
 

@@ -231,7 +231,7 @@ impl FlipTimeKernel {
         // whose work per pixel foretells the whole map's: the progress bar's ETA then holds
         // from the start instead of following the flips' uneven waves.
         let pixels = spec.rows_to_integrate() as u64 * spec.grid.width as u64;
-        if spec.early_exit && !adaptive && pixels > ESTIMATE_ABOVE {
+        if spec.early_exit && !adaptive && spec.band.is_none() && pixels > ESTIMATE_ABOVE {
             let sample = self.run_tiled(ctx, &sample_spec(spec), &monitor.quiet(), max)?;
             monitor.estimate(work_per_pixel(spec, &sample) * pixels as f64);
         }
@@ -300,7 +300,7 @@ impl FlipTimeKernel {
             unreachable!("two entry points")
         };
         let total_steps = spec.stepping.steps();
-        let tiling = Tiling::new(grid.width, spec.rows_to_integrate(), max_pixels);
+        let tiling = Tiling::new(grid.width, spec.row_span(), max_pixels);
         let bufs = self.buffers(ctx, tiling.capacity(), adaptive);
         let t_max = spec.stepping.t_max;
         let time_bytes = sizes(self.precision, adaptive).1;

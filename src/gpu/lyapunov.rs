@@ -155,7 +155,7 @@ impl LyapunovKernel {
             unreachable!("two entry points")
         };
         let total_steps = spec.stepping.steps();
-        let tiling = Tiling::new(grid.width, spec.rows_to_integrate(), max_pixels);
+        let tiling = Tiling::new(grid.width, spec.row_span(), max_pixels);
         let capacity = tiling.capacity();
         let (slot, sum_bytes, params_bytes) = sizes(self.precision);
         let params_buf = params_buffer_of(ctx, params_bytes);

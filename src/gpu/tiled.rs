@@ -6,7 +6,7 @@ use super::context::GpuContext;
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
-use crate::spec::Grid;
+use crate::spec::{Grid, RowSpan};
 
 /// Pendulum-steps per dispatch: about 0.1 s on lavapipe (~1.5e8 steps/s), far less on a real
 /// GPU, so no dispatch holds the device long enough to trip a driver watchdog.
@@ -16,18 +16,23 @@ pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
 /// a step; spread over a few steps it would rival the steps themselves).
 const MIN_STEPS: u64 = 16;
 
-/// A grid cut into tiles of whole rows that fit the device: at most `max_pixels` pixels each.
+/// The rows `span` of a grid cut into tiles of whole rows that fit the device: at most
+/// `max_pixels` pixels each.
 pub struct Tiling {
     pub width: u32,
+    pub span: RowSpan,
+    /// Rows integrated (`span.count`).
     pub height: u32,
     pub tile_rows: u32,
 }
 
 impl Tiling {
-    pub fn new(width: u32, height: u32, max_pixels: u64) -> Self {
+    pub fn new(width: u32, span: RowSpan, max_pixels: u64) -> Self {
+        let height = span.count;
         let tile_rows = (max_pixels / width as u64).clamp(1, height as u64) as u32;
         Tiling {
             width,
+            span,
             height,
             tile_rows,
         }
@@ -42,11 +47,14 @@ impl Tiling {
         self.height.div_ceil(self.tile_rows)
     }
 
-    /// (first row, rows) of each tile, top to bottom.
+    /// (first row of the grid, rows) of each tile, top to bottom.
     pub fn tiles(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
         (0..self.count()).map(|t| {
             let row0 = t * self.tile_rows;
-            (row0, self.tile_rows.min(self.height - row0))
+            (
+                self.span.first + row0,
+                self.tile_rows.min(self.height - row0),
+            )
         })
     }
 }
@@ -72,14 +80,18 @@ pub fn map_tiles(
         "gpu",
         tiling.height as u64 * tiling.width as u64 * steps as u64,
     );
-    let mut field = Field::new(grid.width, grid.height, 0.0);
+    let span = tiling.span;
+    let mut field = Field::new(grid.width, span.field_rows(grid), 0.0);
     for (row0, rows) in tiling.tiles() {
-        let later = (tiling.height - row0 - rows) as u64 * tiling.width as u64;
+        let done = row0 - span.first;
+        let later = (tiling.height - done - rows) as u64 * tiling.width as u64;
         let values = tile(row0, rows, later)?;
-        let start = row0 as usize * grid.width as usize;
+        let start = done as usize * grid.width as usize;
         field.data[start..start + values.len()].copy_from_slice(&values);
     }
-    field.mirror_below(tiling.height);
+    if span.whole {
+        field.mirror_below(tiling.height);
+    }
     monitor.finish();
     Ok(field)
 }

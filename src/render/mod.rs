@@ -7,6 +7,7 @@ mod colormap;
 mod exposure;
 mod files;
 mod maps;
+pub mod store;
 
 pub use annotate::{
     Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks, register_font,

@@ -1,0 +1,106 @@
+//! `chaoscope status` and `chaoscope render`: a Zarr store's progress, and its picture.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser};
+
+use super::args::PictureArgs;
+use super::parse::parse_u32;
+use super::{Cli, Command, json, say};
+use crate::app::store::{self, RenderJob, StatusJob};
+use crate::error::{Error, Result};
+use crate::monitor::Monitor;
+
+#[derive(Args, Debug, Clone)]
+pub struct StatusArgs {
+    /// The store (MAP.zarr).
+    pub store: PathBuf,
+    /// Name the `--tile INDEX/COUNT` runs for this COUNT [default: the count the store was
+    /// made with].
+    #[arg(long, value_parser = parse_u32)]
+    pub tiles: Option<u32>,
+}
+
+pub fn status(args: &StatusArgs) -> Result<serde_json::Value> {
+    let s = store::status(&StatusJob {
+        store: args.store.clone(),
+        tiles: args.tiles,
+    })?;
+    println!(
+        "{}: {}x{} map, {} of {} chunks written",
+        s.store.display(),
+        s.width,
+        s.height,
+        s.written,
+        s.chunks
+    );
+    if s.complete {
+        println!("complete");
+    } else {
+        let rows: Vec<String> = s
+            .missing
+            .iter()
+            .map(|(first, rows)| format!("{first}..{}", first + rows))
+            .collect();
+        println!("missing rows: {}", rows.join(", "));
+        let tiles: Vec<String> = s.tiles_to_run.iter().map(u32::to_string).collect();
+        println!(
+            "to fill them: --tile I/{} for I in {} (with the store's command: {})",
+            s.tiles,
+            tiles.join(" "),
+            s.command
+        );
+    }
+    json(&s)
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// The store (MAP.zarr).
+    pub store: PathBuf,
+    /// PNG to write.
+    #[arg(long, default_value = "out/map.png")]
+    pub output: PathBuf,
+    /// The picture's larger side at most, taking every n-th pixel each way [default: the
+    /// map's full size].
+    #[arg(long, value_parser = parse_u32)]
+    pub max_size: Option<u32>,
+    #[command(flatten)]
+    pub picture: PictureArgs,
+}
+
+pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    let command = store::store_command(&args.store)?;
+    // The store's command is the map's job: parsed back, it gives the map's spec.
+    let words: Vec<&str> = command.split_whitespace().collect();
+    let spec = match Cli::try_parse_from(&words).map(|cli| cli.command) {
+        Ok(Command::Flip(flip)) => flip.job()?.spec,
+        _ => {
+            return Err(Error::Format(format!(
+                "{}: its command is not a flip map this chaoscope reads: {command}",
+                args.store.display()
+            )));
+        }
+    };
+    let job = RenderJob {
+        store: args.store.clone(),
+        spec,
+        picture: args.picture.spec(),
+        output: args.output.clone(),
+        max_size: args.max_size,
+    };
+    let s = store::render(&job, command, monitor)?;
+    say(&s.notices);
+    eprintln!(
+        "{}x{} picture (every {} pixel each way) in {:.2} s -> {}",
+        s.width,
+        s.height,
+        match s.step {
+            1 => "".to_string(),
+            n => format!("{n}th"),
+        },
+        s.seconds,
+        s.output.display()
+    );
+    json(&s)
+}

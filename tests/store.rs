@@ -1,0 +1,364 @@
+//! Zarr stores of maps (`flip --data MAP.zarr`, `--tile I/N`, `status`, `render`): values
+//! equal the .npy of the same command bit for bit however the map is split, a store is only
+//! ever missing whole chunks (never holds a corrupt one), and what is missing is found and
+//! filled again.
+
+mod common;
+
+use std::path::Path;
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+use chaoscope::render::store::MapStore;
+use common::{chaoscope, png_text, read_npy};
+
+fn backend() -> &'static str {
+    if common::gpu().is_some() {
+        "gpu"
+    } else {
+        "cpu"
+    }
+}
+
+/// A 1024 x 1024 map: chunks of 256 rows, mirrored in pairs (two units of work).
+const MAP: [&str; 4] = ["--size", "1024", "--t-max", "4"];
+
+fn flip(args: &[&str], extra: &[&str]) -> assert_cmd::assert::Assert {
+    chaoscope()
+        .arg("flip")
+        .args(args)
+        .args(["--backend", backend()])
+        .args(extra)
+        .assert()
+}
+
+/// Every value of the store's map, bit for bit.
+fn store_bits(path: &Path) -> Vec<u32> {
+    let s = MapStore::open(path).unwrap();
+    s.read_rows(0, s.height)
+        .unwrap()
+        .iter()
+        .map(|v| v.to_bits())
+        .collect()
+}
+
+/// The map of `map`'s flags as .npy at `npy` (and its PNG beside it).
+fn write_npy(map: &[&str], npy: &Path) {
+    chaoscope()
+        .arg("flip")
+        .args(map)
+        .args(["--backend", backend(), "--output"])
+        .arg(npy.with_extension("png"))
+        .arg("--data")
+        .arg(npy)
+        .assert()
+        .success();
+}
+
+fn npy_bits(path: &Path) -> Vec<u32> {
+    read_npy(path).1.iter().map(|v| v.to_bits()).collect()
+}
+
+#[test]
+fn stores_equal_the_npy_whole_or_in_tiles_and_resume() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    let npy = d("map.npy");
+    write_npy(&MAP, &npy);
+    let whole = d("whole.zarr");
+    flip(&MAP, &["--data", whole.to_str().unwrap()]).success();
+    assert_eq!(store_bits(&whole), npy_bits(&npy), "one process");
+    // Three tasks (one of them has nothing to do: two units of work).
+    let tiled = d("tiled.zarr");
+    for i in 0..3 {
+        let tile = format!("{i}/3");
+        flip(&MAP, &["--data", tiled.to_str().unwrap(), "--tile", &tile]).success();
+    }
+    assert_eq!(store_bits(&tiled), npy_bits(&npy), "three tasks");
+    // A chunk deleted by hand: status names it and the task that fills it; a re-run of
+    // that task fills it (and only what is missing).
+    std::fs::remove_file(tiled.join("map/c/3/0")).unwrap();
+    let out = chaoscope()
+        .args(["status", tiled.to_str().unwrap()])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let text = String::from_utf8(out).unwrap();
+    assert!(
+        text.contains("3 of 4 chunks")
+            && text.contains("768..1024")
+            && text.contains("--tile I/3 for I in 0"),
+        "{text}"
+    );
+    flip(&MAP, &["--data", tiled.to_str().unwrap(), "--tile", "0/3"]).success();
+    assert_eq!(store_bits(&tiled), npy_bits(&npy), "after the re-run");
+    chaoscope()
+        .args(["status", tiled.to_str().unwrap()])
+        .assert()
+        .success()
+        .stdout(predicates::str::contains("complete"));
+    // The picture from the store is the flip command's picture, pixel for pixel, and says
+    // which command makes the map.
+    let png = d("from-store.png");
+    chaoscope()
+        .args(["render", tiled.to_str().unwrap(), "--output"])
+        .arg(&png)
+        .assert()
+        .success();
+    let a = chaoscope::render::read_png(&png).unwrap();
+    let b = chaoscope::render::read_png(&d("map.png")).unwrap();
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    assert!(a.rgb == b.rgb, "render's pixels differ from flip's");
+    assert!(png_text(&png, "chaoscope:command").starts_with("chaoscope flip --size 1024x1024"));
+    // Downsampled: every 4th pixel each way.
+    let small = d("small.png");
+    chaoscope()
+        .args([
+            "render",
+            tiled.to_str().unwrap(),
+            "--max-size",
+            "256",
+            "--output",
+        ])
+        .arg(&small)
+        .assert()
+        .success();
+    let s = chaoscope::render::read_png(&small).unwrap();
+    assert_eq!((s.width, s.height), (256, 256));
+    for (r, c) in [(0, 0), (100, 37), (255, 255)] {
+        let (i, j) = ((r * 256 + c) * 3, ((4 * r) * 1024 + 4 * c) * 3);
+        assert_eq!(s.rgb[i..i + 3], b.rgb[j..j + 3], "pixel ({r}, {c})");
+    }
+}
+
+#[test]
+fn stores_refuse_other_commands_and_bad_tiles() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("m.zarr");
+    let s = store.to_str().unwrap();
+    let small = ["--size", "64", "--t-max", "1"];
+    flip(&small, &["--data", s]).success();
+    // Another command into the same store: refused, naming what differs.
+    flip(&["--size", "64", "--t-max", "2"], &["--data", s])
+        .code(2)
+        .stderr(predicates::str::contains("--data"))
+        .stderr(predicates::str::contains("--t-max 1"))
+        .stderr(predicates::str::contains("--t-max 2"));
+    // Another version.
+    let meta = store.join("zarr.json");
+    let text = std::fs::read_to_string(&meta).unwrap();
+    let version = format!("\"chaoscope:version\": \"{}\"", env!("CARGO_PKG_VERSION"));
+    std::fs::write(
+        &meta,
+        text.replace(&version, "\"chaoscope:version\": \"0.0.1\""),
+    )
+    .unwrap();
+    flip(&small, &["--data", s])
+        .code(2)
+        .stderr(predicates::str::contains("0.0.1"));
+    for (tile, why) in [
+        ("4/4", "INDEX < COUNT"),
+        ("0/0", "COUNT >= 1"),
+        ("x", "INDEX/COUNT"),
+    ] {
+        flip(&small, &["--data", s, "--tile", tile])
+            .code(2)
+            .stderr(predicates::str::contains("--tile"))
+            .stderr(predicates::str::contains(why));
+    }
+    flip(&small, &["--tile", "0/2"])
+        .code(2)
+        .stderr(predicates::str::contains("--tile"));
+    flip(&small, &["--data", s, "--output", "x.png"])
+        .code(2)
+        .stderr(predicates::str::contains("chaoscope render"));
+    chaoscope()
+        .args(["status", dir.path().join("none.zarr").to_str().unwrap()])
+        .assert()
+        .code(1)
+        .stderr(predicates::str::contains("no Zarr store here"));
+}
+
+/// Two tasks with the same index at once write the same chunks: each writes whole files of
+/// its own and renames them, so the store is whole and right.
+#[test]
+fn two_tasks_with_one_index_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("m.zarr");
+    let npy = dir.path().join("m.npy");
+    write_npy(&MAP, &npy);
+    let bin = assert_cmd::cargo::cargo_bin("chaoscope");
+    let tasks: Vec<_> = (0..2)
+        .map(|_| {
+            std::process::Command::new(&bin)
+                .arg("flip")
+                .args(MAP)
+                .args(["--backend", backend(), "--tile", "0/1", "--data"])
+                .arg(&store)
+                .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut t in tasks {
+        assert!(t.wait().unwrap().success());
+    }
+    assert_eq!(store_bits(&store), npy_bits(&npy));
+    let temporary = common::walk(&store)
+        .into_iter()
+        .filter(|f| f.contains(".tmp-"))
+        .count();
+    assert_eq!(temporary, 0, "temporary files left");
+}
+
+/// Killed (SIGKILL, no chance to clean up) in the middle of its work, a task leaves whole
+/// chunks only; run again, it finishes the store, equal to an uninterrupted run.
+#[test]
+fn a_killed_task_resubmitted_equals_an_uninterrupted_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("m.zarr");
+    let npy = dir.path().join("m.npy");
+    // Unsymmetric rows, so each 128-row chunk (2048 wide) is a unit of its own: many units,
+    // a few seconds in all on lavapipe.
+    let map = ["--size", "2048x1024", "--t-max", "8", "--theta2", "0:3"];
+    write_npy(&map, &npy);
+    let bin = assert_cmd::cargo::cargo_bin("chaoscope");
+    let mut child = std::process::Command::new(&bin)
+        .arg("flip")
+        .args(map)
+        .args(["--backend", backend(), "--data"])
+        .arg(&store)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill once a few chunks are written (or give up waiting after a while).
+    let started = Instant::now();
+    let chunks = |s: &Path| {
+        std::fs::read_dir(s.join("map/c"))
+            .map(|d| d.count())
+            .unwrap_or(0)
+    };
+    while chunks(&store) < 2 && started.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let s = MapStore::open(&store).unwrap();
+    let missing = s.missing().unwrap();
+    assert!(
+        !missing.is_empty(),
+        "the task finished before the kill: make it longer"
+    );
+    // Every chunk file that exists is whole (a chunk is 128 rows of 2048 f32).
+    for f in common::walk(&store.join("map/c")) {
+        if !f.contains(".tmp-") {
+            assert_eq!(std::fs::metadata(&f).unwrap().len(), 128 * 2048 * 4, "{f}");
+        }
+    }
+    chaoscope()
+        .arg("flip")
+        .args(map)
+        .args(["--backend", backend(), "--data"])
+        .arg(&store)
+        .assert()
+        .success();
+    assert_eq!(store_bits(&store), npy_bits(&npy));
+}
+
+/// A full disk: a clean error, and no corrupt chunk (a small tmpfs; needs root and mount).
+#[test]
+fn a_full_disk_leaves_no_corrupt_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let mount = dir.path().join("small");
+    std::fs::create_dir(&mount).unwrap();
+    let mounted = std::process::Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=3m", "tmpfs"])
+        .arg(&mount)
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !mounted {
+        eprintln!("SKIPPED: cannot mount a tmpfs here (needs root)");
+        return;
+    }
+    let store = mount.join("m.zarr");
+    let result = chaoscope()
+        .arg("flip")
+        .args(MAP)
+        .args(["--backend", backend(), "--no-symmetry", "--data"])
+        .arg(&store)
+        .assert();
+    let files = common::walk(&store.join("map/c"));
+    std::process::Command::new("umount")
+        .arg(&mount)
+        .status()
+        .ok();
+    result
+        .code(1)
+        .stderr(predicates::str::contains("No space left"));
+    // Two of the four 1 MiB chunks fit; none is partial, no temporary file stays.
+    assert!(!files.is_empty(), "no chunk was written");
+    for f in &files {
+        assert!(!f.contains(".tmp-"), "temporary file left: {f}");
+    }
+    let _ = files;
+}
+
+/// zarr-python and xarray read the store: named dimensions, coordinates at the pixel
+/// centres, the values of the .npy bit for bit. The Python is scripts/test's venv (or
+/// CHAOSCOPE_PYTHON); without zarr and xarray the test says so, and fails under CI=true.
+#[test]
+fn xarray_reads_the_store() {
+    let python = std::env::var("CHAOSCOPE_PYTHON").unwrap_or_else(|_| {
+        let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/pyenv/bin/python");
+        venv.to_str().unwrap().to_string()
+    });
+    let has = std::process::Command::new(&python)
+        .args(["-c", "import xarray, zarr"])
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has {
+        assert_ne!(
+            std::env::var("CI").as_deref(),
+            Ok("true"),
+            "{python} has no xarray and zarr (scripts/test installs them)"
+        );
+        eprintln!("SKIPPED: {python} has no xarray and zarr (scripts/test installs them)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (store, npy) = (dir.path().join("m.zarr"), dir.path().join("m.npy"));
+    let map = ["--size", "96x64", "--t-max", "3", "--theta1", "-2:3"];
+    flip(&map, &["--data", store.to_str().unwrap()]).success();
+    write_npy(&map, &npy);
+    let script = format!(
+        r#"
+import numpy as np, xarray as xr
+ds = xr.open_zarr({store:?}, consolidated=False)
+m = ds["map"]
+assert m.dims == ("theta2", "theta1"), m.dims
+assert m.attrs["units"] == "s"
+t1, t2 = ds["theta1"].values, ds["theta2"].values
+assert len(t1) == 96 and len(t2) == 64
+assert abs(t1[0] - (-2 + 5 / 192)) < 1e-15 and t2[0] > t2[-1]
+assert ds.attrs["chaoscope:command"].startswith("chaoscope flip --size 96x64")
+n = np.load({npy:?})
+assert np.array_equal(m.values.view(np.uint32), n.view(np.uint32))
+print("ok")
+"#
+    );
+    let out = std::process::Command::new(&python)
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success() && String::from_utf8_lossy(&out.stdout).contains("ok"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
