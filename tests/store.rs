@@ -362,3 +362,117 @@ print("ok")
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The verdict goes into the store as the array `resolved`, equal to the .npy mask; a store
+/// made without it refuses a task that asks for it.
+#[test]
+fn the_verdict_goes_into_the_store() {
+    let dir = tempfile::tempdir().unwrap();
+    let (store, npy, mask) = (
+        dir.path().join("m.zarr"),
+        dir.path().join("m.npy"),
+        dir.path().join("mask.npy"),
+    );
+    let s = store.to_str().unwrap();
+    let map = ["--size", "128", "--t-max", "20"];
+    flip(&map, &["--data", s, "--resolved", s])
+        .success()
+        .stderr(predicates::str::contains("% resolved"));
+    chaoscope()
+        .arg("flip")
+        .args(map)
+        .args(["--backend", backend(), "--output"])
+        .arg(dir.path().join("m.png"))
+        .arg("--data")
+        .arg(&npy)
+        .arg("--resolved")
+        .arg(&mask)
+        .assert()
+        .success();
+    let st = MapStore::open(&store).unwrap();
+    let ours = st.read_resolved(0, st.height).unwrap().unwrap();
+    let bytes = std::fs::read(&mask).unwrap();
+    let theirs = npyz::NpyFile::new(&bytes[..])
+        .unwrap()
+        .into_vec::<u8>()
+        .unwrap();
+    assert_eq!(ours, theirs);
+    assert!(
+        ours.contains(&0) && ours.contains(&1),
+        "a 20 s map has both"
+    );
+    assert_eq!(store_bits(&store), npy_bits(&npy));
+    let other = dir.path().join("n.zarr");
+    let o = other.to_str().unwrap();
+    flip(&map, &["--data", o]).success();
+    flip(&map, &["--data", o, "--resolved", o])
+        .code(2)
+        .stderr(predicates::str::contains("without the verdict"));
+    flip(&map, &["--data", o, "--resolved", "x.npy"])
+        .code(2)
+        .stderr(predicates::str::contains("--resolved"));
+}
+
+/// A --vary sweep's maps as one store (frame, theta2, theta1): each frame equals its single
+/// map (the command in its PNG) bit for bit; a zoom sweep is refused.
+#[test]
+fn sweeps_go_into_one_store() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, store) = (dir.path().join("sweep"), dir.path().join("sweep.zarr"));
+    let sweep = [
+        "sweep",
+        "--vary",
+        "m2/m1=0.5:2",
+        "--frames",
+        "3",
+        "--size",
+        "48x32",
+        "--t-max",
+        "4",
+    ];
+    chaoscope()
+        .args(sweep)
+        .args(["--backend", backend(), "--output"])
+        .arg(&out)
+        .arg("--data")
+        .arg(&store)
+        .assert()
+        .success();
+    let s = chaoscope::render::store::SweepStore::open_existing(&store).unwrap();
+    for k in 0..3u32 {
+        let command = png_text(&out.join(format!("frame_{k:04}.png")), "chaoscope:command");
+        let npy = dir.path().join(format!("f{k}.npy"));
+        chaoscope()
+            .args(command.split_whitespace().skip(1))
+            .arg("--output")
+            .arg(npy.with_extension("png"))
+            .arg("--data")
+            .arg(&npy)
+            .assert()
+            .success();
+        let frame: Vec<u32> = s
+            .read_frame(k)
+            .unwrap()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        assert_eq!(frame, npy_bits(&npy), "frame {k}");
+    }
+    chaoscope()
+        .args([
+            "sweep",
+            "--zoom-to",
+            "1,1",
+            "--zoom",
+            "4",
+            "--size",
+            "8",
+            "--output",
+        ])
+        .arg(&out)
+        .arg("--data")
+        .arg(dir.path().join("z.zarr"))
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("--data"));
+}

@@ -156,7 +156,8 @@ fn run_store(
         command,
         version: env!("CARGO_PKG_VERSION").to_string(),
         tiles: count,
-        mirrored: store::pairs_mirrored(&grid, job.spec.use_symmetry && job.spec.early_exit),
+        mirrored: store::pairs_mirrored(&grid, job.spec.use_symmetry),
+        resolved: job.files.wants_verdict(),
     };
     let store = MapStore::create_or_open("data", path, &grid, &ours, ("flip time", "s"))?;
     let all = store::units(grid.height, store.chunk_rows, store.info.mirrored);
@@ -173,15 +174,54 @@ fn run_store(
         r * (1 + u.mirror.is_some() as u64)
     };
     monitor.start("rows", todo.iter().map(rows_of).sum());
-    let (mut pixels, mut flipped, mut nan) = (0usize, 0usize, 0usize);
+    let (mut pixels, mut flipped, mut nan, mut resolved) = (0usize, 0usize, 0usize, 0usize);
+    let finer_of = |spec: &FlipSpec| verdict::finer_flip(spec, engine.has_f64());
+    if store.info.resolved
+        && engine
+            .map_info(&grid, finer_of(&job.spec).precision)
+            .backend
+            == "gpu"
+    {
+        check_finer(finer_of(&job.spec).integrator.validate(Precision::F32))?;
+    }
     for unit in &todo {
         monitor.check()?;
+        // A chunk that is its own mirror image (the middle one, on a symmetric grid):
+        // its top half, the rest reflected, as a whole map does.
+        let (first, rows) = store.chunk_span(unit.chunk);
+        let own_mirror = store.info.mirrored && unit.mirror.is_none();
+        let integrated = if own_mirror { rows.div_ceil(2) } else { rows };
         let spec = FlipSpec {
-            band: Some(store.chunk_span(unit.chunk)),
+            band: Some((first, integrated)),
             ..job.spec
         };
-        let field = engine.flip_map(&spec, &monitor.quiet())?;
-        store.write_unit(*unit, &field)?;
+        let band = |spec: &FlipSpec| -> Result<crate::field::Field> {
+            let top = engine.flip_map(spec, &monitor.quiet())?;
+            if !own_mirror {
+                return Ok(top);
+            }
+            let mut whole = crate::field::Field::new(top.width, rows, 0.0);
+            whole.data[..top.data.len()].copy_from_slice(&top.data);
+            whole.mirror_below(integrated);
+            Ok(whole)
+        };
+        let field = band(&spec)?;
+        let mask = if store.info.resolved {
+            let finer = band(&finer_of(&spec))?;
+            Some(verdict::grid_mask(
+                &grid,
+                &field,
+                &finer,
+                verdict::flip_times_agree,
+            ))
+        } else {
+            None
+        };
+        if let Some(m) = &mask {
+            resolved +=
+                m.iter().filter(|&&v| v == 1).count() * (1 + unit.mirror.is_some() as usize);
+        }
+        store.write_unit(*unit, &field, mask.as_deref())?;
         let copies = 1 + unit.mirror.is_some() as usize;
         pixels += field.data.len() * copies;
         flipped += field.data.iter().filter(|t| t.is_finite()).count() * copies;
@@ -204,8 +244,11 @@ fn run_store(
         seconds: started.elapsed().as_secs_f64(),
         flipped: flipped as f64 / pixels.max(1) as f64,
         nan,
-        resolved: None,
-        rule: String::new(),
+        resolved: store
+            .info
+            .resolved
+            .then(|| resolved as f64 / pixels.max(1) as f64),
+        rule: verdict::flip_rule_short(&job.spec, &finer_of(&job.spec)),
         t_max: job.spec.stepping.t_max,
         output: path.to_path_buf(),
         files: vec![path.to_path_buf()],

@@ -46,10 +46,16 @@ impl MapOutputs {
     /// Every path the right kind and writable, before any work.
     pub fn validate(&self) -> Result<()> {
         if let Some(store) = self.store() {
-            if self.wants_verdict() {
+            if self.resolved.as_ref().is_some_and(|r| r != store) {
                 return Err(Error::invalid(
                     "resolved",
-                    "the verdict is not written to a .zarr store yet; use --data MAP.npy",
+                    "with a .zarr store the verdict goes into the store (its array `resolved`): give the store's path",
+                ));
+            }
+            if self.show_unresolved {
+                return Err(Error::invalid(
+                    "show_unresolved",
+                    "a .zarr store has no picture to paint (its verdict is the array `resolved`)",
                 ));
             }
             let parent = store.parent().filter(|p| !p.as_os_str().is_empty());

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
+use crate::field::Field;
 use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::render::{self, Picture, PictureSpec};
@@ -54,6 +55,18 @@ impl Param {
         (Param::Damping, "damping"),
     ];
 
+    /// The parameter's unit, for a store's coordinate.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Param::M1 | Param::M2 => "kg",
+            Param::L1 | Param::L2 => "m",
+            Param::G => "m/s^2",
+            Param::MassRatio | Param::LengthRatio | Param::Mass => "1",
+            Param::Omega1 | Param::Omega2 => "rad/s",
+            Param::Damping => "N m s",
+        }
+    }
+
     pub fn name(self) -> &'static str {
         Param::NAMES
             .iter()
@@ -97,6 +110,8 @@ pub struct SweepJob {
     pub picture: PictureSpec,
     /// Directory for frame_0000.png ... and animation.png.
     pub output: PathBuf,
+    /// The frames' maps also as one Zarr store (frame, theta2, theta1).
+    pub data: Option<PathBuf>,
 }
 
 /// One frame's parameters and grid.
@@ -246,6 +261,15 @@ pub fn run(
         return Err(Error::invalid("ftle_max", "must be > 0"));
     }
     render::check_writable("output", &job.output.join("animation.png"))?;
+    if let Some(data) = &job.data {
+        super::check_extension("data", data, "zarr")?;
+        if job.zoom.is_some() || job.vary.is_none() {
+            return Err(Error::invalid(
+                "data",
+                "a store holds a --vary sweep (a zoom's frames each have angles of their own)",
+            ));
+        }
+    }
     let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     if let (Some(_), Some(k)) = (engine.gpu(), frames.iter().position(|f| f.grid.needs_f64())) {
@@ -254,6 +278,40 @@ pub fn run(
         ));
     }
     std::fs::create_dir_all(&job.output)?;
+    let store = match (&job.data, job.vary) {
+        (Some(path), Some(vary)) => {
+            let n = frames.len();
+            let values: Vec<f64> = (0..n)
+                .map(|k| {
+                    let s = if n == 1 {
+                        0.0
+                    } else {
+                        k as f64 / (n - 1) as f64
+                    };
+                    vary.from + (vary.to - vary.from) * s
+                })
+                .collect();
+            let info = crate::render::store::StoreInfo {
+                command: command.clone(),
+                version: env!("CARGO_PKG_VERSION").to_string(),
+                tiles: 1,
+                mirrored: false,
+                resolved: false,
+            };
+            let map = match job.map {
+                MapKind::Flip => ("flip time", "s"),
+                MapKind::Lyapunov => ("finite-time Lyapunov exponent", "1/s"),
+            };
+            Some(crate::render::store::SweepStore::create_or_open(
+                path,
+                &frames[0].grid,
+                &info,
+                (vary.param.name(), vary.param.unit(), &values),
+                map,
+            )?)
+        }
+        _ => None,
+    };
     monitor.start("frames", frames.len() as u64);
     let quiet = monitor.quiet();
     let mut kept = 0;
@@ -271,6 +329,17 @@ pub fn run(
             Backend::Cpu
         };
         let command = frame_command(&map, on, &job.picture);
+        let stored = match &store {
+            Some(s) => s.has_frame(k as u32)?,
+            None => true,
+        };
+        if path.exists() && !stored {
+            // The picture is there but not the store's frame: the map once more.
+            let field = frame_field(&map, &engine, &quiet)?;
+            if let Some(s) = &store {
+                s.write_frame(k as u32, &field)?;
+            }
+        }
         if path.exists() {
             // Resume: keep a finished frame of the same sweep; refuse to mix sweeps.
             let old = render::read_png(&path)?;
@@ -289,7 +358,11 @@ pub fn run(
             }
             kept += 1;
         } else {
-            let picture = render_frame(job, &map, &engine, &quiet)?;
+            let field = frame_field(&map, &engine, &quiet)?;
+            if let Some(s) = &store {
+                s.write_frame(k as u32, &field)?;
+            }
+            let picture = frame_picture(job, &map, &field)?;
             let mut meta = render::provenance(command, &info);
             meta.push(("chaoscope:frame".into(), format!("{k} of {}", frames.len())));
             render::write_png(&path, picture.width, picture.height, &picture.rgb, &meta)?;
@@ -330,6 +403,7 @@ pub fn run(
         files: (0..frames.len())
             .map(|k| frame_path(&job.output, k as u32))
             .chain([animation.clone()])
+            .chain(job.data.clone())
             .collect(),
         animation,
         notices,
@@ -355,21 +429,20 @@ fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
     }
 }
 
-/// Renders one frame, on the GPU unless it needs f64 (the engine decides).
-fn render_frame(
-    job: &SweepJob,
-    map: &FrameMap,
-    engine: &Engine,
-    monitor: &Monitor,
-) -> Result<Picture> {
+/// One frame's map, on the GPU unless it needs f64 (the engine decides).
+fn frame_field(map: &FrameMap, engine: &Engine, monitor: &Monitor) -> Result<Field> {
     match map {
-        FrameMap::Flip(spec) => {
-            let field = engine.flip_map(spec, monitor)?;
-            render::flip_picture(&field, spec, &job.picture, None)
-        }
+        FrameMap::Flip(spec) => engine.flip_map(spec, monitor),
+        FrameMap::Lyapunov(spec) => engine.lyapunov_map(spec, monitor),
+    }
+}
+
+/// One frame's picture.
+fn frame_picture(job: &SweepJob, map: &FrameMap, field: &Field) -> Result<Picture> {
+    match map {
+        FrameMap::Flip(spec) => render::flip_picture(field, spec, &job.picture, None),
         FrameMap::Lyapunov(spec) => {
-            let field = engine.lyapunov_map(spec, monitor)?;
-            render::lyapunov_picture(&field, spec, (0.0, job.ftle_max as f32), &job.picture, None)
+            render::lyapunov_picture(field, spec, (0.0, job.ftle_max as f32), &job.picture, None)
         }
     }
 }

@@ -60,6 +60,10 @@ pub struct SweepArgs {
     /// Directory for frame_0000.png ... and animation.png (APNG).
     #[arg(long, default_value = "out/sweep")]
     pub output: PathBuf,
+    /// The frames' maps also as one Zarr v3 store SWEEP.zarr: an array (frame, theta2,
+    /// theta1) with the varied parameter as the frame coordinate (--vary sweeps).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
 }
 
 impl SweepArgs {
@@ -84,6 +88,7 @@ impl SweepArgs {
             backend: self.backend,
             picture: self.picture.spec(),
             output: self.output.clone(),
+            data: self.data.clone(),
         })
     }
 }

@@ -145,6 +145,9 @@ pub struct StoreInfo {
     pub tiles: u32,
     /// Whether mirrored chunks are computed together (see [`units`]).
     pub mirrored: bool,
+    /// Whether the store holds the verdict as the array `resolved` (uint8: 1 resolved, 0
+    /// not, 255 not computed yet).
+    pub resolved: bool,
 }
 
 /// A map's store: its group, the map array, the grid.
@@ -152,6 +155,7 @@ pub struct MapStore {
     path: PathBuf,
     store: Arc<AtomicStore>,
     map: Array<AtomicStore>,
+    resolved: Option<Array<AtomicStore>>,
     pub info: StoreInfo,
     pub width: u32,
     pub height: u32,
@@ -259,34 +263,7 @@ impl MapStore {
         let err = |e: &dyn std::fmt::Display| store_error(path, e);
         let (w, h) = (grid.width as u64, grid.height as u64);
         let rows = chunk_rows(grid.width, grid.height) as u64;
-        for (axis, n, values) in [
-            (
-                "theta1",
-                w,
-                (0..grid.width)
-                    .map(|c| grid.theta1_at(c))
-                    .collect::<Vec<f64>>(),
-            ),
-            (
-                "theta2",
-                h,
-                (0..grid.height).map(|r| grid.theta2_at(r)).collect(),
-            ),
-        ] {
-            let mut attributes = serde_json::Map::new();
-            attributes.insert("units".into(), "rad".into());
-            attributes.insert(
-                "long_name".into(),
-                format!("{axis} at the pixel centres").into(),
-            );
-            let array = ArrayBuilder::new(vec![n], vec![n], data_type::float64(), f64::NAN)
-                .dimension_names([axis].into())
-                .attributes(attributes)
-                .build(store.clone(), &format!("/{axis}"))
-                .map_err(|e| err(&e))?;
-            array.store_metadata().map_err(|e| err(&e))?;
-            array.store_chunk(&[0], &values[..]).map_err(|e| err(&e))?;
-        }
+        write_angles(&store, path, grid)?;
         let mut attributes = serde_json::Map::new();
         attributes.insert("units".into(), units.into());
         attributes.insert("long_name".into(), name.into());
@@ -296,17 +273,26 @@ impl MapStore {
             .build(store.clone(), "/map")
             .map_err(|e| err(&e))?;
         map.store_metadata().map_err(|e| err(&e))?;
+        if info.resolved {
+            let mut attributes = serde_json::Map::new();
+            attributes.insert(
+                "long_name".into(),
+                "1 where the pixel is resolved, 0 where not, 255 not computed yet".into(),
+            );
+            let mask = ArrayBuilder::new(vec![h, w], vec![rows, w], data_type::uint8(), 255u8)
+                .dimension_names(["theta2", "theta1"].into())
+                .attributes(attributes)
+                .build(store.clone(), "/resolved")
+                .map_err(|e| err(&e))?;
+            mask.store_metadata().map_err(|e| err(&e))?;
+        }
         let mut attributes = serde_json::Map::new();
         attributes.insert("chaoscope:command".into(), info.command.clone().into());
         attributes.insert("chaoscope:version".into(), info.version.clone().into());
         attributes.insert("chaoscope:tiles".into(), info.tiles.into());
         attributes.insert("chaoscope:mirrored".into(), info.mirrored.into());
-        GroupBuilder::new()
-            .attributes(attributes)
-            .build(store.clone(), "/")
-            .map_err(|e| err(&e))?
-            .store_metadata()
-            .map_err(|e| err(&e))?;
+        attributes.insert("chaoscope:resolved".into(), info.resolved.into());
+        write_group(&store, path, attributes)?;
         Self::open(path)
     }
 
@@ -338,8 +324,16 @@ impl MapStore {
                 .get("chaoscope:mirrored")
                 .and_then(|v| v.as_bool())
                 .unwrap_or(false),
+            resolved: a
+                .get("chaoscope:resolved")
+                .and_then(|v| v.as_bool())
+                .unwrap_or(false),
         };
         let map = Array::open(store.clone(), "/map").map_err(|e| err(&e))?;
+        let resolved = match info.resolved {
+            true => Some(Array::open(store.clone(), "/resolved").map_err(|e| err(&e))?),
+            false => None,
+        };
         let shape = map.shape().to_vec();
         let chunks = map.chunk_grid_shape().to_vec();
         let (height, width) = (shape[0] as u32, shape[1] as u32);
@@ -351,6 +345,7 @@ impl MapStore {
             height,
             chunk_rows: height.div_ceil(chunks[0] as u32),
             map,
+            resolved,
         })
     }
 
@@ -364,14 +359,21 @@ impl MapStore {
         (first, self.chunk_rows.min(self.height - first))
     }
 
-    /// Whether chunk `c` is written (its file exists: it is complete).
+    /// Whether chunk `c` is written (its files exist: they are complete), the verdict's too
+    /// where the store holds one.
     pub fn is_written(&self, c: u32) -> Result<bool> {
-        let key = self.map.chunk_key(&[c as u64, 0]);
-        Ok(self
-            .store
-            .size_key(&key)
-            .map_err(|e| store_error(&self.path, e))?
-            .is_some())
+        for array in std::iter::once(&self.map).chain(&self.resolved) {
+            let key = array.chunk_key(&[c as u64, 0]);
+            let there = self
+                .store
+                .size_key(&key)
+                .map_err(|e| store_error(&self.path, e))?
+                .is_some();
+            if !there {
+                return Ok(false);
+            }
+        }
+        Ok(true)
     }
 
     /// The chunks not written yet.
@@ -385,25 +387,58 @@ impl MapStore {
         Ok(out)
     }
 
-    /// Writes chunk `c` (its rows, row-major).
-    pub fn write_chunk(&self, c: u32, values: &[f32]) -> Result<()> {
-        // Every chunk gets its file, even one that happens to be all NaN (blown-up runs),
-        // so that "written" always means "computed".
+    /// Writes chunk `c` of `array` (its rows, row-major).
+    fn write_chunk<T: zarrs::array::Element>(
+        &self,
+        array: &Array<AtomicStore>,
+        c: u32,
+        values: &[T],
+    ) -> Result<()> {
+        // Every chunk gets its file, even one that happens to be all fill value (NaN:
+        // blown-up runs), so that "written" always means "computed".
         let options = CodecOptions::default().with_store_empty_chunks(true);
-        self.map
+        array
             .store_chunk_opt(&[c as u64, 0], values, &options)
             .map_err(|e| store_error(&self.path, e))
     }
 
-    /// Writes a unit's band: `field` holds chunk `unit.chunk`'s rows; its mirror image, the
-    /// same values in reverse order, goes to `unit.mirror`.
-    pub fn write_unit(&self, unit: Unit, field: &Field) -> Result<()> {
-        self.write_chunk(unit.chunk, &field.data)?;
-        if let Some(m) = unit.mirror {
-            let mirrored: Vec<f32> = field.data.iter().rev().copied().collect();
-            self.write_chunk(m, &mirrored)?;
+    /// Writes a unit's band: `field` holds chunk `unit.chunk`'s rows (and `mask` its verdict,
+    /// where the store holds one); their mirror images, the same values in reverse order, go
+    /// to `unit.mirror`. The verdict first: a chunk of the map marks the unit done.
+    pub fn write_unit(&self, unit: Unit, field: &Field, mask: Option<&[u8]>) -> Result<()> {
+        let chunks = std::iter::once(unit.chunk).chain(unit.mirror);
+        if let (Some(array), Some(mask)) = (&self.resolved, mask) {
+            for (k, c) in chunks.clone().enumerate() {
+                let values: Vec<u8> = match k {
+                    0 => mask.to_vec(),
+                    _ => mask.iter().rev().copied().collect(),
+                };
+                self.write_chunk(array, c, &values)?;
+            }
+        }
+        for (k, c) in chunks.enumerate() {
+            let values: Vec<f32> = match k {
+                0 => field.data.clone(),
+                _ => field.data.iter().rev().copied().collect(),
+            };
+            self.write_chunk(&self.map, c, &values)?;
         }
         Ok(())
+    }
+
+    /// Rows `first..first + rows` of the verdict, if the store holds one.
+    pub fn read_resolved(&self, first: u32, rows: u32) -> Result<Option<Vec<u8>>> {
+        let Some(array) = &self.resolved else {
+            return Ok(None);
+        };
+        let subset = ArraySubset::new_with_ranges(&[
+            first as u64..(first + rows) as u64,
+            0..self.width as u64,
+        ]);
+        array
+            .retrieve_array_subset::<Vec<u8>>(&subset)
+            .map(Some)
+            .map_err(|e| store_error(&self.path, e))
     }
 
     /// Rows `first..first + rows` of the map (NaN where not written).
@@ -422,6 +457,199 @@ impl MapStore {
     }
 }
 
+/// A sweep's store: the maps of its frames as one 3-D array `map` (frame, theta2, theta1),
+/// chunks of one frame's row band, the varied parameter as the coordinate array of the frame
+/// dimension (named after it), the angles as for a single map.
+pub struct SweepStore {
+    path: PathBuf,
+    store: Arc<AtomicStore>,
+    map: Array<AtomicStore>,
+    width: u32,
+    height: u32,
+    chunk_rows: u32,
+}
+
+impl SweepStore {
+    /// Opens the sweep store at `path` made by `info.command`, or makes it: `frames` frames of
+    /// maps over `grid`, `param` (its name, unit, and value per frame), the map's (name, unit).
+    pub fn create_or_open(
+        path: &Path,
+        grid: &Grid,
+        info: &StoreInfo,
+        param: (&str, &str, &[f64]),
+        (name, units): (&str, &str),
+    ) -> Result<Self> {
+        let err = |e: &dyn std::fmt::Display| store_error(path, e);
+        if path.join("zarr.json").is_file() {
+            let store = Arc::new(AtomicStore::new(path)?);
+            let group = Group::open(store.clone(), "/").map_err(|e| err(&e))?;
+            let a = group.attributes();
+            let text = |key: &str| a.get(key).and_then(|v| v.as_str()).map(str::to_string);
+            let theirs = StoreInfo {
+                command: text("chaoscope:command").unwrap_or_default(),
+                version: text("chaoscope:version").unwrap_or_default(),
+                ..info.clone()
+            };
+            check_same("data", path, &theirs, info)?;
+            return Self::open(path, store);
+        }
+        let store = Arc::new(AtomicStore::new(path)?);
+        let (w, h, f) = (grid.width as u64, grid.height as u64, param.2.len() as u64);
+        let rows = chunk_rows(grid.width, grid.height) as u64;
+        let (param_name, param_units, values) = param;
+        // An array name may not hold a slash: m2/m1 is stored as m2_over_m1.
+        let param_array = param_name.replace('/', "_over_");
+        write_angles(&store, path, grid)?;
+        let mut attributes = serde_json::Map::new();
+        attributes.insert("units".into(), param_units.into());
+        write_coordinate(&store, path, (&param_array, "frame"), values, attributes)?;
+        let mut attributes = serde_json::Map::new();
+        attributes.insert("units".into(), units.into());
+        attributes.insert("long_name".into(), name.into());
+        // CF's way of naming a non-dimension coordinate (xarray reads it so).
+        attributes.insert("coordinates".into(), param_array.clone().into());
+        let map = ArrayBuilder::new(
+            vec![f, h, w],
+            vec![1, rows, w],
+            data_type::float32(),
+            f32::NAN,
+        )
+        .dimension_names(["frame", "theta2", "theta1"].into())
+        .attributes(attributes)
+        .build(store.clone(), "/map")
+        .map_err(|e| err(&e))?;
+        map.store_metadata().map_err(|e| err(&e))?;
+        let mut attributes = serde_json::Map::new();
+        attributes.insert("chaoscope:command".into(), info.command.clone().into());
+        attributes.insert("chaoscope:version".into(), info.version.clone().into());
+        attributes.insert("chaoscope:varied".into(), param_name.into());
+        write_group(&store, path, attributes)?;
+        Self::open(path, store)
+    }
+
+    fn open(path: &Path, store: Arc<AtomicStore>) -> Result<Self> {
+        let map = Array::open(store.clone(), "/map").map_err(|e| store_error(path, e))?;
+        let shape = map.shape().to_vec();
+        let chunks = map.chunk_grid_shape().to_vec();
+        let height = shape[1] as u32;
+        Ok(SweepStore {
+            path: path.to_path_buf(),
+            store,
+            width: shape[2] as u32,
+            height,
+            chunk_rows: height.div_ceil(chunks[1] as u32),
+            map,
+        })
+    }
+
+    fn chunks(&self) -> u32 {
+        self.height.div_ceil(self.chunk_rows)
+    }
+
+    /// Whether every chunk of frame `k` is written.
+    pub fn has_frame(&self, k: u32) -> Result<bool> {
+        for c in 0..self.chunks() {
+            let key = self.map.chunk_key(&[k as u64, c as u64, 0]);
+            let there = self
+                .store
+                .size_key(&key)
+                .map_err(|e| store_error(&self.path, e))?;
+            if there.is_none() {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// Frame `k`'s map (NaN where not written).
+    pub fn read_frame(&self, k: u32) -> Result<Vec<f32>> {
+        let subset = ArraySubset::new_with_ranges(&[
+            k as u64..k as u64 + 1,
+            0..self.height as u64,
+            0..self.width as u64,
+        ]);
+        self.map
+            .retrieve_array_subset::<Vec<f32>>(&subset)
+            .map_err(|e| store_error(&self.path, e))
+    }
+
+    /// Opens an existing sweep store.
+    pub fn open_existing(path: &Path) -> Result<Self> {
+        Self::open(path, Arc::new(AtomicStore::new(path)?))
+    }
+
+    /// Writes frame `k`'s map.
+    pub fn write_frame(&self, k: u32, field: &Field) -> Result<()> {
+        let options = CodecOptions::default().with_store_empty_chunks(true);
+        let band = (self.chunk_rows * self.width) as usize;
+        for (c, values) in field.data.chunks(band).enumerate() {
+            self.map
+                .store_chunk_opt(&[k as u64, c as u64, 0], values, &options)
+                .map_err(|e| store_error(&self.path, e))?;
+        }
+        Ok(())
+    }
+}
+
+/// A 1-D f64 coordinate array `/name` along dimension `dim`, written whole.
+fn write_coordinate(
+    store: &Arc<AtomicStore>,
+    path: &Path,
+    (name, dim): (&str, &str),
+    values: &[f64],
+    attributes: serde_json::Map<String, serde_json::Value>,
+) -> Result<()> {
+    let err = |e: &dyn std::fmt::Display| store_error(path, e);
+    let n = values.len() as u64;
+    let array = ArrayBuilder::new(vec![n], vec![n], data_type::float64(), f64::NAN)
+        .dimension_names([dim].into())
+        .attributes(attributes)
+        .build(store.clone(), &format!("/{name}"))
+        .map_err(|e| err(&e))?;
+    array.store_metadata().map_err(|e| err(&e))?;
+    array.store_chunk(&[0], values).map_err(|e| err(&e))
+}
+
+/// The angle coordinates of `grid`'s pixel centres, `theta1` and `theta2`.
+fn write_angles(store: &Arc<AtomicStore>, path: &Path, grid: &Grid) -> Result<()> {
+    for (axis, values) in [
+        (
+            "theta1",
+            (0..grid.width)
+                .map(|c| grid.theta1_at(c))
+                .collect::<Vec<f64>>(),
+        ),
+        (
+            "theta2",
+            (0..grid.height).map(|r| grid.theta2_at(r)).collect(),
+        ),
+    ] {
+        let mut attributes = serde_json::Map::new();
+        attributes.insert("units".into(), "rad".into());
+        attributes.insert(
+            "long_name".into(),
+            format!("{axis} at the pixel centres").into(),
+        );
+        write_coordinate(store, path, (axis, axis), &values, attributes)?;
+    }
+    Ok(())
+}
+
+/// The root group with `attributes`: written last, it marks the store whole.
+fn write_group(
+    store: &Arc<AtomicStore>,
+    path: &Path,
+    attributes: serde_json::Map<String, serde_json::Value>,
+) -> Result<()> {
+    let err = |e: &dyn std::fmt::Display| store_error(path, e);
+    GroupBuilder::new()
+        .attributes(attributes)
+        .build(store.clone(), "/")
+        .map_err(|e| err(&e))?
+        .store_metadata()
+        .map_err(|e| err(&e))
+}
+
 /// `theirs` (a store's) and `ours` made by the same command and version, else an error naming
 /// `field` and what differs.
 fn check_same(
@@ -438,6 +666,21 @@ fn check_same(
                 path.display(),
                 theirs.version,
                 ours.version
+            ),
+        ));
+    }
+    if theirs.resolved != ours.resolved {
+        return Err(Error::invalid(
+            field,
+            format!(
+                "{} was made {} the verdict (--resolved): ask for it {}",
+                path.display(),
+                if theirs.resolved { "with" } else { "without" },
+                if theirs.resolved {
+                    "too"
+                } else {
+                    "in a new store"
+                }
             ),
         ));
     }
