@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A real single-node Slurm for tests/slurm.rs, started without systemd and stopped by the
 # PIDs it started (facts in ../shared/SLURM-NOTES.md): munged, slurmctld and slurmd in WORK,
-# with one node of this machine's CPUs and one (counted, not bound) GPU.
+# with one node of this machine's CPUs and four (counted, not bound) GPUs: lavapipe is on
+# the CPU, so the four tasks of an array can run at once, as on four GPU nodes.
 #   cluster.sh start WORK    prints nothing; fails if the node is not idle within 60 s
 #   cluster.sh env WORK      the environment the Slurm commands need (SLURM_CONF)
 #   cluster.sh stop WORK     cancels leftover jobs, then TERM (KILL after 10 s) by PID
@@ -33,7 +34,8 @@ import socket
 s = [socket.socket() for _ in range(2)]
 for x in s: x.bind(("127.0.0.1", 0))
 print(*[x.getsockname()[1] for x in s])')
-    cpus=$(nproc)
+    # One CPU slot per GPU: the four tasks run at once (lavapipe shares the real cores).
+    cpus=4
     memory=$(( $(awk '/MemTotal/ {print $2}' /proc/meminfo) / 1024 / 2 ))
     cat >"$conf" <<CONF
 ClusterName=chaoscope
@@ -59,16 +61,17 @@ JobAcctGatherType=jobacct_gather/none
 AccountingStorageType=accounting_storage/none
 MpiDefault=none
 ReturnToService=2
+SlurmdParameters=config_overrides
 MailProg=/bin/true
 MinJobAge=300
 SchedulerParameters=batch_sched_delay=0,sched_min_interval=100000
 GresTypes=gpu
-NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$memory Gres=gpu:1 State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$memory Gres=gpu:4 State=UNKNOWN
 PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP
 CONF
     echo "CgroupPlugin=cgroup/v1" >"$work/cgroup.conf"
-    # A counted GPU for --gres=gpu:1 (no device to bind: the tasks find theirs by wgpu).
-    echo "NodeName=$host Name=gpu File=/dev/null Count=1" >"$work/gres.conf"
+    # Counted GPUs for --gres=gpu:1 (stand-in device files: the tasks find theirs by wgpu).
+    echo "NodeName=$host Name=gpu File=/dev/null,/dev/zero,/dev/full,/dev/urandom" >"$work/gres.conf"
     slurmctld -D -f "$conf" >"$work/log/slurmctld.out" 2>&1 &
     echo $! >"$work/slurmctld.pid"
     slurmd -D -N "$host" -f "$conf" >"$work/log/slurmd.out" 2>&1 &
