@@ -417,20 +417,34 @@ pub struct LyapunovSpec {
     pub use_symmetry: bool,
     /// The GPU's precision (the CPU is always f64); grids finer than f32 resolves run in f64.
     pub precision: Precision,
+    /// Only these rows of the grid (first, count), as for [`FlipSpec::band`].
+    pub band: Option<(u32, u32)>,
 }
 
 impl LyapunovSpec {
-    /// Rows to integrate (from the top): all, or the top half when the other half mirrors it.
+    /// Rows to integrate: the band's, or all from the top, or the top half when the other
+    /// half mirrors it.
     pub fn rows_to_integrate(&self) -> u32 {
-        if self.use_symmetry && self.method == Method::Tangent && self.grid.point_symmetric() {
-            self.grid.height.div_ceil(2)
-        } else {
-            self.grid.height
-        }
+        self.row_span().count
+    }
+
+    /// Whether the tangent map's point symmetry applies (see `use_symmetry`).
+    pub fn mirrors(&self) -> bool {
+        self.use_symmetry && self.method == Method::Tangent
     }
 
     pub fn row_span(&self) -> RowSpan {
-        RowSpan::top(self.rows_to_integrate())
+        match self.band {
+            Some((first, count)) => RowSpan {
+                first,
+                count,
+                whole: false,
+            },
+            None if self.mirrors() && self.grid.point_symmetric() => {
+                RowSpan::top(self.grid.height.div_ceil(2))
+            }
+            None => RowSpan::top(self.grid.height),
+        }
     }
 
     /// Steps between renormalisations (the last interval may be shorter).

@@ -259,6 +259,7 @@ fn lyapunov_single_point_writes_the_convergence_csv() {
         renorm: 0.5,
         use_symmetry: true,
         precision: chaoscope::spec::Precision::F32,
+        band: None,
     };
     let start =
         chaoscope::model::State::at_rest(std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);

@@ -257,6 +257,7 @@ fn divergence_maps_carry_the_damping_on_both_paths() {
         renorm: 0.1,
         use_symmetry: true,
         precision: chaoscope::spec::Precision::F32,
+        band: None,
     };
     let c = cpu::ftle_map(&spec, &Monitor::hidden()).unwrap();
     let g = gpu::LyapunovKernel::new(&ctx, spec.method)

@@ -32,6 +32,7 @@ fn spec(n: u32, t_max: f64, dt: f64, method: Method) -> LyapunovSpec {
         renorm: 0.1,
         use_symmetry: true,
         precision: chaoscope::spec::Precision::F32,
+        band: None,
     }
 }
 

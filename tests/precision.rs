@@ -216,6 +216,7 @@ fn f64_gpu_divergence_maps_match_the_f64_cpu() {
             renorm: 0.1,
             use_symmetry: true,
             precision: Precision::F64,
+            band: None,
         };
         let gpu = LyapunovKernel::with_precision(&ctx, method, Precision::F64)
             .run(&ctx, &spec, &Monitor::hidden())

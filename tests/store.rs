@@ -476,3 +476,36 @@ fn sweeps_go_into_one_store() {
         .code(2)
         .stderr(predicates::str::contains("--data"));
 }
+
+/// Divergence maps go into stores the same way: two tasks equal the .npy, and the store
+/// renders.
+#[test]
+fn divergence_maps_go_into_stores() {
+    let dir = tempfile::tempdir().unwrap();
+    let (store, npy) = (dir.path().join("l.zarr"), dir.path().join("l.npy"));
+    let s = store.to_str().unwrap();
+    let map = ["lyapunov", "--size", "96x64", "--t-max", "2"];
+    for tile in ["0/2", "1/2"] {
+        chaoscope()
+            .args(map)
+            .args(["--backend", backend(), "--data", s, "--tile", tile])
+            .assert()
+            .success();
+    }
+    chaoscope()
+        .args(map)
+        .args(["--backend", backend(), "--output"])
+        .arg(npy.with_extension("png"))
+        .arg("--data")
+        .arg(&npy)
+        .assert()
+        .success();
+    assert_eq!(store_bits(&store), npy_bits(&npy));
+    chaoscope()
+        .args(["render", s, "--output"])
+        .arg(dir.path().join("r.png"))
+        .assert()
+        .success();
+    let png = chaoscope::render::read_png(&dir.path().join("r.png")).unwrap();
+    assert_eq!((png.width, png.height), (96, 64));
+}

@@ -134,6 +134,7 @@ fn ftle_spec(size: u32, args: &BenchJob) -> LyapunovSpec {
         renorm: 0.1,
         use_symmetry: false,
         precision: Precision::F32,
+        band: None,
     }
 }
 

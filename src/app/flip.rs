@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use super::{MapOutputs, check_finer, write_map};
 use crate::engine::Backend;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::render::{self, PictureSpec};
 use crate::spec::{FlipSpec, Precision};
@@ -29,20 +29,7 @@ impl FlipJob {
         if self.files.wants_verdict() {
             check_finer(verdict::finer_flip(&self.spec, true).validate())?;
         }
-        if let Some((index, count)) = self.tile {
-            if self.files.store().is_none() {
-                return Err(Error::invalid(
-                    "tile",
-                    "needs a store to fill: --data MAP.zarr",
-                ));
-            }
-            if count == 0 || index >= count {
-                return Err(Error::invalid(
-                    "tile",
-                    format!("{index}/{count}: INDEX/COUNT with 0 <= INDEX < COUNT"),
-                ));
-            }
-        }
+        super::check_tile(self.tile, &self.files)?;
         Ok(())
     }
 }
@@ -135,48 +122,24 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
     })
 }
 
-/// `job` into its Zarr store at `path`, unit by unit (memory holds one), skipping the units
-/// already written: a failed or pre-empted task is simply run again.
+/// `job` into its Zarr store at `path` ([`super::store::fill_store`]).
 fn run_store(
     job: &FlipJob,
     path: &std::path::Path,
     command: String,
     monitor: &Monitor,
 ) -> Result<FlipSummary> {
-    use crate::render::store::{self, MapStore, StoreInfo};
+    use super::store::{StoreFill, fill_store, missing_note};
     let started = Instant::now();
     let (engine, info, mut notices) =
         super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
     if info.backend == "gpu" {
         job.spec.integrator.validate(Precision::F32)?;
     }
-    let (index, count) = job.tile.unwrap_or((0, 1));
     let grid = job.spec.grid;
-    let ours = StoreInfo {
-        command,
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        tiles: count,
-        mirrored: store::pairs_mirrored(&grid, job.spec.use_symmetry),
-        resolved: job.files.wants_verdict(),
-    };
-    let store = MapStore::create_or_open("data", path, &grid, &ours, ("flip time", "s"))?;
-    let all = store::units(grid.height, store.chunk_rows, store.info.mirrored);
-    let mut todo = Vec::new();
-    for unit in store::task_units(&all, index, count) {
-        let written = store.is_written(unit.chunk)?
-            && unit.mirror.map_or(Ok(true), |m| store.is_written(m))?;
-        if !written {
-            todo.push(unit);
-        }
-    }
-    let rows_of = |u: &store::Unit| {
-        let r = store.chunk_span(u.chunk).1 as u64;
-        r * (1 + u.mirror.is_some() as u64)
-    };
-    monitor.start("rows", todo.iter().map(rows_of).sum());
-    let (mut pixels, mut flipped, mut nan, mut resolved) = (0usize, 0usize, 0usize, 0usize);
     let finer_of = |spec: &FlipSpec| verdict::finer_flip(spec, engine.has_f64());
-    if store.info.resolved
+    let verdict = job.files.wants_verdict();
+    if verdict
         && engine
             .map_info(&grid, finer_of(&job.spec).precision)
             .backend
@@ -184,70 +147,50 @@ fn run_store(
     {
         check_finer(finer_of(&job.spec).integrator.validate(Precision::F32))?;
     }
-    for unit in &todo {
-        monitor.check()?;
-        // A chunk that is its own mirror image (the middle one, on a symmetric grid):
-        // its top half, the rest reflected, as a whole map does.
-        let (first, rows) = store.chunk_span(unit.chunk);
-        let own_mirror = store.info.mirrored && unit.mirror.is_none();
-        let integrated = if own_mirror { rows.div_ceil(2) } else { rows };
-        let spec = FlipSpec {
-            band: Some((first, integrated)),
-            ..job.spec
-        };
-        let band = |spec: &FlipSpec| -> Result<crate::field::Field> {
-            let top = engine.flip_map(spec, &monitor.quiet())?;
-            if !own_mirror {
-                return Ok(top);
-            }
-            let mut whole = crate::field::Field::new(top.width, rows, 0.0);
-            whole.data[..top.data.len()].copy_from_slice(&top.data);
-            whole.mirror_below(integrated);
-            Ok(whole)
-        };
-        let field = band(&spec)?;
-        let mask = if store.info.resolved {
-            let finer = band(&finer_of(&spec))?;
-            Some(verdict::grid_mask(
-                &grid,
-                &field,
-                &finer,
-                verdict::flip_times_agree,
-            ))
-        } else {
-            None
-        };
-        if let Some(m) = &mask {
-            resolved +=
-                m.iter().filter(|&&v| v == 1).count() * (1 + unit.mirror.is_some() as usize);
-        }
-        store.write_unit(*unit, &field, mask.as_deref())?;
-        let copies = 1 + unit.mirror.is_some() as usize;
-        pixels += field.data.len() * copies;
-        flipped += field.data.iter().filter(|t| t.is_finite()).count() * copies;
-        nan += field.data.iter().filter(|t| t.is_nan()).count() * copies;
-        monitor.advance(rows_of(unit));
-    }
-    monitor.finish();
-    let missing = store.missing()?.len();
-    if missing > 0 {
-        notices.push(format!(
-            "note: {missing} of the store's {} chunks are still to be computed (`chaoscope status {}`)",
-            store.chunks(),
-            path.display()
-        ));
-    }
+    let fill = StoreFill {
+        path,
+        grid,
+        command,
+        tile: job.tile,
+        symmetric: job.spec.use_symmetry,
+        verdict,
+        quantity: ("flip time", "s"),
+    };
+    let filled = fill_store(
+        &fill,
+        monitor,
+        |rows, monitor| {
+            let spec = FlipSpec {
+                band: Some(rows),
+                ..job.spec
+            };
+            let field = engine.flip_map(&spec, monitor)?;
+            let mask = match verdict {
+                true => {
+                    let finer = engine.flip_map(&finer_of(&spec), monitor)?;
+                    Some(verdict::grid_mask(
+                        &grid,
+                        &field,
+                        &finer,
+                        verdict::flip_times_agree,
+                    ))
+                }
+                false => None,
+            };
+            Ok((field, mask))
+        },
+        f32::is_finite,
+    )?;
+    notices.extend(missing_note(&filled, path));
+    let share = |n: usize| n as f64 / filled.pixels.max(1) as f64;
     Ok(FlipSummary {
         width: grid.width,
         height: grid.height,
         place: info.place().to_string(),
         seconds: started.elapsed().as_secs_f64(),
-        flipped: flipped as f64 / pixels.max(1) as f64,
-        nan,
-        resolved: store
-            .info
-            .resolved
-            .then(|| resolved as f64 / pixels.max(1) as f64),
+        flipped: share(filled.counted),
+        nan: filled.nan,
+        resolved: verdict.then(|| share(filled.resolved)),
         rule: verdict::flip_rule_short(&job.spec, &finer_of(&job.spec)),
         t_max: job.spec.stepping.t_max,
         output: path.to_path_buf(),

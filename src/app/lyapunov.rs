@@ -25,6 +25,8 @@ pub struct LyapunovMapJob {
     pub picture: PictureSpec,
     /// The PNG, the raw exponents (1/s), the verdict.
     pub files: MapOutputs,
+    /// With a .zarr store: compute only part `index` of `count` of it.
+    pub tile: Option<(u32, u32)>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -67,6 +69,10 @@ pub fn run_map(
     job.files.validate()?;
     if job.files.wants_verdict() {
         check_finer(verdict::finer_lyapunov(&job.spec).validate())?;
+    }
+    super::check_tile(job.tile, &job.files)?;
+    if let Some(path) = job.files.store() {
+        return run_store(job, path, command, monitor);
     }
     let started = Instant::now();
     let (engine, info, mut notices) =
@@ -122,6 +128,72 @@ pub fn run_map(
         range,
         output: job.files.output.clone(),
         files: job.files.files(),
+        notices,
+    })
+}
+
+/// `job` into its Zarr store at `path` ([`super::store::fill_store`]).
+fn run_store(
+    job: &LyapunovMapJob,
+    path: &std::path::Path,
+    command: String,
+    monitor: &Monitor,
+) -> Result<LyapunovMapSummary> {
+    use super::store::{StoreFill, fill_store, missing_note};
+    let started = Instant::now();
+    let (engine, info, mut notices) =
+        super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
+    notices.extend(twin_notice(&engine, &job.spec));
+    let grid = job.spec.grid;
+    let verdict = job.files.wants_verdict();
+    let fill = StoreFill {
+        path,
+        grid,
+        command,
+        tile: job.tile,
+        symmetric: job.spec.mirrors(),
+        verdict,
+        quantity: ("finite-time Lyapunov exponent", "1/s"),
+    };
+    let filled = fill_store(
+        &fill,
+        monitor,
+        |rows, monitor| {
+            let spec = LyapunovSpec {
+                band: Some(rows),
+                ..job.spec
+            };
+            let field = engine.lyapunov_map(&spec, monitor)?;
+            let mask = match verdict {
+                true => {
+                    let finer = engine.lyapunov_map(&verdict::finer_lyapunov(&spec), monitor)?;
+                    Some(verdict::grid_mask(
+                        &grid,
+                        &field,
+                        &finer,
+                        verdict::exponents_agree,
+                    ))
+                }
+                false => None,
+            };
+            Ok((field, mask))
+        },
+        |x| x > CHAOTIC_FTLE,
+    )?;
+    notices.extend(missing_note(&filled, path));
+    let share = |n: usize| n as f64 / filled.pixels.max(1) as f64;
+    Ok(LyapunovMapSummary {
+        width: grid.width,
+        height: grid.height,
+        place: info.place().to_string(),
+        seconds: started.elapsed().as_secs_f64(),
+        chaotic: share(filled.counted),
+        nan: filled.nan,
+        resolved: verdict.then(|| share(filled.resolved)),
+        t_max: job.spec.stepping.t_max,
+        range: (f32::NAN, f32::NAN),
+        output: path.to_path_buf(),
+        files: vec![path.to_path_buf()],
         notices,
     })
 }

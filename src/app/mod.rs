@@ -89,6 +89,25 @@ impl MapOutputs {
     }
 }
 
+/// `--tile INDEX/COUNT` only into a store, and in range.
+pub fn check_tile(tile: Option<(u32, u32)>, files: &MapOutputs) -> Result<()> {
+    if let Some((index, count)) = tile {
+        if files.store().is_none() {
+            return Err(Error::invalid(
+                "tile",
+                "needs a store to fill: --data MAP.zarr",
+            ));
+        }
+        if count == 0 || index >= count {
+            return Err(Error::invalid(
+                "tile",
+                format!("{index}/{count}: INDEX/COUNT with 0 <= INDEX < COUNT"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The verdict's map (half the step, a tenth of the tolerances) checked as the map was: its
 /// errors say so.
 pub fn check_finer(finer: Result<()>) -> Result<()> {

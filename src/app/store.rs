@@ -4,13 +4,134 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use super::sweep::FrameMap;
 use crate::engine::RunInfo;
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::render::store::{self, MapStore};
 use crate::render::{self, Outputs, PictureSpec};
-use crate::spec::{FlipSpec, Grid};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec};
+
+/// A map job into a store: which store, the grid, the command, which part.
+pub struct StoreFill<'a> {
+    pub path: &'a Path,
+    pub grid: Grid,
+    pub command: String,
+    pub tile: Option<(u32, u32)>,
+    /// Whether the map may pair mirrored chunks (its own `use_symmetry`).
+    pub symmetric: bool,
+    pub verdict: bool,
+    /// The map's (name, unit), for the array's attributes.
+    pub quantity: (&'a str, &'a str),
+}
+
+/// What a fill computed: pixels written, the counts `count` found in them, resolved pixels.
+pub struct Filled {
+    pub pixels: usize,
+    pub counted: usize,
+    pub nan: usize,
+    pub resolved: usize,
+    pub missing: usize,
+    pub chunks: u32,
+}
+
+/// Fills this task's part of the store: unit by unit (memory holds one band), skipping the
+/// units already written. `band((first, rows), monitor)` computes rows of the map and, with
+/// the verdict, its mask; `count` counts the pixels the summary reports (flipped, chaotic).
+pub fn fill_store(
+    fill: &StoreFill,
+    monitor: &Monitor,
+    band: impl Fn((u32, u32), &Monitor) -> Result<(Field, Option<Vec<u8>>)>,
+    count: impl Fn(f32) -> bool,
+) -> Result<Filled> {
+    let (index, tasks) = fill.tile.unwrap_or((0, 1));
+    let grid = fill.grid;
+    let ours = store::StoreInfo {
+        command: fill.command.clone(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        tiles: tasks,
+        mirrored: store::pairs_mirrored(&grid, fill.symmetric),
+        resolved: fill.verdict,
+    };
+    let store = MapStore::create_or_open("data", fill.path, &grid, &ours, fill.quantity)?;
+    let all = store::units(grid.height, store.chunk_rows, store.info.mirrored);
+    let mut todo = Vec::new();
+    for unit in store::task_units(&all, index, tasks) {
+        let written = store.is_written(unit.chunk)?
+            && unit.mirror.map_or(Ok(true), |m| store.is_written(m))?;
+        if !written {
+            todo.push(unit);
+        }
+    }
+    let rows_of = |u: &store::Unit| {
+        let r = store.chunk_span(u.chunk).1 as u64;
+        r * (1 + u.mirror.is_some() as u64)
+    };
+    monitor.start("rows", todo.iter().map(rows_of).sum());
+    let mut filled = Filled {
+        pixels: 0,
+        counted: 0,
+        nan: 0,
+        resolved: 0,
+        missing: 0,
+        chunks: store.chunks(),
+    };
+    for unit in &todo {
+        monitor.check()?;
+        // A chunk that is its own mirror image (the middle one, on a symmetric grid): its
+        // top half, the rest reflected, as a whole map does.
+        let (first, rows) = store.chunk_span(unit.chunk);
+        let own_mirror = store.info.mirrored && unit.mirror.is_none();
+        let integrated = if own_mirror { rows.div_ceil(2) } else { rows };
+        let (top, mask) = band((first, integrated), &monitor.quiet())?;
+        let (field, mask) = if own_mirror {
+            let mut field = Field::new(top.width, rows, 0.0);
+            field.data[..top.data.len()].copy_from_slice(&top.data);
+            field.mirror_below(integrated);
+            let mask = mask.map(|m| {
+                let mut whole = Field::new(top.width, rows, 0.0);
+                for (w, v) in whole.data.iter_mut().zip(&m) {
+                    *w = *v as f32;
+                }
+                whole.mirror_below(integrated);
+                whole.data.iter().map(|&v| v as u8).collect::<Vec<u8>>()
+            });
+            (field, mask)
+        } else {
+            (top, mask)
+        };
+        let copies = 1 + unit.mirror.is_some() as usize;
+        if let Some(m) = &mask {
+            filled.resolved += m.iter().filter(|&&v| v == 1).count() * copies;
+        }
+        store.write_unit(*unit, &field, mask.as_deref())?;
+        filled.pixels += field.data.len() * copies;
+        filled.counted += field.data.iter().filter(|&&v| count(v)).count() * copies;
+        filled.nan += field.data.iter().filter(|v| v.is_nan()).count() * copies;
+        monitor.advance(rows_of(unit));
+    }
+    monitor.finish();
+    filled.missing = store.missing()?.len();
+    Ok(filled)
+}
+
+/// The notes after a fill: nothing was left to do here, or chunks are still missing.
+pub fn missing_note(filled: &Filled, path: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    if filled.pixels == 0 {
+        out.push("note: nothing left to compute in this part of the store (the figures below count none)".into());
+    }
+    if filled.missing > 0 {
+        out.push(format!(
+            "note: {} of the store's {} chunks are still to be computed (`chaoscope status {}`)",
+            filled.missing,
+            filled.chunks,
+            path.display()
+        ));
+    }
+    out
+}
 
 /// The command a store was made by (to be parsed back into its job by the command line).
 pub fn store_command(path: &Path) -> Result<String> {
@@ -74,7 +195,7 @@ pub fn status(job: &StatusJob) -> Result<StatusSummary> {
 pub struct RenderJob {
     pub store: PathBuf,
     /// The map's spec, from the store's command.
-    pub spec: FlipSpec,
+    pub spec: FrameMap,
     pub picture: PictureSpec,
     pub output: PathBuf,
     /// The picture's larger side at most (every n-th pixel each way); None: full size.
@@ -100,7 +221,10 @@ pub fn render(job: &RenderJob, command: String, monitor: &Monitor) -> Result<Ren
     }
     let started = Instant::now();
     let s = MapStore::open(&job.store)?;
-    let grid = job.spec.grid;
+    let grid = match &job.spec {
+        FrameMap::Flip(spec) => spec.grid,
+        FrameMap::Lyapunov(spec) => spec.grid,
+    };
     if (s.width, s.height) != (grid.width, grid.height) {
         return Err(Error::Format(format!(
             "{}: the map is {}x{} but its command says {}x{}",
@@ -143,15 +267,21 @@ pub fn render(job: &RenderJob, command: String, monitor: &Monitor) -> Result<Ren
             job.store.display()
         ));
     }
-    let spec = FlipSpec {
-        grid: Grid {
-            width: w,
-            height: h,
-            ..grid
-        },
-        ..job.spec
+    let grid = Grid {
+        width: w,
+        height: h,
+        ..grid
     };
-    let picture = render::flip_picture(&small, &spec, &job.picture, None)?;
+    let picture = match job.spec {
+        FrameMap::Flip(spec) => {
+            render::flip_picture(&small, &FlipSpec { grid, ..spec }, &job.picture, None)?
+        }
+        FrameMap::Lyapunov(spec) => {
+            let range = render::ftle_range(&small);
+            let spec = LyapunovSpec { grid, ..spec };
+            render::lyapunov_picture(&small, &spec, range, &job.picture, None)?
+        }
+    };
     let info = RunInfo {
         backend: "zarr store",
         adapter: None,

@@ -419,6 +419,7 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
         renorm: job.renorm,
         use_symmetry: true,
         precision: Precision::F32,
+        band: None,
     }
 }
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use super::args::{PhysicalArgs, PictureArgs, VerdictArgs, backend_parser};
-use super::parse::{Angles, one_of, parse_angles, parse_number, parse_size};
+use super::parse::{Angles, one_of, parse_angles, parse_number, parse_size, parse_tile};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
@@ -70,9 +70,13 @@ pub struct LyapunovArgs {
     /// PNG for a map (default out/lyapunov.png); CSV for a single point (default stdout).
     #[arg(long)]
     pub output: Option<PathBuf>,
-    /// Raw exponents (1/s) as float32 .npy, shape (height, width), row 0 = top.
+    /// Raw exponents (1/s) as float32 .npy, shape (height, width), row 0 = top; or a Zarr
+    /// v3 store MAP.zarr (as for flip).
     #[arg(long)]
     pub data: Option<PathBuf>,
+    /// Compute only part INDEX of COUNT of a .zarr store's map (as for flip).
+    #[arg(long, value_parser = parse_tile)]
+    pub tile: Option<(u32, u32)>,
     #[command(flatten)]
     pub verdict: VerdictArgs,
     #[command(flatten)]
@@ -102,6 +106,7 @@ impl LyapunovArgs {
             renorm: self.renorm,
             use_symmetry: !self.no_symmetry,
             precision: self.precision,
+            band: None,
         })
     }
 
@@ -109,6 +114,16 @@ impl LyapunovArgs {
         let (width, height) = self.size;
         match (self.theta1, self.theta2) {
             (Angles::Range(theta1), Angles::Range(theta2)) => {
+                let zarr = self
+                    .data
+                    .as_ref()
+                    .is_some_and(|d| d.extension().is_some_and(|e| e == "zarr"));
+                if zarr && self.output.is_some() {
+                    return Err(Error::invalid(
+                        "output",
+                        "a .zarr store's picture is made from the store: chaoscope render MAP.zarr --output PNG",
+                    ));
+                }
                 let grid = Grid {
                     width,
                     height,
@@ -130,10 +145,11 @@ impl LyapunovArgs {
                         resolved: self.verdict.resolved.clone(),
                         show_unresolved: self.verdict.show_unresolved,
                     },
+                    tile: self.tile,
                 }))
             }
             (Angles::Point(theta1), Angles::Point(theta2)) => {
-                if self.data.is_some() {
+                if self.data.is_some() || self.tile.is_some() {
                     return Err(Error::invalid(
                         "data",
                         "is for maps; a single-point run writes its CSV to --output",
@@ -189,7 +205,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
             say(&s.notices);
             eprintln!(
-                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s){}{}, colour range {:.2}..{:.2} /s -> {}",
+                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s){}{}{} -> {}",
                 s.width,
                 s.height,
                 s.place,
@@ -201,8 +217,11 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
                     s.resolved,
                     "the same map at half the step within 5 % or 0.02 /s"
                 ),
-                s.range.0,
-                s.range.1,
+                match s.range.0.is_nan() {
+                    // A store has no picture, so no colour range.
+                    true => String::new(),
+                    false => format!(", colour range {:.2}..{:.2} /s", s.range.0, s.range.1),
+                },
                 s.output.display()
             );
             json(&s)

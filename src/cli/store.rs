@@ -8,6 +8,7 @@ use super::args::PictureArgs;
 use super::parse::parse_u32;
 use super::{Cli, Command, json, say};
 use crate::app::store::{self, RenderJob, StatusJob};
+use crate::app::sweep::FrameMap;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 
@@ -74,10 +75,19 @@ pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value>
     // The store's command is the map's job: parsed back, it gives the map's spec.
     let words: Vec<&str> = command.split_whitespace().collect();
     let spec = match Cli::try_parse_from(&words).map(|cli| cli.command) {
-        Ok(Command::Flip(flip)) => flip.job()?.spec,
+        Ok(Command::Flip(flip)) => FrameMap::Flip(flip.job()?.spec),
+        Ok(Command::Lyapunov(l)) => match l.job()? {
+            super::LyapunovJob::Map(map) => FrameMap::Lyapunov(map.spec),
+            super::LyapunovJob::Point(_) => {
+                return Err(Error::Format(format!(
+                    "{}: its command is a single point: {command}",
+                    args.store.display()
+                )));
+            }
+        },
         _ => {
             return Err(Error::Format(format!(
-                "{}: its command is not a flip map this chaoscope reads: {command}",
+                "{}: its command is not a map this chaoscope reads: {command}",
                 args.store.display()
             )));
         }
@@ -92,12 +102,12 @@ pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value>
     let s = store::render(&job, command, monitor)?;
     say(&s.notices);
     eprintln!(
-        "{}x{} picture (every {} pixel each way) in {:.2} s -> {}",
+        "{}x{} picture ({}) in {:.2} s -> {}",
         s.width,
         s.height,
         match s.step {
-            1 => "".to_string(),
-            n => format!("{n}th"),
+            1 => "every pixel".to_string(),
+            n => format!("every {n}th pixel each way"),
         },
         s.seconds,
         s.output.display()
