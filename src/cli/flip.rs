@@ -107,16 +107,7 @@ impl FlipArgs {
 
     pub fn job(&self) -> Result<FlipJob> {
         let (precision, integrator, stepping) = self.stepping()?;
-        let zarr = self
-            .data
-            .as_ref()
-            .is_some_and(|d| d.extension().is_some_and(|e| e == "zarr"));
-        if zarr && self.output.is_some() {
-            return Err(Error::invalid(
-                "output",
-                "a .zarr store's picture is made from the store: chaoscope render MAP.zarr --output PNG",
-            ));
-        }
+        super::args::no_picture_with_a_store(self.data.as_deref(), self.output.as_deref())?;
         Ok(FlipJob {
             spec: FlipSpec {
                 early_exit: !self.full,
