@@ -223,3 +223,19 @@ pub struct VerdictArgs {
     #[arg(long)]
     pub show_unresolved: bool,
 }
+
+/// A map into a .zarr store writes no PNG (`chaoscope render` makes it from the store):
+/// `--output` with one is an error naming it.
+pub fn no_picture_with_a_store(
+    data: Option<&std::path::Path>,
+    output: Option<&std::path::Path>,
+) -> crate::Result<()> {
+    let zarr = data.is_some_and(|d| d.extension().is_some_and(|e| e == "zarr"));
+    if zarr && output.is_some() {
+        return Err(crate::Error::invalid(
+            "output",
+            "a .zarr store's picture is made from the store: chaoscope render MAP.zarr --output PNG",
+        ));
+    }
+    Ok(())
+}

@@ -114,16 +114,7 @@ impl LyapunovArgs {
         let (width, height) = self.size;
         match (self.theta1, self.theta2) {
             (Angles::Range(theta1), Angles::Range(theta2)) => {
-                let zarr = self
-                    .data
-                    .as_ref()
-                    .is_some_and(|d| d.extension().is_some_and(|e| e == "zarr"));
-                if zarr && self.output.is_some() {
-                    return Err(Error::invalid(
-                        "output",
-                        "a .zarr store's picture is made from the store: chaoscope render MAP.zarr --output PNG",
-                    ));
-                }
+                super::args::no_picture_with_a_store(self.data.as_deref(), self.output.as_deref())?;
                 let grid = Grid {
                     width,
                     height,
