@@ -139,12 +139,26 @@ fn mark_unresolved(rgb: &mut [u8], mask: Option<&[u8]>) {
     }
 }
 
-/// The subtitle's note on unresolved pixels, when they are shown.
-fn unresolved_note(mask: Option<&[u8]>) -> &'static str {
-    if mask.is_some() {
-        " · grey: not resolved at this step"
-    } else {
-        ""
+/// The subtitle's note on unresolved pixels, when they are shown: at this step, or at these
+/// tolerances (`adaptive`).
+fn unresolved_note(mask: Option<&[u8]>, adaptive: bool) -> &'static str {
+    match (mask.is_some(), adaptive) {
+        (false, _) => "",
+        (true, false) => " · grey: not resolved at this step",
+        (true, true) => " · grey: not resolved",
+    }
+}
+
+/// How a flip map was stepped, for its subtitle.
+fn stepping_note(spec: &FlipSpec) -> String {
+    match spec.integrator {
+        crate::spec::Integrator::Rk4 => format!("RK4 dt {} s", spec.stepping.dt),
+        crate::spec::Integrator::Dp54 { rtol, atol } if rtol == atol => {
+            format!("DP54 tol {rtol:e} {}", spec.precision.name())
+        }
+        crate::spec::Integrator::Dp54 { rtol, atol } => {
+            format!("DP54 rtol {rtol:e} atol {atol:e} {}", spec.precision.name())
+        }
     }
 }
 
@@ -168,10 +182,10 @@ pub fn flip_picture(
         Annotation {
             title: "Time until an arm first flips over".into(),
             subtitle: format!(
-                "{} · RK4 dt {} s{}",
+                "{} · {}{}",
                 physics_line(&spec.params, &spec.grid),
-                spec.stepping.dt,
-                unresolved_note(unresolved)
+                stepping_note(spec),
+                unresolved_note(unresolved, spec.integrator.tolerances().is_some())
             ),
             x,
             y,
@@ -213,7 +227,7 @@ pub fn lyapunov_picture(
                 physics_line(&spec.params, &spec.grid),
                 spec.stepping.dt,
                 spec.renorm,
-                unresolved_note(unresolved)
+                unresolved_note(unresolved, false)
             ),
             x,
             y,
