@@ -451,10 +451,6 @@ impl MapStore {
             .retrieve_array_subset::<Vec<f32>>(&subset)
             .map_err(|e| store_error(&self.path, e))
     }
-
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
 }
 
 /// A sweep's store: the maps of its frames as one 3-D array `map` (frame, theta2, theta1),
