@@ -25,14 +25,18 @@ impl Field {
     /// Fills rows `rows..height` from the ones above by point reflection through the centre:
     /// (col, row) takes the value of (width-1-col, height-1-row). Needs rows >= height / 2.
     pub fn mirror_below(&mut self, rows: u32) {
-        let w = self.width as usize;
-        let h = self.height as usize;
-        for row in rows as usize..h {
-            let (above, below) = self.data.split_at_mut(row * w);
-            let source = &above[(h - 1 - row) * w..(h - row) * w];
-            for (out, v) in below[..w].iter_mut().zip(source.iter().rev()) {
-                *out = *v;
-            }
+        mirror_below(&mut self.data, self.width as usize, rows as usize);
+    }
+}
+
+/// [`Field::mirror_below`] for rows of any values (`width` a row), e.g. a verdict's mask.
+pub fn mirror_below<T: Copy>(data: &mut [T], width: usize, rows: usize) {
+    let h = data.len() / width.max(1);
+    for row in rows..h {
+        let (above, below) = data.split_at_mut(row * width);
+        let source = &above[(h - 1 - row) * width..(h - row) * width];
+        for (out, v) in below[..width].iter_mut().zip(source.iter().rev()) {
+            *out = *v;
         }
     }
 }

@@ -391,12 +391,7 @@ fn the_verdict_goes_into_the_store() {
         .success();
     let st = MapStore::open(&store).unwrap();
     let ours = st.read_resolved(0, st.height).unwrap().unwrap();
-    let bytes = std::fs::read(&mask).unwrap();
-    let theirs = npyz::NpyFile::new(&bytes[..])
-        .unwrap()
-        .into_vec::<u8>()
-        .unwrap();
-    assert_eq!(ours, theirs);
+    assert_eq!(ours, common::read_mask(&mask).1);
     assert!(
         ours.contains(&0) && ours.contains(&1),
         "a 20 s map has both"

@@ -5,7 +5,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{chaoscope, png_text, read_npy};
+use common::{chaoscope, png_text, read_mask, read_npy};
 
 /// A 32x32, 30 s flip map on `backend` with its verdict: (times, mask, png path).
 fn map_with_verdict(dir: &Path, backend: &str, extra: &[&str]) -> (Vec<f32>, Vec<u8>) {
@@ -35,10 +35,9 @@ fn map_with_verdict(dir: &Path, backend: &str, extra: &[&str]) -> (Vec<f32>, Vec
         .success()
         .stderr(predicates::str::contains("% resolved"));
     let (_, times) = read_npy(&npy);
-    let bytes = std::fs::read(&mask).unwrap();
-    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
-    assert_eq!(npy.shape(), &[32, 32]);
-    (times, npy.into_vec::<u8>().unwrap())
+    let (shape, mask) = read_mask(&mask);
+    assert_eq!(shape, [32, 32]);
+    (times, mask)
 }
 
 /// The flip times of a converged run: CPU f64 DP54 at rtol 1e-12 (at 256^2 the GPU's f64
@@ -181,10 +180,8 @@ fn divergence_maps_have_a_verdict_and_points_refuse_one() {
         .assert()
         .success()
         .stderr(predicates::str::contains("% resolved"));
-    let bytes = std::fs::read(&mask).unwrap();
-    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
-    assert_eq!(npy.shape(), &[16, 16]);
-    let values = npy.into_vec::<u8>().unwrap();
+    let (shape, values) = read_mask(&mask);
+    assert_eq!(shape, [16, 16]);
     assert!(values.iter().all(|&m| m <= 1) && values.contains(&1));
     chaoscope()
         .args(["lyapunov", "--theta1", "1", "--theta2", "1", "--resolved"])
@@ -222,10 +219,6 @@ fn the_verdict_resolves_nothing_finer_than_f64() {
         .success()
         .stderr(predicates::str::contains("finer than even f64"))
         .stderr(predicates::str::contains("0.0 % resolved"));
-    let bytes = std::fs::read(&mask).unwrap();
-    let values = npyz::NpyFile::new(&bytes[..])
-        .unwrap()
-        .into_vec::<u8>()
-        .unwrap();
+    let (_, values) = read_mask(&mask);
     assert!(values.len() == 64 && values.iter().all(|&m| m == 0));
 }

@@ -86,18 +86,13 @@ pub fn fill_store(
         let integrated = if own_mirror { rows.div_ceil(2) } else { rows };
         let (top, mask) = band((first, integrated), &monitor.quiet())?;
         let (field, mask) = if own_mirror {
-            let mut field = Field::new(top.width, rows, 0.0);
-            field.data[..top.data.len()].copy_from_slice(&top.data);
-            field.mirror_below(integrated);
-            let mask = mask.map(|m| {
-                let mut whole = Field::new(top.width, rows, 0.0);
-                for (w, v) in whole.data.iter_mut().zip(&m) {
-                    *w = *v as f32;
-                }
-                whole.mirror_below(integrated);
-                whole.data.iter().map(|&v| v as u8).collect::<Vec<u8>>()
-            });
-            (field, mask)
+            let (width, rows, top_rows) = (top.width as usize, rows as usize, integrated as usize);
+            let field = Field {
+                width: top.width,
+                height: rows as u32,
+                data: reflected(top.data, width, rows, top_rows),
+            };
+            (field, mask.map(|m| reflected(m, width, rows, top_rows)))
         } else {
             (top, mask)
         };
@@ -114,6 +109,19 @@ pub fn fill_store(
     monitor.finish();
     filled.missing = store.missing()?.len();
     Ok(filled)
+}
+
+/// The `top` rows of a band of `rows` rows, the rest filled by point reflection (a band that
+/// is its own mirror image).
+fn reflected<T: Copy + Default>(
+    mut values: Vec<T>,
+    width: usize,
+    rows: usize,
+    top: usize,
+) -> Vec<T> {
+    values.resize(width * rows, T::default());
+    crate::field::mirror_below(&mut values, width, top);
+    values
 }
 
 /// The notes after a fill: nothing was left to do here, or chunks are still missing.

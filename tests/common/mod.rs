@@ -25,6 +25,14 @@ pub fn read_npy(path: &Path) -> (Vec<u64>, Vec<f32>) {
     (shape, npy.into_vec::<f32>().unwrap())
 }
 
+/// (shape, data) of a uint8 .npy file (a verdict's mask).
+pub fn read_mask(path: &Path) -> (Vec<u64>, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    let shape = npy.shape().to_vec();
+    (shape, npy.into_vec::<u8>().unwrap())
+}
+
 /// The text chunk `key` of a decoded PNG.
 pub fn text_of(png: &chaoscope::render::Png, key: &str) -> String {
     png.text
