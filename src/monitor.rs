@@ -51,6 +51,20 @@ impl Monitor {
         }
     }
 
+    /// No bar, cancelled through `cancel`: work run for someone who may go away (the
+    /// explorer's requests).
+    pub fn cancelled_by(cancel: Arc<AtomicBool>) -> Self {
+        Monitor {
+            cancel,
+            ..Monitor::hidden()
+        }
+    }
+
+    /// Whether the user asked to stop.
+    pub fn is_cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+
     /// A bar on stderr when it is a terminal, else log lines; cancelled through `cancel`.
     pub fn terminal(cancel: Arc<AtomicBool>) -> Self {
         let logs = !std::io::stderr().is_terminal();

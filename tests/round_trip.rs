@@ -192,6 +192,8 @@ fn lyapunov_maps_and_points_round_trip() {
             "1e-6",
             "--joint-damping",
             "0.01,0.02",
+            "--colour-range",
+            "0.1:0.75",
         ],
         &[Path::new("--output"), &png],
         || png_text(&png, "chaoscope:command"),

@@ -72,18 +72,8 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
     if job.files.wants_verdict() && engine.map_info(&finer.grid, finer.precision).backend == "gpu" {
         check_finer(finer.integrator.validate(Precision::F32))?;
     }
-    let field = engine.flip_map(&job.spec, monitor)?;
-    let mask = if job.files.wants_verdict() {
-        let finer = engine.flip_map(&finer, monitor)?;
-        Some(verdict::grid_mask(
-            &job.spec.grid,
-            &field,
-            &finer,
-            verdict::flip_times_agree,
-        ))
-    } else {
-        None
-    };
+    let (field, mask) =
+        super::flip_and_verdict(&engine, &job.spec, job.files.wants_verdict(), monitor)?;
     let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let picture = render::flip_picture(&field, &job.spec, &job.picture, shown)?;
     let meta = render::provenance(command, &info);
@@ -164,20 +154,7 @@ fn run_store(
                 band: Some(rows),
                 ..job.spec
             };
-            let field = engine.flip_map(&spec, monitor)?;
-            let mask = match verdict {
-                true => {
-                    let finer = engine.flip_map(&finer_of(&spec), monitor)?;
-                    Some(verdict::grid_mask(
-                        &grid,
-                        &field,
-                        &finer,
-                        verdict::flip_times_agree,
-                    ))
-                }
-                false => None,
-            };
-            Ok((field, mask))
+            super::flip_and_verdict(&engine, &spec, verdict, monitor)
         },
         f32::is_finite,
     )?;

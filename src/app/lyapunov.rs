@@ -27,6 +27,9 @@ pub struct LyapunovMapJob {
     pub files: MapOutputs,
     /// With a .zarr store: compute only part `index` of `count` of it.
     pub tile: Option<(u32, u32)>,
+    /// The colours' range (1/s, low, high); None: 0 to the map's 99.5th percentile
+    /// ([`render::ftle_range`]).
+    pub colour_range: Option<(f32, f32)>,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -71,6 +74,14 @@ pub fn run_map(
         check_finer(verdict::finer_lyapunov(&job.spec).validate())?;
     }
     super::check_tile(job.tile, &job.files)?;
+    if let Some((lo, hi)) = job.colour_range
+        && !(lo.is_finite() && hi.is_finite() && lo < hi)
+    {
+        return Err(crate::error::Error::invalid(
+            "colour_range",
+            format!("{lo}:{hi} must be LOW:HIGH with LOW < HIGH (1/s)"),
+        ));
+    }
     if let Some(path) = job.files.store() {
         return run_store(job, path, command, monitor);
     }
@@ -78,19 +89,11 @@ pub fn run_map(
     let (engine, info, mut notices) =
         super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
     notices.extend(twin_notice(&engine, &job.spec));
-    let field = engine.lyapunov_map(&job.spec, monitor)?;
-    let range = render::ftle_range(&field);
-    let mask = if job.files.wants_verdict() {
-        let finer = engine.lyapunov_map(&verdict::finer_lyapunov(&job.spec), monitor)?;
-        Some(verdict::grid_mask(
-            &job.spec.grid,
-            &field,
-            &finer,
-            verdict::exponents_agree,
-        ))
-    } else {
-        None
-    };
+    let (field, mask) =
+        super::lyapunov_and_verdict(&engine, &job.spec, job.files.wants_verdict(), monitor)?;
+    let range = job
+        .colour_range
+        .unwrap_or_else(|| render::ftle_range(&field));
     let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let picture = render::lyapunov_picture(&field, &job.spec, range, &job.picture, shown)?;
     let colour_range = (
@@ -163,20 +166,7 @@ fn run_store(
                 band: Some(rows),
                 ..job.spec
             };
-            let field = engine.lyapunov_map(&spec, monitor)?;
-            let mask = match verdict {
-                true => {
-                    let finer = engine.lyapunov_map(&verdict::finer_lyapunov(&spec), monitor)?;
-                    Some(verdict::grid_mask(
-                        &grid,
-                        &field,
-                        &finer,
-                        verdict::exponents_agree,
-                    ))
-                }
-                false => None,
-            };
-            Ok((field, mask))
+            super::lyapunov_and_verdict(&engine, &spec, verdict, monitor)
         },
         |x| x > CHAOTIC_FTLE,
     )?;

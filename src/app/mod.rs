@@ -8,6 +8,7 @@ pub mod fit;
 pub mod flip;
 pub mod lyapunov;
 pub mod phase;
+pub mod serve;
 pub mod store;
 pub mod sweep;
 pub mod traces;
@@ -20,7 +21,8 @@ use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::render::{Outputs, Picture, check_writable};
-use crate::spec::{Grid, Precision};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Precision};
+use crate::verdict;
 
 /// Where a map's files go, and whether it carries the verdict ([`crate::verdict`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -148,6 +150,53 @@ pub fn write_map(
         files.mask(path, field.width, field.height, mask)?;
     }
     files.commit(monitor)
+}
+
+/// A flip map and, with `verdict`, its mask against the finer map
+/// ([`verdict::finer_flip`], in f64 where the engine has it).
+pub fn flip_and_verdict(
+    engine: &Engine,
+    spec: &FlipSpec,
+    verdict: bool,
+    monitor: &Monitor,
+) -> Result<(Field, Option<Vec<u8>>)> {
+    let field = engine.flip_map(spec, monitor)?;
+    let mask = match verdict {
+        true => {
+            let finer = engine.flip_map(&verdict::finer_flip(spec, engine.has_f64()), monitor)?;
+            Some(verdict::grid_mask(
+                &spec.grid,
+                &field,
+                &finer,
+                verdict::flip_times_agree,
+            ))
+        }
+        false => None,
+    };
+    Ok((field, mask))
+}
+
+/// A divergence map and, with `verdict`, its mask against the map at half the step.
+pub fn lyapunov_and_verdict(
+    engine: &Engine,
+    spec: &LyapunovSpec,
+    verdict: bool,
+    monitor: &Monitor,
+) -> Result<(Field, Option<Vec<u8>>)> {
+    let field = engine.lyapunov_map(spec, monitor)?;
+    let mask = match verdict {
+        true => {
+            let finer = engine.lyapunov_map(&verdict::finer_lyapunov(spec), monitor)?;
+            Some(verdict::grid_mask(
+                &spec.grid,
+                &field,
+                &finer,
+                verdict::exponents_agree,
+            ))
+        }
+        false => None,
+    };
+    Ok((field, mask))
 }
 
 /// The engine for a map over `grid` in `precision` on `backend`, the path it takes, and the

@@ -174,7 +174,12 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
 }
 
 pub fn lyapunov_map(job: &LyapunovMapJob) -> String {
+    let range = job
+        .colour_range
+        .map(|(lo, hi)| format!(" --colour-range {lo}:{hi}"))
+        .unwrap_or_default();
     lyapunov_map_of(&job.spec, job.backend, &job.picture)
+        + &range
         + show_unresolved(job.files.show_unresolved)
 }
 

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use super::args::{PhysicalArgs, PictureArgs, VerdictArgs, backend_parser};
-use super::parse::{Angles, one_of, parse_angles, parse_number, parse_size, parse_tile};
+use super::parse::{
+    Angles, one_of, parse_angles, parse_number, parse_range, parse_size, parse_tile,
+};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
@@ -81,6 +83,9 @@ pub struct LyapunovArgs {
     pub verdict: VerdictArgs,
     #[command(flatten)]
     pub picture: PictureArgs,
+    /// The colours' range LOW:HIGH (1/s) [default: 0 to the map's 99.5th percentile].
+    #[arg(long, value_parser = parse_range, allow_hyphen_values = true)]
+    pub colour_range: Option<Range>,
 }
 
 /// What the flags ask for: a map or a convergence run.
@@ -137,6 +142,7 @@ impl LyapunovArgs {
                         show_unresolved: self.verdict.show_unresolved,
                     },
                     tile: self.tile,
+                    colour_range: self.colour_range.map(|r| (r.min as f32, r.max as f32)),
                 }))
             }
             (Angles::Point(theta1), Angles::Point(theta2)) => {

@@ -12,6 +12,7 @@ mod lyapunov;
 mod names;
 pub mod parse;
 mod phase;
+mod serve;
 mod store;
 mod sweep;
 mod traces;
@@ -62,6 +63,9 @@ pub enum Command {
     /// Fit the model to a camera's tracked positions: pivot, arm lengths, energies and their
     /// decay, the state and damping by a GPU ensemble search; plots and summary.json.
     Fit(fit::FitArgs),
+    /// The explorer: a local web page to zoom into flip, divergence and verdict maps computed
+    /// on demand, and to watch a clicked pixel's pendulum.
+    Serve(serve::ServeArgs),
     /// What a Zarr store of a map (flip --data MAP.zarr) still lacks, and which --tile runs
     /// would fill it.
     Status(store::StatusArgs),
@@ -131,6 +135,7 @@ impl Command {
             Command::Traces(_) => "traces",
             Command::Phase(_) => "phase",
             Command::Fit(_) => "fit",
+            Command::Serve(_) => "serve",
             Command::Status(_) => "status",
             Command::Render(_) => "render",
             Command::Info => "info",
@@ -152,6 +157,7 @@ impl Command {
             Command::Info
             | Command::Bench(_)
             | Command::Completions { .. }
+            | Command::Serve(_)
             | Command::Status(_)
             | Command::Render(_) => return Ok(None),
         }))
@@ -237,6 +243,7 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Traces(args) => traces::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
         Command::Fit(args) => fit::run(args, monitor),
+        Command::Serve(args) => serve::run(args, monitor),
         Command::Status(args) => store::status(args),
         Command::Render(args) => store::render(args, monitor),
         Command::Info => info::run(cli.json),

@@ -45,7 +45,15 @@ mod tests {
             (
                 "lyapunov",
                 &[
-                    "size", "theta1", "t_max", "dt", "renorm", "eps", "output", "data",
+                    "size",
+                    "theta1",
+                    "t_max",
+                    "dt",
+                    "renorm",
+                    "eps",
+                    "output",
+                    "data",
+                    "colour_range",
                 ],
             ),
             ("trajectory", &["theta1", "t_max", "dt", "every", "output"]),

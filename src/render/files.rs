@@ -296,10 +296,31 @@ pub fn write_png(
     set.commit_now()
 }
 
+/// An 8-bit RGB PNG with tEXt chunks, in memory (the explorer's tiles and views), encoded
+/// as [`write_png`] encodes files.
+pub fn png_bytes(
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+    text: &[(String, String)],
+) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    encode_png(
+        &mut out,
+        Path::new("(memory)"),
+        (width, height),
+        1,
+        None,
+        text,
+        |_| Ok(Cow::Borrowed(rgb)),
+    )?;
+    Ok(out)
+}
+
 /// RGB frames as a PNG into `w`, animated (APNG, `delay_ms` a frame, looping) when
 /// `delay_ms` is given; `path` names the file in errors.
 fn encode_png<'a>(
-    w: &mut BufWriter<&std::fs::File>,
+    w: &mut impl Write,
     path: &Path,
     (width, height): (u32, u32),
     count: usize,

@@ -17,7 +17,7 @@ pub use colormap::{
 };
 pub use exposure::{Bobs, Film, View, draw_arms};
 pub use files::{
-    Outputs, Png, check_writable, read_png, remove_pending, write_atomic, write_gif, write_npy,
-    write_npy_shaped, write_png,
+    Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic, write_gif,
+    write_npy, write_npy_shaped, write_png,
 };
 pub use maps::{Picture, PictureSpec, UNRESOLVED_RGB, flip_picture, lyapunov_picture, provenance};

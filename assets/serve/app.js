@@ -1,0 +1,322 @@
+// chaoscope explorer: the map is Leaflet in CRS.Simple, the whole turn [-pi, pi]^2 being
+// the square lng 0..256, lat -256..0 (tile 0/0/0); every tile, point and trajectory is
+// computed by the server from its URL. The page's state lives in the URL's hash.
+"use strict";
+
+const TURN = 2 * Math.PI;
+const WORLD = 256;
+const COLOURS = ["#f9a03f", "#4fc3f7", "#aed581", "#f06292", "#ba68c8", "#fff176"];
+const KEYS = ["kind", "t_max", "cmap", "m1", "m2", "l1", "l2", "damping", "accurate",
+  "unresolved", "lo", "hi"];
+
+const state = {};          // the view's settings, as query keys
+const page = { starts: [], info: null, firstView: null, loads: 0, lastLoad: null };
+window.chaoscope = page;   // for tests and the curious
+
+const form = document.getElementById("controls");
+const statusLine = document.getElementById("status");
+
+function theta1Of(lng) { return -Math.PI + lng * TURN / WORLD; }
+function theta2Of(lat) { return Math.PI + lat * TURN / WORLD; }
+function lngOf(theta1) { return (theta1 + Math.PI) * WORLD / TURN; }
+function latOf(theta2) { return (theta2 - Math.PI) * WORLD / TURN; }
+
+// The query string of the view's settings (only those that differ from the server's).
+function query(extra) {
+  const q = new URLSearchParams();
+  for (const k of KEYS) {
+    const v = state[k];
+    if (v === undefined || v === "" || v === false) continue;
+    if ((k === "lo" || k === "hi") && state.kind !== "ftle") continue;
+    q.set(k, v === true ? "1" : String(v));
+  }
+  for (const [k, v] of Object.entries(extra || {})) q.set(k, String(v));
+  return q.toString();
+}
+
+function readHash() {
+  const h = new URLSearchParams(location.hash.slice(1));
+  for (const k of KEYS) if (h.has(k)) state[k] = h.get(k);
+  state.accurate = state.accurate === "1" || state.accurate === true;
+  state.unresolved = state.unresolved === "1" || state.unresolved === true;
+  return {
+    z: h.has("z") ? Number(h.get("z")) : null,
+    theta1: h.has("theta1") ? Number(h.get("theta1")) : 0,
+    theta2: h.has("theta2") ? Number(h.get("theta2")) : 0,
+  };
+}
+
+function writeHash() {
+  const c = map.getCenter();
+  const h = new URLSearchParams(query());
+  h.set("z", map.getZoom());
+  h.set("theta1", theta1Of(c.lng).toPrecision(17));
+  h.set("theta2", theta2Of(c.lat).toPrecision(17));
+  history.replaceState(null, "", "#" + h.toString());
+}
+
+function fillForm() {
+  for (const k of KEYS) {
+    const el = form.elements[k];
+    if (!el) continue;
+    if (el.type === "checkbox") el.checked = !!state[k]; else el.value = state[k] ?? "";
+  }
+  document.getElementById("ftle-range").hidden = state.kind !== "ftle";
+}
+
+// The pixel step (rad) at zoom z, and what precision that needs.
+function precisionAt(z) {
+  const step = TURN / (WORLD * 2 ** z);
+  const info = page.info;
+  if (step < info.f64_min_pixel_step) return [step, "beyond f64: no pixel is resolved"];
+  const where = info.place === "the CPU" ? "CPU" : "GPU";
+  if (state.accurate) return [step, `f64 DP54 on the ${info.has_f64 ? where : "CPU"}`];
+  if (step < info.f32_min_pixel_step) return [step, `f64 on the ${info.has_f64 ? where : "CPU"}`];
+  return [step, `f32 on the ${where}`];
+}
+
+function showStatus(extra, isError) {
+  const z = map.getZoom();
+  const [step, precision] = precisionAt(z);
+  statusLine.className = isError ? "error" : "";
+  statusLine.textContent = `zoom ${z} · pixel ${step.toExponential(2)} rad · ${precision}` +
+    ` · tiles by ${page.info.place}` + (extra ? ` · ${extra}` : "");
+}
+
+function legend() {
+  const text = {
+    flip: "Colour: time until an arm first flips (dark: soon, bright: late); black: no flip " +
+      "within t-max; green: NaN.",
+    ftle: "Colour: largest finite-time Lyapunov exponent (black: regular, bright: chaotic).",
+    resolved: "White: the pixel's flip time agrees with a finer run (resolved); black: it " +
+      "does not, so its colour cannot be trusted.",
+  }[state.kind] || "";
+  document.getElementById("legend").textContent =
+    text + (state.unresolved && state.kind !== "resolved" ? " Grey: not resolved." : "");
+}
+
+let map, layer;
+
+async function start() {
+  page.info = await (await fetch("/api/info")).json();
+  const d = page.info.defaults;
+  Object.assign(state, { kind: "flip", t_max: d.t_max, cmap: "", m1: d.m1, m2: d.m2,
+    l1: d.l1, l2: d.l2, damping: d.damping, accurate: false, unresolved: false,
+    lo: "", hi: "" });
+  const cmap = form.elements.cmap;
+  cmap.add(new Option("default", ""));
+  for (const c of page.info.colormaps) cmap.add(new Option(c, c));
+  const view = readHash();
+  fillForm();
+
+  map = L.map("map", { crs: L.CRS.Simple, minZoom: 0, maxZoom: page.info.max_zoom,
+    zoomSnap: 1, attributionControl: false, maxBounds: [[-WORLD * 1.5, -WORLD * 0.5],
+      [WORLD * 0.5, WORLD * 1.5]] });
+  page.map = map;
+  const bounds = [[-WORLD, 0], [0, WORLD]];
+  if (view.z === null) map.fitBounds(bounds);
+  else map.setView([latOf(view.theta2), lngOf(view.theta1)], view.z);
+  await setLayer();
+  map.on("moveend", () => { writeHash(); showStatus(); });
+  map.on("click", (e) => pick(e.latlng, e.originalEvent.shiftKey));
+  form.addEventListener("change", onChange);
+  document.getElementById("save-button").addEventListener("click", saveView);
+  legend();
+}
+
+async function setLayer() {
+  if (state.kind === "ftle" && (state.lo === "" || state.hi === "")) {
+    const r = await fetch("/api/range?" + query({ kind: "ftle" }));
+    if (r.ok) {
+      const { lo, hi } = await r.json();
+      state.lo = Number(lo.toPrecision(3));
+      state.hi = Number(hi.toPrecision(3));
+      fillForm();
+    }
+  }
+  if (layer) map.removeLayer(layer);
+  page.loads = 0;
+  const began = performance.now();
+  layer = L.tileLayer("/tile/{z}/{x}/{y}.png?" + query(), {
+    tileSize: 256, noWrap: true, bounds: [[-WORLD, 0], [0, WORLD]],
+    minZoom: 0, maxZoom: page.info.max_zoom, keepBuffer: 1, updateWhenZooming: false,
+  });
+  page.layer = layer;
+  layer.on("load", () => {
+    page.loads += 1;
+    page.lastLoad = performance.now();
+    if (page.firstView === null) page.firstView = page.lastLoad;
+    document.body.dataset.tiles = "loaded";
+    showStatus(`drawn in ${((page.lastLoad - began) / 1000).toFixed(2)} s`);
+  });
+  layer.on("loading", () => { document.body.dataset.tiles = "loading"; showStatus("computing…"); });
+  layer.on("tileerror", async (e) => {
+    const r = await fetch(e.tile.src).catch(() => null);
+    if (r && !r.ok && r.status !== 503) showStatus(await r.text(), true);
+  });
+  layer.addTo(map);
+  writeHash();
+  showStatus("computing…");
+}
+
+function onChange(e) {
+  const el = e.target;
+  if (!(el.name in state)) return;
+  state[el.name] = el.type === "checkbox" ? el.checked : el.value;
+  if (el.name !== "lo" && el.name !== "hi" && state.kind === "ftle" &&
+    ["kind", "t_max", "m1", "m2", "l1", "l2", "damping"].includes(el.name)) {
+    state.lo = ""; state.hi = "";   // a new physics, a new colour range
+  }
+  fillForm();
+  legend();
+  setLayer();
+  if (page.starts.length) refreshStarts();
+}
+
+// The centre of the pixel under `latlng` at the current zoom, in rad.
+function pixelAt(latlng) {
+  const n = WORLD * 2 ** map.getZoom();
+  const step = TURN / n;
+  const col = Math.floor((latlng.lng / WORLD) * n);
+  const row = Math.floor((-latlng.lat / WORLD) * n);
+  return { theta1: -Math.PI + (col + 0.5) * step, theta2: Math.PI - (row + 0.5) * step, step };
+}
+
+async function pick(latlng, add) {
+  if (latlng.lng < 0 || latlng.lng > WORLD || latlng.lat > 0 || latlng.lat < -WORLD) return;
+  const p = pixelAt(latlng);
+  if (!add) page.starts = [];
+  if (page.starts.length >= COLOURS.length) page.starts.shift();
+  page.starts.push(p);
+  await refreshStarts();
+}
+
+async function load(p) {
+  const where = { theta1: p.theta1, theta2: p.theta2 };
+  const [point, csv] = await Promise.all([
+    fetch("/api/point?" + query({ ...where, pixel: p.step, kind: "flip" })),
+    fetch("/api/trajectory?" + query({ ...where, kind: "flip" })),
+  ]);
+  if (!point.ok) throw new Error(await point.text());
+  if (!csv.ok) throw new Error(await csv.text());
+  const text = await csv.text();
+  const lines = text.trim().split("\n");
+  const rows = lines.slice(2).map((l) => l.split(",").map(Number));
+  return { ...p, point: await point.json(), command: lines[0].replace(/^# /, ""), rows };
+}
+
+async function refreshStarts() {
+  const section = document.getElementById("pendulum");
+  section.hidden = false;
+  document.body.dataset.pendulum = "loading";
+  try {
+    page.loaded = await Promise.all(page.starts.map(load));
+  } catch (err) {
+    showStatus(String(err.message || err), true);
+    return;
+  }
+  const list = document.getElementById("starts");
+  list.textContent = "";
+  page.loaded.forEach((s, i) => {
+    const li = document.createElement("li");
+    li.style.setProperty("--c", COLOURS[i]);
+    const t = s.point.flip_time;
+    const flip = typeof t === "number" ? `flips at ${t.toFixed(3)} s` :
+      t === "never" ? `no flip within ${s.point.t_max} s` : "NaN (blew up)";
+    li.textContent = `θ1 ${s.point.theta1.toFixed(6)}, θ2 ${s.point.theta2.toFixed(6)}: ${flip}` +
+      ` (${s.point.precision}, ${s.point.resolved ? "resolved" : "NOT resolved"})`;
+    list.appendChild(li);
+  });
+  document.getElementById("command").textContent = page.loaded[page.loaded.length - 1].command;
+  drawPlot();
+  document.body.dataset.pendulum = "shown";
+  if (!page.animating) { page.animating = true; page.t0 = performance.now(); requestAnimationFrame(swing); }
+  else page.t0 = performance.now();
+}
+
+// The pendulums at time t (s), looping over the trajectory.
+function swing(now) {
+  const c = document.getElementById("swing");
+  const g = c.getContext("2d");
+  g.clearRect(0, 0, c.width, c.height);
+  const starts = page.loaded || [];
+  if (starts.length) {
+    const l = Number(state.l1) + Number(state.l2);
+    const scale = (c.width / 2 - 12) / l;
+    const [cx, cy] = [c.width / 2, c.height / 2];
+    const rows = starts[0].rows;
+    const span = rows[rows.length - 1][0] + 1;
+    const t = ((now - page.t0) / 1000) % span;
+    starts.forEach((s, i) => {
+      let k = s.rows.findIndex((r) => r[0] >= t);
+      if (k < 0) k = s.rows.length - 1;
+      const r = s.rows[k];
+      // The lower bob's trail over the last second, fading.
+      const from = Math.max(0, k - 50);
+      g.lineWidth = 1;
+      for (let j = from + 1; j <= k; j++) {
+        g.globalAlpha = (j - from) / (k - from + 1) * 0.6;
+        g.strokeStyle = COLOURS[i];
+        g.beginPath();
+        g.moveTo(cx + s.rows[j - 1][7] * scale, cy - s.rows[j - 1][8] * scale);
+        g.lineTo(cx + s.rows[j][7] * scale, cy - s.rows[j][8] * scale);
+        g.stroke();
+      }
+      g.globalAlpha = 1;
+      const [x1, y1, x2, y2] = [cx + r[5] * scale, cy - r[6] * scale, cx + r[7] * scale, cy - r[8] * scale];
+      g.strokeStyle = COLOURS[i]; g.fillStyle = COLOURS[i]; g.lineWidth = 2;
+      g.beginPath(); g.moveTo(cx, cy); g.lineTo(x1, y1); g.lineTo(x2, y2); g.stroke();
+      for (const [x, y] of [[x1, y1], [x2, y2]]) { g.beginPath(); g.arc(x, y, 6, 0, TURN); g.fill(); }
+    });
+    g.fillStyle = "#888"; g.beginPath(); g.arc(cx, cy, 3, 0, TURN); g.fill();
+    g.fillStyle = "#aaa"; g.font = "12px system-ui";
+    g.fillText(`t = ${t.toFixed(2)} s`, 8, 16);
+  }
+  requestAnimationFrame(swing);
+}
+
+function drawPlot() {
+  const c = document.getElementById("plot");
+  const g = c.getContext("2d");
+  g.clearRect(0, 0, c.width, c.height);
+  const starts = page.loaded;
+  const tMax = Math.max(...starts.map((s) => s.rows[s.rows.length - 1][0]));
+  let lo = -Math.PI, hi = Math.PI;
+  for (const s of starts) for (const r of s.rows) { lo = Math.min(lo, r[1], r[3]); hi = Math.max(hi, r[1], r[3]); }
+  const X = (t) => 4 + (t / tMax) * (c.width - 8);
+  const Y = (v) => c.height - 4 - ((v - lo) / (hi - lo)) * (c.height - 8);
+  g.strokeStyle = "#333"; g.setLineDash([]);
+  for (const v of [-Math.PI, Math.PI]) { g.beginPath(); g.moveTo(0, Y(v)); g.lineTo(c.width, Y(v)); g.stroke(); }
+  starts.forEach((s, i) => {
+    for (const [col, dash] of [[1, [4, 3]], [3, []]]) {
+      g.strokeStyle = COLOURS[i]; g.setLineDash(dash); g.lineWidth = 1.2;
+      g.beginPath();
+      s.rows.forEach((r, k) => (k ? g.lineTo(X(r[0]), Y(r[col])) : g.moveTo(X(r[0]), Y(r[col]))));
+      g.stroke();
+    }
+    const t = s.point.flip_time;
+    if (typeof t === "number") {
+      g.fillStyle = COLOURS[i]; g.beginPath(); g.arc(X(t), 6, 3, 0, TURN); g.fill();
+    }
+  });
+  g.setLineDash([]);
+}
+
+function saveView() {
+  const b = map.getBounds();
+  const clamp = (v, a, z) => Math.min(z, Math.max(a, v));
+  const t1 = [theta1Of(clamp(b.getWest(), 0, WORLD)), theta1Of(clamp(b.getEast(), 0, WORLD))];
+  const t2 = [theta2Of(clamp(b.getSouth(), -WORLD, 0)), theta2Of(clamp(b.getNorth(), -WORLD, 0))];
+  const width = Number(document.querySelector("#save select[name=width]").value);
+  const height = Math.max(16, Math.round(width * (t2[1] - t2[0]) / (t1[1] - t1[0])));
+  const annotate = document.querySelector("#save input[name=annotate]").checked;
+  const url = "/api/save?" + query({ theta1_min: t1[0], theta1_max: t1[1], theta2_min: t2[0],
+    theta2_max: t2[1], width, height: Math.min(height, 4096), annotate: annotate ? 1 : 0 });
+  const link = document.createElement("a");
+  link.href = url;
+  link.download = `chaoscope-${state.kind}.png`;
+  document.getElementById("save-status").textContent = "computing… (the download starts when done)";
+  link.click();
+}
+
+start().catch((err) => { statusLine.className = "error"; statusLine.textContent = String(err); });

@@ -1,0 +1,683 @@
+//! `serve`: the explorer. A local HTTP server (axum on tokio) whose page (Leaflet, vendored)
+//! shows flip, divergence and verdict maps as tiles computed on demand by the one engine,
+//! and a clicked pixel's pendulum. Every tile is a pure function of its URL, so tiles are
+//! cached by URL; requests wait for the engine in a bounded queue, and a request whose client
+//! went away is cancelled at the engine's next dispatch.
+
+mod assets;
+pub mod view;
+
+use std::collections::HashMap;
+use std::net::IpAddr;
+use std::num::NonZeroUsize;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use axum::Router;
+use axum::extract::{Path, Query as AxumQuery, State as AxumState};
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use lru::LruCache;
+
+use self::view::{Kind, Query, View, tile_grid};
+use crate::app::MapOutputs;
+use crate::app::flip::FlipJob;
+use crate::app::lyapunov::LyapunovMapJob;
+use crate::app::trajectory::TrajectoryJob;
+use crate::engine::{Backend, Engine};
+use crate::error::{Error, Result};
+use crate::monitor::Monitor;
+use crate::params::ParamSources;
+use crate::render::{self, PictureSpec};
+use crate::spec::{Grid, Precision, Range};
+
+/// Requests waiting for (or holding) the engine at most; more get 503 at once, so a burst
+/// of requests holds a bounded amount of memory.
+pub const MAX_WAITING: usize = 64;
+
+/// A request that has not finished in this time is cancelled (503).
+pub const REQUEST_LIMIT: Duration = Duration::from_secs(60);
+
+/// Tiles and other computed answers kept, most recently used first (a 256^2 tile's PNG is
+/// ~50-150 kB, so ~60 MB).
+pub const CACHE_ENTRIES: usize = 512;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ServeJob {
+    pub host: IpAddr,
+    /// 0: any free port (the URL says which).
+    pub port: u16,
+    /// The physics the page starts from and every request's defaults.
+    pub base: ParamSources,
+    pub backend: Backend,
+}
+
+/// The commands that reproduce what the page shows, written by the command line (the one
+/// inverse of the flags).
+#[derive(Clone, Copy)]
+pub struct Commands {
+    pub flip: fn(&FlipJob) -> String,
+    pub lyapunov: fn(&LyapunovMapJob) -> String,
+    pub trajectory: fn(&TrajectoryJob) -> String,
+}
+
+/// What the server says once it listens.
+pub struct Ready {
+    pub url: String,
+    /// Where tiles are computed: the adapter's name or "the CPU".
+    pub place: String,
+    pub notices: Vec<String>,
+}
+
+/// How a session went, when it stops.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct ServeSummary {
+    pub url: String,
+    /// Tiles computed, served from the cache, cancelled (their client left), refused (the
+    /// queue was full).
+    pub computed: u64,
+    pub cached: u64,
+    pub cancelled: u64,
+    pub refused: u64,
+}
+
+#[derive(Default)]
+struct Counters {
+    computed: AtomicU64,
+    cached: AtomicU64,
+    cancelled: AtomicU64,
+    refused: AtomicU64,
+}
+
+struct Shared {
+    engine: Arc<tokio::sync::Mutex<Engine>>,
+    place: String,
+    has_f64: bool,
+    cache: Mutex<LruCache<String, Arc<Vec<u8>>>>,
+    waiting: AtomicUsize,
+    counters: Counters,
+    base: ParamSources,
+    backend: Backend,
+    commands: Commands,
+}
+
+type S = Arc<Shared>;
+
+/// Serves until `monitor` is cancelled (Ctrl-C); `ready` is told the URL once it listens.
+pub fn run(
+    job: &ServeJob,
+    commands: Commands,
+    monitor: &Monitor,
+    ready: impl FnOnce(&Ready),
+) -> Result<ServeSummary> {
+    // The physics flags checked before anything starts.
+    crate::spec::validate_params(&job.base.resolve()?)?;
+    let engine = Engine::new(job.backend)?;
+    warm_up(&engine, &job.base.resolve()?, monitor)?;
+    let info = engine.info();
+    let shared = Arc::new(Shared {
+        place: info.place().to_string(),
+        has_f64: engine.has_f64(),
+        engine: Arc::new(tokio::sync::Mutex::new(engine)),
+        cache: Mutex::new(LruCache::new(
+            NonZeroUsize::new(CACHE_ENTRIES).expect("nonzero"),
+        )),
+        waiting: AtomicUsize::new(0),
+        counters: Counters::default(),
+        base: job.base.clone(),
+        backend: job.backend,
+        commands,
+    });
+    let notices = shared
+        .engine
+        .try_lock()
+        .map(|e| e.notices())
+        .unwrap_or_default();
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .max_blocking_threads(8)
+        .enable_all()
+        .build()?;
+    let app = router(shared.clone());
+    let url = runtime.block_on(async {
+        let listener = tokio::net::TcpListener::bind((job.host, job.port))
+            .await
+            .map_err(|e| {
+                Error::invalid(
+                    "port",
+                    format!("cannot listen on {}:{}: {e}", job.host, job.port),
+                )
+            })?;
+        let url = format!("http://{}/", listener.local_addr()?);
+        ready(&Ready {
+            url: url.clone(),
+            place: shared.place.clone(),
+            notices,
+        });
+        let stop = {
+            let monitor = monitor.clone();
+            async move {
+                while !monitor.is_cancelled() {
+                    tokio::time::sleep(Duration::from_millis(100)).await;
+                }
+            }
+        };
+        tokio::select! {
+            served = axum::serve(listener, app) => served.map(|_| url.clone()).map_err(Error::Io),
+            _ = stop => Ok(url.clone()),
+        }
+    })?;
+    // Dropping the runtime drops every request, whose guards cancel their work.
+    runtime.shutdown_timeout(Duration::from_secs(2));
+    let c = &shared.counters;
+    Ok(ServeSummary {
+        url,
+        computed: c.computed.load(Ordering::Relaxed),
+        cached: c.cached.load(Ordering::Relaxed),
+        cancelled: c.cancelled.load(Ordering::Relaxed),
+        refused: c.refused.load(Ordering::Relaxed),
+    })
+}
+
+/// Builds the flip kernel before the first request needs it (a tiny map), so the first view
+/// waits only for its own tile.
+fn warm_up(engine: &Engine, params: &crate::model::Params, monitor: &Monitor) -> Result<()> {
+    let spec = crate::spec::FlipSpec::new(
+        *params,
+        Grid::square(8),
+        crate::spec::Stepping {
+            dt: 0.01,
+            t_max: 0.1,
+        },
+    );
+    engine.flip_map(&spec, &monitor.quiet()).map(|_| ())
+}
+
+/// The routes; everything else is 404.
+fn router(shared: S) -> Router {
+    Router::new()
+        .route("/", get(|| async { assets::page() }))
+        .route("/assets/{*path}", get(asset))
+        .route("/tile/{z}/{x}/{y}", get(tile))
+        .route("/api/info", get(info))
+        .route("/api/point", get(point))
+        .route("/api/trajectory", get(trajectory))
+        .route("/api/range", get(range))
+        .route("/api/save", get(save))
+        .route("/api/stats", get(stats))
+        .fallback(|| async { (StatusCode::NOT_FOUND, "not found\n") })
+        .with_state(shared)
+}
+
+async fn asset(Path(path): Path<String>) -> Response {
+    assets::get(&path)
+}
+
+type Params = AxumQuery<HashMap<String, String>>;
+
+/// An error as the page sees it: invalid values 400 with the key and the reason, a full
+/// queue or a request past its time 503, the rest 500.
+fn reply(e: Error) -> Response {
+    match e {
+        Error::InvalidSpec { .. } => (StatusCode::BAD_REQUEST, format!("{e}\n")).into_response(),
+        Error::Interrupted => {
+            (StatusCode::SERVICE_UNAVAILABLE, "cancelled\n".to_string()).into_response()
+        }
+        e => (StatusCode::INTERNAL_SERVER_ERROR, format!("{e}\n")).into_response(),
+    }
+}
+
+fn busy(why: &str) -> Response {
+    (
+        StatusCode::SERVICE_UNAVAILABLE,
+        [(header::RETRY_AFTER, "1")],
+        format!("{why}\n"),
+    )
+        .into_response()
+}
+
+/// Sets the request's cancel flag when the request is dropped before its work finished
+/// (the client went away, or the server stops), and counts it.
+struct CancelOnDrop {
+    cancel: Arc<AtomicBool>,
+    done: bool,
+    shared: S,
+}
+
+impl Drop for CancelOnDrop {
+    fn drop(&mut self) {
+        self.shared.waiting.fetch_sub(1, Ordering::Relaxed);
+        if !self.done {
+            self.cancel.store(true, Ordering::Relaxed);
+            self.shared
+                .counters
+                .cancelled
+                .fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
+
+/// Runs `work` on the engine, one request at a time, in the order they came: at most
+/// [`MAX_WAITING`] wait, each for at most [`REQUEST_LIMIT`].
+async fn on_engine<T: Send + 'static>(
+    shared: &S,
+    work: impl FnOnce(&Engine, &Monitor) -> Result<T> + Send + 'static,
+) -> std::result::Result<T, Response> {
+    if shared.waiting.fetch_add(1, Ordering::Relaxed) >= MAX_WAITING {
+        shared.waiting.fetch_sub(1, Ordering::Relaxed);
+        shared.counters.refused.fetch_add(1, Ordering::Relaxed);
+        return Err(busy("busy: too many requests waiting; try again"));
+    }
+    let cancel = Arc::new(AtomicBool::new(false));
+    let mut guard = CancelOnDrop {
+        cancel: cancel.clone(),
+        done: false,
+        shared: shared.clone(),
+    };
+    let engine = shared.engine.clone();
+    let run = async move {
+        let engine = engine.lock_owned().await;
+        let monitor = Monitor::cancelled_by(cancel);
+        tokio::task::spawn_blocking(move || work(&engine, &monitor)).await
+    };
+    let result = tokio::time::timeout(REQUEST_LIMIT, run).await;
+    guard.done = true;
+    match result {
+        Err(_) => {
+            guard.done = false;
+            Err(busy("the request took too long and was cancelled"))
+        }
+        Ok(Err(e)) => Err(reply(Error::Gpu(format!("the work failed: {e}")))),
+        Ok(Ok(r)) => r.map_err(reply),
+    }
+}
+
+fn cached(shared: &S, key: &str) -> Option<Arc<Vec<u8>>> {
+    let hit = shared.cache.lock().ok()?.get(key).cloned();
+    if hit.is_some() {
+        shared.counters.cached.fetch_add(1, Ordering::Relaxed);
+    }
+    hit
+}
+
+fn remember(shared: &S, key: String, bytes: Arc<Vec<u8>>) {
+    if let Ok(mut c) = shared.cache.lock() {
+        c.put(key, bytes);
+    }
+}
+
+fn png(bytes: Arc<Vec<u8>>, precision: &str) -> Response {
+    (
+        [
+            (header::CONTENT_TYPE, "image/png".to_string()),
+            (header::CACHE_CONTROL, "public, max-age=3600".to_string()),
+            (
+                header::HeaderName::from_static("x-chaoscope-precision"),
+                precision.to_string(),
+            ),
+        ],
+        bytes.as_ref().clone(),
+    )
+        .into_response()
+}
+
+/// Where a map over `grid` runs and in which precision, in words ("f32", "f64").
+fn precision_of(engine: &Engine, grid: &Grid, asked: Precision) -> &'static str {
+    match engine.map_info(grid, asked).backend {
+        "gpu" => "f32",
+        _ => "f64",
+    }
+}
+
+/// The tile (z, x, y), as the bare PNG `chaoscope flip` / `lyapunov` would make of it.
+async fn tile(
+    AxumState(shared): AxumState<S>,
+    Path((z, x, y)): Path<(String, String, String)>,
+    AxumQuery(q): Params,
+) -> Response {
+    let parsed = (|| -> Result<(View, Grid, String)> {
+        let int = |key: &'static str, s: &str| {
+            s.parse::<u64>()
+                .map_err(|_| Error::invalid(key, format!("{s:?} is not a tile index")))
+        };
+        let y = y.strip_suffix(".png").unwrap_or(&y);
+        let (z, x, y) = (int("z", &z)?, int("x", &x)?, int("y", y)?);
+        let mut q = Query::new(q);
+        let view = q.view(&shared.base)?;
+        let size = q
+            .count("size", view::TILE_SIZES.0, view::TILE_SIZES.1)?
+            .unwrap_or(256);
+        q.finish()?;
+        let z = u32::try_from(z).unwrap_or(u32::MAX);
+        let grid = tile_grid(z, x, y, size)?;
+        let key = format!("tile {z}/{x}/{y}/{size} {view:?}");
+        Ok((view, grid, key))
+    })();
+    let (view, grid, key) = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    if let Some(bytes) = cached(&shared, &key) {
+        return png(bytes, "cached");
+    }
+    let result = on_engine(&shared, move |engine, monitor| {
+        let (rgb, precision) = tile_rgb(engine, &view, grid, monitor)?;
+        let bytes = render::png_bytes(grid.width, grid.height, &rgb, &[])?;
+        Ok((Arc::new(bytes), precision))
+    })
+    .await;
+    match result {
+        Ok((bytes, precision)) => {
+            shared.counters.computed.fetch_add(1, Ordering::Relaxed);
+            remember(&shared, key, bytes.clone());
+            png(bytes, precision)
+        }
+        Err(r) => r,
+    }
+}
+
+/// The RGB bytes of a view over `grid` (bare, one pixel a pendulum) and the precision it ran
+/// in.
+pub fn tile_rgb(
+    engine: &Engine,
+    view: &View,
+    grid: Grid,
+    monitor: &Monitor,
+) -> Result<(Vec<u8>, &'static str)> {
+    let picture = PictureSpec {
+        annotate: false,
+        colormap: view.colormap,
+    };
+    match view.kind {
+        Kind::Flip | Kind::Resolved => {
+            let spec = view.flip_spec(grid);
+            spec.validate()?;
+            let precision = precision_of(engine, &grid, spec.precision);
+            if precision == "f32" {
+                spec.integrator.validate(Precision::F32)?;
+            }
+            let verdict = view.unresolved || view.kind == Kind::Resolved;
+            let (field, mask) = super::flip_and_verdict(engine, &spec, verdict, monitor)?;
+            let rgb = match (view.kind, mask) {
+                (Kind::Resolved, Some(mask)) => mask_rgb(&mask),
+                (_, mask) => {
+                    let shown = mask.as_deref().filter(|_| view.unresolved);
+                    render::flip_picture(&field, &spec, &picture, shown)?.rgb
+                }
+            };
+            Ok((rgb, precision))
+        }
+        Kind::Ftle => {
+            let spec = view.lyapunov_spec(grid);
+            spec.validate()?;
+            let (field, mask) =
+                super::lyapunov_and_verdict(engine, &spec, view.unresolved, monitor)?;
+            let rgb =
+                render::lyapunov_picture(&field, &spec, view.range, &picture, mask.as_deref())?.rgb;
+            Ok((rgb, precision_of(engine, &grid, spec.precision)))
+        }
+    }
+}
+
+/// The verdict as a picture: white resolved, black not.
+pub fn mask_rgb(mask: &[u8]) -> Vec<u8> {
+    mask.iter()
+        .flat_map(|&m| [if m == 1 { 255 } else { 0 }; 3])
+        .collect()
+}
+
+fn json(value: serde_json::Value) -> Response {
+    (
+        [(header::CONTENT_TYPE, "application/json")],
+        value.to_string(),
+    )
+        .into_response()
+}
+
+/// What the page needs to know first: where tiles run, the limits, the starting physics.
+async fn info(AxumState(shared): AxumState<S>) -> Response {
+    let p = match shared.base.resolve() {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let colormaps: Vec<&str> = render::Colormap::ALL.iter().map(|c| c.name()).collect();
+    json(serde_json::json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "place": shared.place,
+        "has_f64": shared.has_f64,
+        "f32_min_pixel_step": crate::spec::F32_MIN_PIXEL_STEP,
+        "f64_min_pixel_step": crate::spec::F64_MIN_PIXEL_STEP,
+        "max_zoom": view::MAX_ZOOM,
+        "max_t_max": view::MAX_T_MAX,
+        "kinds": Kind::NAMES,
+        "colormaps": colormaps,
+        "defaults": {
+            "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,
+            "damping": p.losses.joint1, "t_max": 20.0, "dt": 0.01,
+        },
+    }))
+}
+
+/// A clicked pixel: its flip time as the map computes it (a one-pixel map `pixel` rad wide
+/// around the start, so it runs in the tile's precision) and whether it is resolved.
+async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<(View, Grid)> {
+        let mut q = Query::new(q);
+        let mut view = q.view(&shared.base)?;
+        view.kind = Kind::Flip;
+        let start = view::start(&mut q)?;
+        let pixel = q.within("pixel", 1e-16, 1.0)?.unwrap_or(1e-3);
+        q.finish()?;
+        let around = |x: f64| Range {
+            min: x - 0.5 * pixel,
+            max: x + 0.5 * pixel,
+        };
+        let grid = Grid {
+            width: 1,
+            height: 1,
+            theta1: around(start.theta1),
+            theta2: around(start.theta2),
+            omega1: 0.0,
+            omega2: 0.0,
+        };
+        Ok((view, grid))
+    })();
+    let (view, grid) = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let t_max = view.stepping.t_max;
+    let result = on_engine(&shared, move |engine, monitor| {
+        let spec = view.flip_spec(grid);
+        spec.validate()?;
+        let (field, mask) = super::flip_and_verdict(engine, &spec, true, monitor)?;
+        let resolved = mask.is_some_and(|m| m[0] == 1);
+        Ok((field, resolved, precision_of(engine, &grid, spec.precision)))
+    })
+    .await;
+    match result {
+        Ok((field, resolved, precision)) => {
+            let time = {
+                let t = field.data[0];
+                match t.is_finite() {
+                    true => serde_json::json!(t),
+                    false if t.is_nan() => serde_json::json!("nan"),
+                    false => serde_json::json!("never"),
+                }
+            };
+            json(serde_json::json!({
+                "theta1": grid.theta1_at(0),
+                "theta2": grid.theta2_at(0),
+                "flip_time": time,
+                "resolved": resolved,
+                "precision": precision,
+                "t_max": t_max,
+            }))
+        }
+        Err(r) => r,
+    }
+}
+
+/// One start's trajectory: exactly the CSV `chaoscope trajectory` writes (CPU f64, a row
+/// every ~0.02 s), its reproducing command on the first line.
+async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<TrajectoryJob> {
+        let mut q = Query::new(q);
+        let view = q.view(&shared.base)?;
+        let start = view::start(&mut q)?;
+        q.finish()?;
+        let dt = view.stepping.dt;
+        let stride = (0.02 / dt).round().max(1.0);
+        Ok(TrajectoryJob {
+            params: view.params,
+            start,
+            stepping: view.stepping,
+            every: Some(stride * dt),
+            backend: Backend::Cpu,
+            precision: Precision::F32,
+            output: None,
+        })
+    })();
+    let job = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let command = (shared.commands.trajectory)(&job);
+    let work = tokio::task::spawn_blocking(move || {
+        let mut csv = Vec::new();
+        crate::app::trajectory::run(&job, command, &Monitor::hidden(), &mut csv).map(|_| csv)
+    });
+    match tokio::time::timeout(REQUEST_LIMIT, work).await {
+        Ok(Ok(Ok(csv))) => ([(header::CONTENT_TYPE, "text/csv")], csv).into_response(),
+        Ok(Ok(Err(e))) => reply(e),
+        Ok(Err(e)) => reply(Error::Format(format!("the trajectory failed: {e}"))),
+        Err(_) => busy("the request took too long"),
+    }
+}
+
+/// The divergence map's colour range for the page's physics: 0 to the 99.5th percentile of
+/// the whole turn's exponents (a 128^2 overview), as `chaoscope lyapunov` picks it.
+async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<View> {
+        let mut q = Query::new(q);
+        let view = q.view(&shared.base)?;
+        q.finish()?;
+        Ok(view)
+    })();
+    let view = match parsed {
+        Ok(v) => v,
+        Err(e) => return reply(e),
+    };
+    let key = format!(
+        "range {:?} {:?} {:?}",
+        view.params, view.stepping, view.accurate
+    );
+    if let Some(bytes) = cached(&shared, &key) {
+        return json(serde_json::from_slice(&bytes).unwrap_or_default());
+    }
+    let result = on_engine(&shared, move |engine, monitor| {
+        let spec = view.lyapunov_spec(Grid::square(128));
+        spec.validate()?;
+        Ok(render::ftle_range(&engine.lyapunov_map(&spec, monitor)?))
+    })
+    .await;
+    match result {
+        Ok((lo, hi)) => {
+            let value = serde_json::json!({ "lo": lo, "hi": hi });
+            remember(&shared, key, Arc::new(value.to_string().into_bytes()));
+            json(value)
+        }
+        Err(r) => r,
+    }
+}
+
+/// The view as a PNG file made by `chaoscope flip` / `lyapunov`'s own run (its command in
+/// the metadata), over the region and at the size asked.
+async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<(View, Grid, bool)> {
+        let mut q = Query::new(q);
+        let view = q.view(&shared.base)?;
+        let grid = view::region_grid(&mut q)?;
+        let annotate = q.flag("annotate")?;
+        q.finish()?;
+        Ok((view, grid, annotate))
+    })();
+    let (view, grid, annotate) = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let (backend, commands) = (shared.backend, shared.commands);
+    let result = on_engine(&shared, move |_engine, monitor| {
+        let dir = tempfile::tempdir()?;
+        let files = MapOutputs {
+            output: dir.path().join("view.png"),
+            data: None,
+            resolved: None,
+            show_unresolved: view.unresolved || view.kind == Kind::Resolved,
+        };
+        let picture = PictureSpec {
+            annotate,
+            colormap: view.colormap,
+        };
+        let name = match view.kind {
+            Kind::Flip | Kind::Resolved => {
+                let job = FlipJob {
+                    spec: view.flip_spec(grid),
+                    backend,
+                    picture,
+                    files: files.clone(),
+                    tile: None,
+                };
+                crate::app::flip::run(&job, (commands.flip)(&job), monitor)?;
+                "chaoscope-flip.png"
+            }
+            Kind::Ftle => {
+                let job = LyapunovMapJob {
+                    spec: view.lyapunov_spec(grid),
+                    backend,
+                    picture,
+                    files: files.clone(),
+                    tile: None,
+                    colour_range: Some(view.range),
+                };
+                crate::app::lyapunov::run_map(&job, (commands.lyapunov)(&job), monitor)?;
+                "chaoscope-lyapunov.png"
+            }
+        };
+        let bytes = std::fs::read(&files.output).map_err(|e| Error::File {
+            path: files.output.clone(),
+            source: e,
+        })?;
+        Ok((bytes, name))
+    })
+    .await;
+    match result {
+        Ok((bytes, name)) => (
+            [
+                (header::CONTENT_TYPE, "image/png".to_string()),
+                (
+                    header::CONTENT_DISPOSITION,
+                    format!("attachment; filename=\"{name}\""),
+                ),
+            ],
+            bytes,
+        )
+            .into_response(),
+        Err(r) => r,
+    }
+}
+
+/// Counters since the start, and the queue now.
+async fn stats(AxumState(shared): AxumState<S>) -> Response {
+    let c = &shared.counters;
+    json(serde_json::json!({
+        "computed": c.computed.load(Ordering::Relaxed),
+        "cached": c.cached.load(Ordering::Relaxed),
+        "cancelled": c.cancelled.load(Ordering::Relaxed),
+        "refused": c.refused.load(Ordering::Relaxed),
+        "waiting": shared.waiting.load(Ordering::Relaxed),
+        "cache_entries": shared.cache.lock().map(|c| c.len()).unwrap_or(0),
+    }))
+}

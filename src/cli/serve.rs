@@ -1,0 +1,64 @@
+//! `chaoscope serve`: the explorer in the browser.
+
+use std::net::IpAddr;
+
+use clap::Args;
+
+use super::args::{PhysicalArgs, backend_parser};
+use super::{command_line, json, say};
+use crate::app::serve::{self, Commands, ServeJob};
+use crate::engine::Backend;
+use crate::error::Result;
+use crate::monitor::Monitor;
+
+#[derive(Args, Debug, Clone)]
+pub struct ServeArgs {
+    /// Port to listen on (0: any free port; the URL printed says which).
+    #[arg(long, default_value = "8080")]
+    pub port: u16,
+    /// Address to listen on. The default answers this machine only; reach a remote one
+    /// through an SSH tunnel (ssh -L 8080:127.0.0.1:8080 host) rather than opening it.
+    #[arg(long, default_value = "127.0.0.1")]
+    pub host: IpAddr,
+    /// auto: the GPU when an adapter exists, else the CPU (with a notice); gpu; cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+    /// The physics the page starts from (the page can change masses, lengths and damping).
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+}
+
+impl ServeArgs {
+    pub fn job(&self) -> ServeJob {
+        ServeJob {
+            host: self.host,
+            port: self.port,
+            base: self.physical.sources(),
+            backend: self.backend,
+        }
+    }
+}
+
+/// The commands the page shows and the saved views carry.
+pub const COMMANDS: Commands = Commands {
+    flip: command_line::flip,
+    lyapunov: command_line::lyapunov_map,
+    trajectory: command_line::trajectory,
+};
+
+pub fn run(args: &ServeArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    let summary = serve::run(&args.job(), COMMANDS, monitor, |ready| {
+        say(&ready.notices);
+        // The URL on standard output (scripts and tests read it), the rest on stderr.
+        println!("{}", ready.url);
+        eprintln!(
+            "chaoscope explorer at {} (tiles on {}); Ctrl-C stops it",
+            ready.url, ready.place
+        );
+    })?;
+    eprintln!(
+        "stopped: {} tiles computed, {} from the cache, {} cancelled, {} refused (queue full)",
+        summary.computed, summary.cached, summary.cancelled, summary.refused
+    );
+    json(&summary)
+}

@@ -1,0 +1,93 @@
+"""Drives the explorer in a real headless Chromium through WebDriver (selenium with Debian's
+chromedriver): loads the page, waits for the first tiles, zooms in once, clicks a pixel and
+shift-clicks another, and prints what it saw as JSON (timings in seconds from page load).
+
+Usage: explore.py URL OUTDIR   (screenshots map.png and pendulum.png go to OUTDIR)
+"""
+import json
+import sys
+import time
+
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.action_chains import ActionChains
+from selenium.webdriver.common.by import By
+from selenium.webdriver.common.keys import Keys
+from selenium.webdriver.support.ui import WebDriverWait
+
+url, out = sys.argv[1], sys.argv[2]
+options = webdriver.ChromeOptions()
+options.binary_location = "/usr/bin/chromium"
+for flag in ["--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+             "--disable-background-networking", "--window-size=872,512"]:
+    options.add_argument(flag)
+driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+report = {}
+try:
+    wait = WebDriverWait(driver, 90, poll_frequency=0.05)
+    # The map 512 x 512 (the panel is 360 wide): the first view is the whole turn, one
+    # 256 x 256 tile at zoom 0; one zoom step at the centre needs the 4 tiles of zoom 1.
+    def viewport(width, height):
+        driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
+            "width": width, "height": height, "deviceScaleFactor": 1, "mobile": False})
+
+    viewport(872, 512)
+    driver.get(url + "#z=0&theta1=0&theta2=0&t_max=20")
+    wait.until(lambda d: d.execute_script(
+        "return window.chaoscope && window.chaoscope.firstView !== null"))
+    report["first_view_s"] = driver.execute_script(
+        "return window.chaoscope.firstView / 1000")
+    box = driver.find_element(By.ID, "map").rect
+    report["map_box"] = [int(box["x"]), int(box["y"]), int(box["width"]), int(box["height"])]
+    report["status"] = driver.find_element(By.ID, "status").text
+    driver.save_screenshot(out + "/map.png")
+
+    started = driver.execute_script("""
+        const p = window.chaoscope; p.zoomLoads = p.loads; p.tilesAsked = 0;
+        p.layer.on('tileloadstart', () => { p.tilesAsked += 1; });
+        p.zoomStart = performance.now(); p.map.zoomIn(); return p.zoomStart;""")
+    wait.until(lambda d: d.execute_script(
+        "const p = window.chaoscope; return p.loads > p.zoomLoads;"))
+    report["zoom_step_s"] = driver.execute_script(
+        "const p = window.chaoscope; return (p.lastLoad - p.zoomStart) / 1000")
+    report["zoom_step_tiles"] = driver.execute_script("return window.chaoscope.tilesAsked")
+
+    # Click the pixel at (2.5, 2.5) rad, which flips early, then shift-click a neighbour.
+    def click_at(theta1, theta2, shift=False):
+        x, y = driver.execute_script("""
+            const p = window.chaoscope, w = 256, t = 2 * Math.PI;
+            const pt = p.map.latLngToContainerPoint([(arguments[1] - Math.PI) * w / t,
+                                                     (arguments[0] + Math.PI) * w / t]);
+            return [pt.x, pt.y];""", theta1, theta2)
+        element = driver.find_element(By.ID, "map")
+        dx, dy = x - element.rect["width"] / 2, y - element.rect["height"] / 2
+        chain = ActionChains(driver)
+        if shift:
+            chain = chain.key_down(Keys.SHIFT)
+        chain = chain.move_to_element_with_offset(element, dx, dy).click()
+        if shift:
+            chain = chain.key_up(Keys.SHIFT)
+        chain.perform()
+
+    viewport(1280, 860)
+    driver.execute_script("window.chaoscope.map.setView([(2.5 - Math.PI) * 256 / (2 * Math.PI), (2.5 + Math.PI) * 256 / (2 * Math.PI)], 3)")
+    wait.until(lambda d: d.execute_script("return document.body.dataset.tiles === 'loaded'"))
+    click_at(2.5, 2.5)
+    wait.until(lambda d: d.execute_script("return document.body.dataset.pendulum === 'shown'"))
+    click_at(2.52, 2.5, shift=True)
+    wait.until(lambda d: len(d.find_elements(By.CSS_SELECTOR, "#starts li")) == 2
+               and d.execute_script("return document.body.dataset.pendulum === 'shown'"))
+    time.sleep(0.5)  # a few animation frames
+    report["command"] = driver.find_element(By.ID, "command").text
+    report["starts"] = [li.text for li in driver.find_elements(By.CSS_SELECTOR, "#starts li")]
+    report["swing_pixels"] = driver.execute_script("""
+        const c = document.getElementById('swing');
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let n = 0; for (let k = 3; k < d.length; k += 4) if (d[k] > 0) n += 1; return n;""")
+    report["hash"] = driver.execute_script("return location.hash")
+    driver.save_screenshot(out + "/pendulum.png")
+    report["console_errors"] = [e["message"] for e in driver.get_log("browser")
+                                if e["level"] == "SEVERE"]
+finally:
+    driver.quit()
+print(json.dumps(report))

@@ -1,0 +1,545 @@
+//! `chaoscope serve`, end to end: the server started as users start it, asked over HTTP.
+//! Tiles must equal the pixels of `chaoscope flip` / `lyapunov` over the same region, the
+//! trajectory endpoint the command it names, a saved view the command in its metadata; bad
+//! queries get 400, paths outside the assets 404; a burst of requests is bounded; and a real
+//! headless Chromium shows the map and a clicked pixel's pendulum.
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use chaoscope::render::read_png;
+use common::{chaoscope, gpu, png_text};
+
+/// A running `chaoscope serve --port 0`, killed when dropped.
+struct Server {
+    child: Child,
+    url: String,
+    agent: ureq::Agent,
+}
+
+impl Server {
+    fn start(args: &[&str]) -> Server {
+        let bin = assert_cmd::cargo::cargo_bin("chaoscope");
+        let mut child = Command::new(bin)
+            .args(["serve", "--port", "0"])
+            .args(args)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("chaoscope serve starts");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().expect("stdout"))
+            .read_line(&mut line)
+            .expect("the URL on stdout");
+        let url = line.trim().trim_end_matches('/').to_string();
+        assert!(url.starts_with("http://"), "no URL printed: {line:?}");
+        let agent = ureq::Agent::new_with_config(
+            ureq::Agent::config_builder()
+                .http_status_as_error(false)
+                .timeout_global(Some(Duration::from_secs(120)))
+                .build(),
+        );
+        Server { child, url, agent }
+    }
+
+    /// (status, headers' precision, body) of GET `path`.
+    fn get(&self, path: &str) -> (u16, Option<String>, Vec<u8>) {
+        let mut r = self
+            .agent
+            .get(&format!("{}{path}", self.url))
+            .call()
+            .unwrap_or_else(|e| panic!("GET {path}: {e}"));
+        let precision = r
+            .headers()
+            .get("x-chaoscope-precision")
+            .map(|v| v.to_str().unwrap().to_string());
+        let body = r
+            .body_mut()
+            .with_config()
+            .limit(64 << 20)
+            .read_to_vec()
+            .unwrap();
+        (r.status().as_u16(), precision, body)
+    }
+
+    fn rss_kib(&self) -> u64 {
+        let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id()))
+            .expect("/proc status");
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix("VmRSS:"))
+            .and_then(|v| v.split_whitespace().next()?.parse().ok())
+            .expect("VmRSS")
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// RGB bytes of a PNG file or of PNG bytes.
+fn rgb_of_bytes(bytes: &[u8], dir: &Path, name: &str) -> (u32, u32, Vec<u8>) {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let png = read_png(&path).unwrap();
+    (png.width, png.height, png.rgb)
+}
+
+/// Tile (z, x, y)'s theta ranges as `--theta1 MIN:MAX --theta2 MIN:MAX` (the server's own
+/// arithmetic, printed shortest-exact so the command gets the same numbers).
+fn tile_ranges(z: u32, x: u64, y: u64) -> [String; 4] {
+    let g = chaoscope::app::serve::view::tile_grid(z, x, y, 256).unwrap();
+    [
+        "--theta1".into(),
+        format!("{}:{}", g.theta1.min, g.theta1.max),
+        "--theta2".into(),
+        format!("{}:{}", g.theta2.min, g.theta2.max),
+    ]
+}
+
+fn first_differing_pixel(a: &[u8], b: &[u8], width: u32) -> Option<(usize, usize)> {
+    a.chunks(3)
+        .zip(b.chunks(3))
+        .position(|(p, q)| p != q)
+        .map(|k| (k % width as usize, k / width as usize))
+}
+
+/// (what, tile (z, x, y), its query, the map command's flags, the precision it runs in).
+type Case<'a> = (&'a str, (u32, u64, u64), &'a str, &'a [&'a str], &'a str);
+
+#[test]
+fn tiles_equal_the_pixels_of_the_map_commands() {
+    if gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let server = Server::start(&["--backend", "gpu", "--m2", "1.5"]);
+    // Level 16's pixels (3.7e-7 rad) are finer than f32 resolves: the f64 kernels take over.
+    let cases: &[Case] = &[
+        (
+            "flip",
+            (2, 1, 2),
+            "t_max=8",
+            &["flip", "--t-max", "8"],
+            "f32",
+        ),
+        (
+            "flip, deep zoom",
+            (16, 58_843, 6_692),
+            "t_max=4&cmap=viridis",
+            &["flip", "--t-max", "4", "--colormap", "viridis"],
+            "f64",
+        ),
+        (
+            "flip, unresolved grey",
+            (1, 0, 1),
+            "t_max=6&unresolved=1&damping=0.05",
+            &[
+                "flip",
+                "--t-max",
+                "6",
+                "--joint-damping",
+                "0.05",
+                "--show-unresolved",
+            ],
+            "f32",
+        ),
+        (
+            "divergence",
+            (1, 1, 0),
+            "kind=ftle&t_max=5&lo=0&hi=1.5",
+            &["lyapunov", "--t-max", "5", "--colour-range", "0:1.5"],
+            "f32",
+        ),
+        (
+            "accurate flip",
+            (3, 2, 3),
+            "t_max=5&accurate=1",
+            &["flip", "--t-max", "5", "--accurate"],
+            "f64",
+        ),
+    ];
+    for (k, &(what, (z, x, y), query, flags, precision)) in cases.iter().enumerate() {
+        let (status, ran, body) = server.get(&format!("/tile/{z}/{x}/{y}.png?{query}&m2=1.5"));
+        assert_eq!(status, 200, "{what}: {}", String::from_utf8_lossy(&body));
+        assert_eq!(ran.as_deref(), Some(precision), "{what}: precision");
+        let (w, h, tile) = rgb_of_bytes(&body, dir.path(), &format!("tile{k}.png"));
+        assert_eq!((w, h), (256, 256), "{what}");
+        let out = dir.path().join(format!("map{k}.png"));
+        chaoscope()
+            .args(flags)
+            .args(tile_ranges(z, x, y))
+            .args([
+                "--size",
+                "256",
+                "--m2",
+                "1.5",
+                "--backend",
+                "gpu",
+                "--output",
+            ])
+            .arg(&out)
+            .assert()
+            .success();
+        let map = read_png(&out).unwrap();
+        assert_eq!(
+            first_differing_pixel(&tile, &map.rgb, 256),
+            None,
+            "{what}: tile {z}/{x}/{y} differs from the command's map at (x, y)"
+        );
+    }
+    // The verdict's tile is the --resolved mask: white where 1.
+    let (status, _, body) = server.get("/tile/1/1/1.png?kind=resolved&t_max=6&m2=1.5");
+    assert_eq!(status, 200);
+    let (_, _, tile) = rgb_of_bytes(&body, dir.path(), "mask.png");
+    let mask = dir.path().join("mask.npy");
+    chaoscope()
+        .args([
+            "flip",
+            "--t-max",
+            "6",
+            "--size",
+            "256",
+            "--m2",
+            "1.5",
+            "--backend",
+            "gpu",
+        ])
+        .args(tile_ranges(1, 1, 1))
+        .arg("--output")
+        .arg(dir.path().join("m.png"))
+        .arg("--resolved")
+        .arg(&mask)
+        .assert()
+        .success();
+    let (_, m) = common::read_mask(&mask);
+    let want: Vec<u8> = m.iter().flat_map(|&v| [255 * v; 3]).collect();
+    assert_eq!(
+        first_differing_pixel(&tile, &want, 256),
+        None,
+        "verdict tile"
+    );
+    assert!(m.contains(&0) && m.contains(&1), "the mask has both kinds");
+    // A second request comes from the cache, the same bytes.
+    let (_, ran, again) = server.get("/tile/1/1/1.png?kind=resolved&t_max=6&m2=1.5");
+    assert_eq!((ran.as_deref(), again), (Some("cached"), body));
+}
+
+#[test]
+fn trajectory_and_saved_view_equal_their_commands() {
+    if gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let server = Server::start(&["--backend", "gpu"]);
+    let (status, _, csv) =
+        server.get("/api/trajectory?theta1=2.1&theta2=-0.7&t_max=3&l2=0.8&damping=0.01");
+    assert_eq!(status, 200);
+    let csv = String::from_utf8(csv).unwrap();
+    let command = csv
+        .lines()
+        .next()
+        .unwrap()
+        .strip_prefix("# chaoscope ")
+        .unwrap();
+    let out = chaoscope()
+        .args(command.split_whitespace())
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), csv, "{command}");
+
+    let (status, _, png) = server.get(
+        "/api/save?t_max=5&theta1_min=-1&theta1_max=2&theta2_min=0.5&theta2_max=3\
+         &width=96&height=80&annotate=1&cmap=turbo",
+    );
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&png));
+    let saved = dir.path().join("saved.png");
+    std::fs::write(&saved, &png).unwrap();
+    let command = png_text(&saved, "chaoscope:command");
+    assert!(
+        command.contains("--theta1 -1:2") && command.contains("--size 96x80"),
+        "{command}"
+    );
+    let again = dir.path().join("again.png");
+    chaoscope()
+        .args(
+            command
+                .strip_prefix("chaoscope ")
+                .unwrap()
+                .split_whitespace(),
+        )
+        .arg("--output")
+        .arg(&again)
+        .assert()
+        .success();
+    let (a, b) = (read_png(&saved).unwrap(), read_png(&again).unwrap());
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    assert!(
+        a.rgb == b.rgb,
+        "the saved view differs from its command's PNG"
+    );
+
+    // The clicked pixel's flip time is the one-pixel map's, with its verdict.
+    let (status, _, point) = server.get("/api/point?theta1=2.5&theta2=2.5&pixel=0.01&t_max=10");
+    assert_eq!(status, 200);
+    let point: serde_json::Value = serde_json::from_slice(&point).unwrap();
+    let t = point["flip_time"].as_f64().expect("(2.5, 2.5) flips");
+    assert!(t > 0.0 && t < 10.0, "{point}");
+    assert_eq!(point["precision"], "f32");
+}
+
+#[test]
+fn bad_queries_get_400_naming_the_key() {
+    if gpu().is_none() {
+        return;
+    }
+    let server = Server::start(&["--backend", "gpu"]);
+    for (path, key) in [
+        ("/tile/0/0/0.png?kind=mandelbrot", "kind"),
+        ("/tile/0/0/0.png?t_max=NaN", "t_max"),
+        ("/tile/0/0/0.png?t_max=1e6", "t_max"),
+        ("/tile/0/0/0.png?dt=0", "dt"),
+        ("/tile/0/0/0.png?size=100000", "size"),
+        ("/tile/1/2/0.png", "x"),
+        ("/tile/1/0/7.png", "y"),
+        ("/tile/99/0/0.png", "z"),
+        ("/tile/a/0/0.png", "z"),
+        ("/tile/0/0/0.png?m1=-1", "m1"),
+        ("/tile/0/0/0.png?damping=inf", "damping"),
+        ("/tile/0/0/0.png?tmax=3", "query"),
+        ("/tile/0/0/0.png?kind=ftle&lo=2&hi=1", "hi"),
+        ("/api/point?theta2=1", "theta1"),
+        ("/api/trajectory?theta1=1&theta2=1e9", "theta2"),
+        (
+            "/api/save?theta1_min=0&theta1_max=1&theta2_min=0&theta2_max=1&width=1e5",
+            "width",
+        ),
+        (
+            "/api/save?theta1_min=1&theta1_max=0&theta2_min=0&theta2_max=1",
+            "theta1_max",
+        ),
+    ] {
+        let (status, _, body) = server.get(path);
+        let body = String::from_utf8_lossy(&body);
+        assert_eq!(status, 400, "{path}: {body}");
+        assert!(
+            body.starts_with(&format!("invalid value for {key}:")),
+            "{path}: {body}"
+        );
+    }
+}
+
+#[test]
+fn only_the_assets_are_served() {
+    if gpu().is_none() {
+        return;
+    }
+    let server = Server::start(&["--backend", "gpu"]);
+    assert!(
+        server.url.starts_with("http://127.0.0.1:"),
+        "{}",
+        server.url
+    );
+    let (status, _, page) = server.get("/");
+    assert_eq!(status, 200);
+    assert!(String::from_utf8_lossy(&page).contains("/assets/vendor/leaflet/leaflet.js"));
+    let (status, _, licence) = server.get("/assets/vendor/leaflet/LICENSE");
+    assert_eq!(status, 200);
+    assert!(String::from_utf8_lossy(&licence).contains("BSD 2-Clause"));
+    for path in [
+        "/assets/../Cargo.toml",
+        "/assets/%2e%2e/Cargo.toml",
+        "/assets/%2e%2e/%2e%2e/etc/passwd",
+        "/assets/vendor/leaflet/../../../src/main.rs",
+        "/assets/vendor%2fleaflet%2f..%2f..%2fapp.js",
+        "/assets/",
+        "/assets/app.js/",
+        "/etc/passwd",
+        "/src/main.rs",
+        "/tile/0/0/0.png/../../../Cargo.toml",
+        "/index.html",
+    ] {
+        let (status, _, body) = server.get(path);
+        assert_eq!(status, 404, "{path}: {}", String::from_utf8_lossy(&body));
+    }
+}
+
+#[test]
+fn a_burst_of_requests_is_bounded_and_the_server_still_answers() {
+    if gpu().is_none() {
+        return;
+    }
+    let server = Server::start(&["--backend", "gpu"]);
+    server.get("/tile/0/0/0.png?t_max=1");
+    let before = server.rss_kib();
+    // 200 different tiles at once (level 5 has 1024): some wait, the rest are refused (503)
+    // once the queue is full.
+    let statuses: Vec<u16> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..200u64)
+            .map(|k| {
+                let server = &server;
+                s.spawn(move || {
+                    server
+                        .get(&format!("/tile/5/{}/{}.png?t_max=2", k % 32, k / 32))
+                        .0
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let after = server.rss_kib();
+    let ok = statuses.iter().filter(|&&s| s == 200).count();
+    let busy = statuses.iter().filter(|&&s| s == 503).count();
+    eprintln!(
+        "200 requests at once: {ok} tiles, {busy} refused; RSS {} -> {} MiB",
+        before / 1024,
+        after / 1024
+    );
+    assert_eq!(
+        ok + busy,
+        200,
+        "every request gets a tile or 503: {statuses:?}"
+    );
+    assert!(
+        ok >= chaoscope::app::serve::MAX_WAITING.min(200) / 2,
+        "{ok} tiles"
+    );
+    let (status, _, stats) = server.get("/api/stats");
+    assert_eq!(status, 200);
+    let stats: serde_json::Value = serde_json::from_slice(&stats).unwrap();
+    assert_eq!(stats["refused"].as_u64(), Some(busy as u64), "{stats}");
+    assert_eq!(stats["waiting"].as_u64(), Some(0), "{stats}");
+    let (status, _, _) = server.get("/tile/0/0/0.png?t_max=1.5");
+    assert_eq!(status, 200, "the server answers after the burst");
+}
+
+#[test]
+fn a_request_whose_client_leaves_is_cancelled() {
+    if gpu().is_none() {
+        return;
+    }
+    let server = Server::start(&["--backend", "gpu"]);
+    server.get("/tile/0/0/0.png?t_max=1");
+    // A tile that takes seconds, abandoned after 0.3 s.
+    let impatient = ureq::Agent::new_with_config(
+        ureq::Agent::config_builder()
+            .timeout_global(Some(Duration::from_millis(300)))
+            .build(),
+    );
+    let gone = impatient
+        .get(&format!("{}/tile/2/1/1.png?t_max=100", server.url))
+        .call();
+    assert!(
+        gone.is_err(),
+        "the slow tile should not have finished in 0.3 s"
+    );
+    let mut stats = serde_json::Value::Null;
+    for _ in 0..100 {
+        std::thread::sleep(Duration::from_millis(100));
+        let (_, _, body) = server.get("/api/stats");
+        stats = serde_json::from_slice(&body).unwrap();
+        if stats["cancelled"].as_u64() == Some(1) && stats["waiting"].as_u64() == Some(0) {
+            break;
+        }
+    }
+    assert_eq!(stats["cancelled"].as_u64(), Some(1), "{stats}");
+    assert_eq!(stats["computed"].as_u64(), Some(1), "{stats}");
+    let (status, _, _) = server.get("/tile/0/0/0.png?t_max=2");
+    assert_eq!(status, 200);
+}
+
+/// The Python with selenium that scripts/test installs, and Debian's chromium and its
+/// driver; None (a skip, or a failure under CI=true) without them.
+fn browser_tools() -> Option<String> {
+    let python = std::env::var("CHAOSCOPE_PYTHON").unwrap_or_else(|_| {
+        let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/pyenv/bin/python");
+        venv.to_str().unwrap().to_string()
+    });
+    let has_selenium = Command::new(&python)
+        .args(["-c", "import selenium"])
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    let present = has_selenium
+        && Path::new("/usr/bin/chromium").exists()
+        && Path::new("/usr/bin/chromedriver").exists();
+    if !present {
+        assert_ne!(
+            std::env::var("CI").as_deref(),
+            Ok("true"),
+            "no selenium in {python}, or no /usr/bin/chromium and chromedriver (scripts/test installs them)"
+        );
+        eprintln!("SKIPPED: no selenium, chromium or chromedriver (scripts/test installs them)");
+        return None;
+    }
+    Some(python)
+}
+
+#[test]
+fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
+    if gpu().is_none() {
+        return;
+    }
+    let Some(python) = browser_tools() else {
+        return;
+    };
+    let server = Server::start(&["--backend", "gpu"]);
+    let dir = tempfile::tempdir().unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser/explore.py");
+    let out = Command::new(python)
+        .arg(script)
+        .arg(format!("{}/", server.url))
+        .arg(dir.path())
+        .stderr(Stdio::inherit())
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "the browser script failed: {report}");
+    eprintln!("browser: {report}");
+    let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+
+    // The first screenshot shows a map: many colours inside the map's area, not a blank or
+    // an error page.
+    let shot = read_png(&dir.path().join("map.png")).unwrap();
+    let (mx, my, mw, mh) = (
+        report["map_box"][0].as_u64().unwrap() as u32,
+        report["map_box"][1].as_u64().unwrap() as u32,
+        report["map_box"][2].as_u64().unwrap() as u32,
+        report["map_box"][3].as_u64().unwrap() as u32,
+    );
+    let mut colours = std::collections::HashSet::new();
+    for y in my..(my + mh).min(shot.height) {
+        for x in mx..(mx + mw).min(shot.width) {
+            let k = 3 * (y * shot.width + x) as usize;
+            colours.insert([shot.rgb[k], shot.rgb[k + 1], shot.rgb[k + 2]]);
+        }
+    }
+    assert!(
+        colours.len() > 200,
+        "{} colours in the map's area",
+        colours.len()
+    );
+    // The click showed its pendulum: the command that reproduces it, drawn arms, a flip
+    // time; shift-click added a second start.
+    let command = report["command"].as_str().unwrap();
+    assert!(
+        command.starts_with("chaoscope trajectory --theta1 "),
+        "{command}"
+    );
+    assert!(report["swing_pixels"].as_u64().unwrap() > 200, "{report}");
+    assert!(report["starts"].as_array().unwrap().len() == 2, "{report}");
+    assert!(
+        report["starts"][0].as_str().unwrap().contains("flips at"),
+        "{report}"
+    );
+    assert!(dir.path().join("pendulum.png").exists());
+}
