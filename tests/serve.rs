@@ -67,6 +67,17 @@ impl Server {
         (r.status().as_u16(), precision, body)
     }
 
+    /// GET `path` is refused with 400 naming `key`.
+    fn refuses(&self, path: &str, key: &str) {
+        let (status, _, body) = self.get(path);
+        let body = String::from_utf8_lossy(&body);
+        assert_eq!(status, 400, "{path}: {body}");
+        assert!(
+            body.starts_with(&format!("invalid value for {key}:")),
+            "{path}: {body}"
+        );
+    }
+
     fn rss_kib(&self) -> u64 {
         let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id()))
             .expect("/proc status");
@@ -96,7 +107,9 @@ fn rgb_of_bytes(bytes: &[u8], dir: &Path, name: &str) -> (u32, u32, Vec<u8>) {
 /// Tile (z, x, y)'s theta ranges as `--theta1 MIN:MAX --theta2 MIN:MAX` (the server's own
 /// arithmetic, printed shortest-exact so the command gets the same numbers).
 fn tile_ranges(z: u32, x: u64, y: u64) -> [String; 4] {
-    let g = chaoscope::app::serve::view::tile_grid(z, x, y, 256).unwrap();
+    let g = chaoscope::app::serve::view::World::TURN
+        .tile_grid(z, x, y, 256)
+        .unwrap();
     [
         "--theta1".into(),
         format!("{}:{}", g.theta1.min, g.theta1.max),
@@ -328,13 +341,7 @@ fn bad_queries_get_400_naming_the_key() {
             "theta1_max",
         ),
     ] {
-        let (status, _, body) = server.get(path);
-        let body = String::from_utf8_lossy(&body);
-        assert_eq!(status, 400, "{path}: {body}");
-        assert!(
-            body.starts_with(&format!("invalid value for {key}:")),
-            "{path}: {body}"
-        );
+        server.refuses(path, key);
     }
 }
 
@@ -429,14 +436,15 @@ fn a_request_whose_client_leaves_is_cancelled() {
     }
     let server = Server::start(&["--backend", "gpu"]);
     server.get("/tile/0/0/0.png?t_max=1");
-    // A tile that takes seconds, abandoned after 0.3 s.
+    // A tile that takes seconds (divergence maps have no early exit; ~8 s on lavapipe),
+    // abandoned after 0.3 s.
     let impatient = ureq::Agent::new_with_config(
         ureq::Agent::config_builder()
             .timeout_global(Some(Duration::from_millis(300)))
             .build(),
     );
     let gone = impatient
-        .get(&format!("{}/tile/2/1/1.png?t_max=100", server.url))
+        .get(&format!("{}/tile/2/1/1.png?kind=ftle&t_max=100", server.url))
         .call();
     assert!(
         gone.is_err(),
@@ -455,6 +463,126 @@ fn a_request_whose_client_leaves_is_cancelled() {
     assert_eq!(stats["computed"].as_u64(), Some(1), "{stats}");
     let (status, _, _) = server.get("/tile/0/0/0.png?t_max=2");
     assert_eq!(status, 200);
+}
+
+#[test]
+fn a_stored_map_is_served_from_its_pixels_and_computed_below_them() {
+    if gpu().is_none() {
+        return;
+    }
+    use chaoscope::app::serve::view::World;
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("map.zarr");
+    // 600 x 300 pixels: level 2 holds them one to one (3 x 2 tiles, the last ones partly
+    // beyond the map's edge).
+    let map = [
+        "flip", "--size", "600x300", "--theta1", "-2:3", "--theta2", "-1:2", "--t-max", "6",
+    ];
+    chaoscope()
+        .args(map)
+        .args(["--backend", "gpu", "--data"])
+        .arg(&store)
+        .arg("--resolved")
+        .arg(&store)
+        .assert()
+        .success();
+    let whole = dir.path().join("whole.png");
+    chaoscope()
+        .arg("render")
+        .arg(&store)
+        .arg("--output")
+        .arg(&whole)
+        .assert()
+        .success();
+    let whole = read_png(&whole).unwrap();
+    let server = Server::start(&["--backend", "gpu", "--store", store.to_str().unwrap()]);
+    let s = chaoscope::render::store::MapStore::open(&store).unwrap();
+    let mask = s.read_resolved(0, 300).unwrap().unwrap();
+    let grid = chaoscope::spec::Grid {
+        width: 600,
+        height: 300,
+        theta1: chaoscope::spec::Range {
+            min: -2.0,
+            max: 3.0,
+        },
+        theta2: chaoscope::spec::Range {
+            min: -1.0,
+            max: 2.0,
+        },
+        ..chaoscope::spec::Grid::square(1)
+    };
+    let world = World::of_grid(&grid);
+    const OUTSIDE: [u8; 3] = [42, 42, 48];
+    for (z, x, y) in [(2, 2, 1), (2, 0, 0), (0, 0, 0), (1, 1, 0)] {
+        let (status, ran, body) = server.get(&format!("/tile/{z}/{x}/{y}.png"));
+        assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+        assert_eq!(ran.as_deref(), Some("stored"));
+        let (_, _, tile) = rgb_of_bytes(&body, dir.path(), "t.png");
+        let (_, _, verdict) = rgb_of_bytes(
+            &server
+                .get(&format!("/tile/{z}/{x}/{y}.png?kind=resolved"))
+                .2,
+            dir.path(),
+            "v.png",
+        );
+        for j in 0..256u32 {
+            for i in 0..256u32 {
+                let col = world.stored_pixel(z, x, i, 256);
+                let row = world.stored_pixel(z, y, j, 256);
+                let k = 3 * (j * 256 + i) as usize;
+                let (want, want_verdict) = if col < 600 && row < 300 {
+                    let w = 3 * (row * 600 + col) as usize;
+                    let m = mask[(row * 600 + col) as usize];
+                    (&whole.rgb[w..w + 3], [if m == 1 { 255 } else { 0 }; 3])
+                } else {
+                    (&OUTSIDE[..], OUTSIDE)
+                };
+                assert_eq!(&tile[k..k + 3], want, "tile {z}/{x}/{y} at ({i}, {j})");
+                assert_eq!(
+                    verdict[k..k + 3],
+                    want_verdict,
+                    "verdict {z}/{x}/{y} at ({i}, {j})"
+                );
+            }
+        }
+    }
+    // Below the store's pixels: computed with its command's settings over the tile.
+    let (status, ran, body) = server.get("/tile/4/5/3.png");
+    assert_eq!((status, ran.as_deref()), (200, Some("f32")));
+    let (_, _, tile) = rgb_of_bytes(&body, dir.path(), "deep.png");
+    let g = world.tile_grid(4, 5, 3, 256).unwrap();
+    let out = dir.path().join("deep_flip.png");
+    chaoscope()
+        .args([
+            "flip",
+            "--size",
+            "256",
+            "--t-max",
+            "6",
+            "--backend",
+            "gpu",
+            "--theta1",
+        ])
+        .arg(format!("{}:{}", g.theta1.min, g.theta1.max))
+        .arg("--theta2")
+        .arg(format!("{}:{}", g.theta2.min, g.theta2.max))
+        .arg("--output")
+        .arg(&out)
+        .assert()
+        .success();
+    assert_eq!(
+        first_differing_pixel(&tile, &read_png(&out).unwrap().rgb, 256),
+        None
+    );
+    // The store fixes the physics and the kind.
+    for (path, key) in [
+        ("/tile/0/0/0.png?m1=2", "m1"),
+        ("/tile/0/0/0.png?t_max=3", "t_max"),
+        ("/tile/0/0/0.png?kind=ftle", "kind"),
+        ("/tile/2/0/2.png", "y"),
+    ] {
+        server.refuses(path, key);
+    }
 }
 
 /// The Python with selenium that scripts/test installs, and Debian's chromium and its
@@ -542,4 +670,36 @@ fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
         "{report}"
     );
     assert!(dir.path().join("pendulum.png").exists());
+}
+
+#[test]
+fn ctrl_c_stops_the_server_while_it_computes() {
+    if gpu().is_none() {
+        return;
+    }
+    let mut server = Server::start(&["--backend", "gpu"]);
+    // A slow tile (~8 s on lavapipe) in flight when Ctrl-C comes.
+    let url = format!("{}/tile/2/1/1.png?kind=ftle&t_max=100", server.url);
+    std::thread::spawn(move || ureq::get(&url).call().ok());
+    std::thread::sleep(Duration::from_millis(300));
+    let pid = server.child.id().to_string();
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &pid])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let started = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = server.child.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(20),
+            "still running 20 s after Ctrl-C"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.success(), "{status}");
 }

@@ -504,3 +504,22 @@ fn divergence_maps_go_into_stores() {
     let png = chaoscope::render::read_png(&dir.path().join("r.png")).unwrap();
     assert_eq!((png.width, png.height), (96, 64));
 }
+
+/// Regression: a height that is not a whole number of chunks (2048 wide: chunks of 128
+/// rows, so 200 rows end in a chunk of 72) was refused on writing the last chunk, and a
+/// reopened store misread its chunks' height from their count.
+#[test]
+fn a_store_whose_last_chunk_is_shorter_equals_the_npy() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = ["--size", "2048x200", "--t-max", "2", "--theta1", "-1:3"];
+    let npy = dir.path().join("map.npy");
+    write_npy(&map, &npy);
+    let store = dir.path().join("map.zarr");
+    let path = store.to_str().unwrap();
+    flip(&map, &["--data", path, "--tile", "0/2"]).success();
+    flip(&map, &["--data", path, "--tile", "1/2"]).success();
+    let s = MapStore::open(&store).unwrap();
+    assert_eq!((s.chunk_rows, s.chunks()), (128, 2));
+    assert_eq!(s.missing().unwrap(), Vec::<u32>::new());
+    assert_eq!(store_bits(&store), npy_bits(&npy));
+}

@@ -1,13 +1,15 @@
-// chaoscope explorer: the map is Leaflet in CRS.Simple, the whole turn [-pi, pi]^2 being
-// the square lng 0..256, lat -256..0 (tile 0/0/0); every tile, point and trajectory is
-// computed by the server from its URL. The page's state lives in the URL's hash.
+// chaoscope explorer: the map is Leaflet in CRS.Simple. The region of starts (the whole
+// turn [-pi, pi]^2 as tile 0/0/0, or a store's map) spans lng 0..units[0], lat -units[1]..0,
+// as the server's /api/info says; every tile, point and trajectory is computed (or read) by
+// the server from its URL. The page's state lives in the URL's hash.
 "use strict";
 
 const TURN = 2 * Math.PI;
-const WORLD = 256;
 const COLOURS = ["#f9a03f", "#4fc3f7", "#aed581", "#f06292", "#ba68c8", "#fff176"];
 const KEYS = ["kind", "t_max", "cmap", "m1", "m2", "l1", "l2", "damping", "accurate",
   "unresolved", "lo", "hi"];
+// What a store's command fixes.
+const PHYSICS = ["t_max", "m1", "m2", "l1", "l2", "damping", "accurate"];
 
 const state = {};          // the view's settings, as query keys
 const page = { starts: [], info: null, firstView: null, loads: 0, lastLoad: null };
@@ -16,10 +18,17 @@ window.chaoscope = page;   // for tests and the curious
 const form = document.getElementById("controls");
 const statusLine = document.getElementById("status");
 
-function theta1Of(lng) { return -Math.PI + lng * TURN / WORLD; }
-function theta2Of(lat) { return Math.PI + lat * TURN / WORLD; }
-function lngOf(theta1) { return (theta1 + Math.PI) * WORLD / TURN; }
-function latOf(theta2) { return (theta2 - Math.PI) * WORLD / TURN; }
+// Radians per level-0 unit along theta1 and theta2, and the region's corners.
+function world() {
+  const w = page.info.world;
+  return { t1: w.theta1, t2: w.theta2, units: w.units,
+    k1: (w.theta1[1] - w.theta1[0]) / w.units[0], k2: (w.theta2[1] - w.theta2[0]) / w.units[1] };
+}
+function theta1Of(lng) { const w = world(); return w.t1[0] + lng * w.k1; }
+function theta2Of(lat) { const w = world(); return w.t2[1] + lat * w.k2; }
+function lngOf(theta1) { const w = world(); return (theta1 - w.t1[0]) / w.k1; }
+function latOf(theta2) { const w = world(); return (theta2 - w.t2[1]) / w.k2; }
+function bounds() { const u = world().units; return [[-u[1], 0], [0, u[0]]]; }
 
 // The query string of the view's settings (only those that differ from the server's).
 function query(extra) {
@@ -28,6 +37,7 @@ function query(extra) {
     const v = state[k];
     if (v === undefined || v === "" || v === false) continue;
     if ((k === "lo" || k === "hi") && state.kind !== "ftle") continue;
+    if (page.info.store && PHYSICS.includes(k)) continue;
     q.set(k, v === true ? "1" : String(v));
   }
   for (const [k, v] of Object.entries(extra || {})) q.set(k, String(v));
@@ -60,14 +70,17 @@ function fillForm() {
     const el = form.elements[k];
     if (!el) continue;
     if (el.type === "checkbox") el.checked = !!state[k]; else el.value = state[k] ?? "";
+    if (page.info.store && PHYSICS.includes(k)) el.disabled = true;
   }
   document.getElementById("ftle-range").hidden = state.kind !== "ftle";
 }
 
 // The pixel step (rad) at zoom z, and what precision that needs.
 function precisionAt(z) {
-  const step = TURN / (WORLD * 2 ** z);
+  const w = world();
+  const step = Math.min(Math.abs(w.k1), Math.abs(w.k2)) / 2 ** z;
   const info = page.info;
+  if (info.store && z <= info.world.native) return [step, `read from ${info.store.name}`];
   if (step < info.f64_min_pixel_step) return [step, "beyond f64: no pixel is resolved"];
   const where = info.place === "the CPU" ? "CPU" : "GPU";
   if (state.accurate) return [step, `f64 DP54 on the ${info.has_f64 ? where : "CPU"}`];
@@ -103,6 +116,16 @@ async function start() {
   Object.assign(state, { kind: "flip", t_max: d.t_max, cmap: "", m1: d.m1, m2: d.m2,
     l1: d.l1, l2: d.l2, damping: d.damping, accurate: false, unresolved: false,
     lo: "", hi: "" });
+  if (page.info.store) {
+    const s = page.info.store;
+    state.kind = s.kind;
+    for (const o of [...form.elements.kind.options]) {
+      if (o.value !== s.kind && o.value !== "resolved") o.remove();
+    }
+    document.getElementById("hint").textContent =
+      `Showing the store ${s.name} (${s.width} x ${s.height}), made by: ${s.command}. ` +
+      "Zoomed past its pixels, tiles are computed with its settings.";
+  }
   const cmap = form.elements.cmap;
   cmap.add(new Option("default", ""));
   for (const c of page.info.colormaps) cmap.add(new Option(c, c));
@@ -110,11 +133,10 @@ async function start() {
   fillForm();
 
   map = L.map("map", { crs: L.CRS.Simple, minZoom: 0, maxZoom: page.info.max_zoom,
-    zoomSnap: 1, attributionControl: false, maxBounds: [[-WORLD * 1.5, -WORLD * 0.5],
-      [WORLD * 0.5, WORLD * 1.5]] });
+    zoomSnap: 1, attributionControl: false,
+    maxBounds: L.latLngBounds(bounds()).pad(0.5) });
   page.map = map;
-  const bounds = [[-WORLD, 0], [0, WORLD]];
-  if (view.z === null) map.fitBounds(bounds);
+  if (view.z === null) map.fitBounds(bounds());
   else map.setView([latOf(view.theta2), lngOf(view.theta1)], view.z);
   await setLayer();
   map.on("moveend", () => { writeHash(); showStatus(); });
@@ -138,7 +160,7 @@ async function setLayer() {
   page.loads = 0;
   const began = performance.now();
   layer = L.tileLayer("/tile/{z}/{x}/{y}.png?" + query(), {
-    tileSize: 256, noWrap: true, bounds: [[-WORLD, 0], [0, WORLD]],
+    tileSize: 256, noWrap: true, bounds: bounds(),
     minZoom: 0, maxZoom: page.info.max_zoom, keepBuffer: 1, updateWhenZooming: false,
   });
   page.layer = layer;
@@ -175,15 +197,18 @@ function onChange(e) {
 
 // The centre of the pixel under `latlng` at the current zoom, in rad.
 function pixelAt(latlng) {
-  const n = WORLD * 2 ** map.getZoom();
-  const step = TURN / n;
-  const col = Math.floor((latlng.lng / WORLD) * n);
-  const row = Math.floor((-latlng.lat / WORLD) * n);
-  return { theta1: -Math.PI + (col + 0.5) * step, theta2: Math.PI - (row + 0.5) * step, step };
+  const w = world();
+  const scale = 2 ** map.getZoom();
+  const col = Math.floor(latlng.lng * scale);
+  const row = Math.floor(-latlng.lat * scale);
+  return { theta1: w.t1[0] + (col + 0.5) * w.k1 / scale,
+    theta2: w.t2[1] - (row + 0.5) * w.k2 / scale,
+    step: Math.min(Math.abs(w.k1), Math.abs(w.k2)) / scale };
 }
 
 async function pick(latlng, add) {
-  if (latlng.lng < 0 || latlng.lng > WORLD || latlng.lat > 0 || latlng.lat < -WORLD) return;
+  const u = world().units;
+  if (latlng.lng < 0 || latlng.lng > u[0] || latlng.lat > 0 || latlng.lat < -u[1]) return;
   const p = pixelAt(latlng);
   if (!add) page.starts = [];
   if (page.starts.length >= COLOURS.length) page.starts.shift();
@@ -305,8 +330,9 @@ function drawPlot() {
 function saveView() {
   const b = map.getBounds();
   const clamp = (v, a, z) => Math.min(z, Math.max(a, v));
-  const t1 = [theta1Of(clamp(b.getWest(), 0, WORLD)), theta1Of(clamp(b.getEast(), 0, WORLD))];
-  const t2 = [theta2Of(clamp(b.getSouth(), -WORLD, 0)), theta2Of(clamp(b.getNorth(), -WORLD, 0))];
+  const u = world().units;
+  const t1 = [theta1Of(clamp(b.getWest(), 0, u[0])), theta1Of(clamp(b.getEast(), 0, u[0]))];
+  const t2 = [theta2Of(clamp(b.getSouth(), -u[1], 0)), theta2Of(clamp(b.getNorth(), -u[1], 0))];
   const width = Number(document.querySelector("#save select[name=width]").value);
   const height = Math.max(16, Math.round(width * (t2[1] - t2[0]) / (t1[1] - t1[0])));
   const annotate = document.querySelector("#save input[name=annotate]").checked;

@@ -1,15 +1,17 @@
 //! `chaoscope serve`: the explorer in the browser.
 
 use std::net::IpAddr;
+use std::path::PathBuf;
 
 use clap::Args;
 
 use super::args::{PhysicalArgs, backend_parser};
 use super::{command_line, json, say};
-use crate::app::serve::{self, Commands, ServeJob};
+use crate::app::serve::{self, Commands, ServeJob, StoredMap};
 use crate::engine::Backend;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::monitor::Monitor;
+use crate::params::ParamSources;
 
 #[derive(Args, Debug, Clone)]
 pub struct ServeArgs {
@@ -26,16 +28,38 @@ pub struct ServeArgs {
     /// The physics the page starts from (the page can change masses, lengths and damping).
     #[command(flatten)]
     pub physical: PhysicalArgs,
+    /// Show a Zarr store's map (flip/lyapunov --data MAP.zarr) instead: tiles read from it
+    /// down to its own pixels, computed with its command's settings below them.
+    #[arg(long)]
+    pub store: Option<PathBuf>,
 }
 
 impl ServeArgs {
-    pub fn job(&self) -> ServeJob {
-        ServeJob {
+    pub fn job(&self) -> Result<ServeJob> {
+        let store = match &self.store {
+            None => None,
+            Some(path) => {
+                if self.physical.sources() != ParamSources::default() {
+                    return Err(Error::invalid(
+                        "store",
+                        "its command fixes the physics: give the store alone",
+                    ));
+                }
+                let (command, map) = super::store::stored_map(path)?;
+                Some(StoredMap {
+                    path: path.clone(),
+                    command,
+                    map,
+                })
+            }
+        };
+        Ok(ServeJob {
             host: self.host,
             port: self.port,
             base: self.physical.sources(),
             backend: self.backend,
-        }
+            store,
+        })
     }
 }
 
@@ -47,7 +71,7 @@ pub const COMMANDS: Commands = Commands {
 };
 
 pub fn run(args: &ServeArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    let summary = serve::run(&args.job(), COMMANDS, monitor, |ready| {
+    let summary = serve::run(&args.job()?, COMMANDS, monitor, |ready| {
         say(&ready.notices);
         // The URL on standard output (scripts and tests read it), the rest on stderr.
         println!("{}", ready.url);

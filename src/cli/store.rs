@@ -70,9 +70,9 @@ pub struct RenderArgs {
     pub picture: PictureArgs,
 }
 
-pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    let command = store::store_command(&args.store)?;
-    // The store's command is the map's job: parsed back, it gives the map's spec.
+/// A store's command and the map it describes: parsed back, the command gives the spec.
+pub fn stored_map(path: &std::path::Path) -> Result<(String, FrameMap)> {
+    let command = store::store_command(path)?;
     let words: Vec<&str> = command.split_whitespace().collect();
     let spec = match Cli::try_parse_from(&words).map(|cli| cli.command) {
         Ok(Command::Flip(flip)) => FrameMap::Flip(flip.job()?.spec),
@@ -81,17 +81,22 @@ pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value>
             super::LyapunovJob::Point(_) => {
                 return Err(Error::Format(format!(
                     "{}: its command is a single point: {command}",
-                    args.store.display()
+                    path.display()
                 )));
             }
         },
         _ => {
             return Err(Error::Format(format!(
                 "{}: its command is not a map this chaoscope reads: {command}",
-                args.store.display()
+                path.display()
             )));
         }
     };
+    Ok((command, spec))
+}
+
+pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    let (command, spec) = stored_map(&args.store)?;
     let job = RenderJob {
         store: args.store.clone(),
         spec,

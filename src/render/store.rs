@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use zarrs::array::{Array, ArrayBuilder, ArraySubset, CodecOptions, data_type};
+use zarrs::array::{Array, ArrayBuilder, ArrayError, ArraySubset, CodecOptions, data_type};
 use zarrs::filesystem::FilesystemStore;
 use zarrs::group::{Group, GroupBuilder};
 use zarrs::storage::{
@@ -167,6 +167,23 @@ pub fn chunk_rows(width: u32, height: u32) -> u32 {
     (CHUNK_PIXELS / width as u64).clamp(1, height as u64) as u32
 }
 
+/// Rows of a chunk along dimension `rows` (the first chunk's, which every chunk but a
+/// shorter last one shares).
+fn first_chunk_rows(array: &Array<AtomicStore>, rows: usize) -> Result<u32, ArrayError> {
+    let origin = vec![0; array.dimensionality()];
+    Ok(array.chunk_shape(&origin)?[rows].get() as u32)
+}
+
+/// The verdict array's fill value: a pixel not computed yet.
+pub const NOT_COMPUTED: u8 = 255;
+
+/// `values` followed by `fill` up to `len`: an edge chunk's data at the chunk's full shape.
+fn padded<T: Copy>(values: &[T], len: usize, fill: T) -> Vec<T> {
+    let mut out = values.to_vec();
+    out.resize(len.max(values.len()), fill);
+    out
+}
+
 fn store_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::format(path, e)
 }
@@ -279,11 +296,12 @@ impl MapStore {
                 "long_name".into(),
                 "1 where the pixel is resolved, 0 where not, 255 not computed yet".into(),
             );
-            let mask = ArrayBuilder::new(vec![h, w], vec![rows, w], data_type::uint8(), 255u8)
-                .dimension_names(["theta2", "theta1"].into())
-                .attributes(attributes)
-                .build(store.clone(), "/resolved")
-                .map_err(|e| err(&e))?;
+            let mask =
+                ArrayBuilder::new(vec![h, w], vec![rows, w], data_type::uint8(), NOT_COMPUTED)
+                    .dimension_names(["theta2", "theta1"].into())
+                    .attributes(attributes)
+                    .build(store.clone(), "/resolved")
+                    .map_err(|e| err(&e))?;
             mask.store_metadata().map_err(|e| err(&e))?;
         }
         let mut attributes = serde_json::Map::new();
@@ -335,15 +353,14 @@ impl MapStore {
             false => None,
         };
         let shape = map.shape().to_vec();
-        let chunks = map.chunk_grid_shape().to_vec();
         let (height, width) = (shape[0] as u32, shape[1] as u32);
         Ok(MapStore {
             path: path.to_path_buf(),
+            chunk_rows: first_chunk_rows(&map, 0).map_err(|e| err(&e))?,
             store,
             info,
             width,
             height,
-            chunk_rows: height.div_ceil(chunks[0] as u32),
             map,
             resolved,
         })
@@ -387,18 +404,21 @@ impl MapStore {
         Ok(out)
     }
 
-    /// Writes chunk `c` of `array` (its rows, row-major).
-    fn write_chunk<T: zarrs::array::Element>(
+    /// Writes chunk `c` of `array` (its rows, row-major); the last chunk, when shorter,
+    /// padded with the array's `fill` to the chunk's shape (Zarr's edge chunks are whole).
+    fn write_chunk<T: zarrs::array::Element + Copy>(
         &self,
         array: &Array<AtomicStore>,
         c: u32,
         values: &[T],
+        fill: T,
     ) -> Result<()> {
         // Every chunk gets its file, even one that happens to be all fill value (NaN:
         // blown-up runs), so that "written" always means "computed".
         let options = CodecOptions::default().with_store_empty_chunks(true);
+        let whole = (self.chunk_rows * self.width) as usize;
         array
-            .store_chunk_opt(&[c as u64, 0], values, &options)
+            .store_chunk_opt(&[c as u64, 0], padded(values, whole, fill), &options)
             .map_err(|e| store_error(&self.path, e))
     }
 
@@ -413,7 +433,7 @@ impl MapStore {
                     0 => mask.to_vec(),
                     _ => mask.iter().rev().copied().collect(),
                 };
-                self.write_chunk(array, c, &values)?;
+                self.write_chunk(array, c, &values, NOT_COMPUTED)?;
             }
         }
         for (k, c) in chunks.enumerate() {
@@ -421,7 +441,7 @@ impl MapStore {
                 0 => field.data.clone(),
                 _ => field.data.iter().rev().copied().collect(),
             };
-            self.write_chunk(&self.map, c, &values)?;
+            self.write_chunk(&self.map, c, &values, f32::NAN)?;
         }
         Ok(())
     }
@@ -526,14 +546,12 @@ impl SweepStore {
     fn open(path: &Path, store: Arc<AtomicStore>) -> Result<Self> {
         let map = Array::open(store.clone(), "/map").map_err(|e| store_error(path, e))?;
         let shape = map.shape().to_vec();
-        let chunks = map.chunk_grid_shape().to_vec();
-        let height = shape[1] as u32;
         Ok(SweepStore {
             path: path.to_path_buf(),
+            chunk_rows: first_chunk_rows(&map, 1).map_err(|e| store_error(path, e))?,
             store,
             width: shape[2] as u32,
-            height,
-            chunk_rows: height.div_ceil(chunks[1] as u32),
+            height: shape[1] as u32,
             map,
         })
     }
@@ -580,7 +598,11 @@ impl SweepStore {
         let band = (self.chunk_rows * self.width) as usize;
         for (c, values) in field.data.chunks(band).enumerate() {
             self.map
-                .store_chunk_opt(&[k as u64, c as u64, 0], values, &options)
+                .store_chunk_opt(
+                    &[k as u64, c as u64, 0],
+                    padded(values, band, f32::NAN),
+                    &options,
+                )
                 .map_err(|e| store_error(&self.path, e))?;
         }
         Ok(())

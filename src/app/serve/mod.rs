@@ -10,6 +10,7 @@ pub mod view;
 use std::collections::HashMap;
 use std::net::IpAddr;
 use std::num::NonZeroUsize;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -21,15 +22,18 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use lru::LruCache;
 
-use self::view::{Kind, Query, View, tile_grid};
+use self::view::{Kind, Query, View, World};
 use crate::app::MapOutputs;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::LyapunovMapJob;
+use crate::app::sweep::FrameMap;
 use crate::app::trajectory::TrajectoryJob;
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
+use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
+use crate::render::store::MapStore;
 use crate::render::{self, PictureSpec};
 use crate::spec::{Grid, Precision, Range};
 
@@ -52,6 +56,33 @@ pub struct ServeJob {
     /// The physics the page starts from and every request's defaults.
     pub base: ParamSources,
     pub backend: Backend,
+    /// A Zarr store's map to show instead (its command fixes the physics): read from the
+    /// store down to its own pixels, computed with its settings below them.
+    pub store: Option<StoredMap>,
+}
+
+/// A store (`flip --data MAP.zarr`) and the map its command describes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredMap {
+    pub path: PathBuf,
+    pub command: String,
+    pub map: FrameMap,
+}
+
+impl StoredMap {
+    fn grid(&self) -> Grid {
+        match self.map {
+            FrameMap::Flip(s) => s.grid,
+            FrameMap::Lyapunov(s) => s.grid,
+        }
+    }
+
+    fn kind(&self) -> Kind {
+        match self.map {
+            FrameMap::Flip(_) => Kind::Flip,
+            FrameMap::Lyapunov(_) => Kind::Ftle,
+        }
+    }
 }
 
 /// The commands that reproduce what the page shows, written by the command line (the one
@@ -101,6 +132,20 @@ struct Shared {
     base: ParamSources,
     backend: Backend,
     commands: Commands,
+    /// What the tiles cover: the whole turn, or the store's region.
+    world: World,
+    store: Option<(Arc<MapStore>, StoredMap)>,
+}
+
+impl Shared {
+    fn stored(&self) -> Option<FrameMap> {
+        self.store.as_ref().map(|(_, s)| s.map)
+    }
+
+    /// The view a query asks for (the store's, when serving one).
+    fn view(&self, q: &mut Query) -> Result<View> {
+        q.view(&self.base, self.stored())
+    }
 }
 
 type S = Arc<Shared>;
@@ -114,6 +159,14 @@ pub fn run(
 ) -> Result<ServeSummary> {
     // The physics flags checked before anything starts.
     crate::spec::validate_params(&job.base.resolve()?)?;
+    let store = match &job.store {
+        Some(s) => Some((Arc::new(MapStore::open(&s.path)?), s.clone())),
+        None => None,
+    };
+    let world = job
+        .store
+        .as_ref()
+        .map_or(World::TURN, |s| World::of_grid(&s.grid()));
     let engine = Engine::new(job.backend)?;
     warm_up(&engine, &job.base.resolve()?, monitor)?;
     let info = engine.info();
@@ -129,6 +182,8 @@ pub fn run(
         base: job.base.clone(),
         backend: job.backend,
         commands,
+        world,
+        store,
     });
     let notices = shared
         .engine
@@ -337,7 +392,8 @@ async fn tile(
     Path((z, x, y)): Path<(String, String, String)>,
     AxumQuery(q): Params,
 ) -> Response {
-    let parsed = (|| -> Result<(View, Grid, String)> {
+    type Tile = (View, Grid, String, (u32, u64, u64));
+    let parsed = (|| -> Result<Tile> {
         let int = |key: &'static str, s: &str| {
             s.parse::<u64>()
                 .map_err(|_| Error::invalid(key, format!("{s:?} is not a tile index")))
@@ -345,25 +401,47 @@ async fn tile(
         let y = y.strip_suffix(".png").unwrap_or(&y);
         let (z, x, y) = (int("z", &z)?, int("x", &x)?, int("y", y)?);
         let mut q = Query::new(q);
-        let view = q.view(&shared.base)?;
+        let view = shared.view(&mut q)?;
         let size = q
             .count("size", view::TILE_SIZES.0, view::TILE_SIZES.1)?
             .unwrap_or(256);
         q.finish()?;
+        if let Some((_, stored)) = &shared.store
+            && view.kind != stored.kind()
+            && view.kind != Kind::Resolved
+        {
+            return Err(Error::invalid(
+                "kind",
+                format!("the store holds a {:?} map", stored.kind()).to_lowercase(),
+            ));
+        }
         let z = u32::try_from(z).unwrap_or(u32::MAX);
-        let grid = tile_grid(z, x, y, size)?;
+        let grid = shared.world.tile_grid(z, x, y, size)?;
         let key = format!("tile {z}/{x}/{y}/{size} {view:?}");
-        Ok((view, grid, key))
+        Ok((view, grid, key, (z, x, y)))
     })();
-    let (view, grid, key) = match parsed {
+    let (view, grid, key, (z, x, y)) = match parsed {
         Ok(p) => p,
         Err(e) => return reply(e),
     };
     if let Some(bytes) = cached(&shared, &key) {
         return png(bytes, "cached");
     }
+    let (world, store) = (shared.world, shared.store.clone());
     let result = on_engine(&shared, move |engine, monitor| {
-        let (rgb, precision) = tile_rgb(engine, &view, grid, monitor)?;
+        let (rgb, precision) = match store {
+            Some((store, _)) if z <= world.native => {
+                let at = StoredTile {
+                    world,
+                    z,
+                    x,
+                    y,
+                    size: grid.width,
+                };
+                (stored_rgb(&store, &at, &view, grid)?, "stored")
+            }
+            _ => tile_rgb(engine, &view, grid, monitor)?,
+        };
         let bytes = render::png_bytes(grid.width, grid.height, &rgb, &[])?;
         Ok((Arc::new(bytes), precision))
     })
@@ -421,6 +499,82 @@ pub fn tile_rgb(
     }
 }
 
+/// Where a tile lies on a stored map's region.
+struct StoredTile {
+    world: World,
+    z: u32,
+    x: u64,
+    y: u64,
+    size: u32,
+}
+
+/// The colour of tile pixels beyond a stored map's edge (the page's background).
+const OUTSIDE_RGB: [u8; 3] = [42, 42, 48];
+
+/// A tile at or above the store's own level: its pixels read from the store (the stored
+/// pixel under each tile pixel's centre), coloured as `chaoscope render` colours them.
+fn stored_rgb(store: &MapStore, at: &StoredTile, view: &View, grid: Grid) -> Result<Vec<u8>> {
+    let size = at.size as usize;
+    let (width, height) = (at.world.width as u64, at.world.height as u64);
+    let cols: Vec<u64> = (0..at.size)
+        .map(|i| at.world.stored_pixel(at.z, at.x, i, at.size))
+        .collect();
+    let verdict = view.unresolved || view.kind == Kind::Resolved;
+    let mut field = Field::new(at.size, at.size, f32::NAN);
+    let mut mask = vec![255u8; size * size];
+    let mut outside = vec![false; size * size];
+    let mut row_read: Option<(u64, Vec<f32>, Option<Vec<u8>>)> = None;
+    for j in 0..size {
+        let row = at.world.stored_pixel(at.z, at.y, j as u32, at.size);
+        if row >= height {
+            outside[j * size..(j + 1) * size].fill(true);
+            continue;
+        }
+        if row_read.as_ref().is_none_or(|(r, _, _)| *r != row) {
+            let values = store.read_rows(row as u32, 1)?;
+            let resolved = match verdict {
+                true => Some(store.read_resolved(row as u32, 1)?.ok_or_else(|| {
+                    Error::invalid(
+                        "kind",
+                        "the store has no verdict (make it with --resolved MAP.zarr)",
+                    )
+                })?),
+                false => None,
+            };
+            row_read = Some((row, values, resolved));
+        }
+        let (_, values, resolved) = row_read.as_ref().expect("read above");
+        for (i, &col) in cols.iter().enumerate() {
+            let k = j * size + i;
+            if col >= width {
+                outside[k] = true;
+                continue;
+            }
+            field.data[k] = values[col as usize];
+            if let Some(r) = resolved {
+                mask[k] = r[col as usize];
+            }
+        }
+    }
+    let picture = PictureSpec {
+        annotate: false,
+        colormap: view.colormap,
+    };
+    let shown = Some(mask.as_slice()).filter(|_| view.unresolved);
+    let mut rgb = match view.kind {
+        Kind::Resolved => mask_rgb(&mask),
+        Kind::Flip => render::flip_picture(&field, &view.flip_spec(grid), &picture, shown)?.rgb,
+        Kind::Ftle => {
+            let spec = view.lyapunov_spec(grid);
+            render::lyapunov_picture(&field, &spec, view.range, &picture, shown)?.rgb
+        }
+    };
+    for (px, _) in rgb.chunks_exact_mut(3).zip(&outside).filter(|(_, o)| **o) {
+        px.copy_from_slice(&OUTSIDE_RGB);
+    }
+    Ok(rgb)
+}
+
 /// The verdict as a picture: white resolved, black not.
 pub fn mask_rgb(mask: &[u8]) -> Vec<u8> {
     mask.iter()
@@ -443,6 +597,26 @@ async fn info(AxumState(shared): AxumState<S>) -> Response {
         Err(e) => return reply(e),
     };
     let colormaps: Vec<&str> = render::Colormap::ALL.iter().map(|c| c.name()).collect();
+    let w = shared.world;
+    let (units_across, units_down) = w.units();
+    let store = shared.store.as_ref().map(|(_, s)| {
+        serde_json::json!({
+            "name": s.path.file_name().map(|n| n.to_string_lossy().into_owned()),
+            "command": s.command,
+            "kind": s.kind(),
+            "width": w.width,
+            "height": w.height,
+        })
+    });
+    let stepping = shared.stored().map(|m| match m {
+        FrameMap::Flip(s) => s.stepping,
+        FrameMap::Lyapunov(s) => s.stepping,
+    });
+    let p = match shared.stored() {
+        Some(FrameMap::Flip(s)) => s.params,
+        Some(FrameMap::Lyapunov(s)) => s.params,
+        None => p,
+    };
     json(serde_json::json!({
         "version": env!("CARGO_PKG_VERSION"),
         "place": shared.place,
@@ -455,8 +629,17 @@ async fn info(AxumState(shared): AxumState<S>) -> Response {
         "colormaps": colormaps,
         "defaults": {
             "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,
-            "damping": p.losses.joint1, "t_max": 20.0, "dt": 0.01,
+            "damping": p.losses.joint1,
+            "t_max": stepping.map_or(20.0, |s| s.t_max),
+            "dt": stepping.map_or(0.01, |s| s.dt),
         },
+        "world": {
+            "theta1": [w.theta1.min, w.theta1.max],
+            "theta2": [w.theta2.min, w.theta2.max],
+            "units": [units_across, units_down],
+            "native": w.native,
+        },
+        "store": store,
     }))
 }
 
@@ -465,7 +648,7 @@ async fn info(AxumState(shared): AxumState<S>) -> Response {
 async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<(View, Grid)> {
         let mut q = Query::new(q);
-        let mut view = q.view(&shared.base)?;
+        let mut view = shared.view(&mut q)?;
         view.kind = Kind::Flip;
         let start = view::start(&mut q)?;
         let pixel = q.within("pixel", 1e-16, 1.0)?.unwrap_or(1e-3);
@@ -525,7 +708,7 @@ async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Respons
 async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<TrajectoryJob> {
         let mut q = Query::new(q);
-        let view = q.view(&shared.base)?;
+        let view = shared.view(&mut q)?;
         let start = view::start(&mut q)?;
         q.finish()?;
         let dt = view.stepping.dt;
@@ -562,7 +745,7 @@ async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Re
 async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<View> {
         let mut q = Query::new(q);
-        let view = q.view(&shared.base)?;
+        let view = shared.view(&mut q)?;
         q.finish()?;
         Ok(view)
     })();
@@ -577,8 +760,13 @@ async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Respons
     if let Some(bytes) = cached(&shared, &key) {
         return json(serde_json::from_slice(&bytes).unwrap_or_default());
     }
+    let world = shared.world;
     let result = on_engine(&shared, move |engine, monitor| {
-        let spec = view.lyapunov_spec(Grid::square(128));
+        let spec = view.lyapunov_spec(Grid {
+            theta1: world.theta1,
+            theta2: world.theta2,
+            ..Grid::square(128)
+        });
         spec.validate()?;
         Ok(render::ftle_range(&engine.lyapunov_map(&spec, monitor)?))
     })
@@ -598,7 +786,7 @@ async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Respons
 async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<(View, Grid, bool)> {
         let mut q = Query::new(q);
-        let view = q.view(&shared.base)?;
+        let view = shared.view(&mut q)?;
         let grid = view::region_grid(&mut q)?;
         let annotate = q.flag("annotate")?;
         q.finish()?;

@@ -5,13 +5,12 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
+use crate::app::sweep::FrameMap;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
-use crate::spec::{
-    ACCURATE, FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Range, Stepping,
-};
+use crate::spec::{ACCURATE, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping};
 
 /// The deepest zoom level: 256 * 2^42 pixels across a turn, a pixel step of 5.6e-15 rad,
 /// below what f64 resolves (the verdict then says so); Leaflet's pixel coordinates stay
@@ -73,6 +72,8 @@ pub struct View {
     pub unresolved: bool,
     /// FTLE colours from .0 to .1 (1/s).
     pub range: (f32, f32),
+    /// A store's map, whose command fixed the physics, stepping and integrator.
+    pub stored: Option<FrameMap>,
 }
 
 /// A query string's values by key, each key read at most once; keys nobody read are
@@ -143,9 +144,39 @@ impl Query {
         }
     }
 
-    /// The view's settings; `base` gives the physics not in the query (the server's flags).
-    pub fn view(&mut self, base: &ParamSources) -> Result<View> {
-        let kind = Kind::parse(self.take("kind").as_deref().unwrap_or("flip"))?;
+    /// The view's settings; `base` gives the physics not in the query (the server's flags),
+    /// or `stored`, a store's map, fixes them (and the query may not name them).
+    pub fn view(&mut self, base: &ParamSources, stored: Option<FrameMap>) -> Result<View> {
+        let kind = self.take("kind");
+        let kind = match (kind.as_deref(), stored) {
+            (Some(k), _) => Kind::parse(k)?,
+            (None, Some(FrameMap::Lyapunov(_))) => Kind::Ftle,
+            (None, _) => Kind::Flip,
+        };
+        if let Some(map) = stored {
+            for key in PHYSICS_KEYS {
+                if self.values.contains_key(key) {
+                    return Err(Error::invalid(
+                        key,
+                        "is fixed by the store's command (serve --store)",
+                    ));
+                }
+            }
+            let (params, stepping) = match map {
+                FrameMap::Flip(s) => (s.params, s.stepping),
+                FrameMap::Lyapunov(s) => (s.params, s.stepping),
+            };
+            return Ok(View {
+                kind,
+                params,
+                stepping,
+                accurate: false,
+                colormap: self.colormap()?,
+                unresolved: self.flag("unresolved")?,
+                range: self.range()?,
+                stored,
+            });
+        }
         let sources = ParamSources {
             m1: self.number("m1")?.or(base.m1),
             m2: self.number("m2")?.or(base.m2),
@@ -165,34 +196,47 @@ impl Query {
         let accurate = self.flag("accurate")?;
         let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
         let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
-        let colormap = match self.take("cmap") {
-            None => None,
-            Some(name) => Some(
-                Colormap::ALL
-                    .into_iter()
-                    .find(|c| c.name() == name)
-                    .ok_or_else(|| {
-                        let names: Vec<&str> = Colormap::ALL.iter().map(|c| c.name()).collect();
-                        Error::invalid("cmap", format!("{name:?}: one of {}", names.join(", ")))
-                    })?,
-            ),
-        };
-        let lo = self.within("lo", -100.0, 100.0)?.unwrap_or(0.0) as f32;
-        let hi = self.within("hi", -100.0, 100.0)?.unwrap_or(2.0) as f32;
-        if lo >= hi {
-            return Err(Error::invalid("hi", format!("{hi} must exceed lo = {lo}")));
-        }
         Ok(View {
             kind,
             params,
             stepping: Stepping { dt, t_max },
             accurate,
-            colormap,
+            colormap: self.colormap()?,
             unresolved: self.flag("unresolved")?,
-            range: (lo, hi),
+            range: self.range()?,
+            stored: None,
         })
     }
+
+    fn colormap(&mut self) -> Result<Option<Colormap>> {
+        let Some(name) = self.take("cmap") else {
+            return Ok(None);
+        };
+        Colormap::ALL
+            .into_iter()
+            .find(|c| c.name() == name)
+            .map(Some)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Colormap::ALL.iter().map(|c| c.name()).collect();
+                Error::invalid("cmap", format!("{name:?}: one of {}", names.join(", ")))
+            })
+    }
+
+    /// The FTLE colour range `lo`..`hi` (1/s).
+    fn range(&mut self) -> Result<(f32, f32)> {
+        let lo = self.within("lo", -100.0, 100.0)?.unwrap_or(0.0) as f32;
+        let hi = self.within("hi", -100.0, 100.0)?.unwrap_or(2.0) as f32;
+        if lo >= hi {
+            return Err(Error::invalid("hi", format!("{hi} must exceed lo = {lo}")));
+        }
+        Ok((lo, hi))
+    }
 }
+
+/// The query's keys for the physics and the stepping, which a store's command fixes.
+pub const PHYSICS_KEYS: [&str; 9] = [
+    "m1", "m2", "l1", "l2", "g", "damping", "t_max", "dt", "accurate",
+];
 
 /// The same error, naming `to` where it named `from` (the query's key for a spec's field).
 fn rename(e: Error, from: &str, to: &'static str) -> Error {
@@ -205,6 +249,13 @@ fn rename(e: Error, from: &str, to: &'static str) -> Error {
 impl View {
     /// The flip map of this view over `grid`, as `chaoscope flip` makes it.
     pub fn flip_spec(&self, grid: Grid) -> FlipSpec {
+        if let Some(FrameMap::Flip(stored)) = self.stored {
+            return FlipSpec {
+                grid,
+                band: None,
+                ..stored
+            };
+        }
         let mut spec = FlipSpec::new(self.params, grid, self.stepping);
         if self.accurate {
             let (precision, integrator, dt) = ACCURATE;
@@ -218,6 +269,13 @@ impl View {
     /// The divergence map of this view over `grid`, as `chaoscope lyapunov` makes it by
     /// default (tangent method, renormalised every 0.1 s).
     pub fn lyapunov_spec(&self, grid: Grid) -> LyapunovSpec {
+        if let Some(FrameMap::Lyapunov(stored)) = self.stored {
+            return LyapunovSpec {
+                grid,
+                band: None,
+                ..stored
+            };
+        }
         LyapunovSpec {
             params: self.params,
             grid,
@@ -229,46 +287,111 @@ impl View {
             band: None,
         }
     }
-
-    /// The integrator the flip map uses.
-    pub fn integrator(&self) -> Integrator {
-        self.flip_spec(Grid::square(1)).integrator
-    }
 }
 
-/// The grid of tile (z, x, y) with `size` pixels a side: the full turn [-pi, pi]^2 is tile
-/// (0, 0, 0); each level halves the tiles' sides; y counts down from theta2 = pi.
-pub fn tile_grid(z: u32, x: u64, y: u64, size: u32) -> Result<Grid> {
-    if z > MAX_ZOOM {
-        return Err(Error::invalid(
-            "z",
-            format!("{z} must be at most {MAX_ZOOM}"),
-        ));
-    }
-    let n = 1u64 << z;
-    for (key, v) in [("x", x), ("y", y)] {
-        if v >= n {
-            return Err(Error::invalid(
-                key,
-                format!("{v} lies outside level {z}'s tiles 0..{n}"),
-            ));
+/// What the map's tiles cover: a region of starts that is `width` x `height` pixels at zoom
+/// level `native` (tile pixels there are the region's pixels). Level 0's pixel units are
+/// Leaflet's coordinates: the region spans `width / 2^native` of them across.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct World {
+    pub theta1: Range,
+    pub theta2: Range,
+    pub width: u32,
+    pub height: u32,
+    pub native: u32,
+}
+
+impl World {
+    /// The whole turn [-pi, pi]^2 as tile (0, 0, 0), computed at every level.
+    pub const TURN: World = World {
+        theta1: Range::FULL_TURN,
+        theta2: Range::FULL_TURN,
+        width: 256,
+        height: 256,
+        native: 0,
+    };
+
+    /// A stored map's grid: its own pixels at the first level where 256-pixel tiles hold
+    /// them one to one.
+    pub fn of_grid(grid: &Grid) -> World {
+        let side = grid.width.max(grid.height).max(1) as f64;
+        World {
+            theta1: grid.theta1,
+            theta2: grid.theta2,
+            width: grid.width,
+            height: grid.height,
+            native: (side / 256.0).log2().ceil().max(0.0) as u32,
         }
     }
-    let step = 2.0 * PI / n as f64;
-    Ok(Grid {
-        width: size,
-        height: size,
-        theta1: Range {
-            min: -PI + x as f64 * step,
-            max: -PI + (x + 1) as f64 * step,
-        },
-        theta2: Range {
-            min: PI - (y + 1) as f64 * step,
-            max: PI - y as f64 * step,
-        },
-        omega1: 0.0,
-        omega2: 0.0,
-    })
+
+    /// The region's size in level-0 pixel units (across, down).
+    pub fn units(&self) -> (f64, f64) {
+        let scale = (1u64 << self.native) as f64;
+        (self.width as f64 / scale, self.height as f64 / scale)
+    }
+
+    /// Radians per level-0 unit (theta1, theta2).
+    pub fn rad_per_unit(&self) -> (f64, f64) {
+        let (w, h) = self.units();
+        (
+            (self.theta1.max - self.theta1.min) / w,
+            (self.theta2.max - self.theta2.min) / h,
+        )
+    }
+
+    /// Checks tile (z, x, y) lies on the region.
+    pub fn check_tile(&self, z: u32, x: u64, y: u64) -> Result<()> {
+        if z > MAX_ZOOM {
+            return Err(Error::invalid(
+                "z",
+                format!("{z} must be at most {MAX_ZOOM}"),
+            ));
+        }
+        let (w, h) = self.units();
+        let tiles = |units: f64| (units * (1u64 << z) as f64 / 256.0).ceil() as u64;
+        for (key, v, n) in [("x", x, tiles(w)), ("y", y, tiles(h))] {
+            if v >= n {
+                return Err(Error::invalid(
+                    key,
+                    format!("{v} lies outside level {z}'s tiles 0..{n}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The grid of tile (z, x, y) with `size` pixels a side; y counts down from the top
+    /// (theta2's maximum).
+    pub fn tile_grid(&self, z: u32, x: u64, y: u64, size: u32) -> Result<Grid> {
+        self.check_tile(z, x, y)?;
+        let span = 256.0 / (1u64 << z) as f64;
+        let (k1, k2) = self.rad_per_unit();
+        // span * k is exact (a power of two times k), so the whole turn's tiles get
+        // -pi + x * 2 pi / 2^z, the same numbers at every level.
+        let (step1, step2) = (span * k1, span * k2);
+        Ok(Grid {
+            width: size,
+            height: size,
+            theta1: Range {
+                min: self.theta1.min + x as f64 * step1,
+                max: self.theta1.min + (x + 1) as f64 * step1,
+            },
+            theta2: Range {
+                min: self.theta2.max - (y + 1) as f64 * step2,
+                max: self.theta2.max - y as f64 * step2,
+            },
+            omega1: 0.0,
+            omega2: 0.0,
+        })
+    }
+
+    /// The region's pixel under pixel `k` of `size` along tile `t` of level `z` (<= native),
+    /// sampled at the tile pixel's centre: column (or row) of the stored map.
+    pub fn stored_pixel(&self, z: u32, t: u64, k: u32, size: u32) -> u64 {
+        let scale = (1u64 << (self.native - z)) as f64;
+        let unit = (t * 256) as f64 + (k as f64 + 0.5) * 256.0 / size as f64;
+        (unit * scale).floor() as u64
+    }
 }
 
 /// A region `theta1`, `theta2` (MIN:MAX, rad) of `width` x `height` pixels: a saved view.
@@ -322,16 +445,41 @@ mod tests {
 
     #[test]
     fn tiles_cover_the_turn_without_gaps() {
-        let a = tile_grid(3, 2, 5, 256).unwrap();
-        let b = tile_grid(3, 3, 5, 256).unwrap();
+        let turn = World::TURN;
+        let a = turn.tile_grid(3, 2, 5, 256).unwrap();
+        let b = turn.tile_grid(3, 3, 5, 256).unwrap();
         assert_eq!(a.theta1.max, b.theta1.min);
-        let top = tile_grid(0, 0, 0, 256).unwrap();
+        assert_eq!(a.theta1.min, -PI + 2.0 * (2.0 * PI / 8.0));
+        let top = turn.tile_grid(0, 0, 0, 256).unwrap();
         assert_eq!(
             (top.theta1, top.theta2),
             (Range::FULL_TURN, Range::FULL_TURN)
         );
-        assert!(tile_grid(3, 8, 0, 256).is_err());
-        assert!(tile_grid(MAX_ZOOM + 1, 0, 0, 256).is_err());
+        assert!(turn.tile_grid(3, 8, 0, 256).is_err());
+        assert!(turn.tile_grid(MAX_ZOOM + 1, 0, 0, 256).is_err());
+    }
+
+    #[test]
+    fn a_stored_maps_tiles_hold_its_pixels_at_the_native_level() {
+        let grid = Grid {
+            width: 1000,
+            height: 600,
+            ..Grid::square(1)
+        };
+        let world = World::of_grid(&grid);
+        assert_eq!(world.native, 2);
+        // Level 2: tile pixel k of tile t is stored pixel 256 t + k; level 0 every 4th.
+        assert_eq!(world.stored_pixel(2, 3, 7, 256), 3 * 256 + 7);
+        assert_eq!(world.stored_pixel(0, 0, 10, 256), 42);
+        assert!(world.check_tile(2, 3, 2).is_ok());
+        assert!(
+            world.check_tile(2, 3, 3).is_err(),
+            "600 rows are 3 tiles down"
+        );
+        // The native level's tile grid has the stored map's pixel centres.
+        let g = world.tile_grid(2, 1, 0, 256).unwrap();
+        assert!((g.theta1_at(0) - grid.theta1_at(256)).abs() < 1e-12);
+        assert!((g.theta2_at(5) - grid.theta2_at(5)).abs() < 1e-12);
     }
 
     #[test]
@@ -353,13 +501,13 @@ mod tests {
             (&[("damping", "-1")][..], "damping"),
             (&[("cmap", "nope")][..], "cmap"),
         ] {
-            match q(pairs).view(&base) {
+            match q(pairs).view(&base, None) {
                 Err(Error::InvalidSpec { field: f, .. }) => assert_eq!(f, field, "{pairs:?}"),
                 other => panic!("{pairs:?}: {other:?}"),
             }
         }
         let mut extra = q(&[("tmax", "3")]);
-        extra.view(&base).unwrap();
+        extra.view(&base, None).unwrap();
         assert!(extra.finish().is_err());
     }
 }
