@@ -242,6 +242,11 @@ async function refreshStarts() {
   }
   const list = document.getElementById("starts");
   list.textContent = "";
+  // Each start marked on the map in its colour.
+  for (const m of page.markers || []) m.remove();
+  page.markers = page.loaded.map((s, i) => L.circleMarker(
+    [latOf(s.point.theta2), lngOf(s.point.theta1)],
+    { radius: 6, color: COLOURS[i], weight: 2, fill: false, interactive: false }).addTo(map));
   page.loaded.forEach((s, i) => {
     const li = document.createElement("li");
     li.style.setProperty("--c", COLOURS[i]);

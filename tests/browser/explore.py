@@ -70,7 +70,8 @@ try:
         chain.perform()
 
     viewport(1280, 860)
-    driver.execute_script("window.chaoscope.map.setView([(2.5 - Math.PI) * 256 / (2 * Math.PI), (2.5 + Math.PI) * 256 / (2 * Math.PI)], 3)")
+    driver.execute_script("""const t = 2 * Math.PI;
+        window.chaoscope.map.setView([(1.2 - Math.PI) * 256 / t, (0.9 + Math.PI) * 256 / t], 2)""")
     wait.until(lambda d: d.execute_script("return document.body.dataset.tiles === 'loaded'"))
     click_at(2.5, 2.5)
     wait.until(lambda d: d.execute_script("return document.body.dataset.pendulum === 'shown'"))
