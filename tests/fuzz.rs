@@ -92,11 +92,12 @@ fn base(command: &str, data: &str) -> Vec<String> {
 #[test]
 fn random_command_lines_never_panic_and_name_what_is_wrong() {
     let cli = Cli::command();
-    // bench times minutes of work whatever its flags; it is exercised in tests/cli.rs.
+    // bench times minutes of work whatever its flags; it is exercised in tests/cli.rs. serve
+    // runs until stopped (tests/serve.rs).
     // (command, its flags with a plausible value each: None for a switch).
     let commands: Vec<(String, Vec<Flag>)> = cli
         .get_subcommands()
-        .filter(|c| c.get_name() != "bench")
+        .filter(|c| !["bench", "serve"].contains(&c.get_name()))
         .map(|c| {
             let flags = c
                 .get_arguments()

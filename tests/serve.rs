@@ -444,7 +444,10 @@ fn a_request_whose_client_leaves_is_cancelled() {
             .build(),
     );
     let gone = impatient
-        .get(&format!("{}/tile/2/1/1.png?kind=ftle&t_max=100", server.url))
+        .get(&format!(
+            "{}/tile/2/1/1.png?kind=ftle&t_max=100",
+            server.url
+        ))
         .call();
     assert!(
         gone.is_err(),
@@ -702,4 +705,25 @@ fn ctrl_c_stops_the_server_while_it_computes() {
         std::thread::sleep(Duration::from_millis(50));
     };
     assert!(status.success(), "{status}");
+}
+
+#[test]
+fn bad_serve_flags_exit_2_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, flag) in [
+        (vec!["--m1", "-1"], "--m1"),
+        (vec!["--port", "99999"], "--port"),
+        (vec!["--host", "localhost:80"], "--host"),
+        (vec!["--store", "missing.zarr"], "missing.zarr"),
+        (vec!["--store", "missing.zarr", "--m2", "2"], "--store"),
+    ] {
+        chaoscope()
+            .current_dir(dir.path())
+            .arg("serve")
+            .args(&args)
+            .timeout(Duration::from_secs(30))
+            .assert()
+            .failure()
+            .stderr(predicates::str::contains(flag));
+    }
 }
