@@ -30,6 +30,7 @@ pub mod monitor;
 pub mod params;
 pub mod render;
 pub mod spec;
+pub mod tableau;
 pub mod verdict;
 
 pub use error::{Error, Result};

@@ -215,15 +215,20 @@ pub enum Integrator {
     /// `dt` is the first and the largest step. The flip is located on the method's
     /// fourth-order dense output.
     Dp54 { rtol: f64, atol: f64 },
+    /// Dormand-Prince 8(5,3) (Hairer's DOP853), steps kept as for `Dp54`: the higher-order
+    /// pair, fewer and longer steps at tight tolerances; the flip is located on its
+    /// seventh-order dense output.
+    Dop853 { rtol: f64, atol: f64 },
 }
 
 impl Integrator {
-    pub const NAMES: [&'static str; 2] = ["rk4", "dp54"];
+    pub const NAMES: [&'static str; 3] = ["rk4", "dp54", "dop853"];
 
     pub fn name(&self) -> &'static str {
         match self {
             Integrator::Rk4 => "rk4",
             Integrator::Dp54 { .. } => "dp54",
+            Integrator::Dop853 { .. } => "dop853",
         }
     }
 
@@ -231,7 +236,9 @@ impl Integrator {
     pub fn tolerances(&self) -> Option<(f64, f64)> {
         match *self {
             Integrator::Rk4 => None,
-            Integrator::Dp54 { rtol, atol } => Some((rtol, atol)),
+            Integrator::Dp54 { rtol, atol } | Integrator::Dop853 { rtol, atol } => {
+                Some((rtol, atol))
+            }
         }
     }
 

@@ -26,7 +26,7 @@ pub fn flip_rule(spec: &FlipSpec, finer: &FlipSpec) -> String {
 pub fn flip_rule_short(spec: &FlipSpec, finer: &FlipSpec) -> String {
     let how = match spec.integrator {
         Integrator::Rk4 => "at half the time step",
-        Integrator::Dp54 { .. } => "at a tenth of the tolerances",
+        Integrator::Dp54 { .. } | Integrator::Dop853 { .. } => "at a tenth of the tolerances",
     };
     let precision = match (spec.precision, finer.precision) {
         (Precision::F32, Precision::F64) => " in f64",
@@ -107,6 +107,14 @@ pub fn finer_flip(spec: &FlipSpec, f64_available: bool) -> FlipSpec {
         },
         Integrator::Dp54 { rtol, atol } => FlipSpec {
             integrator: Integrator::Dp54 {
+                rtol: 0.1 * rtol,
+                atol: 0.1 * atol,
+            },
+            precision,
+            ..*spec
+        },
+        Integrator::Dop853 { rtol, atol } => FlipSpec {
+            integrator: Integrator::Dop853 {
                 rtol: 0.1 * rtol,
                 atol: 0.1 * atol,
             },

@@ -1,6 +1,6 @@
-//! Adaptive steps (Dormand-Prince 5(4) per pendulum): the GPU kernels against the f64 CPU
-//! twin, the error's rate against the tolerance, the no-flip region and the symmetry, f64
-//! RK4's order on the GPU, and the flags.
+//! Adaptive steps (Dormand-Prince 5(4) and 8(5,3) per pendulum): the GPU kernels against the
+//! f64 CPU twins, the error's rate against the tolerance, the no-flip region and the
+//! symmetry, f64 RK4's order on the GPU, and the flags.
 
 mod common;
 
@@ -12,10 +12,24 @@ use chaoscope::monitor::Monitor;
 use chaoscope::spec::{FlipSpec, Grid, Integrator, Precision, Range, Stepping};
 use common::chaoscope;
 
-fn spec(n: u32, t_max: f64, rtol: f64, precision: Precision) -> FlipSpec {
+/// The two adaptive pairs at tolerance `tol`.
+fn pairs(tol: f64) -> [Integrator; 2] {
+    [
+        Integrator::Dp54 {
+            rtol: tol,
+            atol: tol,
+        },
+        Integrator::Dop853 {
+            rtol: tol,
+            atol: tol,
+        },
+    ]
+}
+
+fn spec_with(n: u32, t_max: f64, integrator: Integrator, precision: Precision) -> FlipSpec {
     FlipSpec {
         precision,
-        integrator: Integrator::Dp54 { rtol, atol: rtol },
+        integrator,
         ..FlipSpec::new(
             Params::default(),
             Grid::square(n),
@@ -53,36 +67,69 @@ fn compare(a: &Field, b: &Field, before: f32) -> (f64, usize) {
 #[test]
 fn adaptive_flip_times_match_the_f64_cpu() {
     let Some(ctx) = common::f64_gpu() else { return };
-    for rtol in [1e-6, 1e-8, 1e-10] {
-        let s = spec(32, 10.0, rtol, Precision::F64);
+    for (rtol, pair) in [1e-6, 1e-8, 1e-10]
+        .into_iter()
+        .flat_map(|tol| pairs(tol).map(|p| (tol, p)))
+    {
+        let s = spec_with(32, 10.0, pair, Precision::F64);
         let (worst, classes) = compare(&gpu_map(&ctx, &s), &cpu_map(&s), 4.0);
         // The GPU carries cos and sin of the angles (outside the error control), so the two
         // are different discretisations whose flip times differ by their global errors,
-        // ~ rtol (measured 360, 210, 1.2e3 rtol); plus 2 ulp of the f32 storage at 4 s.
-        assert!(worst <= 1e3 * rtol + 4.8e-7, "rtol {rtol:e}: {worst:e} s");
-        // None of the 1024 pixels changes class within 10 s (measured at every tolerance).
-        assert_eq!(classes, 0, "rtol {rtol:e}: pixels flipping in one map only");
+        // ~ rtol (measured DP54 360, 210, 1.2e3 rtol; DOP853 400, 48, 0 rtol); plus 2 ulp of
+        // the f32 storage at 4 s.
+        assert!(
+            worst <= 1e3 * rtol + 4.8e-7,
+            "{} rtol {rtol:e}: {worst:e} s",
+            pair.name()
+        );
+        // None of the 1024 pixels changes class within 10 s (measured at every tolerance),
+        // but for DOP853's long steps at 1e-6: two mirrored pairs whose arm grazes the top
+        // near 7.8 and 9.8 s flip in one map only (a 1e-12 run flips both).
+        let allowed = match pair {
+            Integrator::Dop853 { .. } if rtol >= 1e-6 => 4,
+            _ => 0,
+        };
+        assert!(
+            classes <= allowed,
+            "{} rtol {rtol:e}: {classes} pixels flipping in one map only",
+            pair.name()
+        );
     }
     // With rods and every loss (compiled into the kernel by kind): the same, with a larger
     // constant (bearing friction turns over 0.01 rad/s; measured with rods: 4.3e-3, 8.7e-5,
     // 4.8e-7 s at rtol 1e-6, 1e-8, 1e-10; the lab's faster arms 2.1e-6 s at 1e-10).
-    for params in [common::rods_and_every_loss(), common::lab_with_every_loss()] {
+    for (params, pair) in [common::rods_and_every_loss(), common::lab_with_every_loss()]
+        .into_iter()
+        .flat_map(|p| pairs(1e-10).map(|i| (p, i)))
+    {
         let rtol = 1e-10;
         let s = FlipSpec {
             params,
-            ..spec(32, 10.0, rtol, Precision::F64)
+            ..spec_with(32, 10.0, pair, Precision::F64)
         };
         let (worst, classes) = compare(&gpu_map(&ctx, &s), &cpu_map(&s), 4.0);
+        // DOP853's long steps can pass over the bearing friction's turn (|w| < 0.01 rad/s,
+        // a few ms) without its error estimate seeing it; the error then grows in the chaotic
+        // flow: measured with rods 7.6e-6 s; with the lab's arms the CPU twin's run of one
+        // mirrored pair is 1e-3 rad off by 3.1 s and flips 2.1e-4 s late (the GPU's and a
+        // 1e-13 run agree to 3e-7 s). So 1e-3 s for DOP853 with every loss.
+        let allowed = match pair {
+            Integrator::Dop853 { .. } => 1e-3,
+            _ => 5e4 * rtol + 4.8e-7,
+        };
         assert!(
-            worst <= 5e4 * rtol + 4.8e-7 && classes == 0,
-            "losses: {worst:e} s, {classes} pixels"
+            worst <= allowed && classes == 0,
+            "losses {}: {worst:e} s, {classes} pixels",
+            pair.name()
         );
     }
     // f32 at its tightest tolerance: a local error of 1e-5 per step, ~30 steps before 4 s
     // (measured 2.5e-3 s).
-    let s = spec(32, 10.0, 1e-5, Precision::F32);
-    let (worst, _) = compare(&gpu_map(&ctx, &s), &cpu_map(&s), 4.0);
-    assert!(worst <= 1e-2, "f32: {worst:e} s");
+    for pair in pairs(1e-5) {
+        let s = spec_with(32, 10.0, pair, Precision::F32);
+        let (worst, _) = compare(&gpu_map(&ctx, &s), &cpu_map(&s), 4.0);
+        assert!(worst <= 1e-2, "f32 {}: {worst:e} s", pair.name());
+    }
 }
 
 /// RMS of the flip-time error of `map` against `reference` over the pixels flipping in both.
@@ -103,11 +150,11 @@ fn rms_error(map: &Field, reference: &Field) -> f64 {
 #[test]
 fn adaptive_error_falls_with_the_tolerance() {
     let Some(ctx) = common::f64_gpu() else { return };
-    let reference = cpu_map(&spec(32, 4.0, 1e-12, Precision::F64));
+    let reference = cpu_map(&spec_with(32, 4.0, pairs(1e-13)[1], Precision::F64));
     let (loose, tight) = (1e-5, 1e-8);
-    for path in ["cpu", "gpu"] {
+    for (path, k) in [("cpu", 0), ("gpu", 0), ("cpu", 1), ("gpu", 1)] {
         let error = |rtol| {
-            let s = spec(32, 4.0, rtol, Precision::F64);
+            let s = spec_with(32, 4.0, pairs(rtol)[k], Precision::F64);
             let map = match path {
                 "cpu" => cpu_map(&s),
                 _ => gpu_map(&ctx, &s),
@@ -115,9 +162,9 @@ fn adaptive_error_falls_with_the_tolerance() {
             rms_error(&map, &reference)
         };
         let slope = (error(loose) / error(tight)).log10() / (loose / tight).log10();
-        // 1 expected (measured 1.17 CPU, 1.13 GPU); a method of another order, or a broken
-        // controller, lands outside.
-        assert!((0.8..1.35).contains(&slope), "{path}: slope {slope}");
+        // 1 expected (measured DP54 1.17 CPU, 1.13 GPU; DOP853 0.97, 0.97), against a DOP853
+        // run at 1e-13; a method of another order, or a broken controller, lands outside.
+        assert!((0.8..1.35).contains(&slope), "{path} {k}: slope {slope}");
     }
 }
 
@@ -129,7 +176,7 @@ fn f64_gpu_rk4_error_falls_like_dt4() {
     let p = Params::default();
     let start = State::at_rest(2.0, 1.0);
     let mut exact = Adaptive::new(&p, start, 0.01, 1e-13, 1e-13);
-    while exact.t < 2.0 {
+    while exact.clock.t < 2.0 {
         exact.step(2.0).unwrap();
     }
     let kernel = TrajectoryKernel::with_precision(&ctx, Precision::F64);
@@ -166,10 +213,13 @@ fn adaptive_maps_keep_the_no_flip_region_and_the_symmetry() {
         ..Grid::square(33)
     };
     let threshold = p.no_flip_threshold(1e-6);
-    for (name, precision) in [
-        ("gpu f32", Precision::F32),
-        ("gpu f64", Precision::F64),
-        ("cpu", Precision::F64),
+    for (name, precision, k) in [
+        ("gpu f32", Precision::F32, 0),
+        ("gpu f64", Precision::F64, 0),
+        ("cpu", Precision::F64, 0),
+        ("gpu f32", Precision::F32, 1),
+        ("gpu f64", Precision::F64, 1),
+        ("cpu", Precision::F64, 1),
     ] {
         let rtol = if precision == Precision::F32 {
             1e-5
@@ -178,7 +228,7 @@ fn adaptive_maps_keep_the_no_flip_region_and_the_symmetry() {
         };
         let base = FlipSpec {
             grid,
-            ..spec(33, 15.0, rtol, precision)
+            ..spec_with(33, 15.0, pairs(rtol)[k], precision)
         };
         let every = FlipSpec {
             early_exit: false,
@@ -268,5 +318,41 @@ fn adaptive_flags() {
             )
             && !command.contains("--accurate"),
         "{command}"
+    );
+    // DOP853's map records its pair and reads back to the same picture.
+    let o = chaoscope()
+        .args([
+            "flip",
+            "--size",
+            "16",
+            "--t-max",
+            "3",
+            "--integrator",
+            "dop853",
+            "--precision",
+            "f64",
+            "--rtol",
+            "1e-8",
+            "--output",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let command = common::png_text(&out, "chaoscope:command");
+    assert!(
+        command.contains("--integrator dop853 --rtol 0.00000001 --atol 0.00000001"),
+        "{command}"
+    );
+    err(
+        &[
+            "--integrator",
+            "dop853",
+            "--rtol",
+            "1e-6",
+            "--backend",
+            "gpu",
+        ],
+        "--rtol",
     );
 }

@@ -14,7 +14,7 @@ use crate::engine::Backend;
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::PictureSpec;
-use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Spread, Stepping};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Precision, Spread, Stepping};
 
 /// The flags that reproduce `p` exactly.
 pub fn params(p: &Params) -> String {
@@ -134,8 +134,11 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
         out += " --no-symmetry";
     }
     out += precision(spec.precision);
-    if let Integrator::Dp54 { rtol, atol } = spec.integrator {
-        out += &format!(" --integrator dp54 --rtol {rtol} --atol {atol}");
+    if let Some((rtol, atol)) = spec.integrator.tolerances() {
+        out += &format!(
+            " --integrator {} --rtol {rtol} --atol {atol}",
+            spec.integrator.name()
+        );
     }
     out + &picture(pic)
 }

@@ -53,15 +53,16 @@ pub struct FlipArgs {
     /// lavapipe; elsewhere auto runs f64 on the CPU). The CPU is always f64.
     #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
     pub precision: Precision,
-    /// How each pendulum is stepped: rk4 (fixed --dt) or dp54 (Dormand-Prince 5(4): every
-    /// pendulum takes its own steps to --rtol/--atol; --dt is then its first and largest step).
+    /// How each pendulum is stepped: rk4 (fixed --dt), dp54 (Dormand-Prince 5(4): every
+    /// pendulum takes its own steps to --rtol/--atol; --dt is then its first and largest step)
+    /// or dop853 (Dormand-Prince 8(5,3), the same way: fewer, longer steps at tight tolerances).
     #[arg(long, default_value = "rk4", value_parser = clap::builder::PossibleValuesParser::new(Integrator::NAMES))]
     pub integrator: String,
-    /// dp54's relative tolerance per step [default: 1e-5 in f32 on the GPU, else 1e-9; 1e-5
+    /// dp54's and dop853's relative tolerance per step [default: 1e-5 in f32 on the GPU, else 1e-9; 1e-5
     /// is the least f32 allows].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub rtol: Option<f64>,
-    /// dp54's absolute tolerance per step (rad, rad/s) [default: as --rtol].
+    /// dp54's and dop853's absolute tolerance per step (rad, rad/s) [default: as --rtol].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub atol: Option<f64>,
     /// The recommended settings for a map right on >= 99.5 % of its pixels: --precision f64
@@ -80,14 +81,15 @@ impl FlipArgs {
             return Ok((precision, integrator, stepping));
         }
         let integrator = match self.integrator.as_str() {
-            "dp54" => {
+            name @ ("dp54" | "dop853") => {
                 let f32_gpu = self.precision == Precision::F32 && self.backend != Backend::Cpu;
                 let rtol = self
                     .rtol
                     .unwrap_or(if f32_gpu { MIN_TOLERANCE_F32 } else { 1e-9 });
-                Integrator::Dp54 {
-                    rtol,
-                    atol: self.atol.unwrap_or(rtol),
+                let atol = self.atol.unwrap_or(rtol);
+                match name {
+                    "dp54" => Integrator::Dp54 { rtol, atol },
+                    _ => Integrator::Dop853 { rtol, atol },
                 }
             }
             _ => {
@@ -95,7 +97,7 @@ impl FlipArgs {
                     if given.is_some() {
                         return Err(Error::invalid(
                             field,
-                            "applies only to an adaptive integrator (--integrator dp54)",
+                            "applies only to an adaptive integrator (--integrator dp54 or dop853)",
                         ));
                     }
                 }

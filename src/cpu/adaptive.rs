@@ -4,12 +4,13 @@
 
 use std::f64::consts::PI;
 
+use super::dop853::Dop853;
 use super::{map_pixels, rate_of};
 use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, MAX_STEPS, Stepping};
+use crate::spec::{FlipSpec, Integrator, MAX_STEPS, Stepping};
 
 /// An explicit embedded Runge-Kutta pair with a dense output of the form of Hairer's
 /// `dopri5` (`contd5`): y(t + s h) = y0 + s (dy + (1 - s) (b + s (r + (1 - s) h sum d_i k_i)))
@@ -104,45 +105,36 @@ pub fn step_factor(err: f64) -> f64 {
     (SAFETY / err.sqrt().sqrt()).clamp(SHRINK, GROW)
 }
 
-/// One accepted step from `y0` at `t` to `y1` at `t + h`, with its stages.
+/// One accepted DP54 step, with its stages.
 pub struct Step {
-    pub t: f64,
-    pub h: f64,
-    pub y0: [f64; 4],
-    pub y1: [f64; 4],
+    pub span: Span,
     k: [[f64; 4]; 7],
 }
 
-impl Step {
-    /// The dense output at the fraction `s` of the step (fourth order).
-    pub fn dense(&self, s: f64) -> [f64; 4] {
-        let h = self.h;
-        std::array::from_fn(|i| {
-            let dy = self.y1[i] - self.y0[i];
-            let b = h * self.k[0][i] - dy;
-            let r = dy - h * self.k[6][i] - b;
-            let sum: f64 = (0..7).map(|j| DP54.d[j] * self.k[j][i]).sum();
-            self.y0[i] + s * (dy + (1.0 - s) * (b + s * (r + (1.0 - s) * h * sum)))
-        })
-    }
-
+/// An accepted step with its dense output: what the flip rule needs of a method.
+pub trait DenseStep {
+    /// Where the step lies.
+    fn span(&self) -> &Span;
+    /// The rate of angle `i` (0 or 2) at the step's start and end.
+    fn angle_rates(&self, i: usize) -> (f64, f64);
+    /// The dense output at the fraction `s` of the step.
+    fn dense(&self, s: f64) -> [f64; 4];
     /// d/ds of the dense output's component `i` (over the step, so h times its rate).
-    fn slope(&self, i: usize, s: f64) -> f64 {
-        let h = self.h;
-        let dy = self.y1[i] - self.y0[i];
-        let b = h * self.k[0][i] - dy;
-        let r = dy - h * self.k[6][i] - b;
-        let sum: f64 = (0..7).map(|j| DP54.d[j] * self.k[j][i]).sum();
-        dy + (1.0 - 2.0 * s) * b
-            + s * (2.0 - 3.0 * s) * r
-            + 2.0 * s * (1.0 - s) * (1.0 - 2.0 * s) * h * sum
-    }
+    fn slope(&self, i: usize, s: f64) -> f64;
 
     /// Where in the step (a fraction) the angle `i` (0 or 2) first reaches |angle| = pi on
-    /// the dense output, if it does; needs |y0[i]| <= pi. An angle that ends the step within
-    /// pi can still have passed it and come back at a turning point inside the step (large
-    /// adaptive steps make that likely near the top): the turn is found first.
-    pub fn crossing(&self, i: usize) -> Option<f64> {
+    /// the dense output, if it does; needs the angle within pi at the start. An angle that
+    /// ends the step within pi can still have passed pi and come back at a turning point
+    /// inside the step (long adaptive steps make that likely near the top; a long step may
+    /// hold two turns): the step is searched in [`PIECES`] pieces, in order, each for a
+    /// crossing at its end or a turn beyond pi inside. Steps that cannot reach pi are passed
+    /// over first ([`may_reach_pi`], the kernels' rule too).
+    fn crossing(&self, i: usize) -> Option<f64> {
+        let (w0, w1) = self.angle_rates(i);
+        let span = self.span();
+        if !may_reach_pi(span.y0[i], span.y1[i], w0, w1, span.h) {
+            return None;
+        }
         let bisect = |mut lo: f64, mut hi: f64, above: &dyn Fn(f64) -> bool| {
             for _ in 0..53 {
                 let mid = 0.5 * (lo + hi);
@@ -154,24 +146,89 @@ impl Step {
             }
             (lo, hi)
         };
-        let (w0, w1) = (self.k[0][i], self.k[6][i]);
-        let (end, peak) = if self.y1[i].abs() > PI {
-            (1.0, self.y1[i])
-        } else if w0 * w1 <= 0.0 {
-            // Where the slope leaves the sign it started with.
-            let (turn, _) = bisect(0.0, 1.0, &|s| self.slope(i, s).signum() != w0.signum());
-            (turn, self.dense(turn)[i])
-        } else {
-            return None;
-        };
-        if peak.abs() <= PI {
-            return None;
+        for k in 0..PIECES {
+            let (lo, hi) = (k as f64 / PIECES as f64, (k + 1) as f64 / PIECES as f64);
+            let mut top = hi;
+            let mut peak = self.dense(hi)[i];
+            if peak.abs() <= PI {
+                let rising = self.slope(i, lo).signum();
+                if self.slope(i, hi).signum() == rising {
+                    continue;
+                }
+                // Where the slope leaves the sign it had at the piece's start.
+                (top, _) = bisect(lo, hi, &|s| self.slope(i, s).signum() != rising);
+                peak = self.dense(top)[i];
+                if peak.abs() <= PI {
+                    continue;
+                }
+            }
+            let target = PI.copysign(peak);
+            let (_, hi) = bisect(lo, top, &|s| {
+                (self.dense(s)[i] - target) * target.signum() > 0.0
+            });
+            return Some(hi);
         }
-        let target = PI.copysign(peak);
-        let (_, hi) = bisect(0.0, end, &|s| {
-            (self.dense(s)[i] - target) * target.signum() > 0.0
-        });
-        Some(hi)
+        None
+    }
+}
+
+/// The pieces a step's dense output is searched in for a crossing of pi (the kernels' too).
+pub const PIECES: usize = 8;
+
+/// Whether an angle from `a0` to `a1` over a step `h`, with rates `w0` and `w1` at its ends,
+/// may reach |angle| = pi within the step: beyond its ends by at most h (|w0| + |w1|), twice
+/// what a smooth angle travels at those rates (a bound of the dense output itself decides
+/// in the kernels).
+pub fn may_reach_pi(a0: f64, a1: f64, w0: f64, w1: f64, h: f64) -> bool {
+    a0.abs().max(a1.abs()) + h * (w0.abs() + w1.abs()) > PI
+}
+
+/// A method stepping one pendulum: its next accepted step.
+pub trait Stepper {
+    type Step: DenseStep;
+    fn clock(&self) -> &Clock;
+    fn step(&mut self, t_end: f64) -> std::result::Result<Self::Step, Stall>;
+}
+
+/// An accepted step: from `y0` at `t` to `y1` at `t + h`.
+#[derive(Clone, Copy, Debug)]
+pub struct Span {
+    pub t: f64,
+    pub h: f64,
+    pub y0: [f64; 4],
+    pub y1: [f64; 4],
+}
+
+impl DenseStep for Step {
+    fn span(&self) -> &Span {
+        &self.span
+    }
+
+    fn angle_rates(&self, i: usize) -> (f64, f64) {
+        (self.k[0][i], self.k[6][i])
+    }
+
+    /// The dense output (fourth order).
+    fn dense(&self, s: f64) -> [f64; 4] {
+        let h = self.span.h;
+        std::array::from_fn(|i| {
+            let dy = self.span.y1[i] - self.span.y0[i];
+            let b = h * self.k[0][i] - dy;
+            let r = dy - h * self.k[6][i] - b;
+            let sum: f64 = (0..7).map(|j| DP54.d[j] * self.k[j][i]).sum();
+            self.span.y0[i] + s * (dy + (1.0 - s) * (b + s * (r + (1.0 - s) * h * sum)))
+        })
+    }
+
+    fn slope(&self, i: usize, s: f64) -> f64 {
+        let h = self.span.h;
+        let dy = self.span.y1[i] - self.span.y0[i];
+        let b = h * self.k[0][i] - dy;
+        let r = dy - h * self.k[6][i] - b;
+        let sum: f64 = (0..7).map(|j| DP54.d[j] * self.k[j][i]).sum();
+        dy + (1.0 - 2.0 * s) * b
+            + s * (2.0 - 3.0 * s) * r
+            + 2.0 * s * (1.0 - s) * (1.0 - 2.0 * s) * h * sum
     }
 }
 
@@ -189,12 +246,55 @@ pub struct Adaptive<'a> {
     p: &'a Params,
     rtol: f64,
     atol: f64,
-    h_max: f64,
-    pub t: f64,
+    pub clock: Clock,
     pub y: [f64; 4],
-    h: f64,
     k1: [f64; 4],
+}
+
+/// An adaptive run's time, step and attempts, shared by the pairs.
+#[derive(Clone, Copy, Debug)]
+pub struct Clock {
+    pub t: f64,
+    /// The next step to try, and the largest.
+    h: f64,
+    h_max: f64,
     pub attempts: u32,
+}
+
+impl Clock {
+    /// At t = 0 with the first step `h` (also the largest).
+    pub fn new(h: f64) -> Self {
+        Clock {
+            t: 0.0,
+            h,
+            h_max: h,
+            attempts: 0,
+        }
+    }
+
+    /// The next attempt: its step (shortened to land on `t_end`) and whether it lands there;
+    /// a stall when the attempts run out or the step no longer advances the time.
+    pub fn attempt(&mut self, t_end: f64) -> std::result::Result<(f64, bool), Stall> {
+        if self.attempts >= MAX_STEPS {
+            return Err(Stall::TooManySteps);
+        }
+        self.attempts += 1;
+        let last = self.t + self.h >= t_end;
+        let h = if last { t_end - self.t } else { self.h };
+        if h.is_nan() || self.t + h <= self.t {
+            return Err(Stall::StepUnderflow);
+        }
+        Ok((h, last))
+    }
+
+    /// After an attempt of `h`: the next step is the last scaled by `factor` (at most the
+    /// largest); when `accepted` the time moves on (to `t_end` exactly when `last`).
+    pub fn settle(&mut self, h: f64, last: bool, t_end: f64, factor: f64, accepted: bool) {
+        if accepted {
+            self.t = if last { t_end } else { self.t + h };
+        }
+        self.h = (self.h * factor).min(self.h_max);
+    }
 }
 
 impl<'a> Adaptive<'a> {
@@ -205,27 +305,16 @@ impl<'a> Adaptive<'a> {
             p,
             rtol,
             atol,
-            h_max: h,
-            t: 0.0,
+            clock: Clock::new(h),
             y,
-            h,
             k1: rate_of(p, &y),
-            attempts: 0,
         }
     }
 
     /// The next accepted step, ending at `t_end` at the latest.
     pub fn step(&mut self, t_end: f64) -> std::result::Result<Step, Stall> {
         loop {
-            if self.attempts >= MAX_STEPS {
-                return Err(Stall::TooManySteps);
-            }
-            self.attempts += 1;
-            let last = self.t + self.h >= t_end;
-            let h = if last { t_end - self.t } else { self.h };
-            if h.is_nan() || self.t + h <= self.t {
-                return Err(Stall::StepUnderflow);
-            }
+            let (h, last) = self.clock.attempt(t_end)?;
             let mut k = [[0.0; 4]; 7];
             k[0] = self.k1;
             for s in 1..7 {
@@ -247,66 +336,88 @@ impl<'a> Adaptive<'a> {
                 .sum::<f64>()
                 * 0.25;
             let err = err.sqrt();
-            let next_h = (self.h * step_factor(err)).min(self.h_max);
+            let t = self.clock.t;
+            self.clock
+                .settle(h, last, t_end, step_factor(err), err <= 1.0);
             if err <= 1.0 {
                 let step = Step {
-                    t: self.t,
-                    h,
-                    y0: self.y,
-                    y1,
+                    span: Span {
+                        t,
+                        h,
+                        y0: self.y,
+                        y1,
+                    },
                     k,
                 };
-                self.t = if last { t_end } else { self.t + h };
                 self.y = y1;
                 self.k1 = k[6];
-                self.h = next_h;
                 return Ok(step);
             }
-            self.h = next_h;
         }
     }
 }
 
-/// What the adaptive flip rule gives for one start: the flip time (s; +inf = not by
-/// t_max, NaN = the run stalled before flipping) and the attempts it took.
+impl Stepper for Adaptive<'_> {
+    type Step = Step;
+
+    fn clock(&self) -> &Clock {
+        &self.clock
+    }
+
+    fn step(&mut self, t_end: f64) -> std::result::Result<Step, Stall> {
+        Adaptive::step(self, t_end)
+    }
+}
+
+/// The adaptive flip rule: the flip time (s; +inf = not by `t_max`, NaN = the run stalled
+/// before flipping) and the attempts it took.
+pub fn flip_time_with(run: &mut impl Stepper, t_max: f64) -> (f64, u32) {
+    while run.clock().t < t_max {
+        let step = match run.step(t_max) {
+            Ok(step) => step,
+            Err(_) => return (f64::NAN, run.clock().attempts),
+        };
+        let crossings = [0, 2].into_iter().filter_map(|i| step.crossing(i));
+        if let Some(s) = crossings.reduce(f64::min) {
+            return (step.span().t + s * step.span().h, run.clock().attempts);
+        }
+    }
+    (f64::INFINITY, run.clock().attempts)
+}
+
+/// The flip time of one start by `integrator` (adaptive), and the attempts it took
+/// ([`flip_time_with`]); starts below the no-flip energy never flip (with `early_exit`).
 pub fn flip_time_adaptive(
     p: &Params,
     start: State,
     stepping: &Stepping,
-    rtol: f64,
-    atol: f64,
+    integrator: Integrator,
     early_exit: bool,
 ) -> (f64, u32) {
     if early_exit && p.energy(&start) < p.no_flip_threshold(f64::EPSILON) {
         return (f64::INFINITY, 0);
     }
-    let mut run = Adaptive::new(p, start, stepping.dt, rtol, atol);
-    while run.t < stepping.t_max {
-        let step = match run.step(stepping.t_max) {
-            Ok(step) => step,
-            Err(_) => return (f64::NAN, run.attempts),
-        };
-        let crossings = [0, 2].into_iter().filter_map(|i| step.crossing(i));
-        if let Some(s) = crossings.reduce(f64::min) {
-            return (step.t + s * step.h, run.attempts);
-        }
+    match integrator {
+        Integrator::Rk4 => panic!("flip_time_adaptive needs an adaptive integrator"),
+        Integrator::Dp54 { rtol, atol } => flip_time_with(
+            &mut Adaptive::new(p, start, stepping.dt, rtol, atol),
+            stepping.t_max,
+        ),
+        Integrator::Dop853 { rtol, atol } => flip_time_with(
+            &mut Dop853::new(p, start, stepping.dt, rtol, atol),
+            stepping.t_max,
+        ),
     }
-    (f64::INFINITY, run.attempts)
 }
 
 /// The adaptive flip-time map of `spec` (its integrator must be adaptive), rows in parallel.
 pub fn flip_map_adaptive(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-    let (rtol, atol) = spec
-        .integrator
-        .tolerances()
-        .expect("an adaptive integrator");
     map_pixels(&spec.grid, spec.row_span(), monitor, |start| {
         flip_time_adaptive(
             &spec.params,
             start,
             &spec.stepping,
-            rtol,
-            atol,
+            spec.integrator,
             spec.early_exit,
         )
         .0 as f32
@@ -346,14 +457,9 @@ mod tests {
         let error_at = |h: f64| {
             let mut run = Adaptive::new(&p, start, h, 1.0, 1.0);
             let step = run.step(1.0).unwrap();
-            // The reference: the same start over 0.3 h with tiny fixed RK4 steps.
-            let n = 2000;
-            let mut y = start;
-            for _ in 0..n {
-                y = super::super::rk4_step(&p, &y, 0.3 * h / n as f64);
-            }
-            assert_eq!(step.dense(0.0), step.y0);
-            assert!((step.dense(1.0)[0] - step.y1[0]).abs() < 1e-15);
+            let y = super::super::fine_rk4(&p, start, 0.3 * h);
+            assert_eq!(step.dense(0.0), step.span.y0);
+            assert!((step.dense(1.0)[0] - step.span.y1[0]).abs() < 1e-15);
             (step.dense(0.3)[0] - y.theta1).abs()
         };
         let (e1, e2) = (error_at(0.2), error_at(0.1));

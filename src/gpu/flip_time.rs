@@ -3,8 +3,9 @@
 
 use super::context::{GpuContext, map_read, read_buffer};
 use super::layout::{
-    FLIP_ADAPTIVE_WGSL, FLIP_TIME_WGSL, GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuParams, GpuParams64,
-    GpuPendulum, GpuPendulum64, NEVER, NONFINITE, TileParams, shader_source, shader_source_f64,
+    FLIP_TIME_WGSL, GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuParams, GpuParams64, GpuPendulum,
+    GpuPendulum64, NEVER, NONFINITE, TileParams, flip_adaptive_wgsl, flip_dop853_wgsl,
+    shader_source, shader_source_f64,
 };
 use super::pipeline::{
     Variants, bind_group, layouts, module_of, params_buffer_of, record_dispatch, storage_buffer,
@@ -19,8 +20,10 @@ pub struct FlipTimeKernel {
     precision: Precision,
     /// (flip_init, flip_time) per kind of loss and early exit.
     pipelines: Variants,
-    /// (flip_adaptive_init, flip_adaptive), the same.
+    /// (flip_adaptive_init, flip_adaptive), the same: DP54 ...
     adaptive: Variants,
+    /// ... and DOP853.
+    dop853: Variants,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -126,12 +129,13 @@ impl FlipTimeKernel {
 
     /// The kernel in `precision` (f64 needs a context with `GpuContext::has_f64`).
     pub fn with_precision(ctx: &GpuContext, precision: Precision) -> Self {
-        let source = |kernel| match precision {
+        let source = |kernel: &str| match precision {
             Precision::F32 => shader_source(kernel),
             Precision::F64 => shader_source_f64(kernel),
         };
         let module = module_of(ctx, "flip_time.wgsl", source(FLIP_TIME_WGSL));
-        let adaptive = module_of(ctx, "flip_adaptive.wgsl", source(FLIP_ADAPTIVE_WGSL));
+        let adaptive = module_of(ctx, "flip_adaptive.wgsl", source(&flip_adaptive_wgsl()));
+        let dop853 = module_of(ctx, "flip_dop853.wgsl", source(&flip_dop853_wgsl()));
         let (layout, pipeline_layout) =
             layouts(ctx, "flip_time", &[false, false, true, false, false]);
         let kernel = FlipTimeKernel {
@@ -144,6 +148,12 @@ impl FlipTimeKernel {
             ),
             adaptive: Variants::new(
                 adaptive,
+                pipeline_layout.clone(),
+                &["flip_adaptive_init", "flip_adaptive"],
+                Some("EARLY_EXIT"),
+            ),
+            dop853: Variants::new(
+                dop853,
                 pipeline_layout,
                 &["flip_adaptive_init", "flip_adaptive"],
                 Some("EARLY_EXIT"),
@@ -291,10 +301,10 @@ impl FlipTimeKernel {
     ) -> Result<Field> {
         let grid = spec.grid;
         let adaptive = spec.integrator != Integrator::Rk4;
-        let variants = if adaptive {
-            &self.adaptive
-        } else {
-            &self.pipelines
+        let variants = match spec.integrator {
+            Integrator::Rk4 => &self.pipelines,
+            Integrator::Dp54 { .. } => &self.adaptive,
+            Integrator::Dop853 { .. } => &self.dop853,
         };
         let [init, advance] = variants.get(ctx, spec.params.losses.kinds(), spec.early_exit) else {
             unreachable!("two entry points")

@@ -270,7 +270,61 @@ pub fn shader_source(kernel: &str) -> String {
 pub const FLIP_TIME_WGSL: &str = include_str!("../../shaders/flip_time.wgsl");
 pub const TRAJECTORY_WGSL: &str = include_str!("../../shaders/trajectory.wgsl");
 pub const LYAPUNOV_WGSL: &str = include_str!("../../shaders/lyapunov.wgsl");
-pub const FLIP_ADAPTIVE_WGSL: &str = include_str!("../../shaders/flip_adaptive.wgsl");
+const ADAPTIVE_COMMON_WGSL: &str = include_str!("../../shaders/adaptive_common.wgsl");
+const FLIP_DP54_WGSL: &str = include_str!("../../shaders/flip_adaptive.wgsl");
+const FLIP_DOP853_WGSL: &str = include_str!("../../shaders/flip_dop853.wgsl");
+
+/// The DP54 flip kernel: the adaptive kernels' shared part and the method's.
+pub fn flip_adaptive_wgsl() -> String {
+    format!("{ADAPTIVE_COMMON_WGSL}\n{FLIP_DP54_WGSL}")
+}
+
+/// The DOP853 flip kernel: its template with the stages written out from the tableau
+/// (src/tableau.rs, which the CPU twin loops over), only the nonzero weights, as literals
+/// that WGSL takes at full precision in either float type.
+pub fn flip_dop853_wgsl() -> String {
+    let t = &crate::tableau::DOP853;
+    // "w1 * k1.dy + w2 * k2.dy ..." over the nonzero weights (stage j is k{j + 1}).
+    let sum = |weights: &[f64], part: &str| -> String {
+        let terms: Vec<String> = weights
+            .iter()
+            .enumerate()
+            .filter(|(_, w)| **w != 0.0)
+            .map(|(j, w)| format!("{w:e} * k{}.{part}", j + 1))
+            .collect();
+        terms.join(" + ")
+    };
+    let stage = |s: usize| {
+        let a = &t.a[s][..s];
+        format!(
+            "let k{} = rate(c, Pendulum(p.y + step * ({}), p.u + step * ({})));",
+            s + 1,
+            sum(a, "dy"),
+            sum(a, "du")
+        )
+    };
+    let indent = "\n        ";
+    let mut stages: Vec<String> = (1..12).map(stage).collect();
+    stages.push(format!(
+        "let next = Pendulum(p.y + step * ({}), p.u + step * ({}));",
+        sum(&t.b, "dy"),
+        sum(&t.b, "du")
+    ));
+    stages.push(format!("let e5 = {};", sum(&t.e5, "dy")));
+    stages.push(format!("let e3 = {};", sum(&t.e3, "dy")));
+    let mut dense: Vec<String> = (13..16).map(stage).collect();
+    for (m, d) in t.d.iter().enumerate() {
+        dense.push(format!("let hd{m} = step * ({});", sum(d, "dy")));
+    }
+    let body = FLIP_DOP853_WGSL
+        .replace("//{{STAGES}}", &stages.join(indent))
+        .replace("//{{DENSE_STAGES}}", &dense.join("\n                "));
+    assert!(
+        !body.contains("{{"),
+        "a placeholder left in flip_dop853.wgsl"
+    );
+    format!("{ADAPTIVE_COMMON_WGSL}\n{body}")
+}
 
 /// The f64 twin of `shader_source(kernel)`: the same WGSL with f64 for f32, and the few
 /// pieces that f32 writes for its own precision written again: (sin, cos) by a longer
@@ -444,8 +498,16 @@ pub fn all_shaders() -> Vec<(&'static str, String)> {
     vec![
         ("flip_time", shader_source(FLIP_TIME_WGSL)),
         ("flip_time_f64", shader_source_f64(FLIP_TIME_WGSL)),
-        ("flip_adaptive", shader_source(FLIP_ADAPTIVE_WGSL)),
-        ("flip_adaptive_f64", shader_source_f64(FLIP_ADAPTIVE_WGSL)),
+        ("flip_adaptive", shader_source(&flip_adaptive_wgsl())),
+        (
+            "flip_adaptive_f64",
+            shader_source_f64(&flip_adaptive_wgsl()),
+        ),
+        ("flip_adaptive_dop853", shader_source(&flip_dop853_wgsl())),
+        (
+            "flip_adaptive_dop853_f64",
+            shader_source_f64(&flip_dop853_wgsl()),
+        ),
         ("trajectory_f64", shader_source_f64(TRAJECTORY_WGSL)),
         ("lyapunov_f64", shader_source_f64(LYAPUNOV_WGSL)),
         ("trajectory", shader_source(TRAJECTORY_WGSL)),

@@ -151,14 +151,16 @@ fn unresolved_note(mask: Option<&[u8]>, adaptive: bool) -> &'static str {
 
 /// How a flip map was stepped, for its subtitle.
 fn stepping_note(spec: &FlipSpec) -> String {
-    match spec.integrator {
-        crate::spec::Integrator::Rk4 => format!("RK4 dt {} s", spec.stepping.dt),
-        crate::spec::Integrator::Dp54 { rtol, atol } if rtol == atol => {
-            format!("DP54 tol {rtol:e} {}", spec.precision.name())
-        }
-        crate::spec::Integrator::Dp54 { rtol, atol } => {
-            format!("DP54 rtol {rtol:e} atol {atol:e} {}", spec.precision.name())
-        }
+    let Some((rtol, atol)) = spec.integrator.tolerances() else {
+        return format!("RK4 dt {} s", spec.stepping.dt);
+    };
+    let method = spec.integrator.name().to_uppercase();
+    match rtol == atol {
+        true => format!("{method} tol {rtol:e} {}", spec.precision.name()),
+        false => format!(
+            "{method} rtol {rtol:e} atol {atol:e} {}",
+            spec.precision.name()
+        ),
     }
 }
 

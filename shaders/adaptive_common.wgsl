@@ -1,0 +1,156 @@
+// What every adaptive flip kernel shares (shaders/flip_adaptive.wgsl: DP54;
+// shaders/flip_dop853.wgsl: DOP853): the per-pixel slot and the bindings, the tile's set-up,
+// and the location of the flip on a step's dense output. The method's file defines `Dense`
+// (one angle's dense output over a step), `dense_value` and `dense_slope` (in the step's
+// fraction s), and the `flip_adaptive` entry point. Driven by src/gpu/flip_time.rs.
+
+// Mirror of src/gpu/layout.rs `GpuAdaptiveSlot`: a pendulum and its clock.
+struct AdaptiveSlot {
+    y: vec4<f32>,
+    u: vec4<f32>,
+    // (t, the next step's size, attempts so far, unused).
+    clock: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> states: array<AdaptiveSlot>;
+// Flip time (s) per pixel; NEVER until it flips, NONFINITE if the run stalled.
+@group(0) @binding(2) var<storage, read_write> times: array<f32>;
+@group(0) @binding(3) var<storage, read> active_in: array<u32>;
+@group(0) @binding(4) var<storage, read_write> active_out: array<u32>;
+// [0]: length of active_out.
+@group(0) @binding(5) var<storage, read_write> counter: array<atomic<u32>>;
+
+// As in flip_time.wgsl: stop a pixel at its flip, skip starts that cannot flip.
+override EARLY_EXIT: bool = false;
+
+fn push_active(i: u32) {
+    active_out[atomicAdd(&counter[0], 1u)] = i;
+}
+
+// One more step attempt from t with the proposed step h, counted in `attempts`: the step
+// (shortened to land on t-max, `last` then), or stalled: too many attempts, or a step that no
+// longer advances the time (or is not a number), so the run has nothing more to say.
+struct Attempt {
+    step: f32,
+    last: bool,
+    stalled: bool,
+}
+
+fn attempt(t: f32, h: f32, attempts: ptr<function, f32>) -> Attempt {
+    if *attempts >= f32(params.total_steps) {
+        return Attempt(0.0, false, true);
+    }
+    *attempts += 1.0;
+    let last = t + h >= params.t_max;
+    var step = h;
+    if last {
+        step = params.t_max - t;
+    }
+    return Attempt(step, last, !(t + step > t));
+}
+
+// Back onto the unit circles after a step, as after an RK4 step.
+fn on_circles(next: Pendulum) -> Pendulum {
+    let u = next.u;
+    let n1 = fma(u.x * u.x + u.y * u.y, -0.5, 1.5);
+    let n2 = fma(u.z * u.z + u.w * u.w, -0.5, 1.5);
+    return Pendulum(next.y, u * vec4<f32>(n1, n1, n2, n2));
+}
+
+// Whether an angle from a0 to a1 over a step h, with rates w0 and w1 at its ends, may reach
+// |angle| = pi within the step: beyond its ends by at most h (|w0| + |w1|) (the CPU twins'
+// `may_reach_pi`); the method's bound of its dense output decides after.
+fn may_reach_pi(a0: f32, a1: f32, w0: f32, w1: f32, h: f32) -> bool {
+    return max(abs(a0), abs(a1)) + h * (abs(w0) + abs(w1)) > PI;
+}
+
+// Fraction of the step at which the dense output `q` of an angle first reaches |angle| = pi,
+// or 2 if it does not within the step; needs the angle within pi at the start. An angle can
+// pass pi and come back at a turning point inside the step (a long step may hold two): the
+// step is searched in 8 pieces in order (src/cpu/adaptive.rs PIECES), each for a crossing at
+// its end or a turn beyond pi inside, found by bisecting the slope, then the angle.
+fn dense_crossing(q: Dense) -> f32 {
+    for (var k = 0; k < 8; k++) {
+        let lo = f32(k) / 8.0;
+        let hi = f32(k + 1) / 8.0;
+        var top = hi;
+        var peak = dense_value(q, hi);
+        if abs(peak) <= PI {
+            let rising = sign(dense_slope(q, lo));
+            if sign(dense_slope(q, hi)) == rising {
+                continue;
+            }
+            var a = lo;
+            var b = hi;
+            for (var i = 0; i < 24; i++) {
+                let s = 0.5 * (a + b);
+                if sign(dense_slope(q, s)) == rising {
+                    a = s;
+                } else {
+                    b = s;
+                }
+            }
+            top = a;
+            peak = dense_value(q, top);
+            if abs(peak) <= PI {
+                continue;
+            }
+        }
+        let sgn = sign(peak);
+        var a = lo;
+        var b = top;
+        for (var i = 0; i < 24; i++) {
+            let s = 0.5 * (a + b);
+            if sgn * dense_value(q, s) > PI {
+                b = s;
+            } else {
+                a = s;
+            }
+        }
+        return b;
+    }
+    return 2.0;
+}
+
+// The end of a pixel's dispatch: the candidate step (from flip_t, flip_h long) decided on its
+// dense output (q1, q2 for theta1, theta2), a stall reported, the slot and time written, the
+// pixel listed again while it runs.
+fn settle(i: u32, p: Pendulum, clock: vec3<f32>, time: f32, stalled: bool, candidate: bool, flip_t: f32, flip_h: f32, flip_q1: Dense, flip_q2: Dense) {
+    let t = clock.x;
+    let t_max = params.t_max;
+    var t_flip = time;
+    if candidate {
+        let s = min(dense_crossing(flip_q1), dense_crossing(flip_q2));
+        if s <= 1.0 {
+            t_flip = flip_t + s * flip_h;
+        }
+    }
+    // A run that stalled before flipping (its state left the numbers, or its step shrank to
+    // nothing) has no flip time: say so, never "never".
+    if t_flip == NEVER && stalled {
+        t_flip = NONFINITE;
+    }
+    states[i] = AdaptiveSlot(p.y, p.u, vec4<f32>(clock, 0.0));
+    times[i] = t_flip;
+    let running = t < t_max && !stalled;
+    if running && (!EARLY_EXIT || t_flip == NEVER) {
+        push_active(i);
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn flip_adaptive_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let y = grid_start(params, i);
+    let p = pendulum_from(y);
+    states[i] = AdaptiveSlot(p.y, p.u, vec4<f32>(0.0, params.dt, 0.0, 0.0));
+    times[i] = NEVER;
+    if !EARLY_EXIT || energy(coeffs_from(params), y) >= params.no_flip_energy {
+        push_active(i);
+    }
+}
+
