@@ -331,7 +331,11 @@ fn bench_reports_every_mode_of_both_paths() {
         "{text}"
     );
     // The accurate-map rows, each with the share of its pixels the reference confirms.
-    for path in ["chaoscope --accurate", "chaoscope gpu f32 rk4"] {
+    for path in [
+        "chaoscope --accurate",
+        "chaoscope gpu f32 rk4",
+        "chaoscope gpu f64 dop853",
+    ] {
         assert!(
             text.lines()
                 .any(|l| l.starts_with(path) && l.contains(" accurate ") && l.ends_with('%')),

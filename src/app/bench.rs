@@ -305,7 +305,7 @@ fn right(map: &[f32], reference: &Field) -> f64 {
 const PEER_ACCURATE_DT: [f64; 2] = [0.005, 0.0025];
 
 /// One repetition of the accurate-map rows: today's f32 RK4 map at dt `args.dt`, the
-/// `--accurate` map, and each peer in f64 at the steps of PEER_ACCURATE_DT, each with the
+/// `--accurate` map, DOP853 at its tolerance, and each peer in f64 at the steps of PEER_ACCURATE_DT, each with the
 /// fraction of its pixels that match `reference`.
 fn accurate_samples(
     args: &BenchJob,
@@ -324,6 +324,20 @@ fn accurate_samples(
         (
             "chaoscope --accurate (gpu f64 dp54)".to_string(),
             accurate_problem(args, precision, integrator, dt),
+        ),
+        // The higher-order pair at the same tolerance, with the longest steps RK4's
+        // stability check allows this pendulum.
+        (
+            "chaoscope gpu f64 dop853 1e-9 dt 0.1".to_string(),
+            accurate_problem(
+                args,
+                Precision::F64,
+                Integrator::Dop853 {
+                    rtol: 1e-9,
+                    atol: 1e-9,
+                },
+                0.1,
+            ),
         ),
     ] {
         let t0 = Instant::now();
