@@ -727,3 +727,37 @@ fn bad_serve_flags_exit_2_naming_the_flag() {
             .stderr(predicates::str::contains(flag));
     }
 }
+
+/// A client that never finishes its request is cut off after the header-read limit, and
+/// the server goes on answering others meanwhile.
+#[test]
+fn a_request_never_finished_is_cut_off() {
+    if gpu().is_none() {
+        return;
+    }
+    use std::io::{Read, Write};
+    let server = Server::start(&["--backend", "gpu"]);
+    let address = server.url.trim_start_matches("http://");
+    let mut slow = std::net::TcpStream::connect(address).unwrap();
+    slow.write_all(b"GET /api/info HTTP/1.1\r\nHost: x\r\n")
+        .unwrap();
+    let (status, _, _) = server.get("/api/info");
+    assert_eq!(status, 200, "others are answered while one request hangs");
+    slow.set_read_timeout(Some(Duration::from_secs(30)))
+        .unwrap();
+    let started = std::time::Instant::now();
+    let mut rest = Vec::new();
+    // The server closes the connection (perhaps after a 408): the read ends.
+    let _ = slow.read_to_end(&mut rest);
+    let waited = started.elapsed();
+    let limit = chaoscope::app::serve::HEADER_READ_LIMIT;
+    assert!(
+        waited < limit + Duration::from_secs(5),
+        "closed after {waited:?} (limit {limit:?})"
+    );
+    assert!(
+        rest.is_empty() || String::from_utf8_lossy(&rest).starts_with("HTTP/1.1 408"),
+        "{}",
+        String::from_utf8_lossy(&rest)
+    );
+}

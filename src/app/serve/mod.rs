@@ -44,6 +44,14 @@ pub const MAX_WAITING: usize = 64;
 /// A request that has not finished in this time is cancelled (503).
 pub const REQUEST_LIMIT: Duration = Duration::from_secs(60);
 
+/// A connection must send a request's head within this time (from connecting, or from its
+/// last answer on a kept-alive connection), else it is closed: a client that never finishes
+/// its request does not hold its connection.
+pub const HEADER_READ_LIMIT: Duration = Duration::from_secs(5);
+
+/// Open connections at most; more are closed at once.
+pub const MAX_CONNECTIONS: usize = 512;
+
 /// Tiles and other computed answers kept, most recently used first (a 256^2 tile's PNG is
 /// ~50-150 kB, so ~60 MB).
 pub const CACHE_ENTRIES: usize = 512;
@@ -220,9 +228,10 @@ pub fn run(
             }
         };
         tokio::select! {
-            served = axum::serve(listener, app) => served.map(|_| url.clone()).map_err(Error::Io),
-            _ = stop => Ok(url.clone()),
+            _ = serve_connections(listener, app) => {}
+            _ = stop => {}
         }
+        Ok::<String, Error>(url)
     })?;
     // Dropping the runtime drops every request, whose guards cancel their work.
     runtime.shutdown_timeout(Duration::from_secs(2));
@@ -248,6 +257,35 @@ fn warm_up(engine: &Engine, params: &crate::model::Params, monitor: &Monitor) ->
         },
     );
     engine.flip_map(&spec, &monitor.quiet()).map(|_| ())
+}
+
+/// Accepts connections for ever: each served on its own task by HTTP/1 with
+/// [`HEADER_READ_LIMIT`], at most [`MAX_CONNECTIONS`] at once.
+async fn serve_connections(listener: tokio::net::TcpListener, app: Router) {
+    let open = Arc::new(tokio::sync::Semaphore::new(MAX_CONNECTIONS));
+    loop {
+        let stream = match listener.accept().await {
+            Ok((stream, _)) => stream,
+            // Out of file descriptors and the like: wait, then go on.
+            Err(_) => {
+                tokio::time::sleep(Duration::from_millis(50)).await;
+                continue;
+            }
+        };
+        let Ok(permit) = open.clone().try_acquire_owned() else {
+            continue;
+        };
+        let service = hyper_util::service::TowerToHyperService::new(app.clone());
+        tokio::spawn(async move {
+            let _permit = permit;
+            let mut http = hyper::server::conn::http1::Builder::new();
+            http.timer(hyper_util::rt::TokioTimer::new())
+                .header_read_timeout(HEADER_READ_LIMIT);
+            let io = hyper_util::rt::TokioIo::new(stream);
+            // A connection's errors (reset, timeout) end it and nothing else.
+            let _ = http.serve_connection(io, service).await;
+        });
+    }
 }
 
 /// The routes; everything else is 404.
