@@ -331,6 +331,7 @@ fn bad_queries_get_400_naming_the_key() {
         ("/tile/0/0/0.png?tmax=3", "query"),
         ("/tile/0/0/0.png?kind=ftle&lo=2&hi=1", "hi"),
         ("/api/point?theta2=1", "theta1"),
+        ("/api/legend?cmap=plaid", "cmap"),
         ("/api/trajectory?theta1=1&theta2=1e9", "theta2"),
         (
             "/api/save?theta1_min=0&theta1_max=1&theta2_min=0&theta2_max=1&width=1e5",
@@ -359,6 +360,19 @@ fn only_the_assets_are_served() {
     let (status, _, page) = server.get("/");
     assert_eq!(status, 200);
     assert!(String::from_utf8_lossy(&page).contains("/assets/vendor/leaflet/leaflet.js"));
+    // The colour bar: the tiles' own table, ticks inside the bar.
+    let (status, _, bar) = server.get("/api/legend?t_max=20");
+    assert_eq!(status, 200);
+    let bar: serde_json::Value = serde_json::from_slice(&bar).unwrap();
+    assert_eq!(bar["colors"].as_array().unwrap().len(), 64, "{bar}");
+    assert!(
+        bar["ticks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|t| (0.0..=1.0).contains(&t[0].as_f64().unwrap())),
+        "{bar}"
+    );
     let (status, _, licence) = server.get("/assets/vendor/leaflet/LICENSE");
     assert_eq!(status, 200);
     assert!(String::from_utf8_lossy(&licence).contains("BSD 2-Clause"));

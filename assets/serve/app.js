@@ -106,6 +106,33 @@ function legend() {
   }[state.kind] || "";
   document.getElementById("legend").textContent =
     text + (state.unresolved && state.kind !== "resolved" ? " Grey: not resolved." : "");
+  drawBar();
+}
+
+// The colour bar, from the server's colour tables (the tiles' own).
+async function drawBar() {
+  const bar = document.getElementById("bar");
+  bar.hidden = state.kind === "resolved";
+  if (bar.hidden) return;
+  const r = await fetch("/api/legend?" + query());
+  if (!r.ok) return;
+  const { label, colors, ticks } = await r.json();
+  const c = document.getElementById("bar-colours");
+  const g = c.getContext("2d");
+  colors.forEach(([red, green, blue], i) => {
+    g.fillStyle = `rgb(${red},${green},${blue})`;
+    const x0 = Math.floor((i * c.width) / colors.length);
+    g.fillRect(x0, 0, Math.ceil(c.width / colors.length) + 1, c.height);
+  });
+  const holder = document.getElementById("bar-ticks");
+  holder.textContent = "";
+  for (const [f, text] of ticks) {
+    const span = document.createElement("span");
+    span.style.left = `${(f * 100).toFixed(2)}%`;
+    span.textContent = text;
+    holder.appendChild(span);
+  }
+  document.getElementById("bar-label").textContent = label;
 }
 
 let map, layer;
@@ -190,8 +217,7 @@ function onChange(e) {
     state.lo = ""; state.hi = "";   // a new physics, a new colour range
   }
   fillForm();
-  legend();
-  setLayer();
+  setLayer().then(legend);
   if (page.starts.length) refreshStarts();
 }
 

@@ -154,6 +154,14 @@ impl Shared {
     fn view(&self, q: &mut Query) -> Result<View> {
         q.view(&self.base, self.stored())
     }
+
+    /// The view of a query that holds nothing else.
+    fn view_only(&self, q: HashMap<String, String>) -> Result<View> {
+        let mut q = Query::new(q);
+        let view = self.view(&mut q)?;
+        q.finish()?;
+        Ok(view)
+    }
 }
 
 type S = Arc<Shared>;
@@ -299,6 +307,7 @@ fn router(shared: S) -> Router {
         .route("/api/trajectory", get(trajectory))
         .route("/api/range", get(range))
         .route("/api/save", get(save))
+        .route("/api/legend", get(legend))
         .route("/api/stats", get(stats))
         .fallback(|| async { (StatusCode::NOT_FOUND, "not found\n") })
         .with_state(shared)
@@ -781,13 +790,7 @@ async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Re
 /// The divergence map's colour range for the page's physics: 0 to the 99.5th percentile of
 /// the whole turn's exponents (a 128^2 overview), as `chaoscope lyapunov` picks it.
 async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
-    let parsed = (|| -> Result<View> {
-        let mut q = Query::new(q);
-        let view = shared.view(&mut q)?;
-        q.finish()?;
-        Ok(view)
-    })();
-    let view = match parsed {
+    let view = match shared.view_only(q) {
         Ok(v) => v,
         Err(e) => return reply(e),
     };
@@ -893,6 +896,49 @@ async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response
             .into_response(),
         Err(r) => r,
     }
+}
+
+/// The colour bar of a view, from the tables the tiles are coloured with: colours from left
+/// to right (early to late flips; regular to chaotic exponents), ticks as (fraction, label),
+/// and the colours of never, NaN and unresolved pixels.
+async fn legend(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let view = match shared.view_only(q) {
+        Ok(v) => v,
+        Err(e) => return reply(e),
+    };
+    let (colors, ticks, label) = match view.kind {
+        Kind::Ftle => {
+            let (lo, hi) = (view.range.0 as f64, view.range.1 as f64);
+            let ticks: Vec<(f64, String)> = render::decimal_ticks(lo, hi)
+                .into_iter()
+                .map(|(v, l)| ((v - lo) / (hi - lo), l))
+                .collect();
+            let table = render::ftle_table(view.colormap.unwrap_or(render::Colormap::Magma));
+            (table, ticks, "FTLE (1/s)")
+        }
+        Kind::Flip | Kind::Resolved => {
+            let colors = render::FlipColors {
+                t_lo: (view.params.l1 / view.params.g).sqrt(),
+                t_max: view.stepping.t_max,
+                colormap: view.colormap.unwrap_or(render::Colormap::Inferno),
+            };
+            // The bar runs late to early; the page reads left to right from early.
+            let (mut table, ticks) = colors.bar();
+            table.reverse();
+            let ticks = ticks.into_iter().map(|(f, l)| (1.0 - f, l)).collect();
+            (table, ticks, "flip time (s)")
+        }
+    };
+    let every = (colors.len() / 64).max(1);
+    let colors: Vec<[u8; 3]> = colors.into_iter().step_by(every).collect();
+    json(serde_json::json!({
+        "label": label,
+        "colors": colors,
+        "ticks": ticks,
+        "never": render::NEVER_RGB,
+        "nan": render::NAN_RGB,
+        "unresolved": render::UNRESOLVED_RGB,
+    }))
 }
 
 /// Counters since the start, and the queue now.
