@@ -16,6 +16,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use axum::Router;
+use axum::body::Bytes;
 use axum::extract::{Path, Query as AxumQuery, State as AxumState};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
@@ -134,7 +135,7 @@ struct Shared {
     engine: Arc<tokio::sync::Mutex<Engine>>,
     place: String,
     has_f64: bool,
-    cache: Mutex<LruCache<String, Arc<Vec<u8>>>>,
+    cache: Mutex<LruCache<String, Bytes>>,
     waiting: AtomicUsize,
     counters: Counters,
     base: ParamSources,
@@ -396,7 +397,7 @@ async fn on_engine<T: Send + 'static>(
     }
 }
 
-fn cached(shared: &S, key: &str) -> Option<Arc<Vec<u8>>> {
+fn cached(shared: &S, key: &str) -> Option<Bytes> {
     let hit = shared.cache.lock().ok()?.get(key).cloned();
     if hit.is_some() {
         shared.counters.cached.fetch_add(1, Ordering::Relaxed);
@@ -404,13 +405,14 @@ fn cached(shared: &S, key: &str) -> Option<Arc<Vec<u8>>> {
     hit
 }
 
-fn remember(shared: &S, key: String, bytes: Arc<Vec<u8>>) {
+fn remember(shared: &S, key: String, bytes: Bytes) {
     if let Ok(mut c) = shared.cache.lock() {
         c.put(key, bytes);
     }
 }
 
-fn png(bytes: Arc<Vec<u8>>, precision: &str) -> Response {
+/// A tile's answer (bytes shared with the cache, not copied).
+fn png(bytes: Bytes, precision: &str) -> Response {
     (
         [
             (header::CONTENT_TYPE, "image/png".to_string()),
@@ -420,7 +422,7 @@ fn png(bytes: Arc<Vec<u8>>, precision: &str) -> Response {
                 precision.to_string(),
             ),
         ],
-        bytes.as_ref().clone(),
+        bytes,
     )
         .into_response()
 }
@@ -490,7 +492,7 @@ async fn tile(
             _ => tile_rgb(engine, &view, grid, monitor)?,
         };
         let bytes = render::png_bytes(grid.width, grid.height, &rgb, &[])?;
-        Ok((Arc::new(bytes), precision))
+        Ok((Bytes::from(bytes), precision))
     })
     .await;
     match result {
@@ -815,7 +817,7 @@ async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Respons
     match result {
         Ok((lo, hi)) => {
             let value = serde_json::json!({ "lo": lo, "hi": hi });
-            remember(&shared, key, Arc::new(value.to_string().into_bytes()));
+            remember(&shared, key, Bytes::from(value.to_string()));
             json(value)
         }
         Err(r) => r,
