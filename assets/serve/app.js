@@ -185,7 +185,8 @@ async function setLayer() {
   }
   if (layer) map.removeLayer(layer);
   page.loads = 0;
-  const began = performance.now();
+  // When the tiles in view started loading (the layer's, then each zoom's or pan's).
+  let began = performance.now();
   layer = L.tileLayer("/tile/{z}/{x}/{y}.png?" + query(), {
     tileSize: 256, noWrap: true, bounds: bounds(),
     minZoom: 0, maxZoom: page.info.max_zoom, keepBuffer: 1, updateWhenZooming: false,
@@ -198,7 +199,11 @@ async function setLayer() {
     document.body.dataset.tiles = "loaded";
     showStatus(`drawn in ${((page.lastLoad - began) / 1000).toFixed(2)} s`);
   });
-  layer.on("loading", () => { document.body.dataset.tiles = "loading"; showStatus("computing…"); });
+  layer.on("loading", () => {
+    began = performance.now();
+    document.body.dataset.tiles = "loading";
+    showStatus("computing…");
+  });
   layer.on("tileerror", async (e) => {
     const r = await fetch(e.tile.src).catch(() => null);
     if (r && !r.ok && r.status !== 503) showStatus(await r.text(), true);
