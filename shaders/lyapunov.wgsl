@@ -165,12 +165,22 @@ fn tangent_step(c: Coeffs, t: Tangent, dt: f32) -> Tangent {
     sum = tangent_ahead(sum, 2.0, k3);
     let k4 = tangent_rate(c, tangent_ahead(t, dt, k3));
     sum = tangent_ahead(sum, 1.0, k4);
-    let next = tangent_ahead(t, dt / 6.0, sum);
-    // Back onto the unit circles as in rk4_step.
+    return tangent_on_circles(tangent_ahead(t, dt / 6.0, sum));
+}
+
+// Back onto the unit circles after a step, as in rk4_step; the tangent vector as it is.
+fn tangent_on_circles(next: Tangent) -> Tangent {
     let u = next.u;
     let n1 = fma(u.x * u.x + u.y * u.y, -0.5, 1.5);
     let n2 = fma(u.z * u.z + u.w * u.w, -0.5, 1.5);
     return Tangent(next.y, u * vec4<f32>(n1, n1, n2, n2), next.v);
+}
+
+// The renormalisation: the tangent vector scaled to unit length; its length before.
+fn unit_tangent(t: ptr<function, Tangent>) -> f32 {
+    let n = length((*t).v);
+    (*t).v = (*t).v / n;
+    return n;
 }
 
 // Renormalise after step k (1-based)?
@@ -188,7 +198,87 @@ fn tangent_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     states[4u * i] = p.y;
     states[4u * i + 1u] = p.u;
     states[4u * i + 2u] = TANGENT_START;
+    // The adaptive tangent's clock: the next step, attempts so far, stalled.
+    states[4u * i + 3u] = vec4<f32>(params.dt, 0.0, 0.0, 0.0);
     log_sums[i] = 0.0;
+}
+
+// The log sum of a run that stalled (src/gpu/lyapunov.rs STALLED_LOG_SUM): its exponent is NaN.
+const STALLED_LOG_SUM: f32 = -3.0e38;
+
+// The adaptive tangent: DP54 (dp54.wgsl) over the state and the tangent vector, the error
+// controlled over both (RMS of error / (atol + rtol |y|) over the eight components). Here
+// step0 and steps count renormalisation windows: window k ends at step min(k interval,
+// total_steps) of dt, and every pixel lands on it exactly; steps are at most dt.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let c = coeffs_from(params);
+    var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u]);
+    let clock = states[4u * i + 3u];
+    var h = clock.x;
+    var attempts = clock.y;
+    var stalled = clock.z != 0.0;
+    var log_sum = log_sums[i];
+    for (var k = params.step0 + 1u; k <= params.step0 + params.steps && !stalled; k++) {
+        let first = (k - 1u) * params.interval;
+        let window = f32(min(k * params.interval, params.total_steps) - first) * params.dt;
+        var s: f32 = 0.0;
+        var k1 = tangent_rate(c, t);
+        loop {
+            if s >= window {
+                break;
+            }
+            // As adaptive_common.wgsl's `attempt`: 2^24 attempts at most, and a step that
+            // still advances the time.
+            if attempts >= 16777216.0 {
+                stalled = true;
+                break;
+            }
+            attempts += 1.0;
+            let last = s + h >= window;
+            var step = h;
+            if last {
+                step = window - s;
+            }
+            if !(s + step > s) {
+                stalled = true;
+                break;
+            }
+            let k2 = tangent_rate(c, tangent_ahead(t, A21 * step, k1));
+            let k3 = tangent_rate(c, tangent_ahead(tangent_ahead(t, A31 * step, k1), A32 * step, k2));
+            let k4 = tangent_rate(c, tangent_ahead(tangent_ahead(tangent_ahead(t, A41 * step, k1), A42 * step, k2), A43 * step, k3));
+            let k5 = tangent_rate(c, tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(t, A51 * step, k1), A52 * step, k2), A53 * step, k3), A54 * step, k4));
+            let k6 = tangent_rate(c, tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(t, A61 * step, k1), A62 * step, k2), A63 * step, k3), A64 * step, k4), A65 * step, k5));
+            let next = tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(t, B1 * step, k1), B3 * step, k3), B4 * step, k4), B5 * step, k5), B6 * step, k6);
+            let k7 = tangent_rate(c, next);
+            let ey = step * (E1 * k1.y + E3 * k3.y + E4 * k4.y + E5 * k5.y + E6 * k6.y + E7 * k7.y);
+            let ev = step * (E1 * k1.v + E3 * k3.v + E4 * k4.v + E5 * k5.v + E6 * k6.v + E7 * k7.v);
+            let qy = ey / (params.atol + params.rtol * max(abs(t.y), abs(next.y)));
+            let qv = ev / (params.atol + params.rtol * max(abs(t.v), abs(next.v)));
+            let err = sqrt((dot(qy, qy) + dot(qv, qv)) / 8.0);
+            let factor = clamp(SAFETY / sqrt(sqrt(err)), SHRINK, GROW);
+            if err <= 1.0 {
+                s = select(s + step, window, last);
+                t = tangent_on_circles(next);
+                k1 = k7;
+            }
+            h = min(h * factor, params.dt);
+        }
+        if stalled {
+            log_sum = STALLED_LOG_SUM;
+        } else {
+            log_sum += log(unit_tangent(&t));
+        }
+    }
+    states[4u * i] = t.y;
+    states[4u * i + 1u] = t.u;
+    states[4u * i + 2u] = t.v;
+    states[4u * i + 3u] = vec4<f32>(h, attempts, f32(select(0u, 1u, stalled)), 0.0);
+    log_sums[i] = log_sum;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -205,9 +295,7 @@ fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     for (var k = params.step0 + 1u; k <= k_end; k++) {
         t = tangent_step(c, t, dt);
         if renormalise_after(k) {
-            let n = length(t.v);
-            log_sum += log(n);
-            t.v = t.v / n;
+            log_sum += log(unit_tangent(&t));
         }
     }
     states[4u * i] = t.y;

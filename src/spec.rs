@@ -426,6 +426,11 @@ pub struct LyapunovSpec {
     pub precision: Precision,
     /// Only these rows of the grid (first, count), as for [`FlipSpec::band`].
     pub band: Option<(u32, u32)>,
+    /// How the state and the tangent vector are stepped: RK4 at `dt`, or DP54 with every
+    /// pendulum's own steps (of at most `dt`) between renormalisations, which it lands on
+    /// exactly; the error is controlled over the state and the tangent vector. Tangent method
+    /// only.
+    pub integrator: Integrator,
 }
 
 impl LyapunovSpec {
@@ -485,6 +490,16 @@ impl LyapunovSpec {
                     self.renorm, self.stepping.dt, self.stepping.t_max
                 ),
             ));
+        }
+        self.integrator.validate(Precision::F64)?;
+        match (self.method, self.integrator) {
+            (_, Integrator::Rk4) | (Method::Tangent, Integrator::Dp54 { .. }) => {}
+            (Method::Twin { .. }, _) | (_, Integrator::Dop853 { .. }) => {
+                return Err(Error::invalid(
+                    "integrator",
+                    "divergence maps step adaptively with dp54 and the tangent method only",
+                ));
+            }
         }
         if let Method::Twin { eps } = self.method
             && !(eps.is_finite() && eps > 0.0 && eps <= 0.1)

@@ -40,7 +40,16 @@ pub const FTLE_RELATIVE: f64 = 0.05;
 /// ... or within this many 1/s, whichever is larger.
 pub const FTLE_ABSOLUTE: f64 = 0.02;
 
-pub const FTLE_RULE: &str = "resolved: the same map at half the time step gives an exponent within 5 % or 0.02 /s (NaN never agrees)";
+/// The divergence map's rule, in words.
+pub fn ftle_rule(spec: &LyapunovSpec) -> String {
+    let how = match spec.integrator.tolerances() {
+        None => "at half the time step",
+        Some(_) => "at a tenth of the tolerances",
+    };
+    format!(
+        "resolved: the same map {how} gives an exponent within 5 % or 0.02 /s (NaN never agrees)"
+    )
+}
 
 /// Whether two flip times (s; inf = never) agree.
 pub fn flip_times_agree(a: f32, b: f32) -> bool {
@@ -125,11 +134,20 @@ pub fn finer_flip(spec: &FlipSpec, f64_available: bool) -> FlipSpec {
 }
 
 /// The same for a divergence map (the renormalisation interval stays a whole number of
-/// steps: half the step divides it).
+/// steps: half the step divides it); adaptive steps at a tenth of the tolerances.
 pub fn finer_lyapunov(spec: &LyapunovSpec) -> LyapunovSpec {
-    LyapunovSpec {
-        stepping: halved(&spec.stepping),
-        ..*spec
+    match spec.integrator.tolerances() {
+        None => LyapunovSpec {
+            stepping: halved(&spec.stepping),
+            ..*spec
+        },
+        Some((rtol, atol)) => LyapunovSpec {
+            integrator: Integrator::Dp54 {
+                rtol: 0.1 * rtol,
+                atol: 0.1 * atol,
+            },
+            ..*spec
+        },
     }
 }
 

@@ -33,6 +33,7 @@ fn spec(n: u32, t_max: f64, dt: f64, method: Method) -> LyapunovSpec {
         use_symmetry: true,
         precision: chaoscope::spec::Precision::F32,
         band: None,
+        integrator: chaoscope::spec::Integrator::Rk4,
     }
 }
 
@@ -332,4 +333,87 @@ fn tangent_maps_are_point_symmetric_bit_for_bit_and_the_mirrored_half_equals_the
     // Twins are not mirror images of each other's twins: never mirrored.
     let twin = spec(40, 4.0, 0.01, Method::Twin { eps: 1e-8 });
     assert_eq!(twin.rows_to_integrate(), 40);
+}
+
+/// The tangent method with DP54 steps (`--integrator dp54`): the GPU's f64 map against the
+/// CPU twin at the same tolerance, both against converged RK4, and the point symmetry.
+#[test]
+fn adaptive_tangent_maps_match_the_cpu_and_converged_rk4() {
+    use chaoscope::spec::{Integrator, Precision};
+    let Some(ctx) = common::f64_gpu() else { return };
+    let adaptive = |rtol: f64, precision: Precision| LyapunovSpec {
+        integrator: Integrator::Dp54 { rtol, atol: rtol },
+        precision,
+        ..spec(16, 3.0, 0.1, Method::Tangent)
+    };
+    let s = adaptive(1e-10, Precision::F64);
+    let kernel = LyapunovKernel::with_precision(&ctx, Method::Tangent, Precision::F64);
+    let gpu = kernel.run(&ctx, &s, &Monitor::hidden()).unwrap();
+    let cpu = cpu::ftle_map(&s, &Monitor::hidden()).unwrap();
+    let rk4 = cpu::ftle_map(&spec(16, 3.0, 0.001, Method::Tangent), &Monitor::hidden()).unwrap();
+    let worst = |a: &Field, b: &Field| {
+        a.data
+            .iter()
+            .zip(&b.data)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max)
+    };
+    let (gpu_cpu, cpu_rk4) = (worst(&gpu, &cpu), worst(&cpu, &rk4));
+    eprintln!("adaptive FTLE over 3 s: gpu vs cpu {gpu_cpu:e}, cpu vs rk4 dt 1e-3 {cpu_rk4:e}");
+    // Over 3 s the tangent grows by at most e^(2.3 * 3) ~ 1e3: local errors of ~1e-10
+    // (the tolerance; the GPU's cos/sin carried outside the error control) reach ~1e-7 in
+    // the log sum, 3e-8 /s; RK4 at dt 1e-3 is converged to ~1e-9 relative. What remains is
+    // the f32 storage of the exponent (ulp 2.4e-7 at 2 /s): measured 1.2e-7 both.
+    assert!(gpu_cpu <= 1e-6, "gpu vs cpu {gpu_cpu:e} /s");
+    assert!(cpu_rk4 <= 1e-6, "cpu vs rk4 {cpu_rk4:e} /s");
+    // The symmetry holds bit for bit with adaptive steps too (each mirrored pixel takes
+    // the same steps).
+    let every = LyapunovSpec {
+        use_symmetry: false,
+        ..s
+    };
+    let full = kernel.run(&ctx, &every, &Monitor::hidden()).unwrap();
+    common::check_mirror(&full, &gpu, "gpu f64 dp54");
+    // f32 at its tightest tolerance runs and stays near the f64 map (local errors of 1e-5
+    // grown ~1e3-fold over 3 s, in the log: ~3e-3 /s; measured 4.5e-3).
+    let f32_map = LyapunovKernel::new(&ctx, Method::Tangent)
+        .run(&ctx, &adaptive(1e-5, Precision::F32), &Monitor::hidden())
+        .unwrap();
+    let f32_err = worst(&f32_map, &gpu);
+    eprintln!("f32 dp54 1e-5 vs f64: {f32_err:e}");
+    assert!(f32_err <= 1e-2, "f32 {f32_err:e} /s");
+}
+
+#[test]
+fn adaptive_divergence_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.png");
+    let run = |args: &[&str]| {
+        common::chaoscope()
+            .args(["lyapunov", "--size", "8", "--t-max", "1", "--output"])
+            .arg(&out)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    for (args, flag) in [
+        (
+            &["--integrator", "dp54", "--method", "twin"][..],
+            "--integrator",
+        ),
+        (&["--rtol", "1e-6"][..], "--rtol"),
+        (&["--integrator", "dop853"][..], "--integrator"),
+    ] {
+        let o = run(args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(flag), "{args:?}: {stderr}");
+    }
+    let o = run(&["--integrator", "dp54", "--backend", "cpu", "--rtol", "1e-8"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let command = common::png_text(&out, "chaoscope:command");
+    assert!(
+        command.contains("--integrator dp54 --rtol 0.00000001 --atol 0.00000001"),
+        "{command}"
+    );
 }

@@ -217,6 +217,7 @@ fn f64_gpu_divergence_maps_match_the_f64_cpu() {
             use_symmetry: true,
             precision: Precision::F64,
             band: None,
+            integrator: chaoscope::spec::Integrator::Rk4,
         };
         let gpu = LyapunovKernel::with_precision(&ctx, method, Precision::F64)
             .run(&ctx, &spec, &Monitor::hidden())

@@ -135,6 +135,7 @@ fn ftle_spec(size: u32, args: &BenchJob) -> LyapunovSpec {
         use_symmetry: false,
         precision: Precision::F32,
         band: None,
+        integrator: crate::spec::Integrator::Rk4,
     }
 }
 

@@ -107,7 +107,10 @@ pub fn run_map(
     );
     let mut extra = vec![colour_range];
     if shown.is_some() {
-        extra.push(("chaoscope:resolved-rule".into(), verdict::FTLE_RULE.into()));
+        extra.push((
+            "chaoscope:resolved-rule".into(),
+            verdict::ftle_rule(&job.spec),
+        ));
     }
     write_map(
         &picture,

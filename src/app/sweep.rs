@@ -420,6 +420,7 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
         use_symmetry: true,
         precision: Precision::F32,
         band: None,
+        integrator: crate::spec::Integrator::Rk4,
     }
 }
 

@@ -14,7 +14,7 @@ use crate::engine::Backend;
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::PictureSpec;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Precision, Spread, Stepping};
+use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Spread, Stepping};
 
 /// The flags that reproduce `p` exactly.
 pub fn params(p: &Params) -> String {
@@ -134,13 +134,16 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
         out += " --no-symmetry";
     }
     out += precision(spec.precision);
-    if let Some((rtol, atol)) = spec.integrator.tolerances() {
-        out += &format!(
-            " --integrator {} --rtol {rtol} --atol {atol}",
-            spec.integrator.name()
-        );
-    }
+    out += &integrator(&spec.integrator);
     out + &picture(pic)
+}
+
+/// An adaptive integrator's flags; nothing for RK4, the default.
+fn integrator(i: &Integrator) -> String {
+    match i.tolerances() {
+        Some((rtol, atol)) => format!(" --integrator {} --rtol {rtol} --atol {atol}", i.name()),
+        None => String::new(),
+    }
 }
 
 pub fn flip(job: &FlipJob) -> String {
@@ -173,6 +176,7 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
         out += " --no-symmetry";
     }
     out += precision(spec.precision);
+    out += &integrator(&spec.integrator);
     out + &picture(pic)
 }
 

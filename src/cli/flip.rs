@@ -80,30 +80,8 @@ impl FlipArgs {
             stepping.dt = dt;
             return Ok((precision, integrator, stepping));
         }
-        let integrator = match self.integrator.as_str() {
-            name @ ("dp54" | "dop853") => {
-                let f32_gpu = self.precision == Precision::F32 && self.backend != Backend::Cpu;
-                let rtol = self
-                    .rtol
-                    .unwrap_or(if f32_gpu { MIN_TOLERANCE_F32 } else { 1e-9 });
-                let atol = self.atol.unwrap_or(rtol);
-                match name {
-                    "dp54" => Integrator::Dp54 { rtol, atol },
-                    _ => Integrator::Dop853 { rtol, atol },
-                }
-            }
-            _ => {
-                for (field, given) in [("rtol", self.rtol), ("atol", self.atol)] {
-                    if given.is_some() {
-                        return Err(Error::invalid(
-                            field,
-                            "applies only to an adaptive integrator (--integrator dp54 or dop853)",
-                        ));
-                    }
-                }
-                Integrator::Rk4
-            }
-        };
+        let f32_gpu = self.precision == Precision::F32 && self.backend != Backend::Cpu;
+        let integrator = integrator_of(&self.integrator, self.rtol, self.atol, f32_gpu)?;
         Ok((self.precision, integrator, stepping))
     }
 
@@ -136,6 +114,33 @@ impl FlipArgs {
             tile: self.tile,
         })
     }
+}
+
+/// The integrator `name` with its tolerances (default: f32's least on an f32 GPU, else
+/// 1e-9; atol as rtol); tolerances given without an adaptive integrator are an error.
+pub fn integrator_of(
+    name: &str,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    f32_gpu: bool,
+) -> Result<Integrator> {
+    if name == "rk4" {
+        for (field, given) in [("rtol", rtol), ("atol", atol)] {
+            if given.is_some() {
+                return Err(Error::invalid(
+                    field,
+                    "applies only to an adaptive integrator (--integrator dp54 or dop853)",
+                ));
+            }
+        }
+        return Ok(Integrator::Rk4);
+    }
+    let rtol = rtol.unwrap_or(if f32_gpu { MIN_TOLERANCE_F32 } else { 1e-9 });
+    let atol = atol.unwrap_or(rtol);
+    Ok(match name {
+        "dp54" => Integrator::Dp54 { rtol, atol },
+        _ => Integrator::Dop853 { rtol, atol },
+    })
 }
 
 /// ", X % resolved (rule)" when the verdict was asked for.

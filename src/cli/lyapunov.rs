@@ -15,7 +15,7 @@ use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::spec::{Grid, LyapunovSpec, Method, Precision, Range, Stepping};
+use crate::spec::{Grid, Integrator, LyapunovSpec, Method, Precision, Range, Stepping};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MethodArg {
@@ -83,6 +83,17 @@ pub struct LyapunovArgs {
     pub verdict: VerdictArgs,
     #[command(flatten)]
     pub picture: PictureArgs,
+    /// How the state and the tangent vector are stepped: rk4 (fixed --dt) or dp54 (every
+    /// pendulum its own steps to --rtol/--atol, at most --dt, landing on each
+    /// renormalisation; the tangent method only).
+    #[arg(long, default_value = "rk4", value_parser = clap::builder::PossibleValuesParser::new(["rk4", "dp54"]))]
+    pub integrator: String,
+    /// dp54's relative tolerance per step [default: 1e-5 in f32 on the GPU, else 1e-9].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub rtol: Option<f64>,
+    /// dp54's absolute tolerance per step [default: as --rtol].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub atol: Option<f64>,
     /// The colours' range LOW:HIGH (1/s) [default: 0 to the map's 99.5th percentile].
     #[arg(long, value_parser = parse_range, allow_hyphen_values = true)]
     pub colour_range: Option<Range>,
@@ -96,6 +107,12 @@ pub enum LyapunovJob {
 }
 
 impl LyapunovArgs {
+    /// The integrator the flags ask for (tolerances only with dp54).
+    fn integrator(&self) -> Result<Integrator> {
+        let gpu_f32 = self.precision == Precision::F32 && self.backend != Some(Backend::Cpu);
+        super::flip::integrator_of(&self.integrator, self.rtol, self.atol, gpu_f32)
+    }
+
     fn spec(&self, grid: Grid) -> Result<LyapunovSpec> {
         Ok(LyapunovSpec {
             params: self.physical.sources().resolve()?,
@@ -112,6 +129,7 @@ impl LyapunovArgs {
             use_symmetry: !self.no_symmetry,
             precision: self.precision,
             band: None,
+            integrator: self.integrator()?,
         })
     }
 

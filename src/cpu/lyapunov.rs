@@ -6,6 +6,7 @@
 use nalgebra::{Matrix4, Vector4};
 use num_dual::Dual64;
 
+use super::adaptive::{Clock, DP54, step_factor};
 use super::{jacobian, map_pixels, rate_of, rk4_step};
 use crate::error::Result;
 use crate::field::{Convergence, Field};
@@ -63,6 +64,9 @@ pub fn ftle_monitored(spec: &LyapunovSpec, start: State, monitor: &Monitor) -> R
     let mut y = start.to_array();
     monitor.start("steps", steps as u64);
     match spec.method {
+        Method::Tangent if spec.integrator.tolerances().is_some() => {
+            tangent_adaptive(spec, start, monitor, &mut out)?;
+        }
         Method::Tangent => {
             let mut v = TANGENT_START;
             for k in 1..=steps {
@@ -100,6 +104,84 @@ pub fn ftle_monitored(spec: &LyapunovSpec, start: State, monitor: &Monitor) -> R
     }
     monitor.finish();
     Ok(out)
+}
+
+/// The tangent method with DP54 steps (`spec.integrator`'s tolerances) over the state and
+/// the tangent vector together, each renormalisation interval landed on exactly; a stalled
+/// run ends the estimate with NaN.
+fn tangent_adaptive(
+    spec: &LyapunovSpec,
+    start: State,
+    monitor: &Monitor,
+    out: &mut Convergence,
+) -> Result<()> {
+    let p = &spec.params;
+    let (rtol, atol) = spec.integrator.tolerances().expect("adaptive");
+    let dt = spec.stepping.dt;
+    let (steps, every) = (spec.stepping.steps(), spec.renorm_steps());
+    // (theta1, omega1, theta2, omega2, v): the rate of y at dual numbers y + eps v.
+    let rate = |x: &[f64; 8]| -> [f64; 8] {
+        let d: [Dual64; 4] = std::array::from_fn(|i| Dual64::new(x[i], x[4 + i]));
+        let r = rate_of(p, &d);
+        std::array::from_fn(|i| if i < 4 { r[i].re } else { r[i - 4].eps })
+    };
+    let mut x: [f64; 8] = std::array::from_fn(|i| {
+        if i < 4 {
+            start.to_array()[i]
+        } else {
+            TANGENT_START[i - 4]
+        }
+    });
+    let mut clock = Clock::new(dt);
+    let mut log_sum = 0.0;
+    let mut done = 0;
+    while done < steps {
+        let end = (done + every).min(steps);
+        let t_end = end as f64 * dt;
+        let mut k1 = rate(&x);
+        while clock.t < t_end {
+            let Ok((h, last)) = clock.attempt(t_end) else {
+                out.t.push(t_end);
+                out.ftle.push(f64::NAN);
+                return Ok(());
+            };
+            let mut k = [[0.0; 8]; 7];
+            k[0] = k1;
+            for s in 1..7 {
+                let stage: [f64; 8] = std::array::from_fn(|i| {
+                    x[i] + h * (0..s).map(|j| DP54.a[s][j] * k[j][i]).sum::<f64>()
+                });
+                k[s] = rate(&stage);
+            }
+            let next: [f64; 8] = std::array::from_fn(|i| {
+                x[i] + h * (0..7).map(|j| DP54.b[j] * k[j][i]).sum::<f64>()
+            });
+            let err = ((0..8)
+                .map(|i| {
+                    let e = h * (0..7).map(|j| DP54.e[j] * k[j][i]).sum::<f64>();
+                    (e / (atol + rtol * x[i].abs().max(next[i].abs()))).powi(2)
+                })
+                .sum::<f64>()
+                / 8.0)
+                .sqrt();
+            clock.settle(h, last, t_end, step_factor(err), err <= 1.0);
+            if err <= 1.0 {
+                x = next;
+                k1 = k[6];
+            }
+        }
+        monitor.check()?;
+        monitor.advance((end - done) as u64);
+        let n = x[4..].iter().map(|v| v * v).sum::<f64>().sqrt();
+        log_sum += n.ln();
+        for v in &mut x[4..] {
+            *v /= n;
+        }
+        out.t.push(t_end);
+        out.ftle.push(log_sum / t_end);
+        done = end;
+    }
+    Ok(())
 }
 
 /// All four Lyapunov exponents (1/s, descending) over `spec`'s time: four tangent vectors

@@ -269,14 +269,20 @@ pub fn shader_source(kernel: &str) -> String {
 
 pub const FLIP_TIME_WGSL: &str = include_str!("../../shaders/flip_time.wgsl");
 pub const TRAJECTORY_WGSL: &str = include_str!("../../shaders/trajectory.wgsl");
-pub const LYAPUNOV_WGSL: &str = include_str!("../../shaders/lyapunov.wgsl");
+const LYAPUNOV_KERNEL_WGSL: &str = include_str!("../../shaders/lyapunov.wgsl");
+
+/// The divergence kernels, with DP54's coefficients for the adaptive tangent.
+pub fn lyapunov_wgsl() -> String {
+    format!("{DP54_WGSL}\n{LYAPUNOV_KERNEL_WGSL}")
+}
 const ADAPTIVE_COMMON_WGSL: &str = include_str!("../../shaders/adaptive_common.wgsl");
 const FLIP_DP54_WGSL: &str = include_str!("../../shaders/flip_adaptive.wgsl");
+const DP54_WGSL: &str = include_str!("../../shaders/dp54.wgsl");
 const FLIP_DOP853_WGSL: &str = include_str!("../../shaders/flip_dop853.wgsl");
 
 /// The DP54 flip kernel: the adaptive kernels' shared part and the method's.
 pub fn flip_adaptive_wgsl() -> String {
-    format!("{ADAPTIVE_COMMON_WGSL}\n{FLIP_DP54_WGSL}")
+    format!("{ADAPTIVE_COMMON_WGSL}\n{DP54_WGSL}\n{FLIP_DP54_WGSL}")
 }
 
 /// The DOP853 flip kernel: its template with the stages written out from the tableau
@@ -509,8 +515,8 @@ pub fn all_shaders() -> Vec<(&'static str, String)> {
             shader_source_f64(&flip_dop853_wgsl()),
         ),
         ("trajectory_f64", shader_source_f64(TRAJECTORY_WGSL)),
-        ("lyapunov_f64", shader_source_f64(LYAPUNOV_WGSL)),
+        ("lyapunov_f64", shader_source_f64(&lyapunov_wgsl())),
         ("trajectory", shader_source(TRAJECTORY_WGSL)),
-        ("lyapunov", shader_source(LYAPUNOV_WGSL)),
+        ("lyapunov", shader_source(&lyapunov_wgsl())),
     ]
 }

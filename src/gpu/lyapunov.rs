@@ -3,7 +3,7 @@
 
 use super::context::{GpuContext, read_buffer, read_f32s};
 use super::layout::{
-    GpuLyapunovSlot, GpuParams, GpuParams64, LYAPUNOV_WGSL, TileParams, shader_source,
+    GpuLyapunovSlot, GpuParams, GpuParams64, TileParams, lyapunov_wgsl, shader_source,
     shader_source_f64,
 };
 use super::pipeline::{
@@ -26,8 +26,14 @@ pub struct LyapunovKernel {
     precision: Precision,
     /// (init, advance) of the method per kind of loss.
     pipelines: Variants,
+    /// The tangent method's (init, advance) with DP54 steps, compiled on first use.
+    adaptive: Option<Variants>,
     layout: wgpu::BindGroupLayout,
 }
+
+/// A run that stalled leaves this log sum (shaders/lyapunov.wgsl STALLED_LOG_SUM, -3e38):
+/// anything below it is read as NaN.
+const STALLED_BELOW: f64 = -1e38;
 
 /// Bytes per pixel of the slot and the log sum, and of the params, in `precision`.
 fn sizes(precision: Precision) -> (u64, u64, u64) {
@@ -46,8 +52,8 @@ impl LyapunovKernel {
     /// The kernel of `method` in `precision` (f64 needs a context with f64).
     pub fn with_precision(ctx: &GpuContext, method: Method, precision: Precision) -> Self {
         let source = match precision {
-            Precision::F32 => shader_source(LYAPUNOV_WGSL),
-            Precision::F64 => shader_source_f64(LYAPUNOV_WGSL),
+            Precision::F32 => shader_source(&lyapunov_wgsl()),
+            Precision::F64 => shader_source_f64(&lyapunov_wgsl()),
         };
         let module = module_of(ctx, "lyapunov.wgsl", source);
         let (layout, pipeline_layout) = layouts(ctx, "lyapunov", &[false, false]);
@@ -55,9 +61,18 @@ impl LyapunovKernel {
             Method::Tangent => &["tangent_init", "tangent_advance"],
             Method::Twin { .. } => &["twin_init", "twin_advance"],
         };
+        let adaptive = (method == Method::Tangent).then(|| {
+            Variants::new(
+                module.clone(),
+                pipeline_layout.clone(),
+                &["tangent_init", "tangent_adaptive"],
+                None,
+            )
+        });
         let kernel = LyapunovKernel {
             precision,
             pipelines: Variants::new(module, pipeline_layout, entries, None),
+            adaptive,
             layout,
         };
         kernel.pipelines.get(ctx, 0, false);
@@ -109,12 +124,15 @@ impl LyapunovKernel {
             Method::Twin { eps } => eps,
             Method::Tangent => 0.0,
         };
+        let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
         match self.precision {
             Precision::F32 => {
                 let base = GpuParams {
                     interval,
                     total_steps,
                     twin_eps: eps as f32,
+                    rtol: rtol as f32,
+                    atol: atol as f32,
                     ..GpuParams::new(p, dt).with_grid(grid)
                 };
                 self.integrate_with(ctx, spec, monitor, max_pixels, trace, base, |b| {
@@ -129,6 +147,8 @@ impl LyapunovKernel {
                     interval,
                     total_steps,
                     twin_eps: eps,
+                    rtol,
+                    atol,
                     ..GpuParams64::new(p, dt).with_grid(grid)
                 };
                 self.integrate_with(ctx, spec, monitor, max_pixels, trace, base, |b| {
@@ -151,10 +171,31 @@ impl LyapunovKernel {
         sums: impl Fn(&[u8]) -> Vec<f64>,
     ) -> Result<Field> {
         let grid = spec.grid;
-        let [init, advance] = self.pipelines.get(ctx, spec.params.losses.kinds(), false) else {
+        let adaptive = spec.integrator.tolerances().is_some();
+        let variants = match (&self.adaptive, adaptive) {
+            (Some(adaptive), true) => adaptive,
+            (None, true) => {
+                return Err(crate::Error::invalid(
+                    "integrator",
+                    "adaptive steps need the tangent method",
+                ));
+            }
+            (_, false) => &self.pipelines,
+        };
+        let [init, advance] = variants.get(ctx, spec.params.losses.kinds(), false) else {
             unreachable!("two entry points")
         };
         let total_steps = spec.stepping.steps();
+        let interval = spec.renorm_steps();
+        // The adaptive kernel's dispatches count renormalisation windows, each about
+        // `interval` steps of DP54's six rates.
+        let (units, unit_cost) = match adaptive {
+            true => (
+                total_steps.div_ceil(interval),
+                STEP_COST * 2 * interval as u64,
+            ),
+            false => (total_steps, STEP_COST),
+        };
         let tiling = Tiling::new(grid.width, spec.row_span(), max_pixels);
         let capacity = tiling.capacity();
         let (slot, sum_bytes, params_bytes) = sizes(self.precision);
@@ -173,17 +214,19 @@ impl LyapunovKernel {
         };
         let t_end = total_steps as f64 * spec.stepping.dt;
         // A convergence run reads the log sum back after every renormalisation.
-        let max_steps = trace.is_some().then_some(spec.renorm_steps());
+        let max_steps = trace
+            .is_some()
+            .then_some(if adaptive { 1 } else { interval });
         map_tiles(&grid, &tiling, total_steps, monitor, |row0, rows, later| {
             let pixels = rows * grid.width;
             let mut params = base;
             params.set_tile(row0, rows, pixels);
             dispatch(init, &params)?;
             time_loop(
-                total_steps,
+                units,
                 pixels,
                 pixels,
-                STEP_COST,
+                unit_cost,
                 max_steps,
                 later,
                 monitor,
@@ -192,9 +235,16 @@ impl LyapunovKernel {
                     dispatch(advance, &params)?;
                     if let Some(trace) = trace.as_deref_mut() {
                         let log_sum = sums(&read_buffer(ctx, &log_sums, sum_bytes)?)[0];
-                        let t = (step0 + steps) as f64 * spec.stepping.dt;
+                        let done = match adaptive {
+                            true => ((step0 + steps) * interval).min(total_steps),
+                            false => step0 + steps,
+                        };
+                        let t = done as f64 * spec.stepping.dt;
                         trace.t.push(t);
-                        trace.ftle.push(log_sum / t);
+                        trace.ftle.push(match log_sum < STALLED_BELOW {
+                            true => f64::NAN,
+                            false => log_sum / t,
+                        });
                     }
                     Ok(active)
                 },
@@ -202,7 +252,10 @@ impl LyapunovKernel {
             let all = sums(&read_buffer(ctx, &log_sums, pixels as u64 * sum_bytes)?);
             Ok(all
                 .into_iter()
-                .map(|log_sum| (log_sum / t_end) as f32)
+                .map(|log_sum| match log_sum < STALLED_BELOW {
+                    true => f32::NAN,
+                    false => (log_sum / t_end) as f32,
+                })
                 .collect())
         })
     }
@@ -231,7 +284,7 @@ pub struct JacobianKernel {
 
 impl JacobianKernel {
     pub fn new(ctx: &GpuContext) -> Self {
-        let module = shader_module(ctx, "lyapunov.wgsl", LYAPUNOV_WGSL);
+        let module = shader_module(ctx, "lyapunov.wgsl", &lyapunov_wgsl());
         let (layout, pipeline_layout) = layouts(ctx, "jacobian", &[false, false]);
         JacobianKernel {
             pipelines: Variants::new(module, pipeline_layout, &["jacobian_columns"], None),

@@ -285,6 +285,7 @@ impl View {
             use_symmetry: true,
             precision: Precision::F32,
             band: None,
+            integrator: crate::spec::Integrator::Rk4,
         }
     }
 }
