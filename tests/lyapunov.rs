@@ -374,6 +374,20 @@ fn adaptive_tangent_maps_match_the_cpu_and_converged_rk4() {
     };
     let full = kernel.run(&ctx, &every, &Monitor::hidden()).unwrap();
     common::check_mirror(&full, &gpu, "gpu f64 dp54");
+    // With rods and every loss (the same dual-number rate as RK4's).
+    let lossy = LyapunovSpec {
+        params: common::rods_and_every_loss(),
+        ..s
+    };
+    let lossy_gap = worst(
+        &kernel.run(&ctx, &lossy, &Monitor::hidden()).unwrap(),
+        &cpu::ftle_map(&lossy, &Monitor::hidden()).unwrap(),
+    );
+    eprintln!("with every loss: gpu vs cpu {lossy_gap:e}");
+    // As without losses, the f32 storage's ulps (measured 2.4e-7); the friction's turns near
+    // zero speed could cost the error control more (the flip maps allow 5e4 rtol), so a
+    // few ulps.
+    assert!(lossy_gap <= 1e-6, "every loss: gpu vs cpu {lossy_gap:e} /s");
     // f32 at its tightest tolerance runs and stays near the f64 map (local errors of 1e-5
     // grown ~1e3-fold over 3 s, in the log: ~3e-3 /s; measured 4.5e-3).
     let f32_map = LyapunovKernel::new(&ctx, Method::Tangent)
