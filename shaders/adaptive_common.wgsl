@@ -113,17 +113,26 @@ fn dense_crossing(q: Dense) -> f32 {
     return 2.0;
 }
 
-// The end of a pixel's dispatch: the candidate step (from flip_t, flip_h long) decided on its
-// dense output (q1, q2 for theta1, theta2), a stall reported, the slot and time written, the
-// pixel listed again while it runs.
-fn settle(i: u32, p: Pendulum, clock: vec3<f32>, time: f32, stalled: bool, candidate: bool, flip_t: f32, flip_h: f32, flip_q1: Dense, flip_q2: Dense) {
+// A step that may have flipped, decided after the step loop to keep the loop small: where
+// it starts, its length, and the dense outputs of theta1 and theta2 over it.
+struct Candidate {
+    found: bool,
+    t: f32,
+    h: f32,
+    q1: Dense,
+    q2: Dense,
+}
+
+// The end of a pixel's dispatch: the candidate step decided on its dense output, a stall
+// reported, the slot and time written, the pixel listed again while it runs.
+fn settle(i: u32, p: Pendulum, clock: vec3<f32>, time: f32, stalled: bool, flip: Candidate) {
     let t = clock.x;
     let t_max = params.t_max;
     var t_flip = time;
-    if candidate {
-        let s = min(dense_crossing(flip_q1), dense_crossing(flip_q2));
+    if flip.found {
+        let s = min(dense_crossing(flip.q1), dense_crossing(flip.q2));
         if s <= 1.0 {
-            t_flip = flip_t + s * flip_h;
+            t_flip = flip.t + s * flip.h;
         }
     }
     // A run that stalled before flipping (its state left the numbers, or its step shrank to

@@ -84,15 +84,10 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     var attempts = clock.z;
     var t_flip = times[i];
     var stalled = false;
-    // A step that may have flipped, decided after the loop to keep the loop small.
-    var candidate = false;
-    var flip_t: f32 = 0.0;
-    var flip_h: f32 = 0.0;
-    var flip_q1 = Dense();
-    var flip_q2 = Dense();
+    var flip = Candidate();
     var k1 = rate(c, p);
     for (var k = 0u; k < params.steps; k++) {
-        if t >= t_max || candidate {
+        if t >= t_max || flip.found {
             break;
         }
         let at = attempt(t, h, &attempts);
@@ -122,13 +117,9 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             let q2 = dense_of(a.z, b.z, a.w, b.w, d.y, step);
             let reach1 = may_reach_pi(a.x, b.x, a.y, b.y, step) && dense_may_reach_pi(q1, b.x);
             let reach2 = may_reach_pi(a.z, b.z, a.w, b.w, step) && dense_may_reach_pi(q2, b.z);
-            if t_flip == NEVER && !candidate && (reach1 || reach2) {
+            if t_flip == NEVER && !flip.found && (reach1 || reach2) {
                 // Decided after the loop; the pixel's dispatch ends with this step.
-                candidate = true;
-                flip_t = t;
-                flip_h = step;
-                flip_q1 = q1;
-                flip_q2 = q2;
+                flip = Candidate(true, t, step, q1, q2);
             }
             t = select(t + step, t_max, last);
             p = on_circles(next);
@@ -136,5 +127,5 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         h = min(h * factor, params.dt);
     }
-    settle(i, p, vec3<f32>(t, h, attempts), t_flip, stalled, candidate, flip_t, flip_h, flip_q1, flip_q2);
+    settle(i, p, vec3<f32>(t, h, attempts), t_flip, stalled, flip);
 }
