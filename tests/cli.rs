@@ -312,7 +312,7 @@ fn bench_reports_every_mode_of_both_paths() {
     }
     let out = chaoscope()
         .args(["bench", "--size", "32", "--cpu-size", "8", "--t-max", "0.5"])
-        .args(["--repeat", "1", "--no-ftle"])
+        .args(["--repeat", "1"])
         .args(["--accurate-size", "16", "--accurate-t-max", "3"])
         .assert()
         .success()
@@ -343,6 +343,19 @@ fn bench_reports_every_mode_of_both_paths() {
             "no accurate row for {path}:\n{text}"
         );
     }
+    // The divergence-map rows beside them, each with the share of its exponents confirmed.
+    for path in [
+        "chaoscope gpu f32 rk4",
+        "chaoscope gpu f64 rk4",
+        "chaoscope gpu f64 dp54",
+    ] {
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with(path) && l.contains(" accurate-ftle ") && l.ends_with('%')),
+            "no accurate-ftle row for {path}:\n{text}"
+        );
+    }
+    assert!(text.contains("accurate divergence map: f64 DP54"), "{text}");
 }
 
 #[test]

@@ -382,6 +382,92 @@ fn accurate_samples(
     Ok(out)
 }
 
+/// The divergence-map accuracy problem (issue 11): the default pendulum on the accurate
+/// rows' grid at half the side and a third of the time (by default 128 x 128, 10 s: BENCH.md's
+/// table), the tangent method renormalised every 0.1 s, the point-symmetric half integrated
+/// as `chaoscope lyapunov` does.
+fn ftle_accuracy_spec(
+    args: &BenchJob,
+    precision: Precision,
+    integrator: Integrator,
+    dt: f64,
+) -> LyapunovSpec {
+    LyapunovSpec {
+        params: Params::default(),
+        grid: Grid::square(ftle_accuracy_size(args)),
+        stepping: Stepping {
+            dt,
+            t_max: args.accurate_t_max / 3.0,
+        },
+        method: Method::Tangent,
+        renorm: 0.1,
+        use_symmetry: true,
+        precision,
+        band: None,
+        integrator,
+    }
+}
+
+/// Grid side of the accurate divergence-map rows.
+pub fn ftle_accuracy_size(args: &BenchJob) -> u32 {
+    (args.accurate_size / 2).max(2)
+}
+
+/// The converged divergence map: the f64 CPU's DP54 at rtol 1e-11.
+fn ftle_reference(args: &BenchJob, monitor: &Monitor) -> Result<Field> {
+    let tight = Integrator::Dp54 {
+        rtol: 1e-11,
+        atol: 1e-11,
+    };
+    cpu::ftle_map(
+        &ftle_accuracy_spec(args, Precision::F64, tight, 0.1),
+        monitor,
+    )
+}
+
+/// One repetition of the accurate divergence-map rows: f32 and f64 RK4 at dt 0.01 and f64
+/// DP54 at 1e-9 (steps of at most 0.1 s), each with the fraction of its exponents that agree
+/// with `reference` by the verdict's rule.
+fn ftle_accuracy_samples(
+    args: &BenchJob,
+    engine: &crate::engine::Engine,
+    reference: &Field,
+    quiet: &Monitor,
+) -> Result<Vec<Sample>> {
+    let dp54 = Integrator::Dp54 {
+        rtol: 1e-9,
+        atol: 1e-9,
+    };
+    let mut out = Vec::new();
+    for (name, spec) in [
+        (
+            "chaoscope gpu f32 rk4 dt 0.01",
+            ftle_accuracy_spec(args, Precision::F32, Integrator::Rk4, 0.01),
+        ),
+        (
+            "chaoscope gpu f64 rk4 dt 0.01",
+            ftle_accuracy_spec(args, Precision::F64, Integrator::Rk4, 0.01),
+        ),
+        (
+            "chaoscope gpu f64 dp54 1e-9 dt 0.1",
+            ftle_accuracy_spec(args, Precision::F64, dp54, 0.1),
+        ),
+    ] {
+        let t0 = Instant::now();
+        let field = engine.lyapunov_map(&spec, quiet)?;
+        let wall_s = t0.elapsed().as_secs_f64();
+        let agree = crate::verdict::mask(&field, reference, crate::verdict::exponents_agree);
+        out.push(Sample {
+            name: name.to_string(),
+            mode: "accurate-ftle",
+            wall_s,
+            pendulum_steps: f64::NAN,
+            right: Some(crate::verdict::fraction(&agree)),
+        });
+    }
+    Ok(out)
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -439,6 +525,38 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
         Some((engine, accurate_reference(args, monitor)?))
     } else {
         None
+    };
+    // The accurate divergence-map rows, on the same engine, with the FTLE rows.
+    let ftle_reference = match &accurate {
+        Some((engine, _)) if !args.no_ftle => {
+            let small = |s: LyapunovSpec| LyapunovSpec {
+                grid: Grid::square(8),
+                stepping: Stepping {
+                    t_max: 0.2,
+                    ..s.stepping
+                },
+                ..s
+            };
+            for (precision, integrator, dt) in [
+                (Precision::F32, Integrator::Rk4, 0.01),
+                (Precision::F64, Integrator::Rk4, 0.01),
+                (
+                    Precision::F64,
+                    Integrator::Dp54 {
+                        rtol: 1e-9,
+                        atol: 1e-9,
+                    },
+                    0.1,
+                ),
+            ] {
+                engine.lyapunov_map(
+                    &small(ftle_accuracy_spec(args, precision, integrator, dt)),
+                    &quiet,
+                )?;
+            }
+            Some(ftle_reference(args, monitor)?)
+        }
+        _ => None,
     };
     let mut samples: Vec<Sample> = Vec::new();
     let mut notices = Vec::new();
@@ -498,6 +616,9 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
                     &quiet,
                     &mut notices,
                 )?);
+            }
+            if !early && let (Some((engine, _)), Some(reference)) = (&accurate, &ftle_reference) {
+                samples.extend(ftle_accuracy_samples(args, engine, reference, &quiet)?);
             }
             if let Some(dir) = &args.peers {
                 for peer in &args.peer {
@@ -596,6 +717,21 @@ fn ratios(rows: &[Row]) -> Vec<String> {
             )),
             None => out.push("accurate map: no peer run reached 99.5 % of the pixels".into()),
         }
+    }
+    let ftle_row = |path: &str| {
+        rows.iter()
+            .find(|r| r.mode == "accurate-ftle" && r.path.starts_with(path))
+    };
+    if let (Some(a), Some(f32_map)) = (
+        ftle_row("chaoscope gpu f64 dp54"),
+        ftle_row("chaoscope gpu f32 rk4"),
+    ) {
+        out.push(format!(
+            "accurate divergence map: f64 DP54 1e-9 agrees with the converged map on {:.2} % of the pixels (f32 RK4: {:.2} %) in {:.2}x the f32 RK4 map's time",
+            100.0 * a.right.unwrap_or(f64::NAN),
+            100.0 * f32_map.right.unwrap_or(f64::NAN),
+            a.wall_s / f32_map.wall_s
+        ));
     }
     for (mode, peer_mode) in [
         ("early", "early"),

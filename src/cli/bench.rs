@@ -108,8 +108,16 @@ pub fn run(args: &BenchArgs, monitor: &Monitor, as_json: bool) -> Result<serde_j
         "accurate: {0}x{0}, {1} s; right = within 1 % or 0.02 s of f64 DP54 at rtol 1e-12",
         job.accurate_size, job.accurate_t_max
     );
+    if !job.no_ftle {
+        println!(
+            "accurate-ftle: {0}x{0}, {1} s, tangent renormalised every 0.1 s; right = within 5 % \
+             or 0.02 /s of f64 DP54 at rtol 1e-11",
+            bench::ftle_accuracy_size(&job),
+            job.accurate_t_max / 3.0
+        );
+    }
     println!(
-        "{:<w$} {:>9} {:>10} {:>16} {:>8}",
+        "{:<w$} {:>13} {:>10} {:>16} {:>8}",
         "path", "mode", "wall s", "pendulum-steps/s", "right"
     );
     for row in &r.rows {
@@ -121,7 +129,7 @@ pub fn run(args: &BenchArgs, monitor: &Monitor, as_json: bool) -> Result<serde_j
             .right
             .map_or(String::new(), |f| format!("{:.2} %", 100.0 * f));
         println!(
-            "{:<w$} {:>9} {:>10.3} {:>16} {:>8}",
+            "{:<w$} {:>13} {:>10.3} {:>16} {:>8}",
             row.path, row.mode, row.wall_s, rate, right
         );
     }
