@@ -685,20 +685,31 @@ fn ratios(rows: &[Row]) -> Vec<String> {
             full / ftle
         ));
     }
-    let accurate = |path: &str| {
-        rows.iter()
-            .find(|r| r.mode == "accurate" && r.path.starts_with(path))
+    // "NAME is right on X % of the pixels (f32 RK4: Y %) in Zx the f32 RK4 map's time" for
+    // the row of `mode` starting with `path`, against that mode's f32 RK4 row.
+    let against_f32 = |mode: &str, path: &str, what: &str| {
+        let row = |p: &str| {
+            rows.iter()
+                .find(|r| r.mode == mode && r.path.starts_with(p))
+        };
+        let (a, f32_map) = (row(path)?, row("chaoscope gpu f32 rk4")?);
+        let percent = |r: &Row| 100.0 * r.right.unwrap_or(f64::NAN);
+        Some((
+            a,
+            format!(
+                "{what} on {:.2} % of the pixels (f32 RK4: {:.2} %) in {:.2}x the f32 RK4 map's time",
+                percent(a),
+                percent(f32_map),
+                a.wall_s / f32_map.wall_s
+            ),
+        ))
     };
-    if let (Some(a), Some(f32_map)) = (
-        accurate("chaoscope --accurate"),
-        accurate("chaoscope gpu f32 rk4"),
+    if let Some((a, line)) = against_f32(
+        "accurate",
+        "chaoscope --accurate",
+        "accurate map: --accurate is right",
     ) {
-        out.push(format!(
-            "accurate map: --accurate is right on {:.2} % of the pixels (f32 RK4: {:.2} %) in {:.2}x the f32 RK4 map's time",
-            100.0 * a.right.unwrap_or(f64::NAN),
-            100.0 * f32_map.right.unwrap_or(f64::NAN),
-            a.wall_s / f32_map.wall_s
-        ));
+        out.push(line);
         let right = a.right.unwrap_or(0.0);
         let peer = rows
             .iter()
@@ -718,20 +729,12 @@ fn ratios(rows: &[Row]) -> Vec<String> {
             None => out.push("accurate map: no peer run reached 99.5 % of the pixels".into()),
         }
     }
-    let ftle_row = |path: &str| {
-        rows.iter()
-            .find(|r| r.mode == "accurate-ftle" && r.path.starts_with(path))
-    };
-    if let (Some(a), Some(f32_map)) = (
-        ftle_row("chaoscope gpu f64 dp54"),
-        ftle_row("chaoscope gpu f32 rk4"),
+    if let Some((_, line)) = against_f32(
+        "accurate-ftle",
+        "chaoscope gpu f64 dp54",
+        "accurate divergence map: f64 DP54 1e-9 agrees with the converged map",
     ) {
-        out.push(format!(
-            "accurate divergence map: f64 DP54 1e-9 agrees with the converged map on {:.2} % of the pixels (f32 RK4: {:.2} %) in {:.2}x the f32 RK4 map's time",
-            100.0 * a.right.unwrap_or(f64::NAN),
-            100.0 * f32_map.right.unwrap_or(f64::NAN),
-            a.wall_s / f32_map.wall_s
-        ));
+        out.push(line);
     }
     for (mode, peer_mode) in [
         ("early", "early"),
