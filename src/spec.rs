@@ -269,8 +269,8 @@ impl Integrator {
 
 /// What `--accurate` stands for: the recommended settings for a flip map right on >= 99.5 %
 /// of its pixels (measured on a 256 x 256, 30 s map: 99.84 % against a converged reference,
-/// 1.9x the time of the f32 RK4 map at dt 0.01 on lavapipe): f64, DP54 at rtol = atol =
-/// 1e-9, steps of at most 0.05 s.
+/// 8-9x the kernel time of the f32 RK4 map at dt 0.01 on lavapipe, BENCH.md): f64, DP54 at
+/// rtol = atol = 1e-9, steps of at most 0.05 s.
 pub const ACCURATE: (Precision, Integrator, f64) = (
     Precision::F64,
     Integrator::Dp54 {
@@ -279,6 +279,25 @@ pub const ACCURATE: (Precision, Integrator, f64) = (
     },
     0.05,
 );
+
+/// What `lyapunov --accurate` stands for: f64, DP54 over the state and the tangent vector at
+/// rtol = atol = 1e-9, steps of at most 0.1 s (measured on a 128 x 128, 10 s map: 99.93 % of
+/// the exponents within 5 % or 0.02 /s of DP54 at 1e-11, where f32 RK4 at dt 0.01 has 84 %;
+/// BENCH.md). The tangent method only.
+pub const ACCURATE_FTLE: (Precision, Integrator, f64) = (
+    Precision::F64,
+    Integrator::Dp54 {
+        rtol: 1e-9,
+        atol: 1e-9,
+    },
+    0.1,
+);
+
+/// `ACCURATE_FTLE`'s largest step for renormalisations every `renorm` s: the longest whole
+/// fraction of `renorm` that is at most its 0.1 s.
+pub fn accurate_ftle_dt(renorm: f64) -> f64 {
+    renorm / (renorm / ACCURATE_FTLE.2).ceil().max(1.0)
+}
 
 /// Tightest tolerances an adaptive run may ask for in each precision: ~100 epsilon, so the
 /// error estimate is not round-off.

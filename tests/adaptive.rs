@@ -266,17 +266,9 @@ fn adaptive_maps_keep_the_no_flip_region_and_the_symmetry() {
 fn adaptive_flags() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("m.png");
-    let err = |args: &[&str], flag: &str| {
-        let o = chaoscope()
-            .args(["flip", "--size", "8", "--t-max", "1", "--output"])
-            .arg(&out)
-            .args(args)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
-        assert!(stderr.contains(flag), "{args:?}: {stderr}");
-    };
+    let path = out.to_str().unwrap();
+    let base = ["flip", "--size", "8", "--t-max", "1", "--output", path];
+    let err = |args: &[&str], flag: &str| refused(&base, args, flag);
     err(&["--rtol", "1e-6"], "--rtol");
     err(&["--integrator", "dp54", "--atol", "0"], "--atol");
     err(
@@ -355,4 +347,55 @@ fn adaptive_flags() {
         ],
         "--rtol",
     );
+}
+
+/// `lyapunov --accurate`: f64 DP54 at 1e-9 with steps of at most 0.1 s landing on every
+/// renormalisation; the PNG's command spells that out, and run again it gives the same
+/// exponents bit for bit. The twin method (fixed steps only) and explicit settings are refused.
+#[test]
+fn lyapunov_accurate_is_its_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str], name: &str| {
+        let png = dir.path().join(format!("{name}.png"));
+        let npy = dir.path().join(format!("{name}.npy"));
+        let o = chaoscope()
+            .args(args)
+            .arg("--output")
+            .arg(&png)
+            .arg("--data")
+            .arg(&npy)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            common::png_text(&png, "chaoscope:command"),
+            std::fs::read(&npy).unwrap(),
+        )
+    };
+    let flags = [
+        "lyapunov", "--size", "24", "--t-max", "2", "--renorm", "0.25",
+    ];
+    let (command, exponents) = run(&[&flags[..], &["--accurate"]].concat(), "accurate");
+    // 0.25 s in whole steps of at most 0.1 s: three of 1/12 s.
+    assert!(
+        command.contains("--precision f64 --integrator dp54 --rtol 0.000000001 --atol 0.000000001")
+            && command.contains("--dt 0.08333333333333333")
+            && !command.contains("--accurate"),
+        "{command}"
+    );
+    let words: Vec<&str> = command.split_whitespace().skip(1).collect();
+    let (_, again) = run(&words, "again");
+    assert_eq!(exponents, again, "the recorded command's exponents");
+    let base = ["lyapunov", "--size", "8", "--t-max", "1"];
+    refused(&base, &["--accurate", "--method", "twin"], "--accurate");
+    refused(&base, &["--accurate", "--precision", "f32"], "--precision");
+    refused(&base, &["--accurate", "--dt", "0.01"], "--dt");
+}
+
+/// `chaoscope` with `base` and `args` is refused (exit 2) with an error naming `flag`.
+fn refused(base: &[&str], args: &[&str], flag: &str) {
+    let o = chaoscope().args(base).args(args).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(stderr.contains(flag), "{args:?}: {stderr}");
 }

@@ -179,6 +179,20 @@ fn tiles_equal_the_pixels_of_the_map_commands() {
             &["flip", "--t-max", "5", "--accurate"],
             "f64",
         ),
+        (
+            "accurate divergence",
+            (2, 1, 2),
+            "kind=ftle&t_max=1&lo=0&hi=3&accurate=1",
+            &[
+                "lyapunov",
+                "--t-max",
+                "1",
+                "--colour-range",
+                "0:3",
+                "--accurate",
+            ],
+            "f64",
+        ),
     ];
     for (k, &(what, (z, x, y), query, flags, precision)) in cases.iter().enumerate() {
         let (status, ran, body) = server.get(&format!("/tile/{z}/{x}/{y}.png?{query}&m2=1.5"));

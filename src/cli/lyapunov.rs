@@ -15,7 +15,10 @@ use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::spec::{Grid, Integrator, LyapunovSpec, Method, Precision, Range, Stepping};
+use crate::spec::{
+    ACCURATE_FTLE, Grid, Integrator, LyapunovSpec, Method, Precision, Range, Stepping,
+    accurate_ftle_dt,
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MethodArg {
@@ -94,6 +97,11 @@ pub struct LyapunovArgs {
     /// dp54's absolute tolerance per step [default: as --rtol].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub atol: Option<f64>,
+    /// The recommended settings for a map whose exponents are right: --precision f64
+    /// --integrator dp54 --rtol 1e-9 --atol 1e-9 and steps of at most 0.1 s that land on every
+    /// renormalisation (the tangent method; the PNG records those flags).
+    #[arg(long, conflicts_with_all = ["precision", "integrator", "rtol", "atol", "dt"])]
+    pub accurate: bool,
     /// The colours' range LOW:HIGH (1/s) [default: 0 to the map's 99.5th percentile].
     #[arg(long, value_parser = parse_range, allow_hyphen_values = true)]
     pub colour_range: Option<Range>,
@@ -113,12 +121,28 @@ impl LyapunovArgs {
         super::flip::integrator_of(&self.integrator, self.rtol, self.atol, gpu_f32)
     }
 
+    /// The precision, integrator and time step the flags ask for (`--accurate` spelt out).
+    fn stepping(&self) -> Result<(Precision, Integrator, f64)> {
+        if !self.accurate {
+            return Ok((self.precision, self.integrator()?, self.dt));
+        }
+        if self.method == MethodArg::Twin {
+            return Err(Error::invalid(
+                "accurate",
+                "steps the tangent method with dp54; --method twin has fixed steps only",
+            ));
+        }
+        let (precision, integrator, _) = ACCURATE_FTLE;
+        Ok((precision, integrator, accurate_ftle_dt(self.renorm)))
+    }
+
     fn spec(&self, grid: Grid) -> Result<LyapunovSpec> {
+        let (precision, integrator, dt) = self.stepping()?;
         Ok(LyapunovSpec {
             params: self.physical.sources().resolve()?,
             grid,
             stepping: Stepping {
-                dt: self.dt,
+                dt,
                 t_max: self.t_max,
             },
             method: match self.method {
@@ -127,9 +151,9 @@ impl LyapunovArgs {
             },
             renorm: self.renorm,
             use_symmetry: !self.no_symmetry,
-            precision: self.precision,
+            precision,
             band: None,
-            integrator: self.integrator()?,
+            integrator,
         })
     }
 

@@ -10,7 +10,10 @@ use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
-use crate::spec::{ACCURATE, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping};
+use crate::spec::{
+    ACCURATE, ACCURATE_FTLE, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping,
+    accurate_ftle_dt,
+};
 
 /// The deepest zoom level: 256 * 2^42 pixels across a turn, a pixel step of 5.6e-15 rad,
 /// below what f64 resolves (the verdict then says so); Leaflet's pixel coordinates stay
@@ -65,7 +68,7 @@ pub struct View {
     pub kind: Kind,
     pub params: Params,
     pub stepping: Stepping,
-    /// `--accurate`'s settings for flip maps (f64, DP54).
+    /// `--accurate`'s settings (f64, DP54): `flip`'s for flip maps, `lyapunov`'s for FTLE.
     pub accurate: bool,
     pub colormap: Option<Colormap>,
     /// Paint the pixels the verdict cannot resolve grey.
@@ -267,7 +270,7 @@ impl View {
     }
 
     /// The divergence map of this view over `grid`, as `chaoscope lyapunov` makes it by
-    /// default (tangent method, renormalised every 0.1 s).
+    /// default (tangent method, renormalised every 0.1 s), or with `--accurate`.
     pub fn lyapunov_spec(&self, grid: Grid) -> LyapunovSpec {
         if let Some(FrameMap::Lyapunov(stored)) = self.stored {
             return LyapunovSpec {
@@ -276,7 +279,7 @@ impl View {
                 ..stored
             };
         }
-        LyapunovSpec {
+        let mut spec = LyapunovSpec {
             params: self.params,
             grid,
             stepping: self.stepping,
@@ -286,7 +289,14 @@ impl View {
             precision: Precision::F32,
             band: None,
             integrator: crate::spec::Integrator::Rk4,
+        };
+        if self.accurate {
+            let (precision, integrator, _) = ACCURATE_FTLE;
+            spec.precision = precision;
+            spec.integrator = integrator;
+            spec.stepping.dt = accurate_ftle_dt(spec.renorm);
         }
+        spec
     }
 }
 
