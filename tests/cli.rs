@@ -347,7 +347,7 @@ fn bench_reports_every_mode_of_both_paths() {
     for path in [
         "chaoscope gpu f32 rk4",
         "chaoscope gpu f64 rk4",
-        "chaoscope gpu f64 dp54",
+        "chaoscope lyapunov --accurate",
     ] {
         assert!(
             text.lines()
@@ -355,7 +355,10 @@ fn bench_reports_every_mode_of_both_paths() {
             "no accurate-ftle row for {path}:\n{text}"
         );
     }
-    assert!(text.contains("accurate divergence map: f64 DP54"), "{text}");
+    assert!(
+        text.contains("accurate divergence map: lyapunov --accurate agrees"),
+        "{text}"
+    );
 }
 
 #[test]

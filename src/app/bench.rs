@@ -16,7 +16,8 @@ use crate::gpu::{FlipTimeKernel, GpuContext, LyapunovKernel};
 use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::spec::{
-    ACCURATE, FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Stepping,
+    ACCURATE, ACCURATE_FTLE, FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Stepping,
+    accurate_ftle_dt,
 };
 
 #[derive(Debug, Clone, PartialEq)]
@@ -425,21 +426,12 @@ fn ftle_reference(args: &BenchJob, monitor: &Monitor) -> Result<Field> {
     )
 }
 
-/// One repetition of the accurate divergence-map rows: f32 and f64 RK4 at dt 0.01 and f64
-/// DP54 at 1e-9 (steps of at most 0.1 s), each with the fraction of its exponents that agree
-/// with `reference` by the verdict's rule.
-fn ftle_accuracy_samples(
-    args: &BenchJob,
-    engine: &crate::engine::Engine,
-    reference: &Field,
-    quiet: &Monitor,
-) -> Result<Vec<Sample>> {
-    let dp54 = Integrator::Dp54 {
-        rtol: 1e-9,
-        atol: 1e-9,
-    };
-    let mut out = Vec::new();
-    for (name, spec) in [
+/// The accurate divergence-map rows' paths: f32 and f64 RK4 at dt 0.01, and `lyapunov
+/// --accurate` (f64 DP54 at 1e-9, steps of at most 0.1 s).
+fn ftle_accuracy_paths(args: &BenchJob) -> [(&'static str, LyapunovSpec); 3] {
+    let (precision, integrator, _) = ACCURATE_FTLE;
+    let spec = ftle_accuracy_spec(args, precision, integrator, 0.1);
+    [
         (
             "chaoscope gpu f32 rk4 dt 0.01",
             ftle_accuracy_spec(args, Precision::F32, Integrator::Rk4, 0.01),
@@ -449,10 +441,28 @@ fn ftle_accuracy_samples(
             ftle_accuracy_spec(args, Precision::F64, Integrator::Rk4, 0.01),
         ),
         (
-            "chaoscope gpu f64 dp54 1e-9 dt 0.1",
-            ftle_accuracy_spec(args, Precision::F64, dp54, 0.1),
+            "chaoscope lyapunov --accurate (gpu f64 dp54)",
+            LyapunovSpec {
+                stepping: Stepping {
+                    dt: accurate_ftle_dt(spec.renorm),
+                    ..spec.stepping
+                },
+                ..spec
+            },
         ),
-    ] {
+    ]
+}
+
+/// One repetition of the accurate divergence-map rows, each with the fraction of its
+/// exponents that agree with `reference` by the verdict's rule.
+fn ftle_accuracy_samples(
+    args: &BenchJob,
+    engine: &crate::engine::Engine,
+    reference: &Field,
+    quiet: &Monitor,
+) -> Result<Vec<Sample>> {
+    let mut out = Vec::new();
+    for (name, spec) in ftle_accuracy_paths(args) {
         let t0 = Instant::now();
         let field = engine.lyapunov_map(&spec, quiet)?;
         let wall_s = t0.elapsed().as_secs_f64();
@@ -529,30 +539,16 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
     // The accurate divergence-map rows, on the same engine, with the FTLE rows.
     let ftle_reference = match &accurate {
         Some((engine, _)) if !args.no_ftle => {
-            let small = |s: LyapunovSpec| LyapunovSpec {
-                grid: Grid::square(8),
-                stepping: Stepping {
-                    t_max: 0.2,
-                    ..s.stepping
-                },
-                ..s
-            };
-            for (precision, integrator, dt) in [
-                (Precision::F32, Integrator::Rk4, 0.01),
-                (Precision::F64, Integrator::Rk4, 0.01),
-                (
-                    Precision::F64,
-                    Integrator::Dp54 {
-                        rtol: 1e-9,
-                        atol: 1e-9,
+            for (_, spec) in ftle_accuracy_paths(args) {
+                let small = LyapunovSpec {
+                    grid: Grid::square(8),
+                    stepping: Stepping {
+                        t_max: 0.2,
+                        ..spec.stepping
                     },
-                    0.1,
-                ),
-            ] {
-                engine.lyapunov_map(
-                    &small(ftle_accuracy_spec(args, precision, integrator, dt)),
-                    &quiet,
-                )?;
+                    ..spec
+                };
+                engine.lyapunov_map(&small, &quiet)?;
             }
             Some(ftle_reference(args, monitor)?)
         }
@@ -731,8 +727,8 @@ fn ratios(rows: &[Row]) -> Vec<String> {
     }
     if let Some((_, line)) = against_f32(
         "accurate-ftle",
-        "chaoscope gpu f64 dp54",
-        "accurate divergence map: f64 DP54 1e-9 agrees with the converged map",
+        "chaoscope lyapunov --accurate",
+        "accurate divergence map: lyapunov --accurate agrees with the converged map",
     ) {
         out.push(line);
     }
