@@ -288,21 +288,10 @@ fn adaptive_flags() {
     );
     err(&["--accurate", "--precision", "f32"], "--precision");
     err(&["--integrator", "rk5"], "--integrator");
-    let o = chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "16",
-            "--t-max",
-            "2",
-            "--accurate",
-            "--output",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let command = common::png_text(&out, "chaoscope:command");
+    let command = recorded_command(
+        &["flip", "--size", "16", "--t-max", "2", "--accurate"],
+        &out,
+    );
     assert!(
         command.contains("--dt 0.05")
             && command.contains(
@@ -312,8 +301,8 @@ fn adaptive_flags() {
         "{command}"
     );
     // DOP853's map records its pair and reads back to the same picture.
-    let o = chaoscope()
-        .args([
+    let command = recorded_command(
+        &[
             "flip",
             "--size",
             "16",
@@ -325,13 +314,9 @@ fn adaptive_flags() {
             "f64",
             "--rtol",
             "1e-8",
-            "--output",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let command = common::png_text(&out, "chaoscope:command");
+        ],
+        &out,
+    );
     assert!(
         command.contains("--integrator dop853 --rtol 0.00000001 --atol 0.00000001"),
         "{command}"
@@ -390,6 +375,18 @@ fn lyapunov_accurate_is_its_settings() {
     refused(&base, &["--accurate", "--method", "twin"], "--accurate");
     refused(&base, &["--accurate", "--precision", "f32"], "--precision");
     refused(&base, &["--accurate", "--dt", "0.01"], "--dt");
+}
+
+/// The command recorded in the PNG that `chaoscope args --output png` writes (it must succeed).
+fn recorded_command(args: &[&str], png: &std::path::Path) -> String {
+    let o = chaoscope()
+        .args(args)
+        .arg("--output")
+        .arg(png)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    common::png_text(png, "chaoscope:command")
 }
 
 /// `chaoscope` with `base` and `args` is refused (exit 2) with an error naming `flag`.
