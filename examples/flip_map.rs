@@ -22,7 +22,7 @@ fn main() -> Result<(), chaoscope::Error> {
     if let Some(notice) = engine.notice() {
         eprintln!("{notice}");
     }
-    let map = engine.flip_map(&spec, &Monitor::hidden())?;
+    let map = engine.map(&spec, &Monitor::hidden())?;
     let picture = flip_picture(&map, &spec, &PictureSpec::default(), None)?;
     let out = std::path::Path::new("out/example_flip.png");
     write_png(out, picture.width, picture.height, &picture.rgb, &[])?;
@@ -30,7 +30,7 @@ fn main() -> Result<(), chaoscope::Error> {
     let readme = read_png("docs/flip.png".as_ref())?;
     println!(
         "{} backend: {:.1} % of starts flip within 30 s -> {}; pixels {} docs/flip.png",
-        engine.map_info(&spec.grid, spec.precision).backend,
+        engine.map_info(&spec.grid, spec.precision).backend(),
         100.0 * flipped,
         out.display(),
         if readme.rgb == picture.rgb {

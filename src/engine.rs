@@ -10,7 +10,9 @@ use crate::field::{Convergence, Field};
 use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Precision, Range, Stepping};
+use crate::spec::{
+    FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Method, Precision, Range, Stepping,
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
@@ -34,22 +36,116 @@ impl Backend {
     }
 }
 
+/// The path a run takes: a type, so that what depends on it (the f32 tolerance floor, the
+/// words in the PNG and the summary) is decided once, from it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    /// The f64 CPU reference.
+    Cpu,
+    /// A GPU kernel in this precision.
+    Gpu(Precision),
+    /// Read back from a Zarr store (`render`).
+    Store,
+}
+
+impl Path {
+    /// The path in the PNG metadata's words: "cpu", "gpu", "gpu f64", "zarr store".
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::Cpu => "cpu",
+            Path::Gpu(precision) => precision.gpu_path_name(),
+            Path::Store => "zarr store",
+        }
+    }
+
+    pub fn on_gpu(self) -> bool {
+        matches!(self, Path::Gpu(_))
+    }
+
+    /// The precision the arithmetic runs in (the CPU's, and a store's maps', is f64).
+    pub fn precision(self) -> Precision {
+        match self {
+            Path::Gpu(precision) => precision,
+            Path::Cpu | Path::Store => Precision::F64,
+        }
+    }
+}
+
 /// Which path a run took, for the user and the PNG metadata.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunInfo {
-    pub backend: &'static str,
+    pub path: Path,
     pub adapter: Option<String>,
 }
 
 impl RunInfo {
     pub const CPU: RunInfo = RunInfo {
-        backend: "cpu",
+        path: Path::Cpu,
         adapter: None,
     };
+
+    /// The path in the PNG metadata's words ([`Path::name`]).
+    pub fn backend(&self) -> &'static str {
+        self.path.name()
+    }
 
     /// Where it ran, in words: the adapter's name or "the CPU".
     pub fn place(&self) -> &str {
         self.adapter.as_deref().unwrap_or("the CPU")
+    }
+}
+
+/// How each quantity's map runs on either path: the kernels' table, one impl a quantity.
+pub trait MapKernels: MapSpec {
+    /// The map on the GPU's kernel in `precision` (the engine has checked f64 is there).
+    fn on_gpu(&self, k: &Kernels, precision: Precision, monitor: &Monitor) -> Result<Field>;
+    /// The map by the f64 CPU twin.
+    fn on_cpu(&self, monitor: &Monitor) -> Result<Field>;
+    /// What to tell the user about this map on `path`, beyond its precision.
+    fn notices(&self, _path: Path) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+impl MapKernels for FlipSpec {
+    fn on_gpu(&self, k: &Kernels, precision: Precision, monitor: &Monitor) -> Result<Field> {
+        let kernel = match precision {
+            Precision::F32 => k.flip(),
+            Precision::F64 => k.flip64(),
+        };
+        kernel.run(&k.ctx, self, monitor)
+    }
+
+    fn on_cpu(&self, monitor: &Monitor) -> Result<Field> {
+        match self.integrator {
+            Integrator::Rk4 => cpu::flip_map(self, monitor),
+            Integrator::Dp54 { .. } | Integrator::Dop853 { .. } => {
+                cpu::flip_map_adaptive(self, monitor)
+            }
+        }
+    }
+}
+
+impl MapKernels for LyapunovSpec {
+    fn on_gpu(&self, k: &Kernels, precision: Precision, monitor: &Monitor) -> Result<Field> {
+        k.lyapunov(self.method, precision)
+            .run(&k.ctx, self, monitor)
+    }
+
+    fn on_cpu(&self, monitor: &Monitor) -> Result<Field> {
+        cpu::ftle_map(self, monitor)
+    }
+
+    /// f32 cannot resolve a twin separation much below 1e-6 of the state: say so.
+    fn notices(&self, path: Path) -> Vec<String> {
+        match self.method {
+            Method::Twin { eps } if eps < 1e-4 && path == Path::Gpu(Precision::F32) => {
+                vec![format!(
+                    "note: a twin separation of {eps} is close to f32 round-off on the GPU (~1e-7 of the state): the twin reads noise; use the tangent method, a larger separation, or the CPU"
+                )]
+            }
+            _ => Vec::new(),
+        }
     }
 }
 
@@ -154,10 +250,7 @@ impl Engine {
     pub fn info(&self) -> RunInfo {
         match &self.gpu {
             Some(k) => RunInfo {
-                backend: match self.precision {
-                    Precision::F32 => "gpu",
-                    Precision::F64 => "gpu f64",
-                },
+                path: Path::Gpu(self.precision),
                 adapter: Some(k.ctx.adapter_name()),
             },
             None => RunInfo::CPU,
@@ -177,38 +270,31 @@ impl Engine {
         }
     }
 
-    /// The path a map over `grid` asked for in `precision` takes ("gpu f64" for the f64
-    /// kernels).
+    /// The path a map over `grid` asked for in `precision` takes.
     pub fn map_info(&self, grid: &Grid, precision: Precision) -> RunInfo {
         match self.map_gpu(grid, precision) {
             Some((k, precision)) => RunInfo {
-                backend: match precision {
-                    Precision::F32 => "gpu",
-                    Precision::F64 => "gpu f64",
-                },
+                path: Path::Gpu(precision),
                 adapter: Some(k.ctx.adapter_name()),
             },
             None => RunInfo::CPU,
         }
     }
 
-    /// The flip-time map of a validated `spec`.
-    pub fn flip_map(&self, spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-        match self.map_gpu(&spec.grid, spec.precision) {
-            Some((k, Precision::F32)) => k.flip().run(&k.ctx, spec, monitor),
-            Some((k, Precision::F64)) => k.flip64().run(&k.ctx, spec, monitor),
-            None if spec.integrator != Integrator::Rk4 => cpu::flip_map_adaptive(spec, monitor),
-            None => cpu::flip_map(spec, monitor),
-        }
+    /// The path `spec`'s map takes, and the checks that depend on it, made once: the
+    /// tolerances must be within what that path's precision can follow (an f32 kernel's
+    /// error estimate is round-off below [`crate::spec::MIN_TOLERANCE_F32`]).
+    pub fn plan(&self, spec: &impl MapSpec) -> Result<RunInfo> {
+        let info = self.map_info(spec.grid(), spec.precision());
+        spec.integrator().validate(info.path.precision())?;
+        Ok(info)
     }
 
-    /// The divergence (FTLE) map of a validated `spec`.
-    pub fn lyapunov_map(&self, spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-        match self.map_gpu(&spec.grid, spec.precision) {
-            Some((k, precision)) => k
-                .lyapunov(spec.method, precision)
-                .run(&k.ctx, spec, monitor),
-            None => cpu::ftle_map(spec, monitor),
+    /// The map of a validated `spec`, whichever quantity it measures.
+    pub fn map<S: MapKernels>(&self, spec: &S, monitor: &Monitor) -> Result<Field> {
+        match self.map_gpu(spec.grid(), spec.precision()) {
+            Some((k, precision)) => spec.on_gpu(k, precision, monitor),
+            None => spec.on_cpu(monitor),
         }
     }
 

@@ -56,3 +56,15 @@ impl Error {
         Error::Format(format!("{}: {e}", path.display()))
     }
 }
+
+/// `v` finite and > 0, else an error naming `field`.
+pub(crate) fn finite_positive(field: &'static str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("{v} is not allowed; it must be a finite number > 0"),
+        ))
+    }
+}

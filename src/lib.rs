@@ -12,7 +12,7 @@
 //! use chaoscope::spec::{FlipSpec, Grid, Stepping};
 //! let spec = FlipSpec::new(Params::default(), Grid::square(8), Stepping { dt: 0.01, t_max: 2.0 });
 //! spec.validate().unwrap();
-//! let map = Engine::new(Backend::Cpu).unwrap().flip_map(&spec, &Monitor::hidden()).unwrap();
+//! let map = Engine::new(Backend::Cpu).unwrap().map(&spec, &Monitor::hidden()).unwrap();
 //! // The centre of the grid hangs nearly straight down: it can never flip.
 //! assert!(map.get(4, 4).is_infinite());
 //! ```
@@ -28,6 +28,7 @@ pub mod gpu;
 pub mod model;
 pub mod monitor;
 pub mod params;
+pub mod quantity;
 pub mod render;
 pub mod spec;
 pub mod tableau;

@@ -6,9 +6,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, finite_positive};
 use crate::model::{Losses, Params};
-use crate::spec::finite_positive;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Preset {

@@ -6,6 +6,7 @@ mod common;
 use std::path::Path;
 
 use common::{chaoscope, png_text, read_mask, read_npy};
+use predicates::prelude::*;
 
 /// A 32x32, 30 s flip map on `backend` with its verdict: (times, mask, png path).
 fn map_with_verdict(dir: &Path, backend: &str, extra: &[&str]) -> (Vec<f32>, Vec<u8>) {
@@ -221,4 +222,99 @@ fn the_verdict_resolves_nothing_finer_than_f64() {
         .stderr(predicates::str::contains("0.0 % resolved"));
     let (_, values) = read_mask(&mask);
     assert!(values.len() == 64 && values.iter().all(|&m| m == 0));
+}
+
+/// Drift 1 (issue 20): the f32 GPU's tolerance floor holds for divergence maps as for flip
+/// maps: an f32 kernel cannot follow rtol 1e-7 (its error estimate would be round-off).
+#[test]
+fn the_f32_tolerance_floor_holds_for_every_map() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for command in ["flip", "lyapunov"] {
+        chaoscope()
+            .args([command, "--size", "8", "--t-max", "1", "--backend", "gpu"])
+            .args(["--integrator", "dp54", "--rtol", "1e-7", "--output"])
+            .arg(dir.path().join(format!("{command}.png")))
+            .assert()
+            .code(2)
+            .stderr(predicates::str::contains("--rtol").and(predicates::str::contains("f32")));
+    }
+}
+
+/// Drift 2 (issue 20): one rule for the verdict's finer map: in f64 wherever the engine has
+/// f64, for divergence maps as for flip maps. The f32 GPU map's mask must be its agreement
+/// with the f64 map at half the step, pixel for pixel (an f32 finer map shares the f32 map's
+/// round-off, which chaos amplifies: chaotic pixels then agree where the f64 map does not).
+#[test]
+fn the_divergence_verdict_compares_with_f64() {
+    if common::f64_gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let npy = dir.path().join(format!("{name}.npy"));
+        chaoscope()
+            .args([
+                "lyapunov",
+                "--size",
+                "48",
+                "--t-max",
+                "20",
+                "--backend",
+                "gpu",
+            ])
+            .args(extra)
+            .arg("--output")
+            .arg(dir.path().join(format!("{name}.png")))
+            .arg("--data")
+            .arg(&npy)
+            .assert()
+            .success();
+        read_npy(&npy).1
+    };
+    let mask_path = dir.path().join("mask.npy");
+    let map = run("map", &["--resolved", mask_path.to_str().unwrap()]);
+    let finer = run("finer", &["--precision", "f64", "--dt", "0.005"]);
+    let (_, mask) = read_mask(&mask_path);
+    let expected: Vec<u8> = map
+        .iter()
+        .zip(&finer)
+        .map(|(&a, &b)| chaoscope::verdict::exponents_agree(a, b) as u8)
+        .collect();
+    let differ = mask.iter().zip(&expected).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "{differ} of {} pixels", mask.len());
+}
+
+/// Drift 3 (issue 20): the summary states the verdict's rule as it was applied: an adaptive
+/// divergence map's finer map is at a tenth of the tolerances, not at half the step.
+#[test]
+fn the_divergence_summary_states_the_adaptive_rule() {
+    let dir = tempfile::tempdir().unwrap();
+    chaoscope()
+        .args([
+            "lyapunov",
+            "--size",
+            "8",
+            "--t-max",
+            "2",
+            "--backend",
+            "cpu",
+        ])
+        .args([
+            "--integrator",
+            "dp54",
+            "--rtol",
+            "1e-6",
+            "--show-unresolved",
+            "--output",
+        ])
+        .arg(dir.path().join("l.png"))
+        .assert()
+        .success()
+        .stderr(
+            predicates::str::contains("at a tenth of the tolerances")
+                .and(predicates::str::contains("half the step").not()),
+        );
 }

@@ -15,10 +15,7 @@ use crate::field::Field;
 use crate::gpu::{FlipTimeKernel, GpuContext, LyapunovKernel};
 use crate::model::Params;
 use crate::monitor::Monitor;
-use crate::spec::{
-    ACCURATE, ACCURATE_FTLE, FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Stepping,
-    accurate_ftle_dt,
-};
+use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Stepping};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchJob {
@@ -317,7 +314,6 @@ fn accurate_samples(
     notices: &mut Vec<String>,
 ) -> Result<Vec<Sample>> {
     let mut out = Vec::new();
-    let (precision, integrator, dt) = ACCURATE;
     for (name, spec) in [
         (
             format!("chaoscope gpu f32 rk4 dt {}", args.dt),
@@ -325,7 +321,7 @@ fn accurate_samples(
         ),
         (
             "chaoscope --accurate (gpu f64 dp54)".to_string(),
-            accurate_problem(args, precision, integrator, dt),
+            accurate_problem(args, Precision::F32, Integrator::Rk4, args.dt).accurate(),
         ),
         // The higher-order pair at the same tolerance, with the longest steps RK4's
         // stability check allows this pendulum.
@@ -343,7 +339,7 @@ fn accurate_samples(
         ),
     ] {
         let t0 = Instant::now();
-        let field = engine.flip_map(&spec, quiet)?;
+        let field = engine.map(&spec, quiet)?;
         out.push(Sample {
             name,
             mode: "accurate",
@@ -429,8 +425,6 @@ fn ftle_reference(args: &BenchJob, monitor: &Monitor) -> Result<Field> {
 /// The accurate divergence-map rows' paths: f32 and f64 RK4 at dt 0.01, and `lyapunov
 /// --accurate` (f64 DP54 at 1e-9, steps of at most 0.1 s).
 fn ftle_accuracy_paths(args: &BenchJob) -> [(&'static str, LyapunovSpec); 3] {
-    let (precision, integrator, _) = ACCURATE_FTLE;
-    let spec = ftle_accuracy_spec(args, precision, integrator, 0.1);
     [
         (
             "chaoscope gpu f32 rk4 dt 0.01",
@@ -442,13 +436,7 @@ fn ftle_accuracy_paths(args: &BenchJob) -> [(&'static str, LyapunovSpec); 3] {
         ),
         (
             "chaoscope lyapunov --accurate (gpu f64 dp54)",
-            LyapunovSpec {
-                stepping: Stepping {
-                    dt: accurate_ftle_dt(spec.renorm),
-                    ..spec.stepping
-                },
-                ..spec
-            },
+            ftle_accuracy_spec(args, Precision::F32, Integrator::Rk4, 0.01).accurate(),
         ),
     ]
 }
@@ -464,7 +452,7 @@ fn ftle_accuracy_samples(
     let mut out = Vec::new();
     for (name, spec) in ftle_accuracy_paths(args) {
         let t0 = Instant::now();
-        let field = engine.lyapunov_map(&spec, quiet)?;
+        let field = engine.map(&spec, quiet)?;
         let wall_s = t0.elapsed().as_secs_f64();
         let agree = crate::verdict::mask(&field, reference, crate::verdict::exponents_agree);
         out.push(Sample {
@@ -548,7 +536,7 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
                     },
                     ..spec
                 };
-                engine.lyapunov_map(&small, &quiet)?;
+                engine.map(&small, &quiet)?;
             }
             Some(ftle_reference(args, monitor)?)
         }

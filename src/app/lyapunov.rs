@@ -5,18 +5,16 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{MapOutputs, check_finer, check_output, write_map};
-use crate::engine::{Backend, Engine};
+use super::{MapOutputs, check_output, map, write_map};
+use crate::engine::{Backend, Engine, MapKernels};
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::render::{self, Colormap, PictureSpec};
-use crate::spec::{self, LyapunovSpec, Method};
+use crate::spec::{self, LyapunovSpec};
 use crate::verdict;
 
-/// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
-/// below ln(1 + K t) / t, about 0.27 /s at 20 s (tests/lyapunov.rs).
-pub const CHAOTIC_FTLE: f32 = 0.5;
+pub use crate::quantity::CHAOTIC_FTLE;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct LyapunovMapJob {
@@ -44,6 +42,8 @@ pub struct LyapunovMapSummary {
     pub nan: usize,
     /// The fraction of the pixels resolved, when the verdict was asked for.
     pub resolved: Option<f64>,
+    /// How the verdict's finer map differs, in a few words.
+    pub rule: String,
     pub t_max: f64,
     /// The colour range (1/s).
     pub range: (f32, f32),
@@ -53,27 +53,12 @@ pub struct LyapunovMapSummary {
     pub notices: Vec<String>,
 }
 
-/// f32 cannot resolve a twin separation much below 1e-6 of the state: say so.
-fn twin_notice(engine: &Engine, spec: &LyapunovSpec) -> Option<String> {
-    match spec.method {
-        Method::Twin { eps } if eps < 1e-4 && engine.gpu().is_some() => Some(format!(
-            "note: a twin separation of {eps} is close to f32 round-off on the GPU (~1e-7 of the state): the twin reads noise; use the tangent method, a larger separation, or the CPU"
-        )),
-        _ => None,
-    }
-}
-
 pub fn run_map(
     job: &LyapunovMapJob,
     command: String,
     monitor: &Monitor,
 ) -> Result<LyapunovMapSummary> {
-    job.spec.validate()?;
-    job.files.validate()?;
-    if job.files.wants_verdict() {
-        check_finer(verdict::finer_lyapunov(&job.spec).validate())?;
-    }
-    super::check_tile(job.tile, &job.files)?;
+    map::validate(&job.spec, &job.files, job.tile)?;
     if let Some((lo, hi)) = job.colour_range
         && !(lo.is_finite() && hi.is_finite() && lo < hi)
     {
@@ -82,20 +67,44 @@ pub fn run_map(
             format!("{lo}:{hi} must be LOW:HIGH with LOW < HIGH (1/s)"),
         ));
     }
-    if let Some(path) = job.files.store() {
-        return run_store(job, path, command, monitor);
-    }
     let started = Instant::now();
-    let (engine, info, mut notices) =
-        super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
-    notices.extend(twin_notice(&engine, &job.spec));
-    let (field, mask) =
-        super::lyapunov_and_verdict(&engine, &job.spec, job.files.wants_verdict(), monitor)?;
+    let verdict = job.files.wants_verdict();
+    if let Some(path) = job.files.store() {
+        let made = map::make_store(
+            &job.spec,
+            job.backend,
+            path,
+            command,
+            job.tile,
+            verdict,
+            monitor,
+        )?;
+        let filled = &made.made;
+        let share = |n: usize| n as f64 / filled.pixels.max(1) as f64;
+        let grid = job.spec.grid;
+        return Ok(LyapunovMapSummary {
+            width: grid.width,
+            height: grid.height,
+            place: made.info.place().to_string(),
+            seconds: started.elapsed().as_secs_f64(),
+            chaotic: share(filled.counted),
+            nan: filled.nan,
+            resolved: verdict.then(|| share(filled.resolved)),
+            rule: made.rule,
+            t_max: job.spec.stepping.t_max,
+            range: (f32::NAN, f32::NAN),
+            output: path.to_path_buf(),
+            files: vec![path.to_path_buf()],
+            notices: made.notices,
+        });
+    }
+    let made = map::make(&job.spec, job.backend, verdict, monitor)?;
+    let (field, mask) = &made.made;
     let range = job
         .colour_range
-        .unwrap_or_else(|| render::ftle_range(&field));
+        .unwrap_or_else(|| render::ftle_range(field));
     let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
-    let picture = render::lyapunov_picture(&field, &job.spec, range, &job.picture, shown)?;
+    let picture = render::lyapunov_picture(field, &job.spec, range, &job.picture, shown)?;
     let colour_range = (
         "chaoscope:colour-range".into(),
         format!(
@@ -107,17 +116,14 @@ pub fn run_map(
     );
     let mut extra = vec![colour_range];
     if shown.is_some() {
-        extra.push((
-            "chaoscope:resolved-rule".into(),
-            verdict::ftle_rule(&job.spec),
-        ));
+        extra.push(("chaoscope:resolved-rule".into(), made.rule_in_full.clone()));
     }
     write_map(
         &picture,
-        render::provenance(command, &info),
+        render::provenance(command, &made.info),
         extra,
         &job.files,
-        &field,
+        field,
         mask.as_deref(),
         monitor,
     )?;
@@ -125,69 +131,17 @@ pub fn run_map(
     Ok(LyapunovMapSummary {
         width: field.width,
         height: field.height,
-        place: info.place().to_string(),
+        place: made.info.place().to_string(),
         seconds: started.elapsed().as_secs_f64(),
         chaotic: chaotic as f64 / field.data.len() as f64,
         nan: field.data.iter().filter(|x| x.is_nan()).count(),
         resolved: mask.as_deref().map(verdict::fraction),
+        rule: made.rule,
         t_max: job.spec.stepping.t_max,
         range,
         output: job.files.output.clone(),
         files: job.files.files(),
-        notices,
-    })
-}
-
-/// `job` into its Zarr store at `path` ([`super::store::fill_store`]).
-fn run_store(
-    job: &LyapunovMapJob,
-    path: &std::path::Path,
-    command: String,
-    monitor: &Monitor,
-) -> Result<LyapunovMapSummary> {
-    use super::store::{StoreFill, fill_store, missing_note};
-    let started = Instant::now();
-    let (engine, info, mut notices) =
-        super::map_engine(job.backend, job.spec.precision, &job.spec.grid)?;
-    notices.extend(twin_notice(&engine, &job.spec));
-    let grid = job.spec.grid;
-    let verdict = job.files.wants_verdict();
-    let fill = StoreFill {
-        path,
-        grid,
-        command,
-        tile: job.tile,
-        symmetric: job.spec.mirrors(),
-        verdict,
-        quantity: ("finite-time Lyapunov exponent", "1/s"),
-    };
-    let filled = fill_store(
-        &fill,
-        monitor,
-        |rows, monitor| {
-            let spec = LyapunovSpec {
-                band: Some(rows),
-                ..job.spec
-            };
-            super::lyapunov_and_verdict(&engine, &spec, verdict, monitor)
-        },
-        |x| x > CHAOTIC_FTLE,
-    )?;
-    notices.extend(missing_note(&filled, path));
-    let share = |n: usize| n as f64 / filled.pixels.max(1) as f64;
-    Ok(LyapunovMapSummary {
-        width: grid.width,
-        height: grid.height,
-        place: info.place().to_string(),
-        seconds: started.elapsed().as_secs_f64(),
-        chaotic: share(filled.counted),
-        nan: filled.nan,
-        resolved: verdict.then(|| share(filled.resolved)),
-        t_max: job.spec.stepping.t_max,
-        range: (f32::NAN, f32::NAN),
-        output: path.to_path_buf(),
-        files: vec![path.to_path_buf()],
-        notices,
+        notices: made.notices,
     })
 }
 
@@ -225,7 +179,8 @@ pub fn run_point(
     }
     let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
-    notices.extend(twin_notice(&engine, &job.spec));
+    let path = engine.map_info(&job.spec.grid, job.spec.precision).path;
+    notices.extend(job.spec.notices(path));
     let trace = engine.ftle_convergence(&job.spec, job.start, monitor)?;
     if trace.last().is_nan() {
         notices.push(

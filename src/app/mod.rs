@@ -7,6 +7,7 @@ pub mod bench;
 pub mod fit;
 pub mod flip;
 pub mod lyapunov;
+pub mod map;
 pub mod phase;
 pub mod serve;
 pub mod store;
@@ -16,12 +17,12 @@ pub mod trajectory;
 
 use std::path::{Path, PathBuf};
 
-use crate::engine::{Backend, Engine, RunInfo};
+use crate::engine::{Backend, Engine, MapKernels, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::render::{Outputs, Picture, check_writable};
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Precision};
+use crate::spec::{Grid, Precision};
 use crate::verdict;
 
 /// Where a map's files go, and whether it carries the verdict ([`crate::verdict`]).
@@ -152,23 +153,22 @@ pub fn write_map(
     files.commit(monitor)
 }
 
-/// A flip map and, with `verdict`, its mask against the finer map
-/// ([`verdict::finer_flip`], in f64 where the engine has it).
-pub fn flip_and_verdict(
+/// A map and, with `verdict`, its mask against the finer map ([`verdict::finer`]).
+pub fn map_and_verdict<S: MapKernels>(
     engine: &Engine,
-    spec: &FlipSpec,
+    spec: &S,
     verdict: bool,
     monitor: &Monitor,
 ) -> Result<(Field, Option<Vec<u8>>)> {
-    let field = engine.flip_map(spec, monitor)?;
+    let field = engine.map(spec, monitor)?;
     let mask = match verdict {
         true => {
-            let finer = engine.flip_map(&verdict::finer_flip(spec, engine.has_f64()), monitor)?;
+            let finer = engine.map(&verdict::finer(spec, engine.has_f64()), monitor)?;
             Some(verdict::grid_mask(
-                &spec.grid,
+                spec.grid(),
                 &field,
                 &finer,
-                verdict::flip_times_agree,
+                spec.quantity().agree,
             ))
         }
         false => None,
@@ -176,40 +176,28 @@ pub fn flip_and_verdict(
     Ok((field, mask))
 }
 
-/// A divergence map and, with `verdict`, its mask against the map at half the step.
-pub fn lyapunov_and_verdict(
-    engine: &Engine,
-    spec: &LyapunovSpec,
-    verdict: bool,
-    monitor: &Monitor,
-) -> Result<(Field, Option<Vec<u8>>)> {
-    let field = engine.lyapunov_map(spec, monitor)?;
-    let mask = match verdict {
-        true => {
-            let finer = engine.lyapunov_map(&verdict::finer_lyapunov(spec), monitor)?;
-            Some(verdict::grid_mask(
-                &spec.grid,
-                &field,
-                &finer,
-                verdict::exponents_agree,
-            ))
-        }
-        false => None,
-    };
-    Ok((field, mask))
-}
-
-/// The engine for a map over `grid` in `precision` on `backend`, the path it takes, and the
-/// notices to give about both ([`precision_notices`]).
+/// The engine for `spec`'s map on `backend`, the path it takes ([`Engine::plan`], and the
+/// verdict's finer map's with `verdict`), and the notices to give about both
+/// ([`precision_notices`]).
 pub fn map_engine(
     backend: Backend,
-    precision: Precision,
-    grid: &Grid,
+    spec: &impl MapKernels,
+    verdict: bool,
 ) -> Result<(Engine, RunInfo, Vec<String>)> {
     let engine = Engine::new(backend)?;
     let mut notices = engine.notices();
+    let (precision, grid) = (spec.precision(), spec.grid());
     let info = engine.map_info(grid, precision);
     notices.extend(precision_notices(&engine, backend, precision, grid, &info)?);
+    notices.extend(spec.notices(info.path));
+    engine.plan(spec)?;
+    if verdict {
+        check_finer(
+            engine
+                .plan(&verdict::finer(spec, engine.has_f64()))
+                .map(|_| ()),
+        )?;
+    }
     Ok((engine, info, notices))
 }
 
@@ -228,7 +216,7 @@ pub fn precision_notices(
         notices.push(format!(
             "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the {} in f64",
             crate::spec::F32_MIN_PIXEL_STEP,
-            if info.backend == "cpu" { "CPU" } else { "GPU" }
+            if info.path.on_gpu() { "GPU" } else { "CPU" }
         ));
     }
     if grid.beyond_f64() {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::sweep::FrameMap;
-use crate::engine::RunInfo;
+use crate::engine::{Path as RunPath, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
@@ -291,7 +291,7 @@ pub fn render(job: &RenderJob, command: String, monitor: &Monitor) -> Result<Ren
         }
     };
     let info = RunInfo {
-        backend: "zarr store",
+        path: RunPath::Store,
         adapter: None,
     };
     let mut meta = render::provenance(command, &info);

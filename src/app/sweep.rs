@@ -323,7 +323,7 @@ pub fn run(
             FrameMap::Flip(spec) => engine.map_info(&spec.grid, spec.precision),
             FrameMap::Lyapunov(spec) => engine.map_info(&spec.grid, spec.precision),
         };
-        let on = if info.backend.starts_with("gpu") {
+        let on = if info.path.on_gpu() {
             Backend::Gpu
         } else {
             Backend::Cpu
@@ -434,8 +434,8 @@ fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
 /// One frame's map, on the GPU unless it needs f64 (the engine decides).
 fn frame_field(map: &FrameMap, engine: &Engine, monitor: &Monitor) -> Result<Field> {
     match map {
-        FrameMap::Flip(spec) => engine.flip_map(spec, monitor),
-        FrameMap::Lyapunov(spec) => engine.lyapunov_map(spec, monitor),
+        FrameMap::Flip(spec) => engine.map(spec, monitor),
+        FrameMap::Lyapunov(spec) => engine.map(spec, monitor),
     }
 }
 

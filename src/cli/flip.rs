@@ -12,7 +12,8 @@ use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::spec::{ACCURATE, FlipSpec, Integrator, MIN_TOLERANCE_F32, Precision, Stepping};
+use crate::quantity::FLIP_TIME;
+use crate::spec::{FlipSpec, Integrator, MIN_TOLERANCE_F32, Precision};
 
 #[derive(Args, Debug, Clone)]
 pub struct FlipArgs {
@@ -72,34 +73,32 @@ pub struct FlipArgs {
 }
 
 impl FlipArgs {
-    /// The precision, integrator and stepping the flags ask for (`--accurate` spelt out).
-    pub fn stepping(&self) -> Result<(Precision, Integrator, Stepping)> {
-        let mut stepping = self.step.stepping();
-        if self.accurate {
-            let (precision, integrator, dt) = ACCURATE;
-            stepping.dt = dt;
-            return Ok((precision, integrator, stepping));
-        }
+    /// The map the flags ask for (`--accurate` expanded by the spec).
+    pub fn spec(&self) -> Result<FlipSpec> {
         let f32_gpu = self.precision == Precision::F32 && self.backend != Backend::Cpu;
-        let integrator = integrator_of(&self.integrator, self.rtol, self.atol, f32_gpu)?;
-        Ok((self.precision, integrator, stepping))
+        let integrator = match self.accurate {
+            true => Integrator::Rk4,
+            false => integrator_of(&self.integrator, self.rtol, self.atol, f32_gpu)?,
+        };
+        let spec = FlipSpec {
+            early_exit: !self.full,
+            use_symmetry: !(self.full || self.no_symmetry),
+            precision: self.precision,
+            integrator,
+            ..FlipSpec::new(
+                self.physical.sources().resolve()?,
+                self.grid.grid(),
+                self.step.stepping(),
+            )
+        };
+        Ok(if self.accurate { spec.accurate() } else { spec })
     }
 
     pub fn job(&self) -> Result<FlipJob> {
-        let (precision, integrator, stepping) = self.stepping()?;
+        let spec = self.spec()?;
         super::args::no_picture_with_a_store(self.data.as_deref(), self.output.as_deref())?;
         Ok(FlipJob {
-            spec: FlipSpec {
-                early_exit: !self.full,
-                use_symmetry: !(self.full || self.no_symmetry),
-                precision,
-                integrator,
-                ..FlipSpec::new(
-                    self.physical.sources().resolve()?,
-                    self.grid.grid(),
-                    stepping,
-                )
-            },
+            spec,
             backend: self.backend,
             picture: self.picture.spec(),
             files: MapOutputs {
@@ -174,7 +173,7 @@ pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         nan_note(s.nan),
         resolved_note(
             s.resolved,
-            &format!("the same map {} within 1 % or 0.02 s", s.rule)
+            &format!("the same map {} within {}", s.rule, FLIP_TIME.tolerance)
         ),
         s.output.display()
     );

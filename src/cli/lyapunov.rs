@@ -15,10 +15,8 @@ use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::spec::{
-    ACCURATE_FTLE, Grid, Integrator, LyapunovSpec, Method, Precision, Range, Stepping,
-    accurate_ftle_dt,
-};
+use crate::quantity::FTLE;
+use crate::spec::{Grid, Integrator, LyapunovSpec, Method, Precision, Range, Stepping};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MethodArg {
@@ -121,28 +119,23 @@ impl LyapunovArgs {
         super::flip::integrator_of(&self.integrator, self.rtol, self.atol, gpu_f32)
     }
 
-    /// The precision, integrator and time step the flags ask for (`--accurate` spelt out).
-    fn stepping(&self) -> Result<(Precision, Integrator, f64)> {
-        if !self.accurate {
-            return Ok((self.precision, self.integrator()?, self.dt));
-        }
-        if self.method == MethodArg::Twin {
+    /// The map the flags ask for over `grid` (`--accurate` expanded by the spec).
+    fn spec(&self, grid: Grid) -> Result<LyapunovSpec> {
+        if self.accurate && self.method == MethodArg::Twin {
             return Err(Error::invalid(
                 "accurate",
                 "steps the tangent method with dp54; --method twin has fixed steps only",
             ));
         }
-        let (precision, integrator, _) = ACCURATE_FTLE;
-        Ok((precision, integrator, accurate_ftle_dt(self.renorm)))
-    }
-
-    fn spec(&self, grid: Grid) -> Result<LyapunovSpec> {
-        let (precision, integrator, dt) = self.stepping()?;
-        Ok(LyapunovSpec {
+        let integrator = match self.accurate {
+            true => Integrator::Rk4,
+            false => self.integrator()?,
+        };
+        let spec = LyapunovSpec {
             params: self.physical.sources().resolve()?,
             grid,
             stepping: Stepping {
-                dt,
+                dt: self.dt,
                 t_max: self.t_max,
             },
             method: match self.method {
@@ -151,10 +144,11 @@ impl LyapunovArgs {
             },
             renorm: self.renorm,
             use_symmetry: !self.no_symmetry,
-            precision,
+            precision: self.precision,
             band: None,
             integrator,
-        })
+        };
+        Ok(if self.accurate { spec.accurate() } else { spec })
     }
 
     pub fn job(&self) -> Result<LyapunovJob> {
@@ -254,7 +248,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
                 super::flip::nan_note(s.nan),
                 super::flip::resolved_note(
                     s.resolved,
-                    "the same map at half the step within 5 % or 0.02 /s"
+                    &format!("the same map {} within {}", s.rule, FTLE.tolerance)
                 ),
                 match s.range.0.is_nan() {
                     // A store has no picture, so no colour range.

@@ -4,13 +4,9 @@
 
 use std::f64::consts::PI;
 
-use super::dop853::Dop853;
-use super::{map_pixels, rate_of};
-use crate::error::Result;
-use crate::field::Field;
+use super::rate_of;
 use crate::model::{Params, State};
-use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Integrator, MAX_STEPS, Stepping};
+use crate::spec::MAX_STEPS;
 
 /// An explicit embedded Runge-Kutta pair with a dense output of the form of Hairer's
 /// `dopri5` (`contd5`): y(t + s h) = y0 + s (dy + (1 - s) (b + s (r + (1 - s) h sum d_i k_i)))
@@ -383,45 +379,6 @@ pub fn flip_time_with(run: &mut impl Stepper, t_max: f64) -> (f64, u32) {
         }
     }
     (f64::INFINITY, run.clock().attempts)
-}
-
-/// The flip time of one start by `integrator` (adaptive), and the attempts it took
-/// ([`flip_time_with`]); starts below the no-flip energy never flip (with `early_exit`).
-pub fn flip_time_adaptive(
-    p: &Params,
-    start: State,
-    stepping: &Stepping,
-    integrator: Integrator,
-    early_exit: bool,
-) -> (f64, u32) {
-    if early_exit && p.energy(&start) < p.no_flip_threshold(f64::EPSILON) {
-        return (f64::INFINITY, 0);
-    }
-    match integrator {
-        Integrator::Rk4 => panic!("flip_time_adaptive needs an adaptive integrator"),
-        Integrator::Dp54 { rtol, atol } => flip_time_with(
-            &mut Adaptive::new(p, start, stepping.dt, rtol, atol),
-            stepping.t_max,
-        ),
-        Integrator::Dop853 { rtol, atol } => flip_time_with(
-            &mut Dop853::new(p, start, stepping.dt, rtol, atol),
-            stepping.t_max,
-        ),
-    }
-}
-
-/// The adaptive flip-time map of `spec` (its integrator must be adaptive), rows in parallel.
-pub fn flip_map_adaptive(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(&spec.grid, spec.row_span(), monitor, |start| {
-        flip_time_adaptive(
-            &spec.params,
-            start,
-            &spec.stepping,
-            spec.integrator,
-            spec.early_exit,
-        )
-        .0 as f32
-    })
 }
 
 #[cfg(test)]

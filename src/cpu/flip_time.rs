@@ -9,41 +9,46 @@ use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{FlipSpec, Stepping};
 
-/// Time (s) until |theta1| or |theta2| first exceeds pi, located inside the step by cubic
-/// Hermite interpolation; +inf if that does not happen by `t_max`, NaN if the state becomes
-/// infinite or NaN first. With `early_exit`, starts
-/// below the no-flip energy are not integrated at all.
-pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool) -> f64 {
+/// The first flip of a start: when, and which arm which way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstFlip {
+    /// Time (s) until |theta1| or |theta2| first exceeds pi; +inf = not by t-max, NaN = the
+    /// state left the numbers first.
+    pub time: f64,
+    /// Which arm crossed first (1 upper, 2 lower; the upper on a tie) and which way (+1:
+    /// past +pi, -1: past -pi); None when `time` is not finite.
+    pub arm: Option<(u8, i8)>,
+}
+
+/// The first flip of `start`, located inside its step by cubic Hermite interpolation. With
+/// `early_exit`, starts below the no-flip energy are not integrated at all.
+pub fn first_flip(p: &Params, start: State, stepping: &Stepping, early_exit: bool) -> FirstFlip {
+    let never = FirstFlip {
+        time: f64::INFINITY,
+        arm: None,
+    };
     if early_exit && p.energy(&start) < p.no_flip_threshold(f64::EPSILON) {
-        return f64::INFINITY;
+        return never;
     }
     let dt = stepping.dt;
     let mut y = start;
-    let mut flip = f64::INFINITY;
+    let mut flip = never;
     for k in 0..stepping.steps() {
         let next = rk4_step(p, &y, dt);
-        if flip.is_infinite() {
-            let mut s = f64::INFINITY;
-            if next.theta1.abs() > PI {
-                s = s.min(hermite_crossing(
-                    y.theta1,
-                    y.omega1,
-                    next.theta1,
-                    next.omega1,
-                    dt,
-                ));
-            }
-            if next.theta2.abs() > PI {
-                s = s.min(hermite_crossing(
-                    y.theta2,
-                    y.omega2,
-                    next.theta2,
-                    next.omega2,
-                    dt,
-                ));
-            }
-            if s.is_finite() {
-                flip = (k as f64 + s) * dt;
+        if flip.time.is_infinite() {
+            // (fraction of the step, arm, direction) of each angle past pi; the earliest wins.
+            let crossings = [
+                (y.theta1, y.omega1, next.theta1, next.omega1, 1),
+                (y.theta2, y.omega2, next.theta2, next.omega2, 2),
+            ]
+            .into_iter()
+            .filter(|c| c.2.abs() > PI)
+            .map(|(a, w, b, wb, arm)| (hermite_crossing(a, w, b, wb, dt), arm, b.signum() as i8));
+            if let Some((s, arm, way)) = crossings.reduce(|e, l| if l.0 < e.0 { l } else { e }) {
+                flip = FirstFlip {
+                    time: (k as f64 + s) * dt,
+                    arm: Some((arm, way)),
+                };
                 if early_exit {
                     break;
                 }
@@ -51,14 +56,22 @@ pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool
         }
         y = next;
     }
-    if flip <= stepping.t_max {
+    if flip.time <= stepping.t_max {
         flip
     } else if y.to_array().iter().all(|v| v.is_finite()) {
-        f64::INFINITY
+        never
     } else {
         // The state left the numbers (the step blew up): no flip time, not "never".
-        f64::NAN
+        FirstFlip {
+            time: f64::NAN,
+            arm: None,
+        }
     }
+}
+
+/// Time (s) until |theta1| or |theta2| first exceeds pi ([`first_flip`]).
+pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool) -> f64 {
+    first_flip(p, start, stepping, early_exit).time
 }
 
 /// The flip-time map of `spec` (s, +inf = never flipped), rows in parallel.

@@ -4,13 +4,15 @@
 
 pub mod adaptive;
 pub mod dop853;
+mod flip_adaptive;
+mod flip_kind;
 mod flip_time;
 mod lyapunov;
 
-pub use adaptive::{
-    Adaptive, DP54, Stall, Step, flip_map_adaptive, flip_time_adaptive, step_factor,
-};
-pub use flip_time::{flip_map, flip_time};
+pub use adaptive::{Adaptive, DP54, Stall, Step, step_factor};
+pub use flip_adaptive::{flip_map_adaptive, flip_time_adaptive};
+pub use flip_kind::flip_kind_map;
+pub use flip_time::{FirstFlip, first_flip, flip_map, flip_time};
 pub use lyapunov::{ftle, ftle_map, ftle_monitored, lyapunov_spectrum};
 
 use nalgebra::{Matrix2, Matrix4, RealField, Vector2, Vector4};

@@ -176,7 +176,7 @@ pub fn fit_model(
     let n_sub = (window_rows as u32 - 1) * SUBSTEPS;
     // The ensemble integrates with the mean data interval; refinement uses the exact times.
     let dt = (t[row + window_rows - 1] - t[row]) / n_sub as f64;
-    let backend = engine.info().backend;
+    let backend = engine.info().backend();
     let mut best = (f64::INFINITY, guess, 0.0);
     for &c in &dampings {
         let p = with_damping(&spec.params, c, c);

@@ -52,7 +52,7 @@ pub fn provenance(command: String, info: &RunInfo) -> Vec<(String, String)> {
             format!("chaoscope {}", env!("CARGO_PKG_VERSION")),
         ),
         ("chaoscope:command".into(), command),
-        ("chaoscope:backend".into(), info.backend.into()),
+        ("chaoscope:backend".into(), info.backend().into()),
         (
             "chaoscope:adapter".into(),
             info.adapter

@@ -265,7 +265,7 @@ fn warm_up(engine: &Engine, params: &crate::model::Params, monitor: &Monitor) ->
             t_max: 0.1,
         },
     );
-    engine.flip_map(&spec, &monitor.quiet()).map(|_| ())
+    engine.map(&spec, &monitor.quiet()).map(|_| ())
 }
 
 /// Accepts connections for ever: each served on its own task by HTTP/1 with
@@ -429,10 +429,7 @@ fn png(bytes: Bytes, precision: &str) -> Response {
 
 /// Where a map over `grid` runs and in which precision, in words ("f32", "f64").
 fn precision_of(engine: &Engine, grid: &Grid, asked: Precision) -> &'static str {
-    match engine.map_info(grid, asked).backend {
-        "gpu" => "f32",
-        _ => "f64",
-    }
+    engine.map_info(grid, asked).path.precision().name()
 }
 
 /// The tile (z, x, y), as the bare PNG `chaoscope flip` / `lyapunov` would make of it.
@@ -526,7 +523,7 @@ pub fn tile_rgb(
                 spec.integrator.validate(Precision::F32)?;
             }
             let verdict = view.unresolved || view.kind == Kind::Resolved;
-            let (field, mask) = super::flip_and_verdict(engine, &spec, verdict, monitor)?;
+            let (field, mask) = super::map_and_verdict(engine, &spec, verdict, monitor)?;
             let rgb = match (view.kind, mask) {
                 (Kind::Resolved, Some(mask)) => mask_rgb(&mask),
                 (_, mask) => {
@@ -539,8 +536,7 @@ pub fn tile_rgb(
         Kind::Ftle => {
             let spec = view.lyapunov_spec(grid);
             spec.validate()?;
-            let (field, mask) =
-                super::lyapunov_and_verdict(engine, &spec, view.unresolved, monitor)?;
+            let (field, mask) = super::map_and_verdict(engine, &spec, view.unresolved, monitor)?;
             let rgb =
                 render::lyapunov_picture(&field, &spec, view.range, &picture, mask.as_deref())?.rgb;
             Ok((rgb, precision_of(engine, &grid, spec.precision)))
@@ -724,7 +720,7 @@ async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Respons
     let result = on_engine(&shared, move |engine, monitor| {
         let spec = view.flip_spec(grid);
         spec.validate()?;
-        let (field, mask) = super::flip_and_verdict(engine, &spec, true, monitor)?;
+        let (field, mask) = super::map_and_verdict(engine, &spec, true, monitor)?;
         let resolved = mask.is_some_and(|m| m[0] == 1);
         Ok((field, resolved, precision_of(engine, &grid, spec.precision)))
     })
@@ -811,7 +807,7 @@ async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Respons
             ..Grid::square(128)
         });
         spec.validate()?;
-        Ok(render::ftle_range(&engine.lyapunov_map(&spec, monitor)?))
+        Ok(render::ftle_range(&engine.map(&spec, monitor)?))
     })
     .await;
     match result {

@@ -10,10 +10,7 @@ use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
-use crate::spec::{
-    ACCURATE, ACCURATE_FTLE, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping,
-    accurate_ftle_dt,
-};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping};
 
 /// The deepest zoom level: 256 * 2^42 pixels across a turn, a pixel step of 5.6e-15 rad,
 /// below what f64 resolves (the verdict then says so); Leaflet's pixel coordinates stay
@@ -259,14 +256,8 @@ impl View {
                 ..stored
             };
         }
-        let mut spec = FlipSpec::new(self.params, grid, self.stepping);
-        if self.accurate {
-            let (precision, integrator, dt) = ACCURATE;
-            spec.precision = precision;
-            spec.integrator = integrator;
-            spec.stepping.dt = dt;
-        }
-        spec
+        let spec = FlipSpec::new(self.params, grid, self.stepping);
+        if self.accurate { spec.accurate() } else { spec }
     }
 
     /// The divergence map of this view over `grid`, as `chaoscope lyapunov` makes it by
@@ -279,7 +270,7 @@ impl View {
                 ..stored
             };
         }
-        let mut spec = LyapunovSpec {
+        let spec = LyapunovSpec {
             params: self.params,
             grid,
             stepping: self.stepping,
@@ -290,13 +281,7 @@ impl View {
             band: None,
             integrator: crate::spec::Integrator::Rk4,
         };
-        if self.accurate {
-            let (precision, integrator, _) = ACCURATE_FTLE;
-            spec.precision = precision;
-            spec.integrator = integrator;
-            spec.stepping.dt = accurate_ftle_dt(spec.renorm);
-        }
-        spec
+        if self.accurate { spec.accurate() } else { spec }
     }
 }
 

@@ -1,0 +1,109 @@
+//! What a map can measure, one table line each: a quantity's name and unit, when two values of
+//! one pixel agree (the verdict's rule, as data), and which pixels its summary counts. The
+//! one map path (engine, verdict, store, summary) reads a quantity from here; its kernels are
+//! in `engine::MapKernels`.
+
+use crate::verdict;
+
+/// One quantity a map can measure.
+#[derive(Debug)]
+pub struct Quantity {
+    /// Its name in words (a store's `quantity` attribute).
+    pub name: &'static str,
+    /// Its unit (a store's `units` attribute).
+    pub unit: &'static str,
+    /// Whether two values of one pixel agree: the verdict's rule.
+    pub agree: fn(f32, f32) -> bool,
+    /// The rule in words: "the same map ... gives <agreement>".
+    pub agreement: &'static str,
+    /// The tolerance alone, in a few words.
+    pub tolerance: &'static str,
+    /// The pixels the summary counts (flipped, chaotic).
+    pub counted: fn(f32) -> bool,
+}
+
+/// The time until either arm first flips over (s; +inf = never within t-max).
+pub const FLIP_TIME: Quantity = Quantity {
+    name: "flip time",
+    unit: "s",
+    agree: verdict::flip_times_agree,
+    agreement: "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
+    tolerance: "1 % or 0.02 s",
+    counted: f32::is_finite,
+};
+
+/// The largest finite-time Lyapunov exponent (1/s).
+pub const FTLE: Quantity = Quantity {
+    name: "finite-time Lyapunov exponent",
+    unit: "1/s",
+    agree: verdict::exponents_agree,
+    agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
+    tolerance: "5 % or 0.02 /s",
+    counted: |x| x > CHAOTIC_FTLE,
+};
+
+/// Which arm flips first and which way: a class per pixel (its code in the map, as f32; NaN
+/// where the state left the numbers).
+pub const FLIP_KIND: Quantity = Quantity {
+    name: "first flip: arm and direction",
+    unit: "class (0 never, 1 upper +, 2 upper -, 3 lower +, 4 lower -)",
+    agree: |a, b| a == b,
+    agreement: "the same arm flipping first the same way, or neither flipping (NaN never agrees)",
+    tolerance: "the same class",
+    counted: |x| x.is_finite() && x != FlipKind::Never.code(),
+};
+
+/// The classes of [`FLIP_KIND`]: + is past +pi (the angle growing), - past -pi.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlipKind {
+    Never,
+    UpperPlus,
+    UpperMinus,
+    LowerPlus,
+    LowerMinus,
+}
+
+impl FlipKind {
+    pub const ALL: [FlipKind; 5] = [
+        FlipKind::Never,
+        FlipKind::UpperPlus,
+        FlipKind::UpperMinus,
+        FlipKind::LowerPlus,
+        FlipKind::LowerMinus,
+    ];
+
+    /// The class of `arm` (1 upper, 2 lower) flipping `way` (+1 past +pi, -1 past -pi).
+    pub fn of(arm: u8, way: i8) -> FlipKind {
+        match (arm, way > 0) {
+            (1, true) => FlipKind::UpperPlus,
+            (1, false) => FlipKind::UpperMinus,
+            (_, true) => FlipKind::LowerPlus,
+            (_, false) => FlipKind::LowerMinus,
+        }
+    }
+
+    /// Its code in a map (the .npy's values; the shader writes the same numbers).
+    pub fn code(self) -> f32 {
+        self as u8 as f32
+    }
+
+    /// The class of a map value (None for NaN or a value that is no class).
+    pub fn from_code(x: f32) -> Option<FlipKind> {
+        FlipKind::ALL.into_iter().find(|k| k.code() == x)
+    }
+
+    /// In words, for the legend.
+    pub fn label(self) -> &'static str {
+        match self {
+            FlipKind::Never => "never",
+            FlipKind::UpperPlus => "upper arm +",
+            FlipKind::UpperMinus => "upper arm −",
+            FlipKind::LowerPlus => "lower arm +",
+            FlipKind::LowerMinus => "lower arm −",
+        }
+    }
+}
+
+/// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
+/// below ln(1 + K t) / t, about 0.27 /s at 20 s (tests/lyapunov.rs).
+pub const CHAOTIC_FTLE: f32 = 0.5;

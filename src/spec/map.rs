@@ -1,0 +1,366 @@
+//! The two map families' specs: flip-time maps and divergence maps, and the rows a run covers.
+
+use super::stability::{validate_speeds, validate_stability};
+use super::{
+    ACCURATE, ACCURATE_FTLE, Grid, Integrator, Precision, Stepping, validate_grid, validate_params,
+    validate_stepping,
+};
+use crate::error::{Error, Result};
+use crate::model::Params;
+
+/// A flip-time map: for every start, the time until either arm first flips over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlipSpec {
+    pub params: Params,
+    pub grid: Grid,
+    pub stepping: Stepping,
+    /// Stop integrating a pixel once it has flipped, and skip the starts that cannot flip.
+    /// Off only for benchmarks (every pixel runs every step).
+    pub early_exit: bool,
+    /// Integrate only the top half of a point-symmetric grid and mirror it (same map, half
+    /// the work). Off for benchmarks of raw throughput and for checking the symmetry.
+    pub use_symmetry: bool,
+    /// The GPU's precision (the CPU is always f64); grids finer than f32 resolves run in
+    /// f64 whatever is asked.
+    pub precision: Precision,
+    pub integrator: Integrator,
+    /// Only these rows of the grid (first, count): a unit of a store's work. The map then
+    /// holds just them (nothing mirrored).
+    pub band: Option<(u32, u32)>,
+}
+
+/// The rows a map run integrates and the field it gives: rows `first..first + count` of
+/// the grid; `whole`: the field is the whole grid, the rows below `count` mirrored from them
+/// (`first` is 0), else the field is just those rows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RowSpan {
+    pub first: u32,
+    pub count: u32,
+    pub whole: bool,
+}
+
+impl RowSpan {
+    /// The whole grid, `count` top rows integrated.
+    pub fn top(count: u32) -> Self {
+        RowSpan {
+            first: 0,
+            count,
+            whole: true,
+        }
+    }
+
+    /// Rows of the field this span gives on `grid`.
+    pub fn field_rows(&self, grid: &Grid) -> u32 {
+        if self.whole { grid.height } else { self.count }
+    }
+}
+
+/// Largest number of steps one run may take (the step counter is a u32 on the GPU, and f32
+/// counts steps exactly only up to 2^24).
+pub const MAX_STEPS: u32 = 1 << 24;
+
+impl FlipSpec {
+    pub fn new(params: Params, grid: Grid, stepping: Stepping) -> Self {
+        FlipSpec {
+            params,
+            grid,
+            stepping,
+            early_exit: true,
+            use_symmetry: true,
+            precision: Precision::F32,
+            integrator: Integrator::Rk4,
+            band: None,
+        }
+    }
+
+    /// The same map with `--accurate`'s settings ([`ACCURATE`]): the one place they are
+    /// spelt out for flip maps.
+    pub fn accurate(self) -> Self {
+        let (precision, integrator, dt) = ACCURATE;
+        FlipSpec {
+            precision,
+            integrator,
+            stepping: Stepping {
+                dt,
+                ..self.stepping
+            },
+            ..self
+        }
+    }
+
+    /// Rows to integrate: the band's, or all from the top, or the top half when the other
+    /// half mirrors it.
+    pub fn rows_to_integrate(&self) -> u32 {
+        self.row_span().count
+    }
+
+    pub fn row_span(&self) -> RowSpan {
+        match self.band {
+            Some((first, count)) => RowSpan {
+                first,
+                count,
+                whole: false,
+            },
+            None if self.use_symmetry && self.grid.point_symmetric() => {
+                RowSpan::top(self.grid.height.div_ceil(2))
+            }
+            None => RowSpan::top(self.grid.height),
+        }
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        validate_params(&self.params)?;
+        validate_grid(&self.grid)?;
+        validate_stepping(&self.stepping)?;
+        // The f64 range here; the f32 GPU's own is checked where the engine has picked it.
+        self.integrator.validate(Precision::F64)?;
+        if let Some((first, count)) = self.band
+            && (count == 0 || first as u64 + count as u64 > self.grid.height as u64)
+        {
+            return Err(Error::invalid(
+                "tile",
+                format!(
+                    "rows {first}..{} lie outside the grid's {} rows",
+                    first as u64 + count as u64,
+                    self.grid.height
+                ),
+            ));
+        }
+        validate_stability(&self.params, &self.stepping)?;
+        validate_speeds(
+            &self.params,
+            &self.stepping,
+            self.grid.omega1,
+            self.grid.omega2,
+        )
+    }
+}
+
+/// How the divergence of nearby starts is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Tangent (variational) equations alongside the state (Benettin et al.).
+    Tangent,
+    /// A second trajectory started `eps` away (Euclidean in (theta1, omega1, theta2, omega2)),
+    /// pulled back to `eps` at every renormalisation.
+    Twin { eps: f64 },
+}
+
+/// A divergence map: the largest finite-time Lyapunov exponent (1/s) of every start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LyapunovSpec {
+    pub params: Params,
+    pub grid: Grid,
+    pub stepping: Stepping,
+    pub method: Method,
+    /// Renormalisation interval (s), a whole number of steps.
+    pub renorm: f64,
+    /// With the tangent method, integrate only the top half of a point-symmetric grid and
+    /// mirror it: the tangent equations are even under y -> -y (the Jacobian of an odd field
+    /// is even), so mirrored starts get the same exponent bit for bit. Twins are not mirrored
+    /// (the twin of -y sits at -y + eps, the mirror of y - eps, not of y + eps).
+    pub use_symmetry: bool,
+    /// The GPU's precision (the CPU is always f64); grids finer than f32 resolves run in f64.
+    pub precision: Precision,
+    /// Only these rows of the grid (first, count), as for [`FlipSpec::band`].
+    pub band: Option<(u32, u32)>,
+    /// How the state and the tangent vector are stepped: RK4 at `dt`, or DP54 with every
+    /// pendulum's own steps (of at most `dt`) between renormalisations, which it lands on
+    /// exactly; the error is controlled over the state and the tangent vector. Tangent method
+    /// only.
+    pub integrator: Integrator,
+}
+
+impl LyapunovSpec {
+    /// Rows to integrate: the band's, or all from the top, or the top half when the other
+    /// half mirrors it.
+    pub fn rows_to_integrate(&self) -> u32 {
+        self.row_span().count
+    }
+
+    /// The same map with `lyapunov --accurate`'s settings ([`ACCURATE_FTLE`], steps of the
+    /// longest whole fraction of `renorm` within its largest step): the one place they are
+    /// spelt out for divergence maps.
+    pub fn accurate(self) -> Self {
+        let (precision, integrator, largest) = ACCURATE_FTLE;
+        let dt = self.renorm / (self.renorm / largest).ceil().max(1.0);
+        LyapunovSpec {
+            precision,
+            integrator,
+            stepping: Stepping {
+                dt,
+                ..self.stepping
+            },
+            ..self
+        }
+    }
+
+    /// Whether the tangent map's point symmetry applies (see `use_symmetry`).
+    pub fn mirrors(&self) -> bool {
+        self.use_symmetry && self.method == Method::Tangent
+    }
+
+    pub fn row_span(&self) -> RowSpan {
+        match self.band {
+            Some((first, count)) => RowSpan {
+                first,
+                count,
+                whole: false,
+            },
+            None if self.mirrors() && self.grid.point_symmetric() => {
+                RowSpan::top(self.grid.height.div_ceil(2))
+            }
+            None => RowSpan::top(self.grid.height),
+        }
+    }
+
+    /// Steps between renormalisations (the last interval may be shorter).
+    pub fn renorm_steps(&self) -> u32 {
+        ((self.renorm / self.stepping.dt).round() as u32).max(1)
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        validate_params(&self.params)?;
+        validate_grid(&self.grid)?;
+        self.validate_run()
+    }
+
+    /// Everything but the grid (a single-point run has none).
+    pub fn validate_run(&self) -> Result<()> {
+        validate_params(&self.params)?;
+        validate_stepping(&self.stepping)?;
+        validate_stability(&self.params, &self.stepping)?;
+        let g = &self.grid;
+        validate_speeds(&self.params, &self.stepping, g.omega1, g.omega2)?;
+        let k = self.renorm / self.stepping.dt;
+        if !(self.renorm.is_finite() && self.renorm > 0.0)
+            || k.round() < 1.0
+            || (k - k.round()).abs() > 1e-9 * k
+            || self.renorm > self.stepping.t_max
+        {
+            return Err(Error::invalid(
+                "renorm",
+                format!(
+                    "{} s must be a whole multiple of the time step {} s and at most the run's {} s",
+                    self.renorm, self.stepping.dt, self.stepping.t_max
+                ),
+            ));
+        }
+        self.integrator.validate(Precision::F64)?;
+        match (self.method, self.integrator) {
+            (_, Integrator::Rk4) | (Method::Tangent, Integrator::Dp54 { .. }) => {}
+            (Method::Twin { .. }, _) | (_, Integrator::Dop853 { .. }) => {
+                return Err(Error::invalid(
+                    "integrator",
+                    "divergence maps step adaptively with dp54 and the tangent method only",
+                ));
+            }
+        }
+        if let Method::Twin { eps } = self.method
+            && !(eps.is_finite() && eps > 0.0 && eps <= 0.1)
+        {
+            return Err(Error::invalid(
+                "eps",
+                format!("{eps} must be in (0, 0.1]: the twin must stay in the linear regime"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What the one map path (the engine's entry, the verdict, the store) needs of a map's spec,
+/// whichever quantity it measures: a map is its quantity's settings over a grid, stepped in a
+/// precision by an integrator, optionally over a band of rows.
+pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
+    /// The quantity's entry in [`crate::quantity::QUANTITIES`].
+    fn quantity(&self) -> &'static crate::quantity::Quantity;
+    fn grid(&self) -> &Grid;
+    fn stepping(&self) -> Stepping;
+    fn precision(&self) -> Precision;
+    fn integrator(&self) -> Integrator;
+    /// Whether a point-symmetric grid's bottom half is the top half mirrored.
+    fn mirrors(&self) -> bool;
+    /// Every field in range (the f64 tolerances; the f32 GPU's are checked once the engine
+    /// has picked the path).
+    fn validate(&self) -> Result<()>;
+    /// The same map over rows `first..first + count` only.
+    fn with_band(&self, band: (u32, u32)) -> Self;
+    /// The same map stepped otherwise.
+    fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self;
+}
+
+impl MapSpec for FlipSpec {
+    fn quantity(&self) -> &'static crate::quantity::Quantity {
+        &crate::quantity::FLIP_TIME
+    }
+    fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    fn stepping(&self) -> Stepping {
+        self.stepping
+    }
+    fn precision(&self) -> Precision {
+        self.precision
+    }
+    fn integrator(&self) -> Integrator {
+        self.integrator
+    }
+    fn mirrors(&self) -> bool {
+        self.use_symmetry
+    }
+    fn validate(&self) -> Result<()> {
+        FlipSpec::validate(self)
+    }
+    fn with_band(&self, band: (u32, u32)) -> Self {
+        FlipSpec {
+            band: Some(band),
+            ..*self
+        }
+    }
+    fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self {
+        FlipSpec {
+            stepping,
+            integrator,
+            precision,
+            ..*self
+        }
+    }
+}
+
+impl MapSpec for LyapunovSpec {
+    fn quantity(&self) -> &'static crate::quantity::Quantity {
+        &crate::quantity::FTLE
+    }
+    fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    fn stepping(&self) -> Stepping {
+        self.stepping
+    }
+    fn precision(&self) -> Precision {
+        self.precision
+    }
+    fn integrator(&self) -> Integrator {
+        self.integrator
+    }
+    fn mirrors(&self) -> bool {
+        LyapunovSpec::mirrors(self)
+    }
+    fn validate(&self) -> Result<()> {
+        LyapunovSpec::validate(self)
+    }
+    fn with_band(&self, band: (u32, u32)) -> Self {
+        LyapunovSpec {
+            band: Some(band),
+            ..*self
+        }
+    }
+    fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self {
+        LyapunovSpec {
+            stepping,
+            integrator,
+            precision,
+            ..*self
+        }
+    }
+}
