@@ -1,4 +1,5 @@
-// Flip-time map. Twin of src/cpu/flip_time.rs; driven by src/gpu/flip_time.rs.
+// Flip-time map. Twin of src/cpu/flip_time.rs; driven by src/gpu/flip_time.rs. The step loop
+// (`advance`) and the flip's location (`crossing`) serve flip_kind.wgsl too.
 // `flip_init` sets up a tile, `flip_time` advances it by `params.steps` steps. With early exit
 // the pixels still to integrate are kept as a dense list (active_in -> active_out), so
 // finished pixels cost no SIMD lanes in later dispatches.
@@ -38,6 +39,53 @@ fn flip_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
 }
 
+// The first flip among a dispatch's steps: the step k that took an angle past pi, and the
+// states before and after it (located after the loop, to keep the loop small).
+struct FirstFlip {
+    flipped: bool,
+    k: u32,
+    before: vec4<f32>,
+    after: vec4<f32>,
+}
+
+// Advances `p` by this dispatch's steps; `done`: it flipped in an earlier dispatch. With early
+// exit the pendulum stops at its flip.
+fn advance(c: Coeffs, p: ptr<function, Pendulum>, done: bool) -> FirstFlip {
+    let dt = params.dt;
+    var f = FirstFlip(false, 0u, vec4<f32>(), vec4<f32>());
+    let k_end = params.step0 + params.steps;
+    for (var k = params.step0; k < k_end; k++) {
+        let next = rk4_step(c, *p, dt);
+        if !f.flipped && !done && max(abs(next.y.x), abs(next.y.z)) > PI {
+            f = FirstFlip(true, k, (*p).y, next.y);
+            if EARLY_EXIT {
+                *p = next;
+                break;
+            }
+        }
+        *p = next;
+    }
+    return f;
+}
+
+// Where in its step the flip happens (fraction s of the step), and which arm crossed first
+// (1 upper, 2 lower; the upper on a tie), as (s, arm).
+fn crossing(f: FirstFlip, dt: f32) -> vec2<f32> {
+    var s: f32 = 1.0;
+    var arm: f32 = 1.0;
+    if abs(f.after.x) > PI {
+        s = min(s, hermite_crossing(f.before.x, f.before.y, f.after.x, f.after.y, dt));
+    }
+    if abs(f.after.z) > PI {
+        let s2 = hermite_crossing(f.before.z, f.before.w, f.after.z, f.after.w, dt);
+        if abs(f.after.x) <= PI || s2 < s {
+            arm = 2.0;
+        }
+        s = min(s, s2);
+    }
+    return vec2<f32>(s, arm);
+}
+
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let n = linear_index(gid, groups);
@@ -48,42 +96,14 @@ fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     if EARLY_EXIT {
         i = active_in[n];
     }
-    let c = coeffs_from(params);
-    let dt = params.dt;
     var p = Pendulum(states[2u * i], states[2u * i + 1u]);
     var t_flip = times[i];
-    // The step that flipped, located after the loop to keep the loop small.
-    var flipped = false;
-    var k_flip = 0u;
-    var before = vec4<f32>();
-    var after = vec4<f32>();
-    let k_end = params.step0 + params.steps;
-    for (var k = params.step0; k < k_end; k++) {
-        let next = rk4_step(c, p, dt);
-        if !flipped && t_flip == NEVER && max(abs(next.y.x), abs(next.y.z)) > PI {
-            flipped = true;
-            k_flip = k;
-            before = p.y;
-            after = next.y;
-            if EARLY_EXIT {
-                p = next;
-                break;
-            }
-        }
-        p = next;
+    let f = advance(coeffs_from(params), &p, t_flip != NEVER);
+    if f.flipped {
+        t_flip = (f32(f.k) + crossing(f, params.dt).x) * params.dt;
     }
-    if flipped {
-        var s: f32 = 1.0;
-        if abs(after.x) > PI {
-            s = min(s, hermite_crossing(before.x, before.y, after.x, after.y, dt));
-        }
-        if abs(after.z) > PI {
-            s = min(s, hermite_crossing(before.z, before.w, after.z, after.w, dt));
-        }
-        t_flip = (f32(k_flip) + s) * dt;
-    }
-    // A state that left the numbers (the step blew up) has no flip time: say so, never
-    // "never". Checked once a dispatch, outside the loop.
+    // A state that left the numbers (the step blew up): no flip time, never "never".
+    // Checked once a dispatch, outside the loop.
     if t_flip == NEVER && !is_finite4(p.y) {
         t_flip = NONFINITE;
     }

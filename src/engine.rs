@@ -11,7 +11,8 @@ use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{
-    FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Method, Precision, Range, Stepping,
+    FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Method, Precision, Range,
+    Stepping,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,9 +118,10 @@ impl MapKernels for FlipSpec {
     }
 
     fn on_cpu(&self, monitor: &Monitor) -> Result<Field> {
-        match self.integrator {
-            Integrator::Rk4 => cpu::flip_map(self, monitor),
-            Integrator::Dp54 { .. } | Integrator::Dop853 { .. } => {
+        match (self.measure, self.integrator) {
+            (FlipMeasure::Kind, _) => cpu::flip_kind_map(self, monitor),
+            (FlipMeasure::Time, Integrator::Rk4) => cpu::flip_map(self, monitor),
+            (FlipMeasure::Time, Integrator::Dp54 { .. } | Integrator::Dop853 { .. }) => {
                 cpu::flip_map_adaptive(self, monitor)
             }
         }

@@ -48,8 +48,8 @@ pub const FLIP_KIND: Quantity = Quantity {
     name: "first flip: arm and direction",
     unit: "class (0 never, 1 upper +, 2 upper -, 3 lower +, 4 lower -)",
     agree: |a, b| a == b,
-    agreement: "the same arm flipping first the same way, or neither flipping (NaN never agrees)",
-    tolerance: "the same class",
+    agreement: "the same arm flipping first the same way at a flip time within 1 % or 0.02 s, or neither flipping (NaN never agrees)",
+    tolerance: "its class and 1 % or 0.02 s",
     counted: |x| x.is_finite() && x != FlipKind::Never.code(),
 };
 

@@ -152,6 +152,13 @@ fn tiles_equal_the_pixels_of_the_map_commands() {
             "f64",
         ),
         (
+            "flip kind",
+            (2, 3, 1),
+            "kind=flip-kind&t_max=8",
+            &["flip", "--t-max", "8", "--colour-by", "kind"],
+            "f32",
+        ),
+        (
             "flip, unresolved grey",
             (1, 0, 1),
             "t_max=6&unresolved=1&damping=0.05",
@@ -332,6 +339,7 @@ fn bad_queries_get_400_naming_the_key() {
     let server = Server::start(&["--backend", "gpu"]);
     for (path, key) in [
         ("/tile/0/0/0.png?kind=mandelbrot", "kind"),
+        ("/tile/0/0/0.png?kind=flip-kind&accurate=1", "accurate"),
         ("/tile/0/0/0.png?t_max=NaN", "t_max"),
         ("/tile/0/0/0.png?t_max=1e6", "t_max"),
         ("/tile/0/0/0.png?dt=0", "dt"),

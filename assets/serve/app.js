@@ -100,6 +100,8 @@ function legend() {
   const text = {
     flip: "Colour: time until an arm first flips (dark: soon, bright: late); black: no flip " +
       "within t-max; green: NaN.",
+    "flip-kind": "Colour: which arm flips over first, and which way (+: past +π, −: past −π); " +
+      "black: no flip within t-max; green: NaN.",
     ftle: "Colour: largest finite-time Lyapunov exponent (black: regular, bright: chaotic).",
     resolved: "White: the pixel's flip time agrees with a finer run (resolved); black: it " +
       "does not, so its colour cannot be trusted.",

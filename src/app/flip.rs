@@ -5,10 +5,10 @@ use std::time::Instant;
 
 use super::{MapOutputs, map, write_map};
 use crate::engine::Backend;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::render::{self, PictureSpec};
-use crate::spec::FlipSpec;
+use crate::spec::{FlipMeasure, FlipSpec, MapSpec};
 use crate::verdict;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -24,6 +24,12 @@ pub struct FlipJob {
 
 impl FlipJob {
     pub fn validate(&self) -> Result<()> {
+        if self.spec.measure == FlipMeasure::Kind && self.picture.colormap.is_some() {
+            return Err(Error::invalid(
+                "colormap",
+                "the flip kind has a colour a class of its own; leave out --colormap",
+            ));
+        }
         map::validate(&self.spec, &self.files, self.tile)
     }
 }
@@ -106,7 +112,11 @@ pub fn run(job: &FlipJob, command: String, monitor: &Monitor) -> Result<FlipSumm
         mask.as_deref(),
         monitor,
     )?;
-    let flipped = field.data.iter().filter(|t| t.is_finite()).count();
+    let flipped = field
+        .data
+        .iter()
+        .filter(|&&t| (job.spec.quantity().counted)(t))
+        .count();
     Ok(FlipSummary {
         width: field.width,
         height: field.height,

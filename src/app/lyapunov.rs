@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::render::{self, Colormap, PictureSpec};
-use crate::spec::{self, LyapunovSpec};
+use crate::spec::{self, LyapunovSpec, MapSpec};
 use crate::verdict;
 
 pub use crate::quantity::CHAOTIC_FTLE;
@@ -127,7 +127,11 @@ pub fn run_map(
         mask.as_deref(),
         monitor,
     )?;
-    let chaotic = field.data.iter().filter(|&&x| x > CHAOTIC_FTLE).count();
+    let chaotic = field
+        .data
+        .iter()
+        .filter(|&&x| (job.spec.quantity().counted)(x))
+        .count();
     Ok(LyapunovMapSummary {
         width: field.width,
         height: field.height,

@@ -161,19 +161,24 @@ pub fn map_and_verdict<S: MapKernels>(
     monitor: &Monitor,
 ) -> Result<(Field, Option<Vec<u8>>)> {
     let field = engine.map(spec, monitor)?;
-    let mask = match verdict {
-        true => {
-            let finer = engine.map(&verdict::finer(spec, engine.has_f64()), monitor)?;
-            Some(verdict::grid_mask(
-                spec.grid(),
-                &field,
-                &finer,
-                spec.quantity().agree,
-            ))
-        }
-        false => None,
+    if !verdict {
+        return Ok((field, None));
+    }
+    let agreement = |spec: &S, map: &Field| -> Result<Vec<u8>> {
+        let finer = engine.map(&verdict::finer(spec, engine.has_f64()), monitor)?;
+        Ok(verdict::grid_mask(
+            spec.grid(),
+            map,
+            &finer,
+            spec.quantity().agree,
+        ))
     };
-    Ok((field, mask))
+    let mut mask = agreement(spec, &field)?;
+    if let Some(under) = spec.underlying() {
+        let resolved = agreement(&under, &engine.map(&under, monitor)?)?;
+        mask.iter_mut().zip(resolved).for_each(|(m, r)| *m &= r);
+    }
+    Ok((field, Some(mask)))
 }
 
 /// The engine for `spec`'s map on `backend`, the path it takes ([`Engine::plan`], and the

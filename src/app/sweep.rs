@@ -11,14 +11,30 @@ use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::render::{self, Picture, PictureSpec};
 use crate::spec::{
-    self, F32_MIN_PIXEL_STEP, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping,
+    self, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method,
+    Precision, Range, Stepping,
 };
 
 /// Which map each frame shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MapKind {
     Flip,
+    /// Which arm flips first and which way.
+    FlipKind,
     Lyapunov,
+}
+
+impl MapKind {
+    pub const ALL: [MapKind; 3] = [MapKind::Flip, MapKind::FlipKind, MapKind::Lyapunov];
+
+    /// Its name in `--map`.
+    pub fn name(self) -> &'static str {
+        match self {
+            MapKind::Flip => "flip",
+            MapKind::FlipKind => "flip-kind",
+            MapKind::Lyapunov => "lyapunov",
+        }
+    }
 }
 
 /// The parameters a sweep can vary. Ratios keep the denominator and change the numerator;
@@ -298,10 +314,11 @@ pub fn run(
                 mirrored: false,
                 resolved: false,
             };
-            let map = match job.map {
-                MapKind::Flip => ("flip time", "s"),
-                MapKind::Lyapunov => ("finite-time Lyapunov exponent", "1/s"),
+            let quantity = match frame_map(job, &frames[0]) {
+                FrameMap::Flip(spec) => spec.quantity(),
+                FrameMap::Lyapunov(spec) => spec.quantity(),
             };
+            let map = (quantity.name, quantity.unit);
             Some(crate::render::store::SweepStore::create_or_open(
                 path,
                 &frames[0].grid,
@@ -427,6 +444,10 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
 fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
     match job.map {
         MapKind::Flip => FrameMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
+        MapKind::FlipKind => FrameMap::Flip(FlipSpec {
+            measure: FlipMeasure::Kind,
+            ..FlipSpec::new(frame.params, frame.grid, job.stepping)
+        }),
         MapKind::Lyapunov => FrameMap::Lyapunov(lyapunov_spec(job, frame)),
     }
 }

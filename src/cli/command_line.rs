@@ -7,14 +7,16 @@ use crate::app::fit::FitJob;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::{LyapunovMapJob, LyapunovPointJob};
 use crate::app::phase::PhaseJob;
-use crate::app::sweep::{FrameMap, MapKind, SweepJob};
+use crate::app::sweep::{FrameMap, SweepJob};
 use crate::app::traces::TracesJob;
 use crate::app::trajectory::TrajectoryJob;
 use crate::engine::Backend;
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::PictureSpec;
-use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Spread, Stepping};
+use crate::spec::{
+    FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Spread, Stepping,
+};
 
 /// The flags that reproduce `p` exactly.
 pub fn params(p: &Params) -> String {
@@ -128,6 +130,9 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
         params(&spec.params),
         backend.name()
     );
+    if spec.measure != FlipMeasure::Time {
+        out += &format!(" --colour-by {}", spec.measure.name());
+    }
     if !spec.early_exit {
         out += " --full";
     } else if !spec.use_symmetry {
@@ -293,13 +298,7 @@ pub fn frame(map: &FrameMap, backend: Backend, pic: &PictureSpec) -> String {
 }
 
 pub fn sweep(job: &SweepJob) -> String {
-    let mut out = format!(
-        "chaoscope sweep --map {}",
-        match job.map {
-            MapKind::Flip => "flip",
-            MapKind::Lyapunov => "lyapunov",
-        }
-    );
+    let mut out = format!("chaoscope sweep --map {}", job.map.name());
     if let Some(v) = job.vary {
         out += &format!(" --vary {}={}:{}", v.param.name(), v.from, v.to);
     }

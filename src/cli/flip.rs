@@ -12,11 +12,16 @@ use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::quantity::FLIP_TIME;
-use crate::spec::{FlipSpec, Integrator, MIN_TOLERANCE_F32, Precision};
+use crate::spec::{FlipMeasure, FlipSpec, Integrator, MIN_TOLERANCE_F32, MapSpec, Precision};
 
 #[derive(Args, Debug, Clone)]
 pub struct FlipArgs {
+    /// What the map shows of each start's first flip: time (s) or kind (which arm flips first
+    /// and which way, a colour a class with a legend; --data then holds the class codes: 0
+    /// never, 1 upper arm past +pi, 2 upper past -pi, 3 lower past +pi, 4 lower past -pi, NaN
+    /// where the state left the numbers; rk4 only).
+    #[arg(long, default_value = "time", value_parser = one_of(&FlipMeasure::ALL, FlipMeasure::name))]
+    pub colour_by: FlipMeasure,
     #[command(flatten)]
     pub grid: GridArgs,
     #[command(flatten)]
@@ -81,6 +86,7 @@ impl FlipArgs {
             false => integrator_of(&self.integrator, self.rtol, self.atol, f32_gpu)?,
         };
         let spec = FlipSpec {
+            measure: self.colour_by,
             early_exit: !self.full,
             use_symmetry: !(self.full || self.no_symmetry),
             precision: self.precision,
@@ -173,7 +179,11 @@ pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         nan_note(s.nan),
         resolved_note(
             s.resolved,
-            &format!("the same map {} within {}", s.rule, FLIP_TIME.tolerance)
+            &format!(
+                "the same map {} within {}",
+                s.rule,
+                job.spec.quantity().tolerance
+            )
         ),
         s.output.display()
     );

@@ -40,6 +40,8 @@ mod tests {
                     "params",
                     "output",
                     "data",
+                    "integrator",
+                    "colormap",
                 ],
             ),
             (

@@ -2,28 +2,23 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
-use super::parse::{parse_number, parse_point, parse_u32, parse_vary};
+use super::parse::{one_of, parse_number, parse_point, parse_u32, parse_vary};
 use super::{command_line, json, say};
 use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
 use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum MapArg {
-    Flip,
-    Lyapunov,
-}
-
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("20")))]
 pub struct SweepArgs {
-    /// Which map each frame shows.
-    #[arg(long, value_enum, default_value = "flip")]
-    pub map: MapArg,
+    /// Which map each frame shows: flip (times), flip-kind (which arm flips first and which
+    /// way) or lyapunov.
+    #[arg(long, default_value = "flip", value_parser = one_of(&MapKind::ALL, MapKind::name))]
+    pub map: MapKind,
     /// PARAM=FROM:TO, PARAM one of m1, m2, l1, l2, g, m2/m1, l2/l1, mass, omega1, omega2,
     /// damping (both joints, N m s).
     #[arg(long, value_parser = parse_vary, allow_hyphen_values = true)]
@@ -69,10 +64,7 @@ pub struct SweepArgs {
 impl SweepArgs {
     pub fn job(&self) -> Result<SweepJob> {
         Ok(SweepJob {
-            map: match self.map {
-                MapArg::Flip => MapKind::Flip,
-                MapArg::Lyapunov => MapKind::Lyapunov,
-            },
+            map: self.map,
             vary: self.vary,
             zoom: self
                 .zoom_to

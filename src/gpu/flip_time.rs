@@ -5,7 +5,7 @@ use super::context::{GpuContext, map_read, read_buffer};
 use super::layout::{
     FLIP_TIME_WGSL, GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuParams, GpuParams64, GpuPendulum,
     GpuPendulum64, NEVER, NONFINITE, TileParams, flip_adaptive_wgsl, flip_dop853_wgsl,
-    shader_source, shader_source_f64,
+    flip_kind_wgsl, shader_source, shader_source_f64,
 };
 use super::pipeline::{
     Variants, bind_group, layouts, module_of, params_buffer_of, record_dispatch, storage_buffer,
@@ -14,7 +14,8 @@ use super::tiled::{Tiling, adaptive_loop, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Grid, Integrator, MAX_STEPS, Precision, Range};
+use crate::quantity::FlipKind;
+use crate::spec::{FlipMeasure, FlipSpec, Grid, Integrator, MAX_STEPS, Precision, Range};
 
 pub struct FlipTimeKernel {
     precision: Precision,
@@ -24,6 +25,8 @@ pub struct FlipTimeKernel {
     adaptive: Variants,
     /// ... and DOP853.
     dop853: Variants,
+    /// (flip_init, flip_kind): the flip-kind map, RK4 (flip_kind.wgsl over flip_time.wgsl).
+    kind: Variants,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -95,6 +98,7 @@ fn sample_spec(spec: &FlipSpec) -> FlipSpec {
     FlipSpec {
         grid,
         use_symmetry: false,
+        measure: FlipMeasure::Time,
         ..*spec
     }
 }
@@ -134,6 +138,7 @@ impl FlipTimeKernel {
             Precision::F64 => shader_source_f64(kernel),
         };
         let module = module_of(ctx, "flip_time.wgsl", source(FLIP_TIME_WGSL));
+        let kind = module_of(ctx, "flip_kind.wgsl", source(&flip_kind_wgsl()));
         let adaptive = module_of(ctx, "flip_adaptive.wgsl", source(&flip_adaptive_wgsl()));
         let dop853 = module_of(ctx, "flip_dop853.wgsl", source(&flip_dop853_wgsl()));
         let (layout, pipeline_layout) =
@@ -154,8 +159,14 @@ impl FlipTimeKernel {
             ),
             dop853: Variants::new(
                 dop853,
-                pipeline_layout,
+                pipeline_layout.clone(),
                 &["flip_adaptive_init", "flip_adaptive"],
+                Some("EARLY_EXIT"),
+            ),
+            kind: Variants::new(
+                kind,
+                pipeline_layout,
+                &["flip_init", "flip_kind"],
                 Some("EARLY_EXIT"),
             ),
             layout,
@@ -301,10 +312,11 @@ impl FlipTimeKernel {
     ) -> Result<Field> {
         let grid = spec.grid;
         let adaptive = spec.integrator != Integrator::Rk4;
-        let variants = match spec.integrator {
-            Integrator::Rk4 => &self.pipelines,
-            Integrator::Dp54 { .. } => &self.adaptive,
-            Integrator::Dop853 { .. } => &self.dop853,
+        let variants = match (spec.measure, spec.integrator) {
+            (FlipMeasure::Kind, _) => &self.kind,
+            (FlipMeasure::Time, Integrator::Rk4) => &self.pipelines,
+            (FlipMeasure::Time, Integrator::Dp54 { .. }) => &self.adaptive,
+            (FlipMeasure::Time, Integrator::Dop853 { .. }) => &self.dop853,
         };
         let [init, advance] = variants.get(ctx, spec.params.losses.kinds(), spec.early_exit) else {
             unreachable!("two entry points")
@@ -355,16 +367,14 @@ impl FlipTimeKernel {
                 )?;
             }
             let bytes = read_buffer(ctx, &bufs.times, pixels as u64 * time_bytes)?;
+            let t_max = t_max_of(t_max, self.precision);
             Ok(times(&bytes)
                 .into_iter()
-                .map(|t| {
-                    if t == NONFINITE as f64 {
-                        f32::NAN
-                    } else if t == NEVER as f64 || t > t_max_of(t_max, self.precision) {
-                        f32::INFINITY
-                    } else {
-                        t as f32
-                    }
+                .map(|t| match spec.measure {
+                    _ if t == NONFINITE as f64 => f32::NAN,
+                    FlipMeasure::Time if t == NEVER as f64 || t > t_max => f32::INFINITY,
+                    FlipMeasure::Kind if t == NEVER as f64 => FlipKind::Never.code(),
+                    FlipMeasure::Time | FlipMeasure::Kind => t as f32,
                 })
                 .collect())
         })

@@ -268,6 +268,12 @@ pub fn shader_source(kernel: &str) -> String {
 }
 
 pub const FLIP_TIME_WGSL: &str = include_str!("../../shaders/flip_time.wgsl");
+const FLIP_KIND_WGSL: &str = include_str!("../../shaders/flip_kind.wgsl");
+
+/// The flip-kind kernel: the flip-time kernel's loop and flip location, and its own entry.
+pub fn flip_kind_wgsl() -> String {
+    format!("{FLIP_TIME_WGSL}\n{FLIP_KIND_WGSL}")
+}
 pub const TRAJECTORY_WGSL: &str = include_str!("../../shaders/trajectory.wgsl");
 const LYAPUNOV_KERNEL_WGSL: &str = include_str!("../../shaders/lyapunov.wgsl");
 

@@ -1,5 +1,6 @@
 //! Colours for maps: perceptual gradients from colorgrad, sampled once into a lookup table.
 
+use crate::quantity::FlipKind;
 use colorgrad::Gradient;
 use rayon::prelude::*;
 
@@ -143,6 +144,43 @@ pub fn flip_colors(field: &Field, colors: FlipColors) -> Vec<u8> {
             px.copy_from_slice(&c);
         });
     rgb
+}
+
+/// The colours of the flip kinds ([`FlipKind`], Okabe and Ito's colour-blind safe set): the
+/// upper arm warm (orange +, yellow -), the lower arm cool (blue +, sky blue -), never black.
+pub fn flip_kind_rgb(kind: FlipKind) -> [u8; 3] {
+    match kind {
+        FlipKind::Never => NEVER_RGB,
+        FlipKind::UpperPlus => [230, 159, 0],
+        FlipKind::UpperMinus => [240, 228, 66],
+        FlipKind::LowerPlus => [0, 114, 178],
+        FlipKind::LowerMinus => [86, 180, 233],
+    }
+}
+
+/// The flip kinds' colour bar: an equal block for each class that flips, in [`FlipKind`]'s
+/// order from the start of the bar, and ticks (fraction of the bar, label) at their middles.
+pub fn flip_kind_bar() -> (Vec<[u8; 3]>, Vec<(f64, String)>) {
+    let flips = &FlipKind::ALL[1..];
+    let colors = flips
+        .iter()
+        .flat_map(|&k| std::iter::repeat_n(flip_kind_rgb(k), 64))
+        .collect();
+    let ticks = flips
+        .iter()
+        .enumerate()
+        .map(|(i, k)| ((i as f64 + 0.5) / flips.len() as f64, k.label().to_string()))
+        .collect();
+    (colors, ticks)
+}
+
+/// RGB bytes of a flip-kind map; NaN (and any value that is no class) in [`NAN_RGB`].
+pub fn flip_kind_colors(field: &Field) -> Vec<u8> {
+    field
+        .data
+        .iter()
+        .flat_map(|&x| FlipKind::from_code(x).map_or(NAN_RGB, flip_kind_rgb))
+        .collect()
 }
 
 /// Colour range (1/s) of a divergence map: 0 (regular, dark) to the 99.5th percentile of the

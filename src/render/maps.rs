@@ -5,11 +5,11 @@ use crate::engine::RunInfo;
 use crate::error::Result;
 use crate::field::Field;
 use crate::model::Params;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec};
+use crate::spec::{FlipMeasure, FlipSpec, Grid, LyapunovSpec};
 
 use super::{
     Annotation, Axis, ColorBar, Colormap, FlipColors, NEVER_RGB, annotate, decimal_ticks,
-    flip_colors, ftle_colors, ftle_table,
+    flip_colors, flip_kind_bar, flip_kind_colors, ftle_colors, ftle_table,
 };
 
 /// How a map becomes a picture.
@@ -164,13 +164,17 @@ fn stepping_note(spec: &FlipSpec) -> String {
     }
 }
 
-/// The flip map as a picture; with `unresolved`, the pixels whose mask is 0 in grey.
+/// The flip map as a picture (times or kinds, as `spec.measure` says); with `unresolved`,
+/// the pixels whose mask is 0 in grey.
 pub fn flip_picture(
     field: &Field,
     spec: &FlipSpec,
     picture: &PictureSpec,
     unresolved: Option<&[u8]>,
 ) -> Result<Picture> {
+    if spec.measure == FlipMeasure::Kind {
+        return flip_kind_picture(field, spec, picture, unresolved);
+    }
     let colors = FlipColors {
         t_lo: (spec.params.l1 / spec.params.g).sqrt(),
         t_max: spec.stepping.t_max,
@@ -196,6 +200,44 @@ pub fn flip_picture(
                 ticks,
                 label: "flip time (s)".into(),
                 swatch: Some((NEVER_RGB, format!("> {} s", spec.stepping.t_max))),
+            },
+        }
+    })
+}
+
+/// The flip-kind map as a picture: a colour a class, the legend's blocks named.
+fn flip_kind_picture(
+    field: &Field,
+    spec: &FlipSpec,
+    picture: &PictureSpec,
+    unresolved: Option<&[u8]>,
+) -> Result<Picture> {
+    let mut rgb = flip_kind_colors(field);
+    mark_unresolved(&mut rgb, unresolved);
+    frame(field, rgb, picture.annotate, || {
+        let (x, y) = axes(&spec.grid);
+        // The upper arm's classes at the top (the bar runs from the bottom).
+        let (mut colors, ticks) = flip_kind_bar();
+        colors.reverse();
+        let ticks = ticks.into_iter().map(|(f, l)| (1.0 - f, l)).collect();
+        Annotation {
+            title: format!(
+                "Which arm flips over first, and which way, within {} s",
+                spec.stepping.t_max
+            ),
+            subtitle: format!(
+                "{} · {} · + past +π, − past −π{}",
+                physics_line(&spec.params, &spec.grid),
+                stepping_note(spec),
+                unresolved_note(unresolved, false)
+            ),
+            x,
+            y,
+            bar: ColorBar {
+                colors,
+                ticks,
+                label: "first flip".into(),
+                swatch: Some((NEVER_RGB, "never".into())),
             },
         }
     })

@@ -13,7 +13,8 @@ pub use annotate::{
     Annotated, Annotation, Axis, ColorBar, angle_ticks, annotate, decimal_ticks, register_font,
 };
 pub use colormap::{
-    Colormap, FlipColors, NAN_RGB, NEVER_RGB, flip_colors, ftle_colors, ftle_range, ftle_table,
+    Colormap, FlipColors, NAN_RGB, NEVER_RGB, flip_colors, flip_kind_bar, flip_kind_colors,
+    flip_kind_rgb, ftle_colors, ftle_range, ftle_table,
 };
 pub use exposure::{Bobs, Film, View, draw_arms};
 pub use files::{

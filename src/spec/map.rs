@@ -8,9 +8,32 @@ use super::{
 use crate::error::{Error, Result};
 use crate::model::Params;
 
-/// A flip-time map: for every start, the time until either arm first flips over.
+/// What a flip map shows of each start's first flip.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FlipMeasure {
+    /// The time until either arm first flips over ([`crate::quantity::FLIP_TIME`]).
+    #[default]
+    Time,
+    /// Which arm flips first and which way ([`crate::quantity::FLIP_KIND`]).
+    Kind,
+}
+
+impl FlipMeasure {
+    pub const ALL: [FlipMeasure; 2] = [FlipMeasure::Time, FlipMeasure::Kind];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            FlipMeasure::Time => "time",
+            FlipMeasure::Kind => "kind",
+        }
+    }
+}
+
+/// A flip map: for every start, its first flip over the top (when, or which arm which way).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FlipSpec {
+    /// What the map shows of the first flip.
+    pub measure: FlipMeasure,
     pub params: Params,
     pub grid: Grid,
     pub stepping: Stepping,
@@ -62,6 +85,7 @@ pub const MAX_STEPS: u32 = 1 << 24;
 impl FlipSpec {
     pub fn new(params: Params, grid: Grid, stepping: Stepping) -> Self {
         FlipSpec {
+            measure: FlipMeasure::Time,
             params,
             grid,
             stepping,
@@ -101,17 +125,30 @@ impl FlipSpec {
                 count,
                 whole: false,
             },
-            None if self.use_symmetry && self.grid.point_symmetric() => {
+            None if self.mirrors() && self.grid.point_symmetric() => {
                 RowSpan::top(self.grid.height.div_ceil(2))
             }
             None => RowSpan::top(self.grid.height),
         }
     }
 
+    /// Whether a point-symmetric grid's bottom half is the top half mirrored: flip times
+    /// are (the mirrored start flips at the same time), flip kinds are not (the same arm
+    /// flips the other way), so those are integrated whole.
+    pub fn mirrors(&self) -> bool {
+        self.use_symmetry && self.measure == FlipMeasure::Time
+    }
+
     pub fn validate(&self) -> Result<()> {
         validate_params(&self.params)?;
         validate_grid(&self.grid)?;
         validate_stepping(&self.stepping)?;
+        if self.measure == FlipMeasure::Kind && self.integrator != Integrator::Rk4 {
+            return Err(Error::invalid(
+                "integrator",
+                "the flip kind is located with rk4 only (take --integrator rk4)",
+            ));
+        }
         // The f64 range here; the f32 GPU's own is checked where the engine has picked it.
         self.integrator.validate(Precision::F64)?;
         if let Some((first, count)) = self.band
@@ -287,11 +324,20 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     fn with_band(&self, band: (u32, u32)) -> Self;
     /// The same map stepped otherwise.
     fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self;
+    /// The map of the event this quantity is read off, when it has one (the flip kind: the
+    /// flip time): the verdict vouches for a pixel only where that map is resolved too (two
+    /// chaotic runs can name the same class by chance, not the same flip).
+    fn underlying(&self) -> Option<Self> {
+        None
+    }
 }
 
 impl MapSpec for FlipSpec {
     fn quantity(&self) -> &'static crate::quantity::Quantity {
-        &crate::quantity::FLIP_TIME
+        match self.measure {
+            FlipMeasure::Time => &crate::quantity::FLIP_TIME,
+            FlipMeasure::Kind => &crate::quantity::FLIP_KIND,
+        }
     }
     fn grid(&self) -> &Grid {
         &self.grid
@@ -306,7 +352,7 @@ impl MapSpec for FlipSpec {
         self.integrator
     }
     fn mirrors(&self) -> bool {
-        self.use_symmetry
+        FlipSpec::mirrors(self)
     }
     fn validate(&self) -> Result<()> {
         FlipSpec::validate(self)
@@ -324,6 +370,12 @@ impl MapSpec for FlipSpec {
             precision,
             ..*self
         }
+    }
+    fn underlying(&self) -> Option<Self> {
+        (self.measure == FlipMeasure::Kind).then_some(FlipSpec {
+            measure: FlipMeasure::Time,
+            ..*self
+        })
     }
 }
 

@@ -10,7 +10,7 @@ mod memory;
 mod method;
 mod stability;
 
-pub use map::{FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};
+pub use map::{FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};
 pub use memory::{available_memory, check_memory};
 pub use method::{
     ACCURATE, ACCURATE_FTLE, Integrator, MIN_TOLERANCE_F32, MIN_TOLERANCE_F64, Precision,

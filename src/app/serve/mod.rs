@@ -87,10 +87,7 @@ impl StoredMap {
     }
 
     fn kind(&self) -> Kind {
-        match self.map {
-            FrameMap::Flip(_) => Kind::Flip,
-            FrameMap::Lyapunov(_) => Kind::Ftle,
-        }
+        Kind::of(&self.map)
     }
 }
 
@@ -515,13 +512,10 @@ pub fn tile_rgb(
         colormap: view.colormap,
     };
     match view.kind {
-        Kind::Flip | Kind::Resolved => {
+        Kind::Flip | Kind::FlipKind | Kind::Resolved => {
             let spec = view.flip_spec(grid);
             spec.validate()?;
-            let precision = precision_of(engine, &grid, spec.precision);
-            if precision == "f32" {
-                spec.integrator.validate(Precision::F32)?;
-            }
+            let precision = engine.plan(&spec)?.path.precision().name();
             let verdict = view.unresolved || view.kind == Kind::Resolved;
             let (field, mask) = super::map_and_verdict(engine, &spec, verdict, monitor)?;
             let rgb = match (view.kind, mask) {
@@ -608,7 +602,9 @@ fn stored_rgb(store: &MapStore, at: &StoredTile, view: &View, grid: Grid) -> Res
     let shown = Some(mask.as_slice()).filter(|_| view.unresolved);
     let mut rgb = match view.kind {
         Kind::Resolved => mask_rgb(&mask),
-        Kind::Flip => render::flip_picture(&field, &view.flip_spec(grid), &picture, shown)?.rgb,
+        Kind::Flip | Kind::FlipKind => {
+            render::flip_picture(&field, &view.flip_spec(grid), &picture, shown)?.rgb
+        }
         Kind::Ftle => {
             let spec = view.lyapunov_spec(grid);
             render::lyapunov_picture(&field, &spec, view.range, &picture, shown)?.rgb
@@ -849,7 +845,7 @@ async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response
             colormap: view.colormap,
         };
         let name = match view.kind {
-            Kind::Flip | Kind::Resolved => {
+            Kind::Flip | Kind::FlipKind | Kind::Resolved => {
                 let job = FlipJob {
                     spec: view.flip_spec(grid),
                     backend,
@@ -913,6 +909,10 @@ async fn legend(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Respon
                 .collect();
             let table = render::ftle_table(view.colormap.unwrap_or(render::Colormap::Magma));
             (table, ticks, "FTLE (1/s)")
+        }
+        Kind::FlipKind => {
+            let (colors, ticks) = render::flip_kind_bar();
+            (colors, ticks, "first flip")
         }
         Kind::Flip | Kind::Resolved => {
             let colors = render::FlipColors {

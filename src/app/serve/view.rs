@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping};
+use crate::spec::{FlipMeasure, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping};
 
 /// The deepest zoom level: 256 * 2^42 pixels across a turn, a pixel step of 5.6e-15 rad,
 /// below what f64 resolves (the verdict then says so); Leaflet's pixel coordinates stay
@@ -37,6 +37,8 @@ pub const MAX_SAVE_PIXELS: u64 = 1 << 24;
 pub enum Kind {
     /// Flip times.
     Flip,
+    /// Which arm flips first and which way.
+    FlipKind,
     /// Largest finite-time Lyapunov exponents.
     Ftle,
     /// The verdict on the flip map: white resolved, black not.
@@ -44,11 +46,21 @@ pub enum Kind {
 }
 
 impl Kind {
-    pub const NAMES: [&'static str; 3] = ["flip", "ftle", "resolved"];
+    pub const NAMES: [&'static str; 4] = ["flip", "flip-kind", "ftle", "resolved"];
+
+    /// The kind a stored map shows.
+    pub fn of(map: &FrameMap) -> Kind {
+        match map {
+            FrameMap::Flip(s) if s.measure == FlipMeasure::Kind => Kind::FlipKind,
+            FrameMap::Flip(_) => Kind::Flip,
+            FrameMap::Lyapunov(_) => Kind::Ftle,
+        }
+    }
 
     fn parse(s: &str) -> Result<Kind> {
         match s {
             "flip" => Ok(Kind::Flip),
+            "flip-kind" => Ok(Kind::FlipKind),
             "ftle" => Ok(Kind::Ftle),
             "resolved" => Ok(Kind::Resolved),
             _ => Err(Error::invalid(
@@ -150,8 +162,8 @@ impl Query {
         let kind = self.take("kind");
         let kind = match (kind.as_deref(), stored) {
             (Some(k), _) => Kind::parse(k)?,
-            (None, Some(FrameMap::Lyapunov(_))) => Kind::Ftle,
-            (None, _) => Kind::Flip,
+            (None, Some(map)) => Kind::of(&map),
+            (None, None) => Kind::Flip,
         };
         if let Some(map) = stored {
             for key in PHYSICS_KEYS {
@@ -194,6 +206,12 @@ impl Query {
             .and_then(|p| crate::spec::validate_params(&p).map(|_| p))
             .map_err(|e| rename(e, "joint_damping", "damping"))?;
         let accurate = self.flag("accurate")?;
+        if accurate && kind == Kind::FlipKind {
+            return Err(Error::invalid(
+                "accurate",
+                "the flip kind is located with rk4 only; leave accurate off",
+            ));
+        }
         let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
         let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
         Ok(View {
@@ -256,7 +274,13 @@ impl View {
                 ..stored
             };
         }
-        let spec = FlipSpec::new(self.params, grid, self.stepping);
+        let spec = FlipSpec {
+            measure: match self.kind {
+                Kind::FlipKind => FlipMeasure::Kind,
+                Kind::Flip | Kind::Ftle | Kind::Resolved => FlipMeasure::Time,
+            },
+            ..FlipSpec::new(self.params, grid, self.stepping)
+        };
         if self.accurate { spec.accurate() } else { spec }
     }
 
