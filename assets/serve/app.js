@@ -73,6 +73,10 @@ function fillForm() {
     if (page.info.store && PHYSICS.includes(k)) el.disabled = true;
   }
   document.getElementById("ftle-range").hidden = state.kind !== "ftle";
+  // The flip kind is located with RK4 only: no accurate settings for it.
+  if (state.kind === "flip-kind") state.accurate = false;
+  form.elements.accurate.checked = !!state.accurate;
+  form.elements.accurate.disabled = state.kind === "flip-kind";
 }
 
 // The pixel step (rad) at zoom z, and what precision that needs.

@@ -3,15 +3,16 @@
 //! band by band. `flip` and `lyapunov` are two front doors of it: they add their picture and
 //! their summary.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use super::check_output;
 use super::store::{Filled, StoreFill, fill_store, missing_note};
-use super::{MapOutputs, check_finer, check_tile, map_and_verdict, map_engine};
-use crate::engine::{Backend, MapKernels, RunInfo};
-use crate::error::Result;
+use crate::engine::{Backend, Engine, MapKernels, RunInfo};
+use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
-use crate::spec::MapSpec;
+use crate::render::{Outputs, Picture, check_writable};
+use crate::spec::{Grid, MapSpec, Precision};
 use crate::verdict;
 
 /// Everything checked before any work: the spec, the files, the verdict's finer map, the tile.
@@ -90,4 +91,212 @@ pub fn make_store<S: MapKernels>(
         rule: verdict::rule_short(spec, &finer),
         rule_in_full: verdict::rule(spec, &finer),
     })
+}
+
+/// Where a map's files go, and whether it carries the verdict ([`crate::verdict`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapOutputs {
+    /// The PNG.
+    pub output: PathBuf,
+    /// The raw values as float32 .npy, shape (height, width).
+    pub data: Option<PathBuf>,
+    /// The verdict as uint8 .npy, the layout of `data`: 1 resolved.
+    pub resolved: Option<PathBuf>,
+    /// Draw the pixels the verdict cannot resolve in grey.
+    pub show_unresolved: bool,
+}
+
+impl MapOutputs {
+    /// The Zarr store the map goes to (`data` ending in .zarr), if so.
+    pub fn store(&self) -> Option<&Path> {
+        self.data
+            .as_deref()
+            .filter(|p| p.extension().is_some_and(|e| e == "zarr"))
+    }
+
+    /// Every path the right kind and writable, before any work.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(store) = self.store() {
+            if self.resolved.as_ref().is_some_and(|r| r != store) {
+                return Err(Error::invalid(
+                    "resolved",
+                    "with a .zarr store the verdict goes into the store (its array `resolved`): give the store's path",
+                ));
+            }
+            if self.show_unresolved {
+                return Err(Error::invalid(
+                    "show_unresolved",
+                    "a .zarr store has no picture to paint (its verdict is the array `resolved`)",
+                ));
+            }
+            let parent = store.parent().filter(|p| !p.as_os_str().is_empty());
+            return check_writable("data", &parent.unwrap_or(Path::new(".")).join(".probe"));
+        }
+        check_output("output", &self.output, "png")?;
+        if let Some(data) = &self.data {
+            check_output("data", data, "npy")?;
+        }
+        if let Some(path) = &self.resolved {
+            check_output("resolved", path, "npy")?;
+        }
+        Ok(())
+    }
+
+    /// Whether the map is made a second time for the verdict.
+    pub fn wants_verdict(&self) -> bool {
+        self.resolved.is_some() || self.show_unresolved
+    }
+
+    /// The files a run writes.
+    pub fn files(&self) -> Vec<PathBuf> {
+        [
+            Some(self.output.clone()),
+            self.data.clone(),
+            self.resolved.clone(),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+}
+
+/// `--tile INDEX/COUNT` only into a store, and in range.
+pub fn check_tile(tile: Option<(u32, u32)>, files: &MapOutputs) -> Result<()> {
+    if let Some((index, count)) = tile {
+        if files.store().is_none() {
+            return Err(Error::invalid(
+                "tile",
+                "needs a store to fill: --data MAP.zarr",
+            ));
+        }
+        if count == 0 || index >= count {
+            return Err(Error::invalid(
+                "tile",
+                format!("{index}/{count}: INDEX/COUNT with 0 <= INDEX < COUNT"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The verdict's map (half the step, a tenth of the tolerances) checked as the map was: its
+/// errors say so.
+pub fn check_finer(finer: Result<()>) -> Result<()> {
+    finer.map_err(|e| match e {
+        Error::InvalidSpec { field, reason } => {
+            Error::invalid(field, format!("the verdict's finer map: {reason}"))
+        }
+        e => e,
+    })
+}
+
+/// A map's files, as a set: the picture as PNG with its provenance, where the map sits in it
+/// and `extra` text, the raw values as .npy and the verdict's `mask` as .npy when asked.
+pub fn write_map(
+    picture: &Picture,
+    provenance: Vec<(String, String)>,
+    extra: Vec<(String, String)>,
+    to: &MapOutputs,
+    field: &Field,
+    mask: Option<&[u8]>,
+    monitor: &Monitor,
+) -> Result<()> {
+    let mut meta = provenance;
+    meta.extend(picture.metadata());
+    meta.extend(extra);
+    let mut files = Outputs::new();
+    files.png(
+        &to.output,
+        picture.width,
+        picture.height,
+        &picture.rgb,
+        &meta,
+    )?;
+    if let Some(data) = &to.data {
+        files.npy(data, field)?;
+    }
+    if let (Some(path), Some(mask)) = (&to.resolved, mask) {
+        files.mask(path, field.width, field.height, mask)?;
+    }
+    files.commit(monitor)
+}
+
+/// A map and, with `verdict`, its mask against the finer map ([`verdict::finer`]).
+pub fn map_and_verdict<S: MapKernels>(
+    engine: &Engine,
+    spec: &S,
+    verdict: bool,
+    monitor: &Monitor,
+) -> Result<(Field, Option<Vec<u8>>)> {
+    let field = engine.map(spec, monitor)?;
+    if !verdict {
+        return Ok((field, None));
+    }
+    let agreement = |spec: &S, map: &Field| -> Result<Vec<u8>> {
+        let finer = engine.map(&verdict::finer(spec, engine.has_f64()), monitor)?;
+        Ok(verdict::grid_mask(
+            spec.grid(),
+            map,
+            &finer,
+            spec.quantity().agree,
+        ))
+    };
+    let mut mask = agreement(spec, &field)?;
+    if let Some(under) = spec.underlying() {
+        let resolved = agreement(&under, &engine.map(&under, monitor)?)?;
+        mask.iter_mut().zip(resolved).for_each(|(m, r)| *m &= r);
+    }
+    Ok((field, Some(mask)))
+}
+
+/// The engine for `spec`'s map on `backend`, the path it takes ([`Engine::plan`], and the
+/// verdict's finer map's with `verdict`), and the notices to give about both
+/// ([`precision_notices`]).
+pub fn map_engine(
+    backend: Backend,
+    spec: &impl MapKernels,
+    verdict: bool,
+) -> Result<(Engine, RunInfo, Vec<String>)> {
+    let engine = Engine::new(backend)?;
+    let mut notices = engine.notices();
+    let (precision, grid) = (spec.precision(), spec.grid());
+    let info = engine.map_info(grid, precision);
+    notices.extend(precision_notices(&engine, backend, precision, grid, &info)?);
+    notices.extend(spec.notices(info.path));
+    engine.plan(spec)?;
+    if verdict {
+        check_finer(
+            engine
+                .plan(&verdict::finer(spec, engine.has_f64()))
+                .map(|_| ()),
+        )?;
+    }
+    Ok((engine, info, notices))
+}
+
+/// What a map's precision means on this engine: f64 asked of a GPU without it is an error
+/// naming `precision` when the GPU was asked for, else a note that the CPU runs it; a grid
+/// finer than f32 resolves gets a note saying where it runs in f64 (`info`).
+pub fn precision_notices(
+    engine: &Engine,
+    backend: Backend,
+    precision: Precision,
+    grid: &Grid,
+    info: &RunInfo,
+) -> Result<Vec<String>> {
+    let mut notices: Vec<String> = engine.check_f64(precision, backend)?.into_iter().collect();
+    if engine.gpu().is_some() && precision == Precision::F32 && grid.needs_f64() {
+        notices.push(format!(
+            "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the {} in f64",
+            crate::spec::F32_MIN_PIXEL_STEP,
+            if info.path.on_gpu() { "GPU" } else { "CPU" }
+        ));
+    }
+    if grid.beyond_f64() {
+        notices.push(format!(
+            "note: the pixel step is below {:.1e} rad, finer than even f64 resolves near pi: neighbouring pixels start from the same numbers, and the verdict (--resolved) marks every pixel unresolved",
+            crate::spec::F64_MIN_PIXEL_STEP
+        ));
+    }
+    Ok(notices)
 }

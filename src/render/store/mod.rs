@@ -21,6 +21,14 @@ use zarrs::storage::{
     byte_range::ByteRangeIterator,
 };
 
+mod atomic;
+mod sweep;
+mod units;
+
+pub use atomic::AtomicStore;
+pub use sweep::SweepStore;
+pub use units::{Unit, pairs_mirrored, task_units, units};
+
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::spec::Grid;
@@ -28,112 +36,6 @@ use crate::spec::Grid;
 /// Pixels a chunk holds at most (1 MiB of f32): small enough that a 2048-wide map has 16
 /// chunks to share among tasks, large enough to keep a GPU busy.
 const CHUNK_PIXELS: u64 = 1 << 18;
-
-/// The filesystem store, but every `set` goes to a temporary file renamed into place.
-pub struct AtomicStore {
-    inner: FilesystemStore,
-    root: PathBuf,
-}
-
-static TEMPORARY: AtomicU64 = AtomicU64::new(0);
-
-impl AtomicStore {
-    fn new(root: &Path) -> Result<Self> {
-        std::fs::create_dir_all(root).map_err(|source| Error::File {
-            path: root.to_path_buf(),
-            source,
-        })?;
-        let inner = FilesystemStore::new(root).map_err(|e| Error::format(root, e))?;
-        Ok(AtomicStore {
-            inner,
-            root: root.to_path_buf(),
-        })
-    }
-}
-
-impl ReadableStorageTraits for AtomicStore {
-    fn get_partial_many<'a>(
-        &'a self,
-        key: &StoreKey,
-        byte_ranges: ByteRangeIterator<'a>,
-    ) -> std::result::Result<MaybeBytesIterator<'a>, StorageError> {
-        self.inner.get_partial_many(key, byte_ranges)
-    }
-
-    fn size_key(&self, key: &StoreKey) -> std::result::Result<Option<u64>, StorageError> {
-        self.inner.size_key(key)
-    }
-
-    fn supports_get_partial(&self) -> bool {
-        self.inner.supports_get_partial()
-    }
-}
-
-impl WritableStorageTraits for AtomicStore {
-    fn set(&self, key: &StoreKey, value: Bytes) -> std::result::Result<(), StorageError> {
-        let path = self.root.join(key.as_str());
-        let dir = path.parent().unwrap_or(&self.root);
-        std::fs::create_dir_all(dir)?;
-        // Unique per process and write: two tasks writing the same chunk at once each
-        // rename a whole file of their own (the same values), the last one stays.
-        let name = format!(
-            ".{}.tmp-{}-{}",
-            path.file_name().and_then(|n| n.to_str()).unwrap_or("chunk"),
-            std::process::id(),
-            TEMPORARY.fetch_add(1, Ordering::Relaxed)
-        );
-        let temporary = dir.join(name);
-        let written =
-            std::fs::write(&temporary, &value).and_then(|()| std::fs::rename(&temporary, &path));
-        if written.is_err() {
-            std::fs::remove_file(&temporary).ok();
-        }
-        Ok(written?)
-    }
-
-    fn set_partial_many(
-        &self,
-        _key: &StoreKey,
-        _offset_values: OffsetBytesIterator,
-    ) -> std::result::Result<(), StorageError> {
-        Err(StorageError::Unsupported(
-            "partial writes (every chunk is written whole)".into(),
-        ))
-    }
-
-    fn erase(&self, key: &StoreKey) -> std::result::Result<(), StorageError> {
-        self.inner.erase(key)
-    }
-
-    fn erase_prefix(&self, prefix: &StorePrefix) -> std::result::Result<(), StorageError> {
-        self.inner.erase_prefix(prefix)
-    }
-
-    fn supports_set_partial(&self) -> bool {
-        false
-    }
-}
-
-impl ListableStorageTraits for AtomicStore {
-    fn list(&self) -> std::result::Result<StoreKeys, StorageError> {
-        self.inner.list()
-    }
-
-    fn list_prefix(&self, prefix: &StorePrefix) -> std::result::Result<StoreKeys, StorageError> {
-        self.inner.list_prefix(prefix)
-    }
-
-    fn list_dir(
-        &self,
-        prefix: &StorePrefix,
-    ) -> std::result::Result<StoreKeysPrefixes, StorageError> {
-        self.inner.list_dir(prefix)
-    }
-
-    fn size_prefix(&self, prefix: &StorePrefix) -> std::result::Result<u64, StorageError> {
-        self.inner.size_prefix(prefix)
-    }
-}
 
 /// What a store holds, as its group's attributes say.
 #[derive(Clone, Debug, PartialEq)]
@@ -186,66 +88,6 @@ fn padded<T: Copy>(values: &[T], len: usize, fill: T) -> Vec<T> {
 
 fn store_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::format(path, e)
-}
-
-/// Bands of whole chunks computed together: a chunk, or a chunk and its mirror image through
-/// the map's centre (computed once and written twice, as a whole map mirrors its top half).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Unit {
-    pub chunk: u32,
-    pub mirror: Option<u32>,
-}
-
-/// The units of a map of `height` rows in chunks of `chunk_rows` (the last may be shorter);
-/// with `mirrored`, chunk c pairs with chunk C - 1 - c (then `height` is a multiple of
-/// `chunk_rows`, so the pairs are exact images). Task `i` of `n` takes units i, i + n, ...
-pub fn units(height: u32, chunk_rows: u32, mirrored: bool) -> Vec<Unit> {
-    let chunks = height.div_ceil(chunk_rows);
-    if !mirrored {
-        return (0..chunks)
-            .map(|chunk| Unit {
-                chunk,
-                mirror: None,
-            })
-            .collect();
-    }
-    (0..chunks.div_ceil(2))
-        .map(|chunk| {
-            let other = chunks - 1 - chunk;
-            Unit {
-                chunk,
-                mirror: (other != chunk).then_some(other),
-            }
-        })
-        .collect()
-}
-
-/// Whether the map of `grid` pairs mirrored chunks (a point-symmetric grid integrated with
-/// its symmetry, in whole pairs of chunks).
-pub fn pairs_mirrored(grid: &Grid, use_symmetry: bool) -> bool {
-    use_symmetry
-        && grid.point_symmetric()
-        && grid
-            .height
-            .is_multiple_of(chunk_rows(grid.width, grid.height))
-}
-
-/// The units of task `index` of `tasks`, in an order spread over the map (bit-reversed), so
-/// that the first units done foretell the rest's cost for the progress estimate.
-pub fn task_units(all: &[Unit], index: u32, tasks: u32) -> Vec<Unit> {
-    let mine: Vec<Unit> = all
-        .iter()
-        .copied()
-        .skip(index as usize)
-        .step_by(tasks as usize)
-        .collect();
-    let bits = mine.len().next_power_of_two().trailing_zeros();
-    if bits == 0 {
-        return mine;
-    }
-    let mut order: Vec<usize> = (0..mine.len()).collect();
-    order.sort_by_key(|&k| k.reverse_bits() >> (usize::BITS - bits));
-    order.into_iter().map(|k| mine[k]).collect()
 }
 
 impl MapStore {
@@ -470,142 +312,6 @@ impl MapStore {
         self.map
             .retrieve_array_subset::<Vec<f32>>(&subset)
             .map_err(|e| store_error(&self.path, e))
-    }
-}
-
-/// A sweep's store: the maps of its frames as one 3-D array `map` (frame, theta2, theta1),
-/// chunks of one frame's row band, the varied parameter as the coordinate array of the frame
-/// dimension (named after it), the angles as for a single map.
-pub struct SweepStore {
-    path: PathBuf,
-    store: Arc<AtomicStore>,
-    map: Array<AtomicStore>,
-    width: u32,
-    height: u32,
-    chunk_rows: u32,
-}
-
-impl SweepStore {
-    /// Opens the sweep store at `path` made by `info.command`, or makes it: `frames` frames of
-    /// maps over `grid`, `param` (its name, unit, and value per frame), the map's (name, unit).
-    pub fn create_or_open(
-        path: &Path,
-        grid: &Grid,
-        info: &StoreInfo,
-        param: (&str, &str, &[f64]),
-        (name, units): (&str, &str),
-    ) -> Result<Self> {
-        let err = |e: &dyn std::fmt::Display| store_error(path, e);
-        if path.join("zarr.json").is_file() {
-            let store = Arc::new(AtomicStore::new(path)?);
-            let group = Group::open(store.clone(), "/").map_err(|e| err(&e))?;
-            let a = group.attributes();
-            let text = |key: &str| a.get(key).and_then(|v| v.as_str()).map(str::to_string);
-            let theirs = StoreInfo {
-                command: text("chaoscope:command").unwrap_or_default(),
-                version: text("chaoscope:version").unwrap_or_default(),
-                ..info.clone()
-            };
-            check_same("data", path, &theirs, info)?;
-            return Self::open(path, store);
-        }
-        let store = Arc::new(AtomicStore::new(path)?);
-        let (w, h, f) = (grid.width as u64, grid.height as u64, param.2.len() as u64);
-        let rows = chunk_rows(grid.width, grid.height) as u64;
-        let (param_name, param_units, values) = param;
-        // An array name may not hold a slash: m2/m1 is stored as m2_over_m1.
-        let param_array = param_name.replace('/', "_over_");
-        write_angles(&store, path, grid)?;
-        let mut attributes = serde_json::Map::new();
-        attributes.insert("units".into(), param_units.into());
-        write_coordinate(&store, path, (&param_array, "frame"), values, attributes)?;
-        let mut attributes = serde_json::Map::new();
-        attributes.insert("units".into(), units.into());
-        attributes.insert("long_name".into(), name.into());
-        // CF's way of naming a non-dimension coordinate (xarray reads it so).
-        attributes.insert("coordinates".into(), param_array.clone().into());
-        let map = ArrayBuilder::new(
-            vec![f, h, w],
-            vec![1, rows, w],
-            data_type::float32(),
-            f32::NAN,
-        )
-        .dimension_names(["frame", "theta2", "theta1"].into())
-        .attributes(attributes)
-        .build(store.clone(), "/map")
-        .map_err(|e| err(&e))?;
-        map.store_metadata().map_err(|e| err(&e))?;
-        let mut attributes = serde_json::Map::new();
-        attributes.insert("chaoscope:command".into(), info.command.clone().into());
-        attributes.insert("chaoscope:version".into(), info.version.clone().into());
-        attributes.insert("chaoscope:varied".into(), param_name.into());
-        write_group(&store, path, attributes)?;
-        Self::open(path, store)
-    }
-
-    fn open(path: &Path, store: Arc<AtomicStore>) -> Result<Self> {
-        let map = Array::open(store.clone(), "/map").map_err(|e| store_error(path, e))?;
-        let shape = map.shape().to_vec();
-        Ok(SweepStore {
-            path: path.to_path_buf(),
-            chunk_rows: first_chunk_rows(&map, 1).map_err(|e| store_error(path, e))?,
-            store,
-            width: shape[2] as u32,
-            height: shape[1] as u32,
-            map,
-        })
-    }
-
-    fn chunks(&self) -> u32 {
-        self.height.div_ceil(self.chunk_rows)
-    }
-
-    /// Whether every chunk of frame `k` is written.
-    pub fn has_frame(&self, k: u32) -> Result<bool> {
-        for c in 0..self.chunks() {
-            let key = self.map.chunk_key(&[k as u64, c as u64, 0]);
-            let there = self
-                .store
-                .size_key(&key)
-                .map_err(|e| store_error(&self.path, e))?;
-            if there.is_none() {
-                return Ok(false);
-            }
-        }
-        Ok(true)
-    }
-
-    /// Frame `k`'s map (NaN where not written).
-    pub fn read_frame(&self, k: u32) -> Result<Vec<f32>> {
-        let subset = ArraySubset::new_with_ranges(&[
-            k as u64..k as u64 + 1,
-            0..self.height as u64,
-            0..self.width as u64,
-        ]);
-        self.map
-            .retrieve_array_subset::<Vec<f32>>(&subset)
-            .map_err(|e| store_error(&self.path, e))
-    }
-
-    /// Opens an existing sweep store.
-    pub fn open_existing(path: &Path) -> Result<Self> {
-        Self::open(path, Arc::new(AtomicStore::new(path)?))
-    }
-
-    /// Writes frame `k`'s map.
-    pub fn write_frame(&self, k: u32, field: &Field) -> Result<()> {
-        let options = CodecOptions::default().with_store_empty_chunks(true);
-        let band = (self.chunk_rows * self.width) as usize;
-        for (c, values) in field.data.chunks(band).enumerate() {
-            self.map
-                .store_chunk_opt(
-                    &[k as u64, c as u64, 0],
-                    padded(values, band, f32::NAN),
-                    &options,
-                )
-                .map_err(|e| store_error(&self.path, e))?;
-        }
-        Ok(())
     }
 }
 

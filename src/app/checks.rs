@@ -1,0 +1,67 @@
+//! Checks of values and output paths that every command makes before any work, and text
+//! outputs written atomically or to standard output.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::monitor::Monitor;
+use crate::render::{Outputs, check_writable};
+
+/// A CSV (or any text) into `output`, atomically, or to `stdout` when there is none.
+pub fn write_text(
+    output: Option<&Path>,
+    stdout: &mut dyn std::io::Write,
+    monitor: &Monitor,
+    write: impl Fn(&mut dyn std::io::Write) -> Result<()>,
+) -> Result<()> {
+    match output {
+        Some(path) => {
+            let mut files = Outputs::new();
+            files.write(path, |w| write(w))?;
+            files.commit(monitor)
+        }
+        None => write(stdout),
+    }
+}
+
+/// An output file `path` given as `field`: the right extension and a place it can be
+/// written, checked before any work.
+pub fn check_output(field: &'static str, path: &Path, ext: &str) -> Result<()> {
+    check_extension(field, path, ext)?;
+    check_writable(field, path)
+}
+
+/// `path` must end in `.ext`, else an error naming `field`.
+pub fn check_extension(field: &'static str, path: &Path, ext: &str) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
+        _ => Err(Error::invalid(
+            field,
+            format!("{} must end in .{ext}", path.display()),
+        )),
+    }
+}
+
+/// `v` within [lo, hi], else an error naming `field`.
+pub fn check_within(field: &'static str, v: f64, lo: f64, hi: f64) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("{v} must be in [{lo}, {hi}]"),
+        ))
+    }
+}
+
+/// A count within [lo, hi], else an error naming `field`.
+pub fn check_count(field: &'static str, n: u64, lo: u64, hi: u64) -> Result<()> {
+    if (lo..=hi).contains(&n) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("must be between {lo} and {hi}"),
+        ))
+    }
+}

@@ -1,0 +1,278 @@
+//! The page's other questions: what the server runs, a clicked pixel, its trajectory, the
+//! divergence colour range, a saved view, the counters.
+
+use super::*;
+
+/// What the page needs to know first: where tiles run, the limits, the starting physics.
+pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {
+    let p = match shared.base.resolve() {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let colormaps: Vec<&str> = render::Colormap::ALL.iter().map(|c| c.name()).collect();
+    let w = shared.world;
+    let (units_across, units_down) = w.units();
+    let store = shared.store.as_ref().map(|(_, s)| {
+        serde_json::json!({
+            "name": s.path.file_name().map(|n| n.to_string_lossy().into_owned()),
+            "command": s.command,
+            "kind": s.kind(),
+            "width": w.width,
+            "height": w.height,
+        })
+    });
+    let stepping = shared.stored().map(|m| match m {
+        FrameMap::Flip(s) => s.stepping,
+        FrameMap::Lyapunov(s) => s.stepping,
+    });
+    let p = match shared.stored() {
+        Some(FrameMap::Flip(s)) => s.params,
+        Some(FrameMap::Lyapunov(s)) => s.params,
+        None => p,
+    };
+    json(serde_json::json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "place": shared.place,
+        "has_f64": shared.has_f64,
+        "f32_min_pixel_step": crate::spec::F32_MIN_PIXEL_STEP,
+        "f64_min_pixel_step": crate::spec::F64_MIN_PIXEL_STEP,
+        "max_zoom": view::MAX_ZOOM,
+        "max_t_max": view::MAX_T_MAX,
+        "kinds": Kind::NAMES,
+        "colormaps": colormaps,
+        "defaults": {
+            "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,
+            "damping": p.losses.joint1,
+            "t_max": stepping.map_or(20.0, |s| s.t_max),
+            "dt": stepping.map_or(0.01, |s| s.dt),
+        },
+        "world": {
+            "theta1": [w.theta1.min, w.theta1.max],
+            "theta2": [w.theta2.min, w.theta2.max],
+            "units": [units_across, units_down],
+            "native": w.native,
+        },
+        "store": store,
+    }))
+}
+
+/// A clicked pixel: its flip time as the map computes it (a one-pixel map `pixel` rad wide
+/// around the start, so it runs in the tile's precision) and whether it is resolved.
+pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<(View, Grid)> {
+        let mut q = Query::new(q);
+        let mut view = shared.view(&mut q)?;
+        view.kind = Kind::Flip;
+        let start = view::start(&mut q)?;
+        let pixel = q.within("pixel", 1e-16, 1.0)?.unwrap_or(1e-3);
+        q.finish()?;
+        let around = |x: f64| Range {
+            min: x - 0.5 * pixel,
+            max: x + 0.5 * pixel,
+        };
+        let grid = Grid {
+            width: 1,
+            height: 1,
+            theta1: around(start.theta1),
+            theta2: around(start.theta2),
+            omega1: 0.0,
+            omega2: 0.0,
+        };
+        Ok((view, grid))
+    })();
+    let (view, grid) = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let t_max = view.stepping.t_max;
+    let result = on_engine(&shared, move |engine, monitor| {
+        let spec = view.flip_spec(grid);
+        spec.validate()?;
+        let (field, mask) = crate::app::map_and_verdict(engine, &spec, true, monitor)?;
+        let resolved = mask.is_some_and(|m| m[0] == 1);
+        Ok((field, resolved, precision_of(engine, &grid, spec.precision)))
+    })
+    .await;
+    match result {
+        Ok((field, resolved, precision)) => {
+            let time = {
+                let t = field.data[0];
+                match t.is_finite() {
+                    true => serde_json::json!(t),
+                    false if t.is_nan() => serde_json::json!("nan"),
+                    false => serde_json::json!("never"),
+                }
+            };
+            json(serde_json::json!({
+                "theta1": grid.theta1_at(0),
+                "theta2": grid.theta2_at(0),
+                "flip_time": time,
+                "resolved": resolved,
+                "precision": precision,
+                "t_max": t_max,
+            }))
+        }
+        Err(r) => r,
+    }
+}
+
+/// One start's trajectory: exactly the CSV `chaoscope trajectory` writes (CPU f64, a row
+/// every ~0.02 s), its reproducing command on the first line.
+pub(super) async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<TrajectoryJob> {
+        let mut q = Query::new(q);
+        let view = shared.view(&mut q)?;
+        let start = view::start(&mut q)?;
+        q.finish()?;
+        let dt = view.stepping.dt;
+        let stride = (0.02 / dt).round().max(1.0);
+        Ok(TrajectoryJob {
+            params: view.params,
+            start,
+            stepping: view.stepping,
+            every: Some(stride * dt),
+            backend: Backend::Cpu,
+            precision: Precision::F32,
+            output: None,
+        })
+    })();
+    let job = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let command = (shared.commands.trajectory)(&job);
+    let work = tokio::task::spawn_blocking(move || {
+        let mut csv = Vec::new();
+        crate::app::trajectory::run(&job, command, &Monitor::hidden(), &mut csv).map(|_| csv)
+    });
+    match tokio::time::timeout(REQUEST_LIMIT, work).await {
+        Ok(Ok(Ok(csv))) => ([(header::CONTENT_TYPE, "text/csv")], csv).into_response(),
+        Ok(Ok(Err(e))) => reply(e),
+        Ok(Err(e)) => reply(Error::Format(format!("the trajectory failed: {e}"))),
+        Err(_) => busy("the request took too long"),
+    }
+}
+
+/// The divergence map's colour range for the page's physics: 0 to the 99.5th percentile of
+/// the whole turn's exponents (a 128^2 overview), as `chaoscope lyapunov` picks it.
+pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let view = match shared.view_only(q) {
+        Ok(v) => v,
+        Err(e) => return reply(e),
+    };
+    let key = format!(
+        "range {:?} {:?} {:?}",
+        view.params, view.stepping, view.accurate
+    );
+    if let Some(bytes) = cached(&shared, &key) {
+        return json(serde_json::from_slice(&bytes).unwrap_or_default());
+    }
+    let world = shared.world;
+    let result = on_engine(&shared, move |engine, monitor| {
+        let spec = view.lyapunov_spec(Grid {
+            theta1: world.theta1,
+            theta2: world.theta2,
+            ..Grid::square(128)
+        });
+        spec.validate()?;
+        Ok(render::ftle_range(&engine.map(&spec, monitor)?))
+    })
+    .await;
+    match result {
+        Ok((lo, hi)) => {
+            let value = serde_json::json!({ "lo": lo, "hi": hi });
+            remember(&shared, key, Bytes::from(value.to_string()));
+            json(value)
+        }
+        Err(r) => r,
+    }
+}
+
+/// The view as a PNG file made by `chaoscope flip` / `lyapunov`'s own run (its command in
+/// the metadata), over the region and at the size asked.
+pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<(View, Grid, bool)> {
+        let mut q = Query::new(q);
+        let view = shared.view(&mut q)?;
+        let grid = view::region_grid(&mut q)?;
+        let annotate = q.flag("annotate")?;
+        q.finish()?;
+        Ok((view, grid, annotate))
+    })();
+    let (view, grid, annotate) = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let (backend, commands) = (shared.backend, shared.commands);
+    let result = on_engine(&shared, move |_engine, monitor| {
+        let dir = tempfile::tempdir()?;
+        let files = MapOutputs {
+            output: dir.path().join("view.png"),
+            data: None,
+            resolved: None,
+            show_unresolved: view.unresolved || view.kind == Kind::Resolved,
+        };
+        let picture = PictureSpec {
+            annotate,
+            colormap: view.colormap,
+        };
+        let name = match view.kind {
+            Kind::Flip | Kind::FlipKind | Kind::Resolved => {
+                let job = FlipJob {
+                    spec: view.flip_spec(grid),
+                    backend,
+                    picture,
+                    files: files.clone(),
+                    tile: None,
+                };
+                crate::app::flip::run(&job, (commands.flip)(&job), monitor)?;
+                "chaoscope-flip.png"
+            }
+            Kind::Ftle => {
+                let job = LyapunovMapJob {
+                    spec: view.lyapunov_spec(grid),
+                    backend,
+                    picture,
+                    files: files.clone(),
+                    tile: None,
+                    colour_range: Some(view.range),
+                };
+                crate::app::lyapunov::run_map(&job, (commands.lyapunov)(&job), monitor)?;
+                "chaoscope-lyapunov.png"
+            }
+        };
+        let bytes = std::fs::read(&files.output).map_err(|e| Error::File {
+            path: files.output.clone(),
+            source: e,
+        })?;
+        Ok((bytes, name))
+    })
+    .await;
+    match result {
+        Ok((bytes, name)) => (
+            [
+                (header::CONTENT_TYPE, "image/png".to_string()),
+                (
+                    header::CONTENT_DISPOSITION,
+                    format!("attachment; filename=\"{name}\""),
+                ),
+            ],
+            bytes,
+        )
+            .into_response(),
+        Err(r) => r,
+    }
+}
+
+/// Counters since the start, and the queue now.
+pub(super) async fn stats(AxumState(shared): AxumState<S>) -> Response {
+    let c = &shared.counters;
+    json(serde_json::json!({
+        "computed": c.computed.load(Ordering::Relaxed),
+        "cached": c.cached.load(Ordering::Relaxed),
+        "cancelled": c.cancelled.load(Ordering::Relaxed),
+        "refused": c.refused.load(Ordering::Relaxed),
+        "waiting": shared.waiting.load(Ordering::Relaxed),
+        "cache_entries": shared.cache.lock().map(|c| c.len()).unwrap_or(0),
+    }))
+}

@@ -1,0 +1,110 @@
+//! [`AtomicStore`]: zarrs' filesystem store with every write a temporary file renamed into
+//! place, so a killed writer leaves no half-written chunk.
+
+use super::*;
+
+/// The filesystem store, but every `set` goes to a temporary file renamed into place.
+pub struct AtomicStore {
+    inner: FilesystemStore,
+    root: PathBuf,
+}
+
+static TEMPORARY: AtomicU64 = AtomicU64::new(0);
+
+impl AtomicStore {
+    pub(super) fn new(root: &Path) -> Result<Self> {
+        std::fs::create_dir_all(root).map_err(|source| Error::File {
+            path: root.to_path_buf(),
+            source,
+        })?;
+        let inner = FilesystemStore::new(root).map_err(|e| Error::format(root, e))?;
+        Ok(AtomicStore {
+            inner,
+            root: root.to_path_buf(),
+        })
+    }
+}
+
+impl ReadableStorageTraits for AtomicStore {
+    fn get_partial_many<'a>(
+        &'a self,
+        key: &StoreKey,
+        byte_ranges: ByteRangeIterator<'a>,
+    ) -> std::result::Result<MaybeBytesIterator<'a>, StorageError> {
+        self.inner.get_partial_many(key, byte_ranges)
+    }
+
+    fn size_key(&self, key: &StoreKey) -> std::result::Result<Option<u64>, StorageError> {
+        self.inner.size_key(key)
+    }
+
+    fn supports_get_partial(&self) -> bool {
+        self.inner.supports_get_partial()
+    }
+}
+
+impl WritableStorageTraits for AtomicStore {
+    fn set(&self, key: &StoreKey, value: Bytes) -> std::result::Result<(), StorageError> {
+        let path = self.root.join(key.as_str());
+        let dir = path.parent().unwrap_or(&self.root);
+        std::fs::create_dir_all(dir)?;
+        // Unique per process and write: two tasks writing the same chunk at once each
+        // rename a whole file of their own (the same values), the last one stays.
+        let name = format!(
+            ".{}.tmp-{}-{}",
+            path.file_name().and_then(|n| n.to_str()).unwrap_or("chunk"),
+            std::process::id(),
+            TEMPORARY.fetch_add(1, Ordering::Relaxed)
+        );
+        let temporary = dir.join(name);
+        let written =
+            std::fs::write(&temporary, &value).and_then(|()| std::fs::rename(&temporary, &path));
+        if written.is_err() {
+            std::fs::remove_file(&temporary).ok();
+        }
+        Ok(written?)
+    }
+
+    fn set_partial_many(
+        &self,
+        _key: &StoreKey,
+        _offset_values: OffsetBytesIterator,
+    ) -> std::result::Result<(), StorageError> {
+        Err(StorageError::Unsupported(
+            "partial writes (every chunk is written whole)".into(),
+        ))
+    }
+
+    fn erase(&self, key: &StoreKey) -> std::result::Result<(), StorageError> {
+        self.inner.erase(key)
+    }
+
+    fn erase_prefix(&self, prefix: &StorePrefix) -> std::result::Result<(), StorageError> {
+        self.inner.erase_prefix(prefix)
+    }
+
+    fn supports_set_partial(&self) -> bool {
+        false
+    }
+}
+
+impl ListableStorageTraits for AtomicStore {
+    fn list(&self) -> std::result::Result<StoreKeys, StorageError> {
+        self.inner.list()
+    }
+
+    fn list_prefix(&self, prefix: &StorePrefix) -> std::result::Result<StoreKeys, StorageError> {
+        self.inner.list_prefix(prefix)
+    }
+
+    fn list_dir(
+        &self,
+        prefix: &StorePrefix,
+    ) -> std::result::Result<StoreKeysPrefixes, StorageError> {
+        self.inner.list_dir(prefix)
+    }
+
+    fn size_prefix(&self, prefix: &StorePrefix) -> std::result::Result<u64, StorageError> {
+        self.inner.size_prefix(prefix)
+    }
+}
