@@ -6,16 +6,16 @@
 
 // Mirror of src/gpu/layout.rs `GpuAdaptiveSlot`: a pendulum and its clock.
 struct AdaptiveSlot {
-    y: vec4<f32>,
-    u: vec4<f32>,
+    y: vec4<real>,
+    u: vec4<real>,
     // (t, the next step's size, attempts so far, unused).
-    clock: vec4<f32>,
+    clock: vec4<real>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read_write> states: array<AdaptiveSlot>;
 // Flip time (s) per pixel; NEVER until it flips, NONFINITE if the run stalled.
-@group(0) @binding(2) var<storage, read_write> times: array<f32>;
+@group(0) @binding(2) var<storage, read_write> times: array<real>;
 @group(0) @binding(3) var<storage, read> active_in: array<u32>;
 @group(0) @binding(4) var<storage, read_write> active_out: array<u32>;
 // [0]: length of active_out.
@@ -32,13 +32,13 @@ fn push_active(i: u32) {
 // (shortened to land on t-max, `last` then), or stalled: too many attempts, or a step that no
 // longer advances the time (or is not a number), so the run has nothing more to say.
 struct Attempt {
-    step: f32,
+    step: real,
     last: bool,
     stalled: bool,
 }
 
-fn attempt(t: f32, h: f32, attempts: ptr<function, f32>) -> Attempt {
-    if *attempts >= f32(params.total_steps) {
+fn attempt(t: real, h: real, attempts: ptr<function, real>) -> Attempt {
+    if *attempts >= real(params.total_steps) {
         return Attempt(0.0, false, true);
     }
     *attempts += 1.0;
@@ -55,13 +55,13 @@ fn on_circles(next: Pendulum) -> Pendulum {
     let u = next.u;
     let n1 = fma(u.x * u.x + u.y * u.y, -0.5, 1.5);
     let n2 = fma(u.z * u.z + u.w * u.w, -0.5, 1.5);
-    return Pendulum(next.y, u * vec4<f32>(n1, n1, n2, n2));
+    return Pendulum(next.y, u * vec4<real>(n1, n1, n2, n2));
 }
 
 // Whether an angle from a0 to a1 over a step h, with rates w0 and w1 at its ends, may reach
 // |angle| = pi within the step: beyond its ends by at most h (|w0| + |w1|) (the CPU twins'
 // `may_reach_pi`); the method's bound of its dense output decides after.
-fn may_reach_pi(a0: f32, a1: f32, w0: f32, w1: f32, h: f32) -> bool {
+fn may_reach_pi(a0: real, a1: real, w0: real, w1: real, h: real) -> bool {
     return max(abs(a0), abs(a1)) + h * (abs(w0) + abs(w1)) > PI;
 }
 
@@ -70,10 +70,10 @@ fn may_reach_pi(a0: f32, a1: f32, w0: f32, w1: f32, h: f32) -> bool {
 // pass pi and come back at a turning point inside the step (a long step may hold two): the
 // step is searched in 8 pieces in order (src/cpu/adaptive.rs PIECES), each for a crossing at
 // its end or a turn beyond pi inside, found by bisecting the slope, then the angle.
-fn dense_crossing(q: Dense) -> f32 {
+fn dense_crossing(q: Dense) -> real {
     for (var k = 0; k < 8; k++) {
-        let lo = f32(k) / 8.0;
-        let hi = f32(k + 1) / 8.0;
+        let lo = real(k) / 8.0;
+        let hi = real(k + 1) / 8.0;
         var top = hi;
         var peak = dense_value(q, hi);
         if abs(peak) <= PI {
@@ -83,7 +83,7 @@ fn dense_crossing(q: Dense) -> f32 {
             }
             var a = lo;
             var b = hi;
-            for (var i = 0; i < 24; i++) {
+            for (var i = 0; i < BISECTIONS; i++) {
                 let s = 0.5 * (a + b);
                 if sign(dense_slope(q, s)) == rising {
                     a = s;
@@ -100,7 +100,7 @@ fn dense_crossing(q: Dense) -> f32 {
         let sgn = sign(peak);
         var a = lo;
         var b = top;
-        for (var i = 0; i < 24; i++) {
+        for (var i = 0; i < BISECTIONS; i++) {
             let s = 0.5 * (a + b);
             if sgn * dense_value(q, s) > PI {
                 b = s;
@@ -117,15 +117,15 @@ fn dense_crossing(q: Dense) -> f32 {
 // it starts, its length, and the dense outputs of theta1 and theta2 over it.
 struct Candidate {
     found: bool,
-    t: f32,
-    h: f32,
+    t: real,
+    h: real,
     q1: Dense,
     q2: Dense,
 }
 
 // The end of a pixel's dispatch: the candidate step decided on its dense output, a stall
 // reported, the slot and time written, the pixel listed again while it runs.
-fn settle(i: u32, p: Pendulum, clock: vec3<f32>, time: f32, stalled: bool, flip: Candidate) {
+fn settle(i: u32, p: Pendulum, clock: vec3<real>, time: real, stalled: bool, flip: Candidate) {
     let t = clock.x;
     let t_max = params.t_max;
     var t_flip = time;
@@ -140,7 +140,7 @@ fn settle(i: u32, p: Pendulum, clock: vec3<f32>, time: f32, stalled: bool, flip:
     if t_flip == NEVER && stalled {
         t_flip = NONFINITE;
     }
-    states[i] = AdaptiveSlot(p.y, p.u, vec4<f32>(clock, 0.0));
+    states[i] = AdaptiveSlot(p.y, p.u, vec4<real>(clock, 0.0));
     times[i] = t_flip;
     let running = t < t_max && !stalled;
     if running && (!EARLY_EXIT || t_flip == NEVER) {
@@ -156,7 +156,7 @@ fn flip_adaptive_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     }
     let y = grid_start(params, i);
     let p = pendulum_from(y);
-    states[i] = AdaptiveSlot(p.y, p.u, vec4<f32>(0.0, params.dt, 0.0, 0.0));
+    states[i] = AdaptiveSlot(p.y, p.u, vec4<real>(0.0, params.dt, 0.0, 0.0));
     times[i] = NEVER;
     if !EARLY_EXIT || energy(coeffs_from(params), y) >= params.no_flip_energy {
         push_active(i);

@@ -6,25 +6,25 @@
 
 
 // p + h (w1 k1 + w2 k2), and so on: a stage's state.
-fn along2(p: Pendulum, h: f32, w1: f32, k1: Rate, w2: f32, k2: Rate) -> Pendulum {
+fn along2(p: Pendulum, h: real, w1: real, k1: Rate, w2: real, k2: Rate) -> Pendulum {
     return Pendulum(p.y + h * (w1 * k1.dy + w2 * k2.dy), p.u + h * (w1 * k1.du + w2 * k2.du));
 }
 
-fn along3(p: Pendulum, h: f32, w1: f32, k1: Rate, w2: f32, k2: Rate, w3: f32, k3: Rate) -> Pendulum {
+fn along3(p: Pendulum, h: real, w1: real, k1: Rate, w2: real, k2: Rate, w3: real, k3: Rate) -> Pendulum {
     return Pendulum(
         p.y + h * (w1 * k1.dy + w2 * k2.dy + w3 * k3.dy),
         p.u + h * (w1 * k1.du + w2 * k2.du + w3 * k3.du),
     );
 }
 
-fn along4(p: Pendulum, h: f32, w1: f32, k1: Rate, w2: f32, k2: Rate, w3: f32, k3: Rate, w4: f32, k4: Rate) -> Pendulum {
+fn along4(p: Pendulum, h: real, w1: real, k1: Rate, w2: real, k2: Rate, w3: real, k3: Rate, w4: real, k4: Rate) -> Pendulum {
     return Pendulum(
         p.y + h * (w1 * k1.dy + w2 * k2.dy + w3 * k3.dy + w4 * k4.dy),
         p.u + h * (w1 * k1.du + w2 * k2.du + w3 * k3.du + w4 * k4.du),
     );
 }
 
-fn along5(p: Pendulum, h: f32, w1: f32, k1: Rate, w2: f32, k2: Rate, w3: f32, k3: Rate, w4: f32, k4: Rate, w5: f32, k5: Rate) -> Pendulum {
+fn along5(p: Pendulum, h: real, w1: real, k1: Rate, w2: real, k2: Rate, w3: real, k3: Rate, w4: real, k4: Rate, w5: real, k5: Rate) -> Pendulum {
     return Pendulum(
         p.y + h * (w1 * k1.dy + w2 * k2.dy + w3 * k3.dy + w4 * k4.dy + w5 * k5.dy),
         p.u + h * (w1 * k1.du + w2 * k2.du + w3 * k3.du + w4 * k4.du + w5 * k5.du),
@@ -34,35 +34,35 @@ fn along5(p: Pendulum, h: f32, w1: f32, k1: Rate, w2: f32, k2: Rate, w3: f32, k3
 // One angle's dense output over a step (dopri5's contd5):
 // a0 + s (dy + (1 - s) (b + s (r + (1 - s) hd))), s the fraction of the step.
 struct Dense {
-    a0: f32,
-    dy: f32,
-    b: f32,
-    r: f32,
-    hd: f32,
+    a0: real,
+    dy: real,
+    b: real,
+    r: real,
+    hd: real,
 }
 
 // From the angle at the step's ends (a0, a1), its rates there (w0, w1; the rates at the first
 // and last stage), d = the sum of D_i times the angle's rate at stage i, and the step h.
-fn dense_of(a0: f32, a1: f32, w0: f32, w1: f32, d: f32, h: f32) -> Dense {
+fn dense_of(a0: real, a1: real, w0: real, w1: real, d: real, h: real) -> Dense {
     let dy = a1 - a0;
     let b = h * w0 - dy;
     let r = dy - h * w1 - b;
     return Dense(a0, dy, b, r, h * d);
 }
 
-fn dense_value(q: Dense, s: f32) -> f32 {
+fn dense_value(q: Dense, s: real) -> real {
     return q.a0 + s * (q.dy + (1.0 - s) * (q.b + s * (q.r + (1.0 - s) * q.hd)));
 }
 
 // d/ds of `dense_value`.
-fn dense_slope(q: Dense, s: f32) -> f32 {
+fn dense_slope(q: Dense, s: real) -> real {
     return q.dy + (1.0 - 2.0 * s) * q.b + s * (2.0 - 3.0 * s) * q.r + 2.0 * s * (1.0 - s) * (1.0 - 2.0 * s) * q.hd;
 }
 
 // Whether the dense output may reach |angle| = pi within the step: a bound of it reaches pi
 // (|a0 + s dy| <= max |a|, s (1 - s) <= 1/4, s^2 (1 - s) <= 4/27, s^2 (1 - s)^2 <= 1/16).
 // Cheap and conservative: `dense_crossing` decides.
-fn dense_may_reach_pi(q: Dense, a1: f32) -> bool {
+fn dense_may_reach_pi(q: Dense, a1: real) -> bool {
     let bound = max(abs(q.a0), abs(a1)) + 0.25 * abs(q.b) + (4.0 / 27.0) * abs(q.r) + 0.0625 * abs(q.hd);
     return bound > PI;
 }
@@ -127,5 +127,5 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         h = min(h * factor, params.dt);
     }
-    settle(i, p, vec3<f32>(t, h, attempts), t_flip, stalled, flip);
+    settle(i, p, vec3<real>(t, h, attempts), t_flip, stalled, flip);
 }

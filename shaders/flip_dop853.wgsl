@@ -12,30 +12,30 @@ const GROW = 6.0;
 // One angle's dense output over a step (dop853.f's contd8), s the fraction of the step:
 // a0 + s (f0 + (1 - s) (f1 + s (f2 + (1 - s) (f3 + s (f4 + (1 - s) (f5 + s f6)))))).
 struct Dense {
-    a0: f32,
-    f0: f32,
-    f1: f32,
-    f2: f32,
-    f3: f32,
-    f4: f32,
-    f5: f32,
-    f6: f32,
+    a0: real,
+    f0: real,
+    f1: real,
+    f2: real,
+    f3: real,
+    f4: real,
+    f5: real,
+    f6: real,
 }
 
 // From the angle at the step's ends (a0, a1), its rates there (w0, w1), the step h and
 // hd = h times the sums of the dense weights D_m,i times the angle's rate at stage i.
-fn dense_of(a0: f32, a1: f32, w0: f32, w1: f32, h: f32, hd: vec4<f32>) -> Dense {
+fn dense_of(a0: real, a1: real, w0: real, w1: real, h: real, hd: vec4<real>) -> Dense {
     let f0 = a1 - a0;
     return Dense(a0, f0, h * w0 - f0, 2.0 * f0 - h * (w1 + w0), hd.x, hd.y, hd.z, hd.w);
 }
 
-fn dense_value(q: Dense, s: f32) -> f32 {
+fn dense_value(q: Dense, s: real) -> real {
     let r = 1.0 - s;
     return q.a0 + s * (q.f0 + r * (q.f1 + s * (q.f2 + r * (q.f3 + s * (q.f4 + r * (q.f5 + s * q.f6))))));
 }
 
 // d/ds of `dense_value`: the nested products and their derivatives, inside out.
-fn dense_slope(q: Dense, s: f32) -> f32 {
+fn dense_slope(q: Dense, s: real) -> real {
     let r = 1.0 - s;
     let p5 = q.f5 + s * q.f6;
     let p4 = q.f4 + r * p5;
@@ -54,7 +54,7 @@ fn dense_slope(q: Dense, s: f32) -> f32 {
 // Whether the dense output may reach |angle| = pi within the step: a bound of it reaches pi
 // (the chord a0 + s f0 stays within max |a|, and s^a (1 - s)^b <= a^a b^b / (a + b)^(a + b)
 // bounds each further term). Cheap and conservative: `dense_crossing` decides.
-fn dense_may_reach_pi(q: Dense, a1: f32) -> bool {
+fn dense_may_reach_pi(q: Dense, a1: real) -> bool {
     let bound = max(abs(q.a0), abs(a1)) + 0.25 * abs(q.f1) + (4.0 / 27.0) * abs(q.f2)
         + 0.0625 * abs(q.f3) + 0.03456 * abs(q.f4) + 0.015625 * abs(q.f5) + 0.0083931 * abs(q.f6);
     return bound > PI;
@@ -116,8 +116,8 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             if t_flip == NEVER && !flip.found && (near1 || near2) {
                 // DENSE_STAGES: k14..k16 and `hd0`..`hd3`, h times the dense weights' sums.
                 //{{DENSE_STAGES}}
-                let q1 = dense_of(a.x, b.x, a.y, b.y, step, vec4<f32>(hd0.x, hd1.x, hd2.x, hd3.x));
-                let q2 = dense_of(a.z, b.z, a.w, b.w, step, vec4<f32>(hd0.z, hd1.z, hd2.z, hd3.z));
+                let q1 = dense_of(a.x, b.x, a.y, b.y, step, vec4<real>(hd0.x, hd1.x, hd2.x, hd3.x));
+                let q2 = dense_of(a.z, b.z, a.w, b.w, step, vec4<real>(hd0.z, hd1.z, hd2.z, hd3.z));
                 if (near1 && dense_may_reach_pi(q1, b.x)) || (near2 && dense_may_reach_pi(q2, b.z)) {
                     // Decided after the loop; the pixel's dispatch ends with this step.
                     flip = Candidate(true, t, step, q1, q2);
@@ -129,5 +129,5 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         h = min(h * factor, params.dt);
     }
-    settle(i, p, vec3<f32>(t, h, attempts), t_flip, stalled, flip);
+    settle(i, p, vec3<real>(t, h, attempts), t_flip, stalled, flip);
 }

@@ -20,7 +20,7 @@ fn flip_kind(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     if f.flipped {
         let at = crossing(f, params.dt);
         // The flip time exactly as flip_time writes it: a flip past t-max is none.
-        if (f32(f.k) + at.x) * params.dt <= params.t_max {
+        if (real(f.k) + at.x) * params.dt <= params.t_max {
             var angle = f.after.x;
             if at.y == 2.0 {
                 angle = f.after.z;

@@ -6,9 +6,9 @@
 
 @group(0) @binding(0) var<uniform> params: Params;
 // Per pixel i: states[2 i] = Pendulum.y, states[2 i + 1] = Pendulum.u.
-@group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> states: array<vec4<real>>;
 // Flip time (s) per pixel; NEVER until it flips.
-@group(0) @binding(2) var<storage, read_write> times: array<f32>;
+@group(0) @binding(2) var<storage, read_write> times: array<real>;
 @group(0) @binding(3) var<storage, read> active_in: array<u32>;
 @group(0) @binding(4) var<storage, read_write> active_out: array<u32>;
 // [0]: length of active_out.
@@ -44,15 +44,15 @@ fn flip_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
 struct FirstFlip {
     flipped: bool,
     k: u32,
-    before: vec4<f32>,
-    after: vec4<f32>,
+    before: vec4<real>,
+    after: vec4<real>,
 }
 
 // Advances `p` by this dispatch's steps; `done`: it flipped in an earlier dispatch. With early
 // exit the pendulum stops at its flip.
 fn advance(c: Coeffs, p: ptr<function, Pendulum>, done: bool) -> FirstFlip {
     let dt = params.dt;
-    var f = FirstFlip(false, 0u, vec4<f32>(), vec4<f32>());
+    var f = FirstFlip(false, 0u, vec4<real>(), vec4<real>());
     let k_end = params.step0 + params.steps;
     for (var k = params.step0; k < k_end; k++) {
         let next = rk4_step(c, *p, dt);
@@ -70,9 +70,9 @@ fn advance(c: Coeffs, p: ptr<function, Pendulum>, done: bool) -> FirstFlip {
 
 // Where in its step the flip happens (fraction s of the step), and which arm crossed first
 // (1 upper, 2 lower; the upper on a tie), as (s, arm).
-fn crossing(f: FirstFlip, dt: f32) -> vec2<f32> {
-    var s: f32 = 1.0;
-    var arm: f32 = 1.0;
+fn crossing(f: FirstFlip, dt: real) -> vec2<real> {
+    var s: real = 1.0;
+    var arm: real = 1.0;
     if abs(f.after.x) > PI {
         s = min(s, hermite_crossing(f.before.x, f.before.y, f.after.x, f.after.y, dt));
     }
@@ -83,7 +83,7 @@ fn crossing(f: FirstFlip, dt: f32) -> vec2<f32> {
         }
         s = min(s, s2);
     }
-    return vec2<f32>(s, arm);
+    return vec2<real>(s, arm);
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -100,7 +100,7 @@ fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     var t_flip = times[i];
     let f = advance(coeffs_from(params), &p, t_flip != NEVER);
     if f.flipped {
-        t_flip = (f32(f.k) + crossing(f, params.dt).x) * params.dt;
+        t_flip = (real(f.k) + crossing(f, params.dt).x) * params.dt;
     }
     // A state that left the numbers (the step blew up): no flip time, never "never".
     // Checked once a dispatch, outside the loop.

@@ -7,7 +7,7 @@
 @group(0) @binding(0) var<uniform> params: Params;
 // Per pixel i a LyapunovSlot, as vec4s: states[4 i ..= 4 i + 2] = Tangent.y, .u, .v (twin:
 // 4 i ..= 4 i + 3 = y, u, y2, u2).
-@group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> states: array<vec4<real>>;
 
 // Mirror of src/gpu/layout.rs `GpuLyapunovSlot`: the layout of one pixel's states.
 struct LyapunovSlot {
@@ -15,38 +15,38 @@ struct LyapunovSlot {
     b: Pendulum,
 }
 // Sum of the log stretch factors so far.
-@group(0) @binding(2) var<storage, read_write> log_sums: array<f32>;
+@group(0) @binding(2) var<storage, read_write> log_sums: array<real>;
 
 // The unit tangent vector every run starts from (src/cpu/lyapunov.rs TANGENT_START).
-const TANGENT_START: vec4<f32> = vec4<f32>(0.5, 0.5, 0.5, 0.5);
+const TANGENT_START: vec4<real> = vec4<real>(0.5, 0.5, 0.5, 0.5);
 
 // Dual numbers as vec2: .x the value, .y the derivative along the tangent vector. Sums and
 // products with plain numbers are the vector operations; these are the rest.
-fn dmul(a: vec2<f32>, b: vec2<f32>) -> vec2<f32> {
-    return vec2<f32>(a.x * b.x, fma(a.x, b.y, a.y * b.x));
+fn dmul(a: vec2<real>, b: vec2<real>) -> vec2<real> {
+    return vec2<real>(a.x * b.x, fma(a.x, b.y, a.y * b.x));
 }
 
-fn drecip(a: vec2<f32>) -> vec2<f32> {
+fn drecip(a: vec2<real>) -> vec2<real> {
     let r = 1.0 / a.x;
-    return vec2<f32>(r, -a.y * r * r);
+    return vec2<real>(r, -a.y * r * r);
 }
 
-fn dconst(x: f32) -> vec2<f32> {
-    return vec2<f32>(x, 0.0);
+fn dconst(x: real) -> vec2<real> {
+    return vec2<real>(x, 0.0);
 }
 
-fn dsqrt(a: vec2<f32>) -> vec2<f32> {
+fn dsqrt(a: vec2<real>) -> vec2<real> {
     let r = sqrt(a.x);
-    return vec2<f32>(r, 0.5 * a.y / r);
+    return vec2<real>(r, 0.5 * a.y / r);
 }
 
 // `loss_torques` of common.wgsl in dual numbers (value, derivative along v) per torque.
-fn dual_loss_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>) -> array<vec2<f32>, 2> {
+fn dual_loss_torques(c: Coeffs, w1: vec2<real>, w2: vec2<real>, cd: vec2<real>) -> array<vec2<real>, 2> {
     let relative = w2 - w1;
     var tau1 = -c.joint1 * w1 + c.joint2 * relative;
     var tau2 = -c.joint2 * relative;
     if !has_drag() {
-        return array<vec2<f32>, 2>(tau1, tau2);
+        return array<vec2<real>, 2>(tau1, tau2);
     }
     let v1 = c.l1 * w1;
     let s1 = dsqrt(dmul(v1, v1) + dconst(V_SMOOTH2));
@@ -61,23 +61,23 @@ fn dual_loss_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>) -> 
             tau2 += (c.drag_rod2 * GAUSS_W[i]) * f[1];
         }
     }
-    return array<vec2<f32>, 2>(tau1, tau2);
+    return array<vec2<real>, 2>(tau1, tau2);
 }
 
 // smooth_sign of common.wgsl: w / sqrt(w^2 + s^2), derivative s^2 / (w^2 + s^2)^(3/2).
-fn dsmooth_sign(w: vec2<f32>) -> vec2<f32> {
+fn dsmooth_sign(w: vec2<real>) -> vec2<real> {
     let s2 = BEARING_SMOOTH * BEARING_SMOOTH;
     let r = inverseSqrt(w.x * w.x + s2);
-    return vec2<f32>(w.x * r, s2 * r * r * r * w.y);
+    return vec2<real>(w.x * r, s2 * r * r * r * w.y);
 }
 
 // |(x, y)| of dual components.
-fn dlength(x: vec2<f32>, y: vec2<f32>) -> vec2<f32> {
+fn dlength(x: vec2<real>, y: vec2<real>) -> vec2<real> {
     return dsqrt(dmul(x, x) + dmul(y, y));
 }
 
 // `bearing_torques` of common.wgsl in dual numbers.
-fn dual_bearing_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, c1: vec2<f32>, s1: vec2<f32>, c2: vec2<f32>, s2: vec2<f32>, a1: vec2<f32>, a2: vec2<f32>) -> array<vec2<f32>, 2> {
+fn dual_bearing_torques(c: Coeffs, w1: vec2<real>, w2: vec2<real>, c1: vec2<real>, s1: vec2<real>, c2: vec2<real>, s2: vec2<real>, a1: vec2<real>, a2: vec2<real>) -> array<vec2<real>, 2> {
     let w1sq = dmul(w1, w1);
     let w2sq = dmul(w2, w2);
     let arm1x = dmul(a1, c1) - dmul(w1sq, s1);
@@ -91,40 +91,40 @@ fn dual_bearing_torques(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, c1: vec2<f32>, 
     let joint = dlength(low * arm1x + s_2 * arm2x, low * arm1y + s_2 * arm2y + dconst(c.mass_lower * c.g));
     let t_pivot = c.bearing * dmul(pivot, dsmooth_sign(w1));
     let t_joint = c.bearing * dmul(joint, dsmooth_sign(w2 - w1));
-    return array<vec2<f32>, 2>(-t_pivot + t_joint, -t_joint);
+    return array<vec2<real>, 2>(-t_pivot + t_joint, -t_joint);
 }
 
-fn dual_lower_arm_drag(c: Coeffs, w1: vec2<f32>, w2: vec2<f32>, cd: vec2<f32>, s: f32) -> array<vec2<f32>, 2> {
+fn dual_lower_arm_drag(c: Coeffs, w1: vec2<real>, w2: vec2<real>, cd: vec2<real>, s: real) -> array<vec2<real>, 2> {
     let u_e1 = c.l1 * w1 + s * dmul(w2, cd);
     let u_e2 = c.l1 * dmul(w1, cd) + s * w2;
     let u2 = c.l1 * c.l1 * dmul(w1, w1) + s * s * dmul(w2, w2) + 2.0 * c.l1 * s * dmul(dmul(w1, w2), cd);
     // As in common.wgsl: keep |u|^2 >= 0 against rounding.
-    let sp = dsqrt(select(u2, vec2<f32>(0.0), u2.x < 0.0) + dconst(V_SMOOTH2));
-    return array<vec2<f32>, 2>(-c.l1 * dmul(sp, u_e1), -s * dmul(sp, u_e2));
+    let sp = dsqrt(select(u2, vec2<real>(0.0), u2.x < 0.0) + dconst(V_SMOOTH2));
+    return array<vec2<real>, 2>(-c.l1 * dmul(sp, u_e1), -s * dmul(sp, u_e2));
 }
 
 // The state of Pendulum (y, u) and a tangent vector v = (d theta1, d omega1, d theta2,
 // d omega2) of the four-dimensional system. The tangents of the carried cos and sin follow
 // from v (d cos = -sin d theta, d sin = cos d theta), so they are not integrated.
 struct Tangent {
-    y: vec4<f32>,
-    u: vec4<f32>,
-    v: vec4<f32>,
+    y: vec4<real>,
+    u: vec4<real>,
+    v: vec4<real>,
 }
 
 // `rate` of common.wgsl evaluated at dual numbers: the value parts are the rate, the
 // derivative parts are J v (the variational equations), exact up to round-off.
 fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
-    let w1 = vec2<f32>(t.y.y, t.v.y);
-    let w2 = vec2<f32>(t.y.w, t.v.w);
-    let c1 = vec2<f32>(t.u.x, -t.u.y * t.v.x);
-    let s1 = vec2<f32>(t.u.y, t.u.x * t.v.x);
-    let c2 = vec2<f32>(t.u.z, -t.u.w * t.v.z);
-    let s2 = vec2<f32>(t.u.w, t.u.z * t.v.z);
+    let w1 = vec2<real>(t.y.y, t.v.y);
+    let w2 = vec2<real>(t.y.w, t.v.w);
+    let c1 = vec2<real>(t.u.x, -t.u.y * t.v.x);
+    let s1 = vec2<real>(t.u.y, t.u.x * t.v.x);
+    let c2 = vec2<real>(t.u.z, -t.u.w * t.v.z);
+    let s2 = vec2<real>(t.u.w, t.u.z * t.v.z);
     let sd = dmul(s1, c2) - dmul(c1, s2);
     let cd = dmul(c1, c2) + dmul(s1, s2);
-    var tau1 = vec2<f32>();
-    var tau2 = vec2<f32>();
+    var tau1 = vec2<real>();
+    var tau2 = vec2<real>();
     if has_losses() {
         let tau = dual_loss_torques(c, w1, w2, cd);
         tau1 = tau[0];
@@ -143,20 +143,20 @@ fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
         a2 += dmul(c.a * b[1] - dmul(ccd, b[0]), inv_det);
     }
     return Tangent(
-        vec4<f32>(w1.x, a1.x, w2.x, a2.x),
+        vec4<real>(w1.x, a1.x, w2.x, a2.x),
         // d/dt (cos, sin) = omega (-sin, cos)
-        vec4<f32>(-w1.x * s1.x, w1.x * c1.x, -w2.x * s2.x, w2.x * c2.x),
-        vec4<f32>(w1.y, a1.y, w2.y, a2.y),
+        vec4<real>(-w1.x * s1.x, w1.x * c1.x, -w2.x * s2.x, w2.x * c2.x),
+        vec4<real>(w1.y, a1.y, w2.y, a2.y),
     );
 }
 
-fn tangent_ahead(t: Tangent, h: f32, k: Tangent) -> Tangent {
+fn tangent_ahead(t: Tangent, h: real, k: Tangent) -> Tangent {
     return Tangent(t.y + h * k.y, t.u + h * k.u, t.v + h * k.v);
 }
 
 // RK4 with the stages summed as they come (k1 + 2 k2 + 2 k3 + k4, in the CPU's order), which
 // keeps fewer values alive at once than summing at the end.
-fn tangent_step(c: Coeffs, t: Tangent, dt: f32) -> Tangent {
+fn tangent_step(c: Coeffs, t: Tangent, dt: real) -> Tangent {
     let k1 = tangent_rate(c, t);
     var sum = k1;
     let k2 = tangent_rate(c, tangent_ahead(t, 0.5 * dt, k1));
@@ -173,11 +173,11 @@ fn tangent_on_circles(next: Tangent) -> Tangent {
     let u = next.u;
     let n1 = fma(u.x * u.x + u.y * u.y, -0.5, 1.5);
     let n2 = fma(u.z * u.z + u.w * u.w, -0.5, 1.5);
-    return Tangent(next.y, u * vec4<f32>(n1, n1, n2, n2), next.v);
+    return Tangent(next.y, u * vec4<real>(n1, n1, n2, n2), next.v);
 }
 
 // The renormalisation: the tangent vector scaled to unit length; its length before.
-fn unit_tangent(t: ptr<function, Tangent>) -> f32 {
+fn unit_tangent(t: ptr<function, Tangent>) -> real {
     let n = length((*t).v);
     (*t).v = (*t).v / n;
     return n;
@@ -199,12 +199,12 @@ fn tangent_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     states[4u * i + 1u] = p.u;
     states[4u * i + 2u] = TANGENT_START;
     // The adaptive tangent's clock: the next step, attempts so far, stalled.
-    states[4u * i + 3u] = vec4<f32>(params.dt, 0.0, 0.0, 0.0);
+    states[4u * i + 3u] = vec4<real>(params.dt, 0.0, 0.0, 0.0);
     log_sums[i] = 0.0;
 }
 
 // The log sum of a run that stalled (src/gpu/lyapunov.rs STALLED_LOG_SUM): its exponent is NaN.
-const STALLED_LOG_SUM: f32 = -3.0e38;
+const STALLED_LOG_SUM: real = -3.0e38;
 
 // The adaptive tangent: DP54 (dp54.wgsl) over the state and the tangent vector, the error
 // controlled over both (RMS of error / (atol + rtol |y|) over the eight components). Here
@@ -225,8 +225,8 @@ fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     var log_sum = log_sums[i];
     for (var k = params.step0 + 1u; k <= params.step0 + params.steps && !stalled; k++) {
         let first = (k - 1u) * params.interval;
-        let window = f32(min(k * params.interval, params.total_steps) - first) * params.dt;
-        var s: f32 = 0.0;
+        let window = real(min(k * params.interval, params.total_steps) - first) * params.dt;
+        var s: real = 0.0;
         var k1 = tangent_rate(c, t);
         loop {
             if s >= window {
@@ -271,13 +271,13 @@ fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
         if stalled {
             log_sum = STALLED_LOG_SUM;
         } else {
-            log_sum += log(unit_tangent(&t));
+            log_sum += ln_real(unit_tangent(&t));
         }
     }
     states[4u * i] = t.y;
     states[4u * i + 1u] = t.u;
     states[4u * i + 2u] = t.v;
-    states[4u * i + 3u] = vec4<f32>(h, attempts, f32(select(0u, 1u, stalled)), 0.0);
+    states[4u * i + 3u] = vec4<real>(h, attempts, real(select(0u, 1u, stalled)), 0.0);
     log_sums[i] = log_sum;
 }
 
@@ -295,7 +295,7 @@ fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     for (var k = params.step0 + 1u; k <= k_end; k++) {
         t = tangent_step(c, t, dt);
         if renormalise_after(k) {
-            log_sum += log(unit_tangent(&t));
+            log_sum += ln_real(unit_tangent(&t));
         }
     }
     states[4u * i] = t.y;
@@ -341,14 +341,14 @@ fn twin_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             // In f32 a separation much below ~1e-6 |y| is round-off: that is why the tangent
             // method is the default. max() keeps a collapsed twin finite.
             let n = max(length(d), 1e-30);
-            log_sum += log(n / eps);
+            log_sum += ln_real(n / eps);
             // The twin's cos and sin are a's carried ones rotated by the angle offsets, so
             // the two stay consistent: fresh ones would differ from a's by the carried
             // values' own discretisation error, which an f64 twin 1e-8 away would read.
             let yb = a.y + d * (eps / n);
             let r1 = sincos(yb.x - a.y.x);
             let r2 = sincos(yb.z - a.y.z);
-            let ub = vec4<f32>(
+            let ub = vec4<real>(
                 a.u.x * r1.y - a.u.y * r1.x,
                 a.u.y * r1.y + a.u.x * r1.x,
                 a.u.z * r2.y - a.u.w * r2.x,
@@ -375,7 +375,7 @@ fn jacobian_columns(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     let p = pendulum_from(states[4u * i]);
     let c = coeffs_from(params);
     for (var j = 0u; j < 4u; j++) {
-        var v = vec4<f32>();
+        var v = vec4<real>();
         v[j] = 1.0;
         states[4u * i + j] = tangent_rate(c, Tangent(p.y, p.u, v)).v;
     }

@@ -5,7 +5,7 @@
 // ensembles (traces, phase portraits, fitting tracked data).
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read_write> states: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> states: array<vec4<real>>;
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn trajectory(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

@@ -110,11 +110,7 @@ pub trait MapKernels: MapSpec {
 
 impl MapKernels for FlipSpec {
     fn on_gpu(&self, k: &Kernels, precision: Precision, monitor: &Monitor) -> Result<Field> {
-        let kernel = match precision {
-            Precision::F32 => k.flip(),
-            Precision::F64 => k.flip64(),
-        };
-        kernel.run(&k.ctx, self, monitor)
+        k.flip(precision).run(&k.ctx, self, monitor)
     }
 
     fn on_cpu(&self, monitor: &Monitor) -> Result<Field> {
@@ -218,13 +214,6 @@ impl Engine {
             self.gpu = None;
         }
         Ok(self)
-    }
-
-    fn trajectory_kernel(k: &Kernels, precision: Precision) -> &crate::gpu::TrajectoryKernel {
-        match precision {
-            Precision::F32 => k.trajectory(),
-            Precision::F64 => k.trajectory64(),
-        }
     }
 
     /// What to tell the user once about the choice (auto fell back to the CPU).
@@ -347,7 +336,8 @@ impl Engine {
         let steps = stepping.steps();
         match &self.gpu {
             Some(k) => {
-                let states = Self::trajectory_kernel(k, self.precision)
+                let states = k
+                    .trajectory(self.precision)
                     .run(&k.ctx, p, &[start], stepping.dt, steps, 1)?
                     .remove(0);
                 let work = cpu::dissipated_along(p, &states, stepping.dt);
@@ -408,7 +398,8 @@ impl Engine {
         for (k, chunk) in starts.chunks(per_chunk).enumerate() {
             monitor.check()?;
             let runs = match &self.gpu {
-                Some(g) => Self::trajectory_kernel(g, self.precision)
+                Some(g) => g
+                    .trajectory(self.precision)
                     .run(&g.ctx, p, chunk, dt, steps, stride)?,
                 None => chunk
                     .par_iter()

@@ -3,8 +3,9 @@
 
 use chaoscope::gpu::layout::{
     GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuLyapunovSlot, GpuParams, GpuParams64, GpuPendulum,
-    GpuPendulum64, all_shaders,
+    GpuPendulum64,
 };
+use chaoscope::gpu::shaders::all_shaders;
 use wgpu::naga;
 
 fn module(name: &str, source: &str) -> naga::Module {
@@ -23,7 +24,7 @@ fn module(name: &str, source: &str) -> naga::Module {
 #[test]
 fn every_shader_parses_and_validates() {
     for (name, source) in all_shaders() {
-        module(name, &source);
+        module(&name, &source);
     }
 }
 
@@ -71,7 +72,7 @@ fn params_struct_matches_its_rust_mirror() {
         width, height, rows, row0, step0, steps, count, interval, total_steps,
         twin_eps, rtol, atol, t_max, _pad0, _pad1);
     for (name, source) in all_shaders() {
-        let (wgsl, span) = wgsl_struct(&module(name, &source), "Params");
+        let (wgsl, span) = wgsl_struct(&module(&name, &source), "Params");
         let (rust, size) = if name.ends_with("_f64") {
             (&rust64, std::mem::size_of::<GpuParams64>())
         } else {
@@ -92,7 +93,7 @@ fn storage_structs_match_their_rust_mirrors() {
     let pendulum64 = rust_offsets!(GpuPendulum64; y, u);
     let slot = rust_offsets!(GpuLyapunovSlot; a, b);
     for (name, source) in all_shaders() {
-        let module = module(name, &source);
+        let module = module(&name, &source);
         let (wgsl, span) = wgsl_struct(&module, "Pendulum");
         let (rust, size) = if name.ends_with("_f64") {
             (&pendulum64, std::mem::size_of::<GpuPendulum64>())

@@ -3,7 +3,7 @@
 mod common;
 
 use chaoscope::cpu;
-use chaoscope::gpu::{FlipTimeKernel, GpuContext, layout::shader_source_f64};
+use chaoscope::gpu::{FlipTimeKernel, GpuContext, shaders};
 use chaoscope::model::Params;
 use chaoscope::monitor::Monitor;
 use chaoscope::spec::{FlipSpec, Grid, Precision, Stepping};
@@ -17,10 +17,11 @@ fn gpu_sincos(ctx: &GpuContext, xs: &[f64]) -> Vec<[f64; 2]> {
     gpu_eval(ctx, xs, "data[gid.x] = sincos(data[gid.x].x);")
 }
 
-/// The f64 shaders' natural logarithm at `xs` (in .y; `+= log(` is what the f64 source
-/// turns into its own ln64).
+/// The f64 shaders' natural logarithm (`ln_real`, their own: SPIR-V's log is f32 only) at
+/// `xs` (in .y).
 fn gpu_ln(ctx: &GpuContext, xs: &[f64]) -> Vec<f64> {
-    let body = "var r: f32 = 0.0;\n        r += log(data[gid.x].x);\n        data[gid.x].y = r;";
+    let body =
+        "var r: real = 0.0;\n        r += ln_real(data[gid.x].x);\n        data[gid.x].y = r;";
     gpu_eval(ctx, xs, body).into_iter().map(|v| v[1]).collect()
 }
 
@@ -28,7 +29,7 @@ fn gpu_ln(ctx: &GpuContext, xs: &[f64]) -> Vec<f64> {
 fn gpu_eval(ctx: &GpuContext, xs: &[f64], body: &str) -> Vec<[f64; 2]> {
     let kernel = format!(
         "
-@group(0) @binding(0) var<storage, read_write> data: array<vec2<f32>>;
+@group(0) @binding(0) var<storage, read_write> data: array<vec2<real>>;
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
     if gid.x < arrayLength(&data) {{
@@ -40,7 +41,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("sincos"),
-            source: wgpu::ShaderSource::Wgsl(shader_source_f64(&kernel).into()),
+            source: wgpu::ShaderSource::Wgsl(shaders::assemble(&kernel, Precision::F64).into()),
         });
     let pipeline = ctx
         .device

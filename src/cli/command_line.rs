@@ -138,7 +138,7 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
     } else if !spec.use_symmetry {
         out += " --no-symmetry";
     }
-    out += precision(spec.precision);
+    out += &precision(spec.precision);
     out += &integrator(&spec.integrator);
     out + &picture(pic)
 }
@@ -180,7 +180,7 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
     if !spec.use_symmetry {
         out += " --no-symmetry";
     }
-    out += precision(spec.precision);
+    out += &precision(spec.precision);
     out += &integrator(&spec.integrator);
     out + &picture(pic)
 }
@@ -205,7 +205,7 @@ pub fn lyapunov_point(job: &LyapunovPointJob) -> String {
         method(s.method),
         params(&s.params),
         job.backend.name()
-    ) + precision(s.precision)
+    ) + &precision(s.precision)
 }
 
 pub fn trajectory(job: &TrajectoryJob) -> String {
@@ -219,7 +219,7 @@ pub fn trajectory(job: &TrajectoryJob) -> String {
     if let Some(every) = job.every {
         out += &format!(" --every {every}");
     }
-    out + precision(job.precision)
+    out + &precision(job.precision)
 }
 
 fn spread(s: Spread) -> String {
@@ -243,14 +243,14 @@ pub fn traces(job: &TracesJob) -> String {
     if job.backend != Backend::Auto {
         out += &format!(" --backend {}", job.backend.name());
     }
-    out + precision(job.precision)
+    out + &precision(job.precision)
 }
 
-/// ` --precision f64` when not f32, the default.
-fn precision(p: Precision) -> &'static str {
-    match p {
-        Precision::F32 => "",
-        Precision::F64 => " --precision f64",
+/// ` --precision P` when not the default.
+fn precision(p: Precision) -> String {
+    match p == Precision::default() {
+        true => String::new(),
+        false => format!(" --precision {}", p.name()),
     }
 }
 
@@ -281,7 +281,7 @@ pub fn phase(job: &PhaseJob) -> String {
         if job.backend != Backend::Auto {
             out += &format!(" --backend {}", job.backend.name());
         }
-        out + precision(job.precision)
+        out + &precision(job.precision)
     };
     if let Some(c) = job.colormap {
         out += &format!(" --colormap {}", c.name());
@@ -330,5 +330,5 @@ pub fn fit(job: &FitJob) -> String {
         job.velocity_error,
         sources(&job.params),
         job.backend.name()
-    ) + precision(job.precision)
+    ) + &precision(job.precision)
 }

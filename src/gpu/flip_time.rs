@@ -2,14 +2,11 @@
 //! inside the tiled loop of `tiled.rs`.
 
 use super::context::{GpuContext, map_read, read_buffer};
-use super::layout::{
-    FLIP_TIME_WGSL, GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuParams, GpuParams64, GpuPendulum,
-    GpuPendulum64, NEVER, NONFINITE, TileParams, flip_adaptive_wgsl, flip_dop853_wgsl,
-    flip_kind_wgsl, shader_source, shader_source_f64,
-};
+use super::layout::{NEVER, NONFINITE, Real, Run, RunParams, TileParams, read_reals, with_real};
 use super::pipeline::{
-    Variants, bind_group, layouts, module_of, params_buffer_of, record_dispatch, storage_buffer,
+    Variants, bind_group, kernel_module, layouts, params_buffer_of, record_dispatch, storage_buffer,
 };
+use super::shaders::Kernel;
 use super::tiled::{Tiling, adaptive_loop, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
@@ -46,37 +43,20 @@ struct Buffers {
 /// params, in `precision`.
 fn sizes(precision: Precision, adaptive: bool) -> (u64, u64, u64) {
     use std::mem::size_of;
-    match (precision, adaptive) {
-        (Precision::F32, false) => (
-            size_of::<GpuPendulum>() as u64,
-            4,
-            size_of::<GpuParams>() as u64,
-        ),
-        (Precision::F32, true) => (
-            size_of::<GpuAdaptiveSlot>() as u64,
-            4,
-            size_of::<GpuParams>() as u64,
-        ),
-        (Precision::F64, false) => (
-            size_of::<GpuPendulum64>() as u64,
-            8,
-            size_of::<GpuParams64>() as u64,
-        ),
-        (Precision::F64, true) => (
-            size_of::<GpuAdaptiveSlot64>() as u64,
-            8,
-            size_of::<GpuParams64>() as u64,
-        ),
-    }
+    with_real!(precision, R => (
+        match adaptive {
+            true => size_of::<<R as Real>::AdaptiveSlot>(),
+            false => size_of::<<R as Real>::Pendulum>(),
+        } as u64,
+        size_of::<R>() as u64,
+        size_of::<<R as Real>::Params>() as u64,
+    ))
 }
 
-/// t-max as the kernel compares flip times with it: in f32 the f32 t-max (as before f64
-/// kernels existed, so f32 maps keep their bits), in f64 t-max itself.
+/// t-max as the kernel compares flip times with it: rounded to the kernel's precision (so
+/// f32 maps keep the bits they had before f64 kernels existed).
 fn t_max_of(t_max: f64, precision: Precision) -> f64 {
-    match precision {
-        Precision::F32 => t_max as f32 as f64,
-        Precision::F64 => t_max,
-    }
+    with_real!(precision, R => R::from_f64(t_max).to_f64())
 }
 
 /// Maps integrating more pixels than this estimate their work from a sample first.
@@ -133,14 +113,10 @@ impl FlipTimeKernel {
 
     /// The kernel in `precision` (f64 needs a context with `GpuContext::has_f64`).
     pub fn with_precision(ctx: &GpuContext, precision: Precision) -> Self {
-        let source = |kernel: &str| match precision {
-            Precision::F32 => shader_source(kernel),
-            Precision::F64 => shader_source_f64(kernel),
-        };
-        let module = module_of(ctx, "flip_time.wgsl", source(FLIP_TIME_WGSL));
-        let kind = module_of(ctx, "flip_kind.wgsl", source(&flip_kind_wgsl()));
-        let adaptive = module_of(ctx, "flip_adaptive.wgsl", source(&flip_adaptive_wgsl()));
-        let dop853 = module_of(ctx, "flip_dop853.wgsl", source(&flip_dop853_wgsl()));
+        let module = kernel_module(ctx, Kernel::FlipTime, precision);
+        let kind = kernel_module(ctx, Kernel::FlipKind, precision);
+        let adaptive = kernel_module(ctx, Kernel::FlipDp54, precision);
+        let dop853 = kernel_module(ctx, Kernel::FlipDop853, precision);
         let (layout, pipeline_layout) =
             layouts(ctx, "flip_time", &[false, false, true, false, false]);
         let kernel = FlipTimeKernel {
@@ -267,49 +243,26 @@ impl FlipTimeKernel {
         monitor: &Monitor,
         max_pixels: u64,
     ) -> Result<Field> {
-        let (p, dt, grid) = (&spec.params, spec.stepping.dt, &spec.grid);
-        let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
-        let t_max = spec.stepping.t_max;
-        match self.precision {
-            Precision::F32 => {
-                let base = GpuParams {
-                    rtol: rtol as f32,
-                    atol: atol as f32,
-                    t_max: t_max as f32,
-                    ..GpuParams::new(p, dt).with_grid(grid)
-                };
-                self.integrate(ctx, spec, monitor, max_pixels, base, |bytes| {
-                    bytemuck::pod_collect_to_vec::<u8, f32>(bytes)
-                        .into_iter()
-                        .map(|t| t as f64)
-                        .collect()
-                })
-            }
-            Precision::F64 => {
-                let base = GpuParams64 {
-                    rtol,
-                    atol,
-                    t_max,
-                    ..GpuParams64::new(p, dt).with_grid(grid)
-                };
-                self.integrate(ctx, spec, monitor, max_pixels, base, |bytes| {
-                    bytemuck::pod_collect_to_vec::<u8, f64>(bytes)
-                })
-            }
-        }
+        with_real!(self.precision, R => self.integrate::<R>(ctx, spec, monitor, max_pixels))
     }
 
-    /// The tiled loop with `base` params (either precision); `times` reads a tile's flip
-    /// times from the bytes of its buffer.
-    fn integrate(
+    /// The tiled loop in the kernel's scalar `R`.
+    fn integrate<R: Real>(
         &self,
         ctx: &GpuContext,
         spec: &FlipSpec,
         monitor: &Monitor,
         max_pixels: u64,
-        base: impl TileParams,
-        times: impl Fn(&[u8]) -> Vec<f64>,
     ) -> Result<Field> {
+        let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
+        let base = R::Params::of(&spec.params, spec.stepping.dt)
+            .over(&spec.grid)
+            .with_run(Run {
+                rtol,
+                atol,
+                t_max: spec.stepping.t_max,
+                ..Run::default()
+            });
         let grid = spec.grid;
         let adaptive = spec.integrator != Integrator::Rk4;
         let variants = match (spec.measure, spec.integrator) {
@@ -368,7 +321,7 @@ impl FlipTimeKernel {
             }
             let bytes = read_buffer(ctx, &bufs.times, pixels as u64 * time_bytes)?;
             let t_max = t_max_of(t_max, self.precision);
-            Ok(times(&bytes)
+            Ok(read_reals::<R>(&bytes)
                 .into_iter()
                 .map(|t| match spec.measure {
                     _ if t == NONFINITE as f64 => f32::NAN,

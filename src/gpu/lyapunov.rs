@@ -3,13 +3,13 @@
 
 use super::context::{GpuContext, read_buffer, read_f32s};
 use super::layout::{
-    GpuLyapunovSlot, GpuParams, GpuParams64, TileParams, lyapunov_wgsl, shader_source,
-    shader_source_f64,
+    GpuLyapunovSlot, GpuParams, Real, Run, RunParams, TileParams, read_reals, with_real,
 };
 use super::pipeline::{
-    Variants, bind_group, dispatch_and_wait, layouts, module_of, params_buffer, params_buffer_of,
-    shader_module, storage_buffer,
+    Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer,
+    params_buffer_of, storage_buffer,
 };
+use super::shaders::Kernel;
 use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::{Convergence, Field};
@@ -37,10 +37,12 @@ const STALLED_BELOW: f64 = -1e38;
 
 /// Bytes per pixel of the slot and the log sum, and of the params, in `precision`.
 fn sizes(precision: Precision) -> (u64, u64, u64) {
-    match precision {
-        Precision::F32 => (SLOT_BYTES, 4, std::mem::size_of::<GpuParams>() as u64),
-        Precision::F64 => (2 * SLOT_BYTES, 8, std::mem::size_of::<GpuParams64>() as u64),
-    }
+    use std::mem::size_of;
+    with_real!(precision, R => (
+        size_of::<<R as Real>::LyapunovSlot>() as u64,
+        size_of::<R>() as u64,
+        size_of::<<R as Real>::Params>() as u64,
+    ))
 }
 
 impl LyapunovKernel {
@@ -51,11 +53,7 @@ impl LyapunovKernel {
 
     /// The kernel of `method` in `precision` (f64 needs a context with f64).
     pub fn with_precision(ctx: &GpuContext, method: Method, precision: Precision) -> Self {
-        let source = match precision {
-            Precision::F32 => shader_source(&lyapunov_wgsl()),
-            Precision::F64 => shader_source_f64(&lyapunov_wgsl()),
-        };
-        let module = module_of(ctx, "lyapunov.wgsl", source);
+        let module = kernel_module(ctx, Kernel::Lyapunov, precision);
         let (layout, pipeline_layout) = layouts(ctx, "lyapunov", &[false, false]);
         let entries: &'static [&'static str] = match method {
             Method::Tangent => &["tangent_init", "tangent_advance"],
@@ -118,58 +116,33 @@ impl LyapunovKernel {
         max_pixels: u64,
         trace: Option<&mut Convergence>,
     ) -> Result<Field> {
-        let (p, dt, grid) = (&spec.params, spec.stepping.dt, &spec.grid);
-        let (interval, total_steps) = (spec.renorm_steps(), spec.stepping.steps());
-        let eps = match spec.method {
-            Method::Twin { eps } => eps,
-            Method::Tangent => 0.0,
-        };
-        let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
-        match self.precision {
-            Precision::F32 => {
-                let base = GpuParams {
-                    interval,
-                    total_steps,
-                    twin_eps: eps as f32,
-                    rtol: rtol as f32,
-                    atol: atol as f32,
-                    ..GpuParams::new(p, dt).with_grid(grid)
-                };
-                self.integrate_with(ctx, spec, monitor, max_pixels, trace, base, |b| {
-                    bytemuck::pod_collect_to_vec::<u8, f32>(b)
-                        .into_iter()
-                        .map(f64::from)
-                        .collect()
-                })
-            }
-            Precision::F64 => {
-                let base = GpuParams64 {
-                    interval,
-                    total_steps,
-                    twin_eps: eps,
-                    rtol,
-                    atol,
-                    ..GpuParams64::new(p, dt).with_grid(grid)
-                };
-                self.integrate_with(ctx, spec, monitor, max_pixels, trace, base, |b| {
-                    bytemuck::pod_collect_to_vec::<u8, f64>(b)
-                })
-            }
-        }
+        with_real!(self.precision, R => self.integrate_in::<R>(ctx, spec, monitor, max_pixels, trace))
     }
 
-    /// The tiled loop with `base` params; `sums` reads log sums from their buffer's bytes.
-    #[allow(clippy::too_many_arguments)]
-    fn integrate_with(
+    /// The tiled loop in the kernel's scalar `R`.
+    fn integrate_in<R: Real>(
         &self,
         ctx: &GpuContext,
         spec: &LyapunovSpec,
         monitor: &Monitor,
         max_pixels: u64,
         mut trace: Option<&mut Convergence>,
-        base: impl TileParams,
-        sums: impl Fn(&[u8]) -> Vec<f64>,
     ) -> Result<Field> {
+        let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
+        let base = R::Params::of(&spec.params, spec.stepping.dt)
+            .over(&spec.grid)
+            .with_run(Run {
+                interval: spec.renorm_steps(),
+                total_steps: spec.stepping.steps(),
+                twin_eps: match spec.method {
+                    Method::Twin { eps } => eps,
+                    Method::Tangent => 0.0,
+                },
+                rtol,
+                atol,
+                ..Run::default()
+            });
+        let sums = read_reals::<R>;
         let grid = spec.grid;
         let adaptive = spec.integrator.tolerances().is_some();
         let variants = match (&self.adaptive, adaptive) {
@@ -284,7 +257,7 @@ pub struct JacobianKernel {
 
 impl JacobianKernel {
     pub fn new(ctx: &GpuContext) -> Self {
-        let module = shader_module(ctx, "lyapunov.wgsl", &lyapunov_wgsl());
+        let module = kernel_module(ctx, Kernel::Lyapunov, Precision::F32);
         let (layout, pipeline_layout) = layouts(ctx, "jacobian", &[false, false]);
         JacobianKernel {
             pipelines: Variants::new(module, pipeline_layout, &["jacobian_columns"], None),

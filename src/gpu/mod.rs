@@ -6,6 +6,7 @@ mod flip_time;
 pub mod layout;
 mod lyapunov;
 mod pipeline;
+pub mod shaders;
 mod tiled;
 mod trajectory;
 
@@ -19,15 +20,16 @@ pub use trajectory::TrajectoryKernel;
 
 use crate::spec::{Method, Precision};
 
-/// A context and its kernels, each built on first use and kept.
+/// A context and its kernels, each built on first use and kept: the kernels' table, one
+/// slot a kernel and precision.
 pub struct Kernels {
     pub ctx: GpuContext,
-    flip: OnceLock<FlipTimeKernel>,
-    flip64: OnceLock<FlipTimeKernel>,
+    /// f32 and f64.
+    flip: [OnceLock<FlipTimeKernel>; 2],
     /// Tangent and twin, f32 and f64.
     lyapunov: [OnceLock<LyapunovKernel>; 4],
-    trajectory: OnceLock<TrajectoryKernel>,
-    trajectory64: OnceLock<TrajectoryKernel>,
+    /// f32 and f64.
+    trajectory: [OnceLock<TrajectoryKernel>; 2],
     jacobian: OnceLock<JacobianKernel>,
 }
 
@@ -35,23 +37,17 @@ impl Kernels {
     pub fn new(ctx: GpuContext) -> Self {
         Kernels {
             ctx,
-            flip: OnceLock::new(),
-            flip64: OnceLock::new(),
+            flip: Default::default(),
             lyapunov: Default::default(),
-            trajectory: OnceLock::new(),
-            trajectory64: OnceLock::new(),
+            trajectory: Default::default(),
             jacobian: OnceLock::new(),
         }
     }
 
-    pub fn flip(&self) -> &FlipTimeKernel {
-        self.flip.get_or_init(|| FlipTimeKernel::new(&self.ctx))
-    }
-
-    /// The f64 flip kernel (the context must have f64).
-    pub fn flip64(&self) -> &FlipTimeKernel {
-        self.flip64
-            .get_or_init(|| FlipTimeKernel::with_precision(&self.ctx, Precision::F64))
+    /// The flip kernel in `precision` (f64: the context must have it).
+    pub fn flip(&self, precision: Precision) -> &FlipTimeKernel {
+        self.flip[precision as usize]
+            .get_or_init(|| FlipTimeKernel::with_precision(&self.ctx, precision))
     }
 
     /// The divergence kernel of `method` in `precision` (f64: the context must have it).
@@ -59,20 +55,15 @@ impl Kernels {
         let slot = match method {
             Method::Tangent => 0,
             Method::Twin { .. } => 1,
-        } + 2 * (precision == Precision::F64) as usize;
+        } + 2 * precision as usize;
         self.lyapunov[slot]
             .get_or_init(|| LyapunovKernel::with_precision(&self.ctx, method, precision))
     }
 
-    pub fn trajectory(&self) -> &TrajectoryKernel {
-        self.trajectory
-            .get_or_init(|| TrajectoryKernel::new(&self.ctx))
-    }
-
-    /// The f64 trajectory kernel (the context must have f64).
-    pub fn trajectory64(&self) -> &TrajectoryKernel {
-        self.trajectory64
-            .get_or_init(|| TrajectoryKernel::with_precision(&self.ctx, Precision::F64))
+    /// The trajectory kernel in `precision` (f64: the context must have it).
+    pub fn trajectory(&self, precision: Precision) -> &TrajectoryKernel {
+        self.trajectory[precision as usize]
+            .get_or_init(|| TrajectoryKernel::with_precision(&self.ctx, precision))
     }
 
     pub fn jacobian(&self) -> &JacobianKernel {

@@ -1,14 +1,17 @@
 //! The wgpu boilerplate every kernel shares: modules, pipelines, bindings, one dispatch.
 
 use super::context::GpuContext;
-use super::layout::{WORKGROUP_SIZE, shader_source};
+use super::layout::WORKGROUP_SIZE;
+use super::shaders::{Kernel, source};
 use crate::error::Result;
+use crate::spec::Precision;
 
-pub fn shader_module(ctx: &GpuContext, label: &str, kernel: &str) -> wgpu::ShaderModule {
-    module_of(ctx, label, shader_source(kernel))
+/// The module of `kernel` in `precision`.
+pub fn kernel_module(ctx: &GpuContext, kernel: Kernel, precision: Precision) -> wgpu::ShaderModule {
+    module_of(ctx, kernel.name(), source(kernel, precision))
 }
 
-/// A module of a full WGSL source (e.g. `layout::shader_source_f64`).
+/// A module of a full WGSL source (`shaders::source`).
 pub fn module_of(ctx: &GpuContext, label: &str, source: String) -> wgpu::ShaderModule {
     ctx.device
         .create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -2,10 +2,12 @@
 //! every `stride`-th state.
 
 use super::context::{GpuContext, read_buffer};
-use super::layout::{GpuParams, GpuParams64, TRAJECTORY_WGSL, shader_source, shader_source_f64};
+use super::layout::{Real, Run, RunParams, read_reals, with_real};
 use super::pipeline::{
-    Variants, bind_group, dispatch_and_wait, layouts, module_of, params_buffer_of, storage_buffer,
+    Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer_of,
+    storage_buffer,
 };
+use super::shaders::Kernel;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::spec::Precision;
@@ -24,11 +26,7 @@ impl TrajectoryKernel {
 
     /// The kernel in `precision` (f64 needs a context with `GpuContext::has_f64`).
     pub fn with_precision(ctx: &GpuContext, precision: Precision) -> Self {
-        let source = match precision {
-            Precision::F32 => shader_source(TRAJECTORY_WGSL),
-            Precision::F64 => shader_source_f64(TRAJECTORY_WGSL),
-        };
-        let module = module_of(ctx, "trajectory.wgsl", source);
+        let module = kernel_module(ctx, Kernel::Trajectory, precision);
         let (layout, pipeline_layout) = layouts(ctx, "trajectory", &[false]);
         TrajectoryKernel {
             precision,
@@ -37,9 +35,21 @@ impl TrajectoryKernel {
         }
     }
 
-    /// One run per start, integrated in f32 over `steps` steps of `dt`, keeping the start
-    /// and every `stride`-th state (steps must be a multiple of it).
+    /// One run per start, integrated over `steps` steps of `dt` in the kernel's precision,
+    /// keeping the start and every `stride`-th state (`steps` a multiple of `stride`).
     pub fn run(
+        &self,
+        ctx: &GpuContext,
+        p: &Params,
+        starts: &[State],
+        dt: f64,
+        steps: u32,
+        stride: u32,
+    ) -> Result<Vec<Vec<State>>> {
+        with_real!(self.precision, R => self.run_in::<R>(ctx, p, starts, dt, steps, stride))
+    }
+
+    fn run_in<R: Real>(
         &self,
         ctx: &GpuContext,
         p: &Params,
@@ -54,10 +64,7 @@ impl TrajectoryKernel {
         );
         let per_run = (steps / stride) as u64 + 1;
         // A state is four floats of the kernel's precision.
-        let state_bytes = match self.precision {
-            Precision::F32 => 16,
-            Precision::F64 => 32,
-        };
+        let state_bytes = 4 * std::mem::size_of::<R>() as u64;
         let bytes = starts.len() as u64 * per_run * state_bytes;
         if bytes > ctx.max_binding() {
             return Err(Error::invalid(
@@ -72,50 +79,25 @@ impl TrajectoryKernel {
             unreachable!("one entry point")
         };
         let count = starts.len() as u32;
-        let params: Vec<u8> = match self.precision {
-            Precision::F32 => bytemuck::bytes_of(&GpuParams {
-                steps,
-                interval: stride,
-                count,
-                ..GpuParams::new(p, dt)
-            })
-            .to_vec(),
-            Precision::F64 => bytemuck::bytes_of(&GpuParams64 {
-                steps,
-                interval: stride,
-                count,
-                ..GpuParams64::new(p, dt)
-            })
-            .to_vec(),
-        };
+        let params = R::Params::of(p, dt).with_run(Run {
+            steps,
+            interval: stride,
+            count,
+            ..Run::default()
+        });
+        let params = bytemuck::bytes_of(&params);
         let params_buf = params_buffer_of(ctx, params.len() as u64);
-        ctx.queue.write_buffer(&params_buf, 0, &params);
+        ctx.queue.write_buffer(&params_buf, 0, params);
         let states = storage_buffer(ctx, "trajectory states", bytes);
         for (i, s) in starts.iter().enumerate() {
             let at = i as u64 * per_run * state_bytes;
-            match self.precision {
-                Precision::F32 => {
-                    let v = s.to_array().map(|v| v as f32);
-                    ctx.queue
-                        .write_buffer(&states, at, bytemuck::cast_slice(&v));
-                }
-                Precision::F64 => {
-                    let v = s.to_array();
-                    ctx.queue
-                        .write_buffer(&states, at, bytemuck::cast_slice(&v));
-                }
-            }
+            let v = s.to_array().map(R::from_f64);
+            ctx.queue
+                .write_buffer(&states, at, bytemuck::cast_slice(&v));
         }
         let bind = bind_group(ctx, "trajectory", &self.layout, &[&params_buf, &states]);
         dispatch_and_wait(ctx, pipeline, &bind, count)?;
-        let raw = read_buffer(ctx, &states, bytes)?;
-        let values: Vec<f64> = match self.precision {
-            Precision::F32 => bytemuck::pod_collect_to_vec::<u8, f32>(&raw)
-                .into_iter()
-                .map(f64::from)
-                .collect(),
-            Precision::F64 => bytemuck::pod_collect_to_vec::<u8, f64>(&raw),
-        };
+        let values = read_reals::<R>(&read_buffer(ctx, &states, bytes)?);
         let all: Vec<State> = values
             .chunks_exact(4)
             .map(|v| State::from_array(std::array::from_fn(|i| v[i])))

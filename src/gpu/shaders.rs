@@ -1,0 +1,143 @@
+//! Shader assembly: which WGSL files make each kernel, in which precision. A kernel's full
+//! source is the constants shared with Rust, the precision's own file (`real_f32.wgsl` or
+//! `real_f64.wgsl`: `alias real = ...` and the few functions whose f32 and f64 forms differ),
+//! `common.wgsl`, then the kernel's files, every one of them written over `real`.
+
+use super::layout::{NEVER, NONFINITE, Real, WORKGROUP_SIZE, with_real};
+use crate::spec::Precision;
+
+const COMMON: &str = include_str!("../../shaders/common.wgsl");
+const FLIP_TIME: &str = include_str!("../../shaders/flip_time.wgsl");
+const FLIP_KIND: &str = include_str!("../../shaders/flip_kind.wgsl");
+const ADAPTIVE_COMMON: &str = include_str!("../../shaders/adaptive_common.wgsl");
+const DP54: &str = include_str!("../../shaders/dp54.wgsl");
+const FLIP_DP54: &str = include_str!("../../shaders/flip_adaptive.wgsl");
+const FLIP_DOP853: &str = include_str!("../../shaders/flip_dop853.wgsl");
+const LYAPUNOV: &str = include_str!("../../shaders/lyapunov.wgsl");
+const TRAJECTORY: &str = include_str!("../../shaders/trajectory.wgsl");
+
+/// The kernels, each one WGSL module.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    /// Flip times, RK4 (`flip_init`, `flip_time`).
+    FlipTime,
+    /// Flip kinds: the flip-time kernel's loop and flip location, and its own entry.
+    FlipKind,
+    /// Flip times, DP54: the adaptive kernels' shared part, DP54's coefficients, the method.
+    FlipDp54,
+    /// Flip times, DOP853: the shared part and the stages written out from the tableau.
+    FlipDop853,
+    /// Divergence maps (tangent, twin, adaptive tangent; DP54's coefficients) and Jacobians.
+    Lyapunov,
+    /// Trajectories and ensembles.
+    Trajectory,
+}
+
+impl Kernel {
+    pub const ALL: [Kernel; 6] = [
+        Kernel::FlipTime,
+        Kernel::FlipKind,
+        Kernel::FlipDp54,
+        Kernel::FlipDop853,
+        Kernel::Lyapunov,
+        Kernel::Trajectory,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::FlipTime => "flip_time",
+            Kernel::FlipKind => "flip_kind",
+            Kernel::FlipDp54 => "flip_adaptive",
+            Kernel::FlipDop853 => "flip_dop853",
+            Kernel::Lyapunov => "lyapunov",
+            Kernel::Trajectory => "trajectory",
+        }
+    }
+
+    /// The kernel's own files, in order, after `common.wgsl`.
+    fn body(self) -> String {
+        match self {
+            Kernel::FlipTime => FLIP_TIME.to_string(),
+            Kernel::FlipKind => format!("{FLIP_TIME}\n{FLIP_KIND}"),
+            Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{DP54}\n{FLIP_DP54}"),
+            Kernel::FlipDop853 => flip_dop853(),
+            Kernel::Lyapunov => format!("{DP54}\n{LYAPUNOV}"),
+            Kernel::Trajectory => TRAJECTORY.to_string(),
+        }
+    }
+}
+
+/// The full source of `kernel` in `precision` (f64 needs `Features::SHADER_F64`).
+pub fn source(kernel: Kernel, precision: Precision) -> String {
+    assemble(&kernel.body(), precision)
+}
+
+/// The full source of WGSL `body` (written over `real`) in `precision`: the constants shared
+/// with Rust, the precision's file, `common.wgsl`, then `body`.
+pub fn assemble(body: &str, precision: Precision) -> String {
+    let real = with_real!(precision, R => R::WGSL);
+    format!(
+        "const WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst NEVER: real = {NEVER:?};\nconst NONFINITE: real = {NONFINITE:?};\n{real}\n{COMMON}\n{body}"
+    )
+}
+
+/// Every kernel in every precision, for validation: named as the kernel, with `_f64` for
+/// the f64 ones.
+pub fn all_shaders() -> Vec<(String, String)> {
+    Kernel::ALL
+        .into_iter()
+        .flat_map(|k| {
+            Precision::ALL.into_iter().map(move |p| {
+                let suffix = if p == Precision::F64 { "_f64" } else { "" };
+                (format!("{}{suffix}", k.name()), source(k, p))
+            })
+        })
+        .collect()
+}
+
+/// The DOP853 flip kernel: its template with the stages written out from the tableau
+/// (src/tableau.rs, which the CPU twin loops over), only the nonzero weights, as literals
+/// that WGSL takes at full precision in either float type.
+fn flip_dop853() -> String {
+    let t = &crate::tableau::DOP853;
+    // "w1 * k1.dy + w2 * k2.dy ..." over the nonzero weights (stage j is k{j + 1}).
+    let sum = |weights: &[f64], part: &str| -> String {
+        let terms: Vec<String> = weights
+            .iter()
+            .enumerate()
+            .filter(|(_, w)| **w != 0.0)
+            .map(|(j, w)| format!("{w:e} * k{}.{part}", j + 1))
+            .collect();
+        terms.join(" + ")
+    };
+    let stage = |s: usize| {
+        let a = &t.a[s][..s];
+        format!(
+            "let k{} = rate(c, Pendulum(p.y + step * ({}), p.u + step * ({})));",
+            s + 1,
+            sum(a, "dy"),
+            sum(a, "du")
+        )
+    };
+    let indent = "\n        ";
+    let mut stages: Vec<String> = (1..12).map(stage).collect();
+    stages.push(format!(
+        "let next = Pendulum(p.y + step * ({}), p.u + step * ({}));",
+        sum(&t.b, "dy"),
+        sum(&t.b, "du")
+    ));
+    stages.push(format!("let e5 = {};", sum(&t.e5, "dy")));
+    stages.push(format!("let e3 = {};", sum(&t.e3, "dy")));
+    let mut dense: Vec<String> = (13..16).map(stage).collect();
+    for (m, d) in t.d.iter().enumerate() {
+        dense.push(format!("let hd{m} = step * ({});", sum(d, "dy")));
+    }
+    let body = FLIP_DOP853
+        .replace("//{{STAGES}}", &stages.join(indent))
+        .replace("//{{DENSE_STAGES}}", &dense.join("\n                "));
+    assert!(
+        !body.contains("{{"),
+        "a placeholder left in flip_dop853.wgsl"
+    );
+    format!("{ADAPTIVE_COMMON}\n{body}")
+}
