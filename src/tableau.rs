@@ -1,24 +1,32 @@
 //! Coefficients of the Runge-Kutta pairs that both paths use as data: the CPU twins loop over
 //! them, src/gpu/layout.rs writes the shaders' unrolled stages from them.
 
-/// DOP853's coefficients: 12 stages (the 13th, at the propagated solution, starts the next
-/// step), a fifth- and a third-order error estimate, and three more stages with the weights
-/// `d` for the dense output.
-pub struct Dop853Tableau {
+/// An explicit embedded Runge-Kutta pair as data, every pair the same type: `S` stages (a
+/// dense output's extra stages included; unused weights 0), `E` error estimates and `D` rows
+/// of dense-output weights. The CPU twins loop over it; src/gpu/shaders.rs writes the
+/// kernels' coefficients (DP54) and stages (DOP853) from it.
+pub struct Tableau<const S: usize, const E: usize, const D: usize> {
     /// The stages' times (fractions of the step; the equations are autonomous, so only the
     /// order conditions read them).
-    pub c: [f64; 16],
-    /// a[s][j], j < s (stages 13..16 are the dense output's).
-    pub a: [[f64; 15]; 16],
-    pub b: [f64; 12],
-    pub e3: [f64; 12],
-    pub e5: [f64; 12],
-    pub d: [[f64; 16]; 4],
+    pub c: [f64; S],
+    /// a[s][j], j < s.
+    pub a: [[f64; S]; S],
+    /// Weights of the propagated solution.
+    pub b: [f64; S],
+    /// Weights of the error estimates.
+    pub e: [[f64; S]; E],
+    /// The dense output's weights.
+    pub d: [[f64; S]; D],
 }
+
+/// DOP853's coefficients: 12 stages (the 13th, at the propagated solution, starts the next
+/// step), a fifth- and a third-order error estimate (`e`), and three more stages with the
+/// weights `d` for the dense output.
+pub type Dop853Tableau = Tableau<16, 2, 4>;
 
 /// Hairer, Norsett & Wanner, Solving ODE I (2nd ed.), section II.10, and `dop853.f`; the
 /// digits as scipy's `dop853_coefficients.py` carries them.
-pub const DOP853: Dop853Tableau = Dop853Tableau {
+pub const DOP853: Dop853Tableau = Tableau {
     c: [
         0.0,
         0.05260015195876773,
@@ -39,10 +47,11 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
     ],
     a: [
         [
-            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
         ],
         [
             0.05260015195876773,
+            0.0,
             0.0,
             0.0,
             0.0,
@@ -74,11 +83,13 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.0,
             0.0,
             0.0,
+            0.0,
         ],
         [
             0.02958758547680685,
             0.0,
             0.08876275643042054,
+            0.0,
             0.0,
             0.0,
             0.0,
@@ -108,6 +119,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.0,
             0.0,
             0.0,
+            0.0,
         ],
         [
             0.037037037037037035,
@@ -115,6 +127,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.0,
             0.17082860872947386,
             0.12546768756682242,
+            0.0,
             0.0,
             0.0,
             0.0,
@@ -142,6 +155,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.0,
             0.0,
             0.0,
+            0.0,
         ],
         [
             0.03709200011850479,
@@ -151,6 +165,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.10726203044637328,
             -0.015319437748624402,
             0.008273789163814023,
+            0.0,
             0.0,
             0.0,
             0.0,
@@ -176,6 +191,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.0,
             0.0,
             0.0,
+            0.0,
         ],
         [
             0.47766253643826434,
@@ -187,6 +203,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             15.279233632882423,
             -33.28821096898486,
             -0.020331201708508627,
+            0.0,
             0.0,
             0.0,
             0.0,
@@ -210,6 +227,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.0,
             0.0,
             0.0,
+            0.0,
         ],
         [
             2.273310147516538,
@@ -223,6 +241,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             -8.87285693353063,
             12.360567175794303,
             0.6433927460157636,
+            0.0,
             0.0,
             0.0,
             0.0,
@@ -244,6 +263,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.0,
             0.0,
             0.0,
+            0.0,
         ],
         [
             0.056167502283047954,
@@ -259,6 +279,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             0.00820105229563469,
             0.007567897660545699,
             -0.008298,
+            0.0,
             0.0,
             0.0,
         ],
@@ -278,6 +299,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             -0.00034046500868740456,
             0.1413124436746325,
             0.0,
+            0.0,
         ],
         [
             -0.42889630158379194,
@@ -295,6 +317,7 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             -0.0013990241651590145,
             2.9475147891527724,
             -9.15095847217987,
+            0.0,
         ],
     ],
     b: [
@@ -310,34 +333,48 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
         -0.1521609496625161,
         0.20136540080403034,
         0.04471061572777259,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
     ],
-    e3: [
-        -0.18980075407240762,
-        0.0,
-        0.0,
-        0.0,
-        0.0,
-        4.450312892752409,
-        1.8915178993145003,
-        -5.801203960010585,
-        -0.4226823213237919,
-        -0.1521609496625161,
-        0.20136540080403034,
-        0.02265179219836082,
-    ],
-    e5: [
-        0.01312004499419488,
-        0.0,
-        0.0,
-        0.0,
-        0.0,
-        -1.2251564463762044,
-        -0.4957589496572502,
-        1.6643771824549864,
-        -0.35032884874997366,
-        0.3341791187130175,
-        0.08192320648511571,
-        -0.022355307863886294,
+    e: [
+        [
+            0.01312004499419488,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            -1.2251564463762044,
+            -0.4957589496572502,
+            1.6643771824549864,
+            -0.35032884874997366,
+            0.3341791187130175,
+            0.08192320648511571,
+            -0.022355307863886294,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            -0.18980075407240762,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            4.450312892752409,
+            1.8915178993145003,
+            -5.801203960010585,
+            -0.4226823213237919,
+            -0.1521609496625161,
+            0.20136540080403034,
+            0.02265179219836082,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
     ],
     d: [
         [
@@ -413,4 +450,77 @@ pub const DOP853: Dop853Tableau = Dop853Tableau {
             -149.72683625798564,
         ],
     ],
+};
+
+/// Dormand-Prince 5(4): 7 stages (the last, at the propagated solution, is the next step's
+/// first: FSAL, so b equals the last row of a), the error estimate's weights (b minus the
+/// embedded fourth-order weights) and the dense output of Hairer's `dopri5` (`contd5`):
+/// y(t + s h) = y0 + s (dy + (1 - s) (b + s (r + (1 - s) h sum d_i k_i))) with dy = y1 - y0,
+/// b = h k1 - dy, r = dy - h k7 - b.
+pub type Dp54Tableau = Tableau<7, 1, 1>;
+
+/// Dormand & Prince (1980), the coefficients of Hairer, Norsett & Wanner, Solving ODE I,
+/// table 5.2, and the dense output of `dopri5.f`.
+pub const DP54: Dp54Tableau = Tableau {
+    c: [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0],
+    a: [
+        [0.0; 7],
+        [0.2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0, 0.0],
+        [
+            19372.0 / 6561.0,
+            -25360.0 / 2187.0,
+            64448.0 / 6561.0,
+            -212.0 / 729.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            9017.0 / 3168.0,
+            -355.0 / 33.0,
+            46732.0 / 5247.0,
+            49.0 / 176.0,
+            -5103.0 / 18656.0,
+            0.0,
+            0.0,
+        ],
+        [
+            35.0 / 384.0,
+            0.0,
+            500.0 / 1113.0,
+            125.0 / 192.0,
+            -2187.0 / 6784.0,
+            11.0 / 84.0,
+            0.0,
+        ],
+    ],
+    b: [
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+        0.0,
+    ],
+    e: [[
+        71.0 / 57600.0,
+        0.0,
+        -71.0 / 16695.0,
+        71.0 / 1920.0,
+        -17253.0 / 339200.0,
+        22.0 / 525.0,
+        -1.0 / 40.0,
+    ]],
+    d: [[
+        -12715105075.0 / 11282082432.0,
+        0.0,
+        87487479700.0 / 32700410799.0,
+        -10690763975.0 / 1880347072.0,
+        701980252875.0 / 199316789632.0,
+        -1453857185.0 / 822651844.0,
+        69997945.0 / 29380423.0,
+    ]],
 };

@@ -7,84 +7,7 @@ use std::f64::consts::PI;
 use super::rate_of;
 use crate::model::{Params, State};
 use crate::spec::MAX_STEPS;
-
-/// An explicit embedded Runge-Kutta pair with a dense output of the form of Hairer's
-/// `dopri5` (`contd5`): y(t + s h) = y0 + s (dy + (1 - s) (b + s (r + (1 - s) h sum d_i k_i)))
-/// with dy = y1 - y0, b = h k1 - dy, r = dy - h k7 - b.
-pub struct Tableau {
-    pub c: [f64; 7],
-    pub a: [[f64; 6]; 7],
-    /// Weights of the propagated (fifth-order) solution; the last stage is the next step's
-    /// first (FSAL), so b equals the last row of a.
-    pub b: [f64; 7],
-    /// b minus the embedded fourth-order weights: the local error estimate's weights.
-    pub e: [f64; 7],
-    /// The dense output's weights.
-    pub d: [f64; 7],
-}
-
-/// Dormand & Prince (1980), the coefficients of Hairer, Norsett & Wanner, Solving ODE I,
-/// table 5.2, and the dense output of `dopri5.f`.
-pub const DP54: Tableau = Tableau {
-    c: [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0],
-    a: [
-        [0.0; 6],
-        [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
-        [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
-        [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
-        [
-            19372.0 / 6561.0,
-            -25360.0 / 2187.0,
-            64448.0 / 6561.0,
-            -212.0 / 729.0,
-            0.0,
-            0.0,
-        ],
-        [
-            9017.0 / 3168.0,
-            -355.0 / 33.0,
-            46732.0 / 5247.0,
-            49.0 / 176.0,
-            -5103.0 / 18656.0,
-            0.0,
-        ],
-        [
-            35.0 / 384.0,
-            0.0,
-            500.0 / 1113.0,
-            125.0 / 192.0,
-            -2187.0 / 6784.0,
-            11.0 / 84.0,
-        ],
-    ],
-    b: [
-        35.0 / 384.0,
-        0.0,
-        500.0 / 1113.0,
-        125.0 / 192.0,
-        -2187.0 / 6784.0,
-        11.0 / 84.0,
-        0.0,
-    ],
-    e: [
-        71.0 / 57600.0,
-        0.0,
-        -71.0 / 16695.0,
-        71.0 / 1920.0,
-        -17253.0 / 339200.0,
-        22.0 / 525.0,
-        -1.0 / 40.0,
-    ],
-    d: [
-        -12715105075.0 / 11282082432.0,
-        0.0,
-        87487479700.0 / 32700410799.0,
-        -10690763975.0 / 1880347072.0,
-        701980252875.0 / 199316789632.0,
-        -1453857185.0 / 822651844.0,
-        69997945.0 / 29380423.0,
-    ],
-};
+pub use crate::tableau::DP54;
 
 /// The step-size controller: the next step is h (SAFETY err^(-1/4)) within [SHRINK, GROW]
 /// times the last (err the RMS of the error over the tolerance; a quarter, not the textbook
@@ -211,7 +134,7 @@ impl DenseStep for Step {
             let dy = self.span.y1[i] - self.span.y0[i];
             let b = h * self.k[0][i] - dy;
             let r = dy - h * self.k[6][i] - b;
-            let sum: f64 = (0..7).map(|j| DP54.d[j] * self.k[j][i]).sum();
+            let sum: f64 = (0..7).map(|j| DP54.d[0][j] * self.k[j][i]).sum();
             self.span.y0[i] + s * (dy + (1.0 - s) * (b + s * (r + (1.0 - s) * h * sum)))
         })
     }
@@ -221,7 +144,7 @@ impl DenseStep for Step {
         let dy = self.span.y1[i] - self.span.y0[i];
         let b = h * self.k[0][i] - dy;
         let r = dy - h * self.k[6][i] - b;
-        let sum: f64 = (0..7).map(|j| DP54.d[j] * self.k[j][i]).sum();
+        let sum: f64 = (0..7).map(|j| DP54.d[0][j] * self.k[j][i]).sum();
         dy + (1.0 - 2.0 * s) * b
             + s * (2.0 - 3.0 * s) * r
             + 2.0 * s * (1.0 - s) * (1.0 - 2.0 * s) * h * sum
@@ -325,7 +248,7 @@ impl<'a> Adaptive<'a> {
             });
             let err = (0..4)
                 .map(|i| {
-                    let e = h * (0..7).map(|j| DP54.e[j] * k[j][i]).sum::<f64>();
+                    let e = h * (0..7).map(|j| DP54.e[0][j] * k[j][i]).sum::<f64>();
                     let scale = self.atol + self.rtol * self.y[i].abs().max(y1[i].abs());
                     (e / scale).powi(2)
                 })
@@ -400,7 +323,9 @@ mod tests {
             assert!((s - 1.0 / q as f64).abs() < 1e-14, "b order {q}");
         }
         for q in 1..=4 {
-            let s: f64 = (0..7).map(|i| (t.b[i] - t.e[i]) * t.c[i].powi(q - 1)).sum();
+            let s: f64 = (0..7)
+                .map(|i| (t.b[i] - t.e[0][i]) * t.c[i].powi(q - 1))
+                .sum();
             assert!((s - 1.0 / q as f64).abs() < 1e-14, "embedded order {q}");
         }
     }

@@ -161,12 +161,12 @@ impl<'a> Stepper for Dop853<'a> {
             let y1: [f64; 4] = std::array::from_fn(|i| {
                 self.y[i] + h * (0..12).map(|j| t.b[j] * k[j][i]).sum::<f64>()
             });
-            let weighted = |w: &[f64; 12]| -> [f64; 4] {
+            let weighted = |w: &[f64; 16]| -> [f64; 4] {
                 std::array::from_fn(|i| (0..12).map(|j| w[j] * k[j][i]).sum())
             };
             let scale: [f64; 4] =
                 std::array::from_fn(|i| self.atol + self.rtol * self.y[i].abs().max(y1[i].abs()));
-            let err = scaled_error(h, &weighted(&t.e5), &weighted(&t.e3), &scale);
+            let err = scaled_error(h, &weighted(&t.e[0]), &weighted(&t.e[1]), &scale);
             let t = self.clock.t;
             self.clock
                 .settle(h, last, t_end, step_factor(err), err <= 1.0);
@@ -210,11 +210,11 @@ mod tests {
             let s: f64 = (0..12).map(|i| t.b[i] * t.c[i].powi(q - 1)).sum();
             assert!((s - 1.0 / q as f64).abs() < 1e-13, "b order {q}: {s}");
         }
-        let e5: f64 = t.e5.iter().sum();
+        let e5: f64 = t.e[0].iter().sum();
         assert!(e5.abs() < 1e-13, "e5 sums to {e5}");
         for q in 1..=3 {
             let s: f64 = (0..12)
-                .map(|i| (t.b[i] - t.e3[i]) * t.c[i].powi(q - 1))
+                .map(|i| (t.b[i] - t.e[1][i]) * t.c[i].powi(q - 1))
                 .sum();
             assert!((s - 1.0 / q as f64).abs() < 1e-13, "third order {q}: {s}");
         }

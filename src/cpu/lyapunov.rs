@@ -158,7 +158,7 @@ fn tangent_adaptive(
             });
             let err = ((0..8)
                 .map(|i| {
-                    let e = h * (0..7).map(|j| DP54.e[j] * k[j][i]).sum::<f64>();
+                    let e = h * (0..7).map(|j| DP54.e[0][j] * k[j][i]).sum::<f64>();
                     (e / (atol + rtol * x[i].abs().max(next[i].abs()))).powi(2)
                 })
                 .sum::<f64>()

@@ -59,9 +59,9 @@ impl Kernel {
         match self {
             Kernel::FlipTime => FLIP_TIME.to_string(),
             Kernel::FlipKind => format!("{FLIP_TIME}\n{FLIP_KIND}"),
-            Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{DP54}\n{FLIP_DP54}"),
+            Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{}\n{FLIP_DP54}", dp54()),
             Kernel::FlipDop853 => flip_dop853(),
-            Kernel::Lyapunov => format!("{DP54}\n{LYAPUNOV}"),
+            Kernel::Lyapunov => format!("{}\n{LYAPUNOV}", dp54()),
             Kernel::Trajectory => TRAJECTORY.to_string(),
         }
     }
@@ -95,6 +95,33 @@ pub fn all_shaders() -> Vec<(String, String)> {
         .collect()
 }
 
+/// DP54's coefficients and controller (dp54.wgsl) with the coefficients written from the
+/// tableau (src/tableau.rs `DP54`): `const Aij`, `Bj`, `Ej`, `Dj` (1-based, as in Hairer's
+/// tables) for the nonzero weights, as literals WGSL takes at full precision in either float.
+fn dp54() -> String {
+    let t = &crate::tableau::DP54;
+    let mut lines = Vec::new();
+    let mut named = |name: String, w: f64| {
+        if w != 0.0 {
+            lines.push(format!("const {name} = {w:e};"));
+        }
+    };
+    // Rows 2..6: the last row is b (FSAL), named B.
+    for (s, row) in t.a.iter().enumerate().take(6).skip(1) {
+        for (j, &w) in row[..s].iter().enumerate() {
+            named(format!("A{}{}", s + 1, j + 1), w);
+        }
+    }
+    for (letter, weights) in [("B", &t.b), ("E", &t.e[0]), ("D", &t.d[0])] {
+        for (j, &w) in weights.iter().enumerate() {
+            named(format!("{letter}{}", j + 1), w);
+        }
+    }
+    let body = DP54.replace("//{{COEFFICIENTS}}", &lines.join("\n"));
+    assert!(!body.contains("{{"), "a placeholder left in dp54.wgsl");
+    body
+}
+
 /// The DOP853 flip kernel: its template with the stages written out from the tableau
 /// (src/tableau.rs, which the CPU twin loops over), only the nonzero weights, as literals
 /// that WGSL takes at full precision in either float type.
@@ -126,8 +153,8 @@ fn flip_dop853() -> String {
         sum(&t.b, "dy"),
         sum(&t.b, "du")
     ));
-    stages.push(format!("let e5 = {};", sum(&t.e5, "dy")));
-    stages.push(format!("let e3 = {};", sum(&t.e3, "dy")));
+    stages.push(format!("let e5 = {};", sum(&t.e[0], "dy")));
+    stages.push(format!("let e3 = {};", sum(&t.e[1], "dy")));
     let mut dense: Vec<String> = (13..16).map(stage).collect();
     for (m, d) in t.d.iter().enumerate() {
         dense.push(format!("let hd{m} = step * ({});", sum(d, "dy")));
