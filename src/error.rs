@@ -13,6 +13,15 @@ pub enum Error {
     /// (`t_max`, `size`, `joint_damping`...); the command line maps it to its flag.
     #[error("invalid value for {field}: {reason}")]
     InvalidSpec { field: &'static str, reason: String },
+    /// A store (named by `field`) made with other settings than this run's: each setting
+    /// (a spec field) that differs, with the store's value and this run's.
+    #[error("invalid value for {field}: {} was made with other settings: {} (its command: {command})", path.display(), describe(differences))]
+    StoreDiffers {
+        field: &'static str,
+        path: std::path::PathBuf,
+        differences: Vec<(&'static str, String, String)>,
+        command: String,
+    },
     /// The GPU reported an error (validation, out of memory, lost device).
     #[error("GPU error: {0}")]
     Gpu(String),
@@ -36,6 +45,15 @@ pub enum Error {
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// "t_max 1 there, 2 here; ..." for [`Error::StoreDiffers`].
+fn describe(differences: &[(&'static str, String, String)]) -> String {
+    differences
+        .iter()
+        .map(|(field, theirs, ours)| format!("{field} {theirs} there, {ours} here"))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
 
 impl Error {
     /// An invalid value of the specification field `field`.

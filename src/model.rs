@@ -18,7 +18,7 @@
 //! [`Losses`].
 
 /// Energy losses (section 2.4 of the lab report), all off by default.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Losses {
     /// Viscous joint damping (N m s): torque -c1 omega1 at the pivot and -c2 (omega2 - omega1)
     /// at the middle joint (equal and opposite on the two arms).
@@ -81,7 +81,7 @@ impl Losses {
 }
 
 /// Physical parameters, SI units.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Params {
     /// Upper bob mass (kg).
     pub m1: f64,

@@ -523,3 +523,67 @@ fn a_store_whose_last_chunk_is_shorter_equals_the_npy() {
     assert_eq!(s.missing().unwrap(), Vec::<u32>::new());
     assert_eq!(store_bits(&store), npy_bits(&npy));
 }
+
+/// A store's identity is data, not a command to run (issue 25's audit: a store whose command
+/// said `--params /etc/shadow` made `render` read that file and print its first line, and
+/// `--params /dev/zero` took 4 GB): `render` and `serve --store` read the map from the
+/// recorded settings and never open a path named inside a store; recorded settings out of
+/// range are refused like flags; a task with other settings is refused naming the flags.
+#[test]
+fn a_store_is_read_as_data_and_never_opens_what_it_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("m.zarr");
+    let s = store.to_str().unwrap();
+    let map = ["--size", "48", "--t-max", "2"];
+    flip(&map, &["--data", s]).success();
+    let meta = store.join("zarr.json");
+    let text = std::fs::read_to_string(&meta).unwrap();
+    let secret = dir.path().join("secret.toml");
+    std::fs::write(&secret, "m1 = \"the secret first line\"\n").unwrap();
+    let hostile = text.replace(
+        "\"chaoscope:command\": \"chaoscope flip",
+        &format!(
+            "\"chaoscope:command\": \"chaoscope flip --params {} --params /dev/zero",
+            secret.display()
+        ),
+    );
+    assert_ne!(hostile, text, "the command was rewritten");
+    std::fs::write(&meta, &hostile).unwrap();
+    let png = dir.path().join("r.png");
+    let out = chaoscope()
+        .args(["render", s, "--output"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{said}");
+    assert!(!said.contains("secret"), "{said}");
+    // The picture is the map's, from its recorded settings.
+    let direct = dir.path().join("d.png");
+    flip(&map, &["--output", direct.to_str().unwrap()]).success();
+    let (a, b) = (
+        chaoscope::render::read_png(&png).unwrap(),
+        chaoscope::render::read_png(&direct).unwrap(),
+    );
+    assert!(a.rgb == b.rgb, "render's pixels differ from flip's");
+    // Recorded settings out of range are refused as a flag would be.
+    let bad = text.replace("\"t_max\": 2.0", "\"t_max\": -1.0");
+    assert_ne!(bad, text, "t_max was rewritten");
+    std::fs::write(&meta, &bad).unwrap();
+    chaoscope()
+        .args(["render", s, "--output"])
+        .arg(&png)
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("--t-max"));
+    // Another task with other physics: refused, naming the flags that differ.
+    std::fs::write(&meta, &text).unwrap();
+    flip(
+        &["--size", "48", "--t-max", "2", "--m2", "1.5"],
+        &["--data", s],
+    )
+    .code(2)
+    .stderr(predicates::str::contains(
+        "`--m2 1` where this run has `--m2 1.5`",
+    ));
+}

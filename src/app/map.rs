@@ -76,6 +76,7 @@ pub fn make_store<S: MapKernels>(
         symmetric: spec.mirrors(),
         verdict,
         quantity: (quantity.name, quantity.unit),
+        identity: serde_json::json!({ "map": spec.any(), "backend": backend.name() }),
     };
     let filled = fill_store(
         &fill,

@@ -24,6 +24,8 @@ pub struct StoreFill<'a> {
     pub verdict: bool,
     /// The map's (name, unit), for the array's attributes.
     pub quantity: (&'a str, &'a str),
+    /// The map's settings as data ([`store::StoreInfo::identity`]).
+    pub identity: serde_json::Value,
 }
 
 /// What a fill computed: pixels written, the counts `count` found in them, resolved pixels.
@@ -53,6 +55,7 @@ pub fn fill_store(
         tiles: tasks,
         mirrored: store::pairs_mirrored(&grid, fill.symmetric),
         resolved: fill.verdict,
+        identity: fill.identity.clone(),
     };
     let store = MapStore::create_or_open("data", fill.path, &grid, &ours, fill.quantity)?;
     let all = store::units(grid.height, store.chunk_rows, store.info.mirrored);
@@ -141,9 +144,27 @@ pub fn missing_note(filled: &Filled, path: &Path) -> Vec<String> {
     out
 }
 
-/// The command a store was made by (to be parsed back into its job by the command line).
-pub fn store_command(path: &Path) -> Result<String> {
-    Ok(MapStore::open(path)?.info.command)
+/// The map a store holds (from its identity, as data, checked like any spec) and the command
+/// that made it. The command is shown, never parsed: it may name files, and a store may come
+/// from anyone.
+pub fn stored_map(path: &Path) -> Result<(String, FrameMap)> {
+    let info = MapStore::open(path)?.info;
+    let bad = |why: String| Error::Format(format!("{}: {why}", path.display()));
+    let map = info
+        .identity
+        .get("map")
+        .cloned()
+        .ok_or_else(|| bad("records no map (chaoscope:identity); start a new store".into()))?;
+    let map: FrameMap = serde_json::from_value(map).map_err(|e| {
+        bad(format!(
+            "its recorded map (chaoscope:identity) is not one: {e}"
+        ))
+    })?;
+    match &map {
+        FrameMap::Flip(spec) => spec.validate()?,
+        FrameMap::Lyapunov(spec) => spec.validate()?,
+    }
+    Ok((info.command, map))
 }
 
 #[derive(Clone, Debug, PartialEq)]

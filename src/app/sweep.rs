@@ -138,11 +138,7 @@ pub struct Frame {
 }
 
 /// One frame as a single map: what the frame's reproducing command describes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum FrameMap {
-    Flip(FlipSpec),
-    Lyapunov(LyapunovSpec),
-}
+pub use crate::spec::AnyMap as FrameMap;
 
 /// The frames of a sweep, validated; errors name the job's field.
 pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
@@ -313,6 +309,10 @@ pub fn run(
                 tiles: 1,
                 mirrored: false,
                 resolved: false,
+                identity: serde_json::json!({
+                    "frames": frames.iter().map(|f| frame_map(job, f)).collect::<Vec<_>>(),
+                    "backend": job.backend.name(),
+                }),
             };
             let quantity = match frame_map(job, &frames[0]) {
                 FrameMap::Flip(spec) => spec.quantity(),

@@ -279,6 +279,27 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
             );
             ExitCode::from(2)
         }
+        Err(Error::StoreDiffers {
+            field,
+            path,
+            differences,
+            command: made_by,
+        }) => {
+            let what: Vec<String> = differences
+                .iter()
+                .map(|(setting, theirs, ours)| {
+                    let flag = names::flag(command, setting);
+                    format!("`{flag} {theirs}` where this run has `{flag} {ours}`")
+                })
+                .collect();
+            eprintln!(
+                "error: invalid value for {}: {} was made by another command: it has {} (its command: {made_by})",
+                names::flag(command, field),
+                path.display(),
+                what.join(", ")
+            );
+            ExitCode::from(2)
+        }
         Err(e) => {
             eprintln!("error: {e}");
             match e {

@@ -45,7 +45,7 @@ impl ServeArgs {
                         "its command fixes the physics: give the store alone",
                     ));
                 }
-                let (command, map) = super::store::stored_map(path)?;
+                let (command, map) = crate::app::store::stored_map(path)?;
                 Some(StoredMap {
                     path: path.clone(),
                     command,

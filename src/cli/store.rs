@@ -2,14 +2,13 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser};
+use clap::Args;
 
 use super::args::PictureArgs;
 use super::parse::parse_u32;
-use super::{Cli, Command, json, say};
+use super::{json, say};
 use crate::app::store::{self, RenderJob, StatusJob};
-use crate::app::sweep::FrameMap;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::monitor::Monitor;
 
 #[derive(Args, Debug, Clone)]
@@ -70,33 +69,8 @@ pub struct RenderArgs {
     pub picture: PictureArgs,
 }
 
-/// A store's command and the map it describes: parsed back, the command gives the spec.
-pub fn stored_map(path: &std::path::Path) -> Result<(String, FrameMap)> {
-    let command = store::store_command(path)?;
-    let words: Vec<&str> = command.split_whitespace().collect();
-    let spec = match Cli::try_parse_from(&words).map(|cli| cli.command) {
-        Ok(Command::Flip(flip)) => FrameMap::Flip(flip.job()?.spec),
-        Ok(Command::Lyapunov(l)) => match l.job()? {
-            super::LyapunovJob::Map(map) => FrameMap::Lyapunov(map.spec),
-            super::LyapunovJob::Point(_) => {
-                return Err(Error::Format(format!(
-                    "{}: its command is a single point: {command}",
-                    path.display()
-                )));
-            }
-        },
-        _ => {
-            return Err(Error::Format(format!(
-                "{}: its command is not a map this chaoscope reads: {command}",
-                path.display()
-            )));
-        }
-    };
-    Ok((command, spec))
-}
-
 pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    let (command, spec) = stored_map(&args.store)?;
+    let (command, spec) = store::stored_map(&args.store)?;
     let job = RenderJob {
         store: args.store.clone(),
         spec,

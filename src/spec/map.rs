@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::model::Params;
 
 /// What a flip map shows of each start's first flip.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum FlipMeasure {
     /// The time until either arm first flips over ([`crate::quantity::FLIP_TIME`]).
     #[default]
@@ -30,7 +30,7 @@ impl FlipMeasure {
 }
 
 /// A flip map: for every start, its first flip over the top (when, or which arm which way).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FlipSpec {
     /// What the map shows of the first flip.
     pub measure: FlipMeasure,
@@ -174,7 +174,7 @@ impl FlipSpec {
 }
 
 /// How the divergence of nearby starts is measured.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Method {
     /// Tangent (variational) equations alongside the state (Benettin et al.).
     Tangent,
@@ -184,7 +184,7 @@ pub enum Method {
 }
 
 /// A divergence map: the largest finite-time Lyapunov exponent (1/s) of every start.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LyapunovSpec {
     pub params: Params,
     pub grid: Grid,
@@ -305,6 +305,13 @@ impl LyapunovSpec {
     }
 }
 
+/// A map of either family, as data: a sweep's frame, and what a store records it holds.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum AnyMap {
+    Flip(FlipSpec),
+    Lyapunov(LyapunovSpec),
+}
+
 /// What the one map path (the engine's entry, the verdict, the store) needs of a map's spec,
 /// whichever quantity it measures: a map is its quantity's settings over a grid, stepped in a
 /// precision by an integrator, optionally over a band of rows.
@@ -330,6 +337,8 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     fn underlying(&self) -> Option<Self> {
         None
     }
+    /// The map as data of either family.
+    fn any(&self) -> AnyMap;
 }
 
 impl MapSpec for FlipSpec {
@@ -370,6 +379,9 @@ impl MapSpec for FlipSpec {
             precision,
             ..*self
         }
+    }
+    fn any(&self) -> AnyMap {
+        AnyMap::Flip(*self)
     }
     fn underlying(&self) -> Option<Self> {
         (self.measure == FlipMeasure::Kind).then_some(FlipSpec {
@@ -414,5 +426,8 @@ impl MapSpec for LyapunovSpec {
             precision,
             ..*self
         }
+    }
+    fn any(&self) -> AnyMap {
+        AnyMap::Lyapunov(*self)
     }
 }

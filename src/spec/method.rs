@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 
 /// The floating-point precision a GPU kernel integrates in (the CPU path is always f64).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Precision {
     /// The default: every GPU, fastest.
     #[default]
@@ -33,7 +33,7 @@ impl Precision {
 }
 
 /// How each pendulum is stepped in time.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Integrator {
     /// Classic fourth-order Runge-Kutta at the fixed step `dt`, the flip located by cubic
     /// Hermite interpolation.

@@ -10,7 +10,7 @@ mod memory;
 mod method;
 mod stability;
 
-pub use map::{FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};
+pub use map::{AnyMap, FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};
 pub use memory::{available_memory, check_memory};
 pub use method::{
     ACCURATE, ACCURATE_FTLE, Integrator, MIN_TOLERANCE_F32, MIN_TOLERANCE_F64, Precision,
@@ -18,7 +18,7 @@ pub use method::{
 pub use stability::{largest_stable_dt, speed_bound, validate_speeds, validate_stability};
 
 /// A closed interval `min:max` of angles (rad).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Range {
     pub min: f64,
     pub max: f64,
@@ -37,7 +37,7 @@ impl Range {
 
 /// The initial-condition grid: theta1 along x (left to right), theta2 along y (top = max),
 /// every start with the same angular velocities. Pixel centres, not edges.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Grid {
     pub width: u32,
     pub height: u32,
@@ -128,7 +128,7 @@ pub const F32_MIN_PIXEL_STEP: f64 = 16.0 * 2.384185791015625e-7;
 pub const F64_MIN_PIXEL_STEP: f64 = 16.0 * 4.440892098500626e-16;
 
 /// Fixed-step time integration from t = 0 to `t_max`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stepping {
     /// Time step (s).
     pub dt: f64,

@@ -50,6 +50,10 @@ pub struct StoreInfo {
     /// Whether the store holds the verdict as the array `resolved` (uint8: 1 resolved, 0
     /// not, 255 not computed yet).
     pub resolved: bool,
+    /// What the store holds, as data (JSON: the map's spec and the backend asked for): its
+    /// identity, compared field by field with a task's before it adds to it; `render` and
+    /// `serve --store` read the map from it, never from the command (which may name files).
+    pub identity: serde_json::Value,
 }
 
 /// A map's store: its group, the map array, the grid.
@@ -152,6 +156,7 @@ impl MapStore {
         attributes.insert("chaoscope:tiles".into(), info.tiles.into());
         attributes.insert("chaoscope:mirrored".into(), info.mirrored.into());
         attributes.insert("chaoscope:resolved".into(), info.resolved.into());
+        attributes.insert("chaoscope:identity".into(), info.identity.clone());
         write_group(&store, path, attributes)?;
         Self::open(path)
     }
@@ -188,6 +193,7 @@ impl MapStore {
                 .get("chaoscope:resolved")
                 .and_then(|v| v.as_bool())
                 .unwrap_or(false),
+            identity: a.get("chaoscope:identity").cloned().unwrap_or_default(),
         };
         let map = Array::open(store.clone(), "/map").map_err(|e| err(&e))?;
         let resolved = match info.resolved {
@@ -408,46 +414,117 @@ fn check_same(
             ),
         ));
     }
-    if theirs.command != ours.command {
-        let flags = |c: &str| -> Vec<String> {
-            let words: Vec<&str> = c.split_whitespace().collect();
-            let mut out = Vec::new();
-            let mut k = 0;
-            while k < words.len() {
-                if words[k].starts_with("--") {
-                    let mut flag = words[k].to_string();
-                    while k + 1 < words.len() && !words[k + 1].starts_with("--") {
-                        k += 1;
-                        flag = format!("{flag} {}", words[k]);
-                    }
-                    out.push(flag);
-                } else {
-                    out.push(words[k].to_string());
-                }
-                k += 1;
-            }
-            out
-        };
-        let (a, b) = (flags(&theirs.command), flags(&ours.command));
-        let only = |x: &[String], y: &[String]| {
-            x.iter()
-                .filter(|f| !y.contains(f))
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
+    if theirs.identity.is_null() {
         return Err(Error::invalid(
             field,
             format!(
-                "{} was made by another command: it has `{}` where this one has `{}` (its command: {})",
-                path.display(),
-                only(&a, &b),
-                only(&b, &a),
-                theirs.command
+                "{} records no settings as data (chaoscope:identity): it was made by an older chaoscope; start a new store",
+                path.display()
             ),
         ));
     }
+    let mut differences = Vec::new();
+    differ(
+        &mut Vec::new(),
+        &theirs.identity,
+        &ours.identity,
+        &mut differences,
+    );
+    if !differences.is_empty() {
+        return Err(Error::StoreDiffers {
+            field,
+            path: path.to_path_buf(),
+            differences,
+            command: theirs.command.clone(),
+        });
+    }
     Ok(())
+}
+
+/// The settings in which two identities differ: (spec field, theirs, ours), one entry a
+/// field, in the order of the identity.
+fn differ(
+    at: &mut Vec<String>,
+    theirs: &serde_json::Value,
+    ours: &serde_json::Value,
+    out: &mut Vec<(&'static str, String, String)>,
+) {
+    use serde_json::Value;
+    match (theirs, ours) {
+        (Value::Object(a), Value::Object(b)) if a.keys().eq(b.keys()) => {
+            for (key, value) in a {
+                at.push(key.clone());
+                differ(at, value, &b[key], out);
+                at.pop();
+            }
+        }
+        (Value::Array(a), Value::Array(b)) if a.len() == b.len() => {
+            for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                at.push(k.to_string());
+                differ(at, x, y, out);
+                at.pop();
+            }
+        }
+        (a, b) if a == b => {}
+        (a, b) => {
+            let field = setting(at);
+            if out.iter().all(|(f, _, _)| *f != field) {
+                out.push((field, shown(a), shown(b)));
+            }
+        }
+    }
+}
+
+/// A value as a command line writes it: numbers as Rust prints them (1, not 1.0), enum
+/// variants by name, the rest as JSON.
+fn shown(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Number(n) => n.as_f64().map_or(n.to_string(), |x| x.to_string()),
+        serde_json::Value::String(s) => s.to_lowercase(),
+        serde_json::Value::Object(o) if o.len() == 1 => o.keys().next().unwrap().to_lowercase(),
+        v => v.to_string(),
+    }
+}
+
+/// The spec field an identity's path names (the names the command line maps to its flags).
+fn setting(at: &[String]) -> &'static str {
+    let leaf = at.last().map(String::as_str).unwrap_or("");
+    let parent = at.len().checked_sub(2).map_or("", |k| at[k].as_str());
+    match (parent, leaf) {
+        ("", "map") | (_, "Flip") | (_, "Lyapunov") | ("map", _) => "data",
+        (_, "width" | "height") => "size",
+        ("theta1", "min" | "max") => "theta1",
+        ("theta2", "min" | "max") => "theta2",
+        (_, "joint1" | "joint2") => "joint_damping",
+        (_, "rod1" | "rod2") => "rod_mass",
+        (_, "bob_area1" | "bob_area2") => "drag_area",
+        (_, "rod_area1" | "rod_area2") => "rod_drag_area",
+        (_, "bearing") => "bearing_friction",
+        (_, "measure") => "colour_by",
+        (_, "early_exit") => "full",
+        (_, "use_symmetry") => "no_symmetry",
+        (_, "rtol") => "rtol",
+        (_, "atol") => "atol",
+        (_, "eps") => "eps",
+        ("integrator", _) | (_, "integrator") | ("Dp54" | "Dop853", _) => "integrator",
+        ("method", _) | (_, "method") | ("Twin", _) => "method",
+        (_, "m1") => "m1",
+        (_, "m2") => "m2",
+        (_, "l1") => "l1",
+        (_, "l2") => "l2",
+        (_, "g") => "g",
+        (_, "t_max") => "t_max",
+        (_, "dt") => "dt",
+        (_, "omega1") => "omega1",
+        (_, "omega2") => "omega2",
+        (_, "renorm") => "renorm",
+        (_, "precision") => "precision",
+        (_, "backend") => "backend",
+        (_, "rho") => "rho",
+        (_, "cw") => "cw",
+        (_, "bearing_radius") => "bearing_radius",
+        _ => "data",
+    }
 }
 
 #[cfg(test)]

@@ -33,6 +33,7 @@ impl SweepStore {
             let theirs = StoreInfo {
                 command: text("chaoscope:command").unwrap_or_default(),
                 version: text("chaoscope:version").unwrap_or_default(),
+                identity: a.get("chaoscope:identity").cloned().unwrap_or_default(),
                 ..info.clone()
             };
             check_same("data", path, &theirs, info)?;
@@ -68,6 +69,7 @@ impl SweepStore {
         attributes.insert("chaoscope:command".into(), info.command.clone().into());
         attributes.insert("chaoscope:version".into(), info.version.clone().into());
         attributes.insert("chaoscope:varied".into(), param_name.into());
+        attributes.insert("chaoscope:identity".into(), info.identity.clone());
         write_group(&store, path, attributes)?;
         Self::open(path, store)
     }
