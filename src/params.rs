@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::error::{Error, Result, finite_positive};
+use crate::error::{Error, Result};
 use crate::model::{Losses, Params};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -192,37 +192,90 @@ fn key_of(field: &str) -> &str {
     }
 }
 
-fn finite_non_negative(field: &'static str, v: f64) -> Result<()> {
-    if v.is_finite() && v >= 0.0 {
+/// The range each parameter may take: wide enough for any pendulum on a bench or in a
+/// textbook (masses far beyond: they drop out of the motion, and the GPU's coefficients are
+/// scaled by a power of two, tests/hardening.rs), narrow enough that every coefficient the
+/// runs form from them (inertias up to M l^2, torques up to M g l, the energies and the
+/// stability limits) stays finite in f64 and, scaled, in f32. `--help` states them.
+pub const RANGES: [(&str, f64, f64); 13] = [
+    ("m1", 1e-30, 1e30),
+    ("m2", 1e-30, 1e30),
+    ("l1", 1e-4, 1e4),
+    ("l2", 1e-4, 1e4),
+    ("g", 1e-6, 1e6),
+    ("rod_mass", 0.0, 1e30),
+    ("joint_damping", 0.0, 1e30),
+    ("rho", 0.0, 1e4),
+    ("cw", 0.0, 100.0),
+    ("drag_area", 0.0, 1e4),
+    ("rod_drag_area", 0.0, 1e4),
+    ("bearing_friction", 0.0, 1.0),
+    ("bearing_radius", 0.0, 1.0),
+];
+
+/// `v` within the range [`RANGES`] gives `field`, else an error naming it and the range.
+fn in_range(field: &'static str, v: f64) -> Result<()> {
+    let (_, lo, hi) =
+        RANGES
+            .iter()
+            .find(|r| r.0 == field)
+            .copied()
+            .unwrap_or((field, 0.0, f64::MAX));
+    if (lo..=hi).contains(&v) {
         Ok(())
     } else {
         Err(Error::invalid(
             field,
-            format!("{v} is not allowed; it must be a finite number >= 0"),
+            format!(
+                "{} is not allowed; it must be between {} and {}",
+                short(v),
+                short(lo),
+                short(hi)
+            ),
         ))
     }
 }
 
-/// Every parameter in its allowed range; the error names the field of [`ParamSources`].
+/// A number as a person writes it: plain when moderate, else in exponent form.
+fn short(x: f64) -> String {
+    match x == 0.0 || (1e-3..1e4).contains(&x.abs()) {
+        true => format!("{x}"),
+        false => format!("{x:e}"),
+    }
+}
+
+/// Every parameter in its allowed range ([`RANGES`]); the error names the field of
+/// [`ParamSources`].
 pub fn validate(p: &Params) -> Result<()> {
-    finite_positive("m1", p.m1)?;
-    finite_positive("m2", p.m2)?;
-    finite_positive("l1", p.l1)?;
-    finite_positive("l2", p.l2)?;
-    finite_positive("g", p.g)?;
-    finite_non_negative("rod_mass", p.rod1)?;
-    finite_non_negative("rod_mass", p.rod2)?;
+    for (field, v) in [
+        ("m1", p.m1),
+        ("m2", p.m2),
+        ("l1", p.l1),
+        ("l2", p.l2),
+        ("g", p.g),
+    ] {
+        in_range(field, v)?;
+    }
+    in_range("rod_mass", p.rod1)?;
+    in_range("rod_mass", p.rod2)?;
     let l = &p.losses;
-    finite_non_negative("joint_damping", l.joint1)?;
-    finite_non_negative("joint_damping", l.joint2)?;
-    finite_non_negative("rho", l.rho)?;
-    finite_non_negative("cw", l.cw)?;
-    finite_non_negative("drag_area", l.bob_area1)?;
-    finite_non_negative("drag_area", l.bob_area2)?;
-    finite_non_negative("rod_drag_area", l.rod_area1)?;
-    finite_non_negative("rod_drag_area", l.rod_area2)?;
-    finite_non_negative("bearing_friction", l.bearing)?;
-    finite_non_negative("bearing_radius", l.bearing_radius)
+    in_range("joint_damping", l.joint1)?;
+    in_range("joint_damping", l.joint2)?;
+    in_range("rho", l.rho)?;
+    in_range("cw", l.cw)?;
+    in_range("drag_area", l.bob_area1)?;
+    in_range("drag_area", l.bob_area2)?;
+    in_range("rod_drag_area", l.rod_area1)?;
+    in_range("rod_drag_area", l.rod_area2)?;
+    in_range("bearing_friction", l.bearing)?;
+    in_range("bearing_radius", l.bearing_radius)?;
+    if l.bearing > 0.0 && l.bearing_radius == 0.0 {
+        return Err(Error::invalid(
+            "bearing_radius",
+            "0 is not allowed with bearing friction: the friction acts at a radius > 0",
+        ));
+    }
+    Ok(())
 }
 
 impl ParamSources {

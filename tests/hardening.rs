@@ -650,3 +650,159 @@ fn a_map_larger_than_the_process_may_take_is_refused_up_front() {
         "refused before the work"
     );
 }
+
+/// Issue 25's audit: physics whose coefficients overflow (`--m1 1e308`, in flags, in a
+/// `--params` file, in `sweep --vary`, on every command) ran nalgebra's unbounded Schur
+/// decomposition in the stability analysis until SIGKILL, deaf to Ctrl-C and `timeout`. Each
+/// is now refused up front, exit 2 naming the flag and its range, well within a 10 s bound.
+#[test]
+fn overflowing_physics_is_refused_at_once_on_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = dir.path().join("big.toml");
+    std::fs::write(&toml, "m1 = 1e308\n").unwrap();
+    let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let map = ["flip", "--size", "16", "--t-max", "1", "--output"];
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["--m1", "1e308"], "--m1"),
+        (vec!["--l1", "1e155"], "--l1"),
+        (vec!["--m2", "1e300"], "--m2"),
+        (vec!["--g", "1e308"], "--g"),
+        (vec!["--rod-mass", "1e308"], "--rod-mass"),
+        (vec!["--bearing-friction", "1e308"], "--bearing-friction"),
+        (vec!["--joint-damping", "1e308"], "--joint-damping"),
+        (vec!["--m1", "1e-300"], "--m1"),
+        (
+            vec!["--bearing-friction", "0.001", "--bearing-radius", "0"],
+            "--bearing-radius",
+        ),
+        (vec!["--params", &toml.to_string_lossy()], "--params"),
+    ]
+    .into_iter()
+    .map(|(extra, flag)| {
+        let mut args: Vec<String> = map.iter().map(|s| s.to_string()).collect();
+        args.push(out("m.png"));
+        args.extend(extra.into_iter().map(String::from));
+        (args, flag)
+    })
+    .chain([
+        (
+            [
+                "sweep",
+                "--vary",
+                "m1=1:1e308",
+                "--frames",
+                "2",
+                "--size",
+                "8",
+                "--output",
+            ]
+            .map(String::from)
+            .into_iter()
+            .chain([out("sweep")])
+            .collect(),
+            "--vary",
+        ),
+        (
+            [
+                "lyapunov", "--size", "8", "--t-max", "1", "--omega1", "1e300", "--output",
+            ]
+            .map(String::from)
+            .into_iter()
+            .chain([out("l.png")])
+            .collect(),
+            "--omega1",
+        ),
+        (
+            [
+                "trajectory",
+                "--theta1",
+                "1",
+                "--theta2",
+                "1",
+                "--l2",
+                "1e155",
+            ]
+            .map(String::from)
+            .to_vec(),
+            "--l2",
+        ),
+        (
+            [
+                "traces", "--theta1", "1", "--theta2", "1", "--g", "1e308", "--output",
+            ]
+            .map(String::from)
+            .into_iter()
+            .chain([out("t.png")])
+            .collect(),
+            "--g",
+        ),
+    ])
+    .collect();
+    for (args, flag) in cases {
+        let started = Instant::now();
+        chaoscope()
+            .args(&args)
+            .timeout(Duration::from_secs(10))
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(format!(
+                "invalid value for {flag}"
+            )));
+        assert!(started.elapsed() < Duration::from_secs(10), "{args:?}");
+    }
+}
+
+/// Issue 25's smaller findings: a completion script written to a full device is an error,
+/// not a panic; the verdict's mask cannot overwrite the map it judges; a tolerance too loose
+/// in f64 is not answered with advice to use f64.
+#[test]
+fn small_findings_of_the_audit() {
+    if Path::new("/dev/full").exists() {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let out = std::process::Command::new(assert_cmd::cargo::cargo_bin("chaoscope"))
+            .args(["completions", "bash"])
+            .stdout(full)
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{said}");
+        assert!(
+            said.contains("No space left") && !said.contains("panicked"),
+            "{said}"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let npy = dir.path().join("x.npy");
+    chaoscope()
+        .args(["flip", "--size", "8", "--t-max", "1", "--output"])
+        .arg(dir.path().join("x.png"))
+        .arg("--data")
+        .arg(&npy)
+        .arg("--resolved")
+        .arg(&npy)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--resolved"));
+    assert!(!npy.exists(), "nothing written");
+    chaoscope()
+        .args(["flip", "--size", "8", "--t-max", "1", "--backend", "cpu"])
+        .args([
+            "--integrator",
+            "dp54",
+            "--rtol",
+            "1",
+            "--precision",
+            "f64",
+            "--output",
+        ])
+        .arg(dir.path().join("y.png"))
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("--rtol")
+                .and(predicate::str::contains("use --precision f64").not()),
+        );
+}

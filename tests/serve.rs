@@ -9,7 +9,7 @@ mod common;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use chaoscope::render::read_png;
 use common::{chaoscope, gpu, png_text};
@@ -796,4 +796,46 @@ fn a_request_never_finished_is_cut_off() {
         "{}",
         String::from_utf8_lossy(&rest)
     );
+}
+
+/// Issue 25's audit: a request whose physics overflow (`m1=1e308`) ran nalgebra's unbounded
+/// Schur decomposition for ever inside the one engine, so the next normal tile got no answer.
+/// Now every such value is refused at once naming its key, on every endpoint, and the next
+/// normal tile is computed (a new t-max each time, so not from the cache) within the
+/// watchdog's bound: answered at all, not hung (a 16^2 tile takes milliseconds).
+#[test]
+fn hostile_values_are_refused_and_the_explorer_keeps_answering() {
+    let server = Server::start(&["--backend", "cpu"]);
+    let hostile = [
+        ("/tile/0/0/0.png?size=16&m1=1e308", "m1"),
+        ("/tile/0/0/0.png?size=16&l1=1e155", "l1"),
+        ("/tile/0/0/0.png?size=16&m2=1e300", "m2"),
+        ("/tile/0/0/0.png?size=16&g=1e308", "g"),
+        ("/tile/0/0/0.png?size=16&damping=1e308", "damping"),
+        ("/api/point?theta1=1&theta2=1&pixel=0.01&m1=1e308", "m1"),
+        ("/api/range?m1=1e308", "m1"),
+        (
+            "/api/save?theta1_min=0&theta1_max=1&theta2_min=0&theta2_max=1&width=16&m1=1e308",
+            "m1",
+        ),
+        ("/api/trajectory?theta1=1&theta2=1&m1=1e308", "m1"),
+    ];
+    for (k, (path, key)) in hostile.iter().enumerate() {
+        let sent = Instant::now();
+        server.refuses(path, key);
+        let refused = sent.elapsed();
+        let sent = Instant::now();
+        let (status, _, _) = server.get(&format!(
+            "/tile/0/0/0.png?size=16&t_max={}",
+            1.0 + 0.1 * k as f64
+        ));
+        let answered = sent.elapsed();
+        assert_eq!(status, 200, "the tile after {path}");
+        // A watchdog's bound, not a speed target: a hung engine never answers.
+        assert!(
+            refused < Duration::from_secs(10) && answered < Duration::from_secs(10),
+            "{path}: refused in {refused:?}, the next tile in {answered:?}"
+        );
+        eprintln!("{path}: refused in {refused:?}, the next tile in {answered:?}");
+    }
 }

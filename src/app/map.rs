@@ -117,6 +117,12 @@ impl MapOutputs {
 
     /// Every path the right kind and writable, before any work.
     pub fn validate(&self) -> Result<()> {
+        if self.resolved.is_some() && self.resolved == self.data && self.store().is_none() {
+            return Err(Error::invalid(
+                "resolved",
+                "is the --data file: the mask would overwrite the map; give it its own .npy",
+            ));
+        }
         if let Some(store) = self.store() {
             if self.resolved.as_ref().is_some_and(|r| r != store) {
                 return Err(Error::invalid(

@@ -28,48 +28,49 @@ fn preset_parser() -> impl clap::builder::TypedValueParser<Value = Preset> {
 /// The physical parameters, SI units; every command takes them.
 #[derive(Args, Debug, Clone, Default)]
 pub struct PhysicalArgs {
-    /// Upper bob mass (kg) [default 1].
+    /// Upper bob mass (kg, 1e-30 to 1e30) [default 1].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub m1: Option<f64>,
-    /// Lower bob mass (kg) [default 1].
+    /// Lower bob mass (kg, 1e-30 to 1e30) [default 1].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub m2: Option<f64>,
-    /// Upper arm length (m) [default 1].
+    /// Upper arm length (m, 1e-4 to 1e4) [default 1].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub l1: Option<f64>,
-    /// Lower arm length (m) [default 1].
+    /// Lower arm length (m, 1e-4 to 1e4) [default 1].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub l2: Option<f64>,
-    /// Gravitational acceleration (m/s^2) [default 9.81].
+    /// Gravitational acceleration (m/s^2, 1e-6 to 1e6) [default 9.81].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub g: Option<f64>,
-    /// Masses of uniform rods along the arms, R or R1,R2 (kg) [default 0: massless arms].
+    /// Masses of uniform rods along the arms, R or R1,R2 (kg, 0 to 1e30) [default 0:
+    /// massless arms].
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub rod_mass: Option<(f64, f64)>,
-    /// Viscous joint damping, C or C1,C2 (N m s): torque -C1 w1 at the pivot, -C2 (w2 - w1)
-    /// at the middle joint.
+    /// Viscous joint damping, C or C1,C2 (N m s, 0 to 1e30): torque -C1 w1 at the pivot,
+    /// -C2 (w2 - w1) at the middle joint.
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub joint_damping: Option<(f64, f64)>,
     /// Quadratic air drag on bobs and rods (F = 1/2 rho c_w A v^2).
     #[arg(long)]
     pub air_drag: bool,
-    /// Air density (kg/m^3) for --air-drag [default 1.2].
+    /// Air density (kg/m^3, 0 to 1e4) for --air-drag [default 1.2].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub rho: Option<f64>,
-    /// Drag coefficient for --air-drag [default 2, the report's plates].
+    /// Drag coefficient for --air-drag (0 to 100) [default 2, the report's plates].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub cw: Option<f64>,
-    /// Projected areas of the bobs, A or A1,A2 (m^2) [default 1.45e-3].
+    /// Projected areas of the bobs, A or A1,A2 (m^2, 0 to 1e4) [default 1.45e-3].
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub drag_area: Option<(f64, f64)>,
-    /// Projected areas of the rods, A or A1,A2 (m^2) [default 0].
+    /// Projected areas of the rods, A or A1,A2 (m^2, 0 to 1e4) [default 0].
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
     pub rod_drag_area: Option<(f64, f64)>,
-    /// Rolling-friction coefficient c_R of the pivot and middle bearings (F = c_R F_N; the
-    /// report: 0.5e-3 to 1e-3).
+    /// Rolling-friction coefficient c_R of the pivot and middle bearings (F = c_R F_N; 0 to
+    /// 1; the report: 0.5e-3 to 1e-3).
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub bearing_friction: Option<f64>,
-    /// Radius (m) at which bearing friction acts [default 0.004].
+    /// Radius (m, above 0 to 1) at which bearing friction acts [default 0.004].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub bearing_radius: Option<f64>,
     /// A named set of parameters: lab, the report's apparatus (flags given as well override

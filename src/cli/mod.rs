@@ -250,13 +250,16 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Bench(args) => bench::run(args, monitor, cli.json),
         Command::Completions { shell } => {
             use clap::CommandFactory;
-            clap_complete::generate(
-                *shell,
-                &mut Cli::command(),
-                "chaoscope",
-                &mut std::io::stdout(),
-            );
-            Ok(serde_json::Value::Null)
+            use std::io::Write;
+            // Into memory first: clap_complete panics on a failed write (a full disk, a
+            // closed pipe), which must be an error instead.
+            let mut script = Vec::new();
+            clap_complete::generate(*shell, &mut Cli::command(), "chaoscope", &mut script);
+            let mut out = std::io::stdout().lock();
+            out.write_all(&script)
+                .and_then(|()| out.flush())
+                .map(|()| serde_json::Value::Null)
+                .map_err(Error::from)
         }
     };
     let result = result.map(|mut summary| {

@@ -98,10 +98,15 @@ impl Integrator {
         };
         for (field, v) in [("rtol", rtol), ("atol", atol)] {
             if !(v.is_finite() && (least..=1e-2).contains(&v)) {
+                // Advice only where it helps: a tolerance too tight for f32.
+                let advice = match precision == Precision::F32 && v < least {
+                    true => " (use --precision f64 for tighter tolerances)",
+                    false => "",
+                };
                 return Err(Error::invalid(
                     field,
                     format!(
-                        "{v:e} must be between {least:e} and 1e-2 in {} (use --precision f64 for tighter tolerances)",
+                        "{v:e} must be between {least:e} and 1e-2 in {}{advice}",
                         precision.name()
                     ),
                 ));

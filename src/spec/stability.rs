@@ -39,7 +39,13 @@ pub fn largest_stable_dt(p: &Params) -> f64 {
             k[(0, 0)], k[(0, 1)], c[(0, 0)], c[(0, 1)],
             k[(1, 0)], k[(1, 1)], c[(1, 0)], c[(1, 1)],
         );
-        for lambda in a.complex_eigenvalues().iter() {
+        // A bounded Schur decomposition (nalgebra's complex_eigenvalues iterates without a
+        // limit, and spun for ever on a matrix with inf or NaN); validated parameters give
+        // finite matrices, which converge in a few dozen iterations.
+        let Some(schur) = a.try_schur(1e-15, 1000) else {
+            return f64::NAN;
+        };
+        for lambda in schur.complex_eigenvalues().iter() {
             let size = lambda.norm();
             if size == 0.0 {
                 continue;
@@ -64,6 +70,12 @@ pub fn largest_stable_dt(p: &Params) -> f64 {
 /// naming `dt` with the largest stable step.
 pub fn validate_stability(p: &Params, s: &Stepping) -> Result<()> {
     let limit = largest_stable_dt(p);
+    if limit.is_nan() || limit <= 0.0 {
+        return Err(Error::invalid(
+            "dt",
+            "no stable step can be found for these parameters (their linearised motion has no finite eigenvalues): check the masses, lengths, g and losses",
+        ));
+    }
     if s.dt > limit {
         return Err(Error::invalid(
             "dt",
@@ -95,6 +107,14 @@ pub fn speed_bound(p: &Params, omega1: f64, omega2: f64) -> f64 {
 /// step that the fastest reachable rotation ([`speed_bound`]) would blow up, naming `dt`.
 pub fn validate_speeds(p: &Params, s: &Stepping, omega1: f64, omega2: f64) -> Result<()> {
     let omega = speed_bound(p, omega1, omega2);
+    if !(omega.is_finite() && omega > 0.0) {
+        return Err(Error::invalid(
+            "omega1",
+            format!(
+                "the speeds these starts can reach are not finite ({omega:e} rad/s): check the starting speeds, masses and lengths"
+            ),
+        ));
+    }
     let limit = 2.0 * std::f64::consts::SQRT_2 / omega;
     if s.dt > limit {
         return Err(Error::invalid(
