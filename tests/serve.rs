@@ -839,3 +839,33 @@ fn hostile_values_are_refused_and_the_explorer_keeps_answering() {
         eprintln!("{path}: refused in {refused:?}, the next tile in {answered:?}");
     }
 }
+
+/// Issue 25's smaller server findings: a repeated key is refused naming it (not one value
+/// taken silently), a too-narrow clicked pixel names `pixel` (not `theta1`), and a request
+/// head of 200 kB is answered 431 while the server goes on answering.
+#[test]
+fn heads_and_keys_are_bounded() {
+    let server = Server::start(&["--backend", "cpu"]);
+    server.refuses("/tile/0/0/0.png?size=16&size=512", "size");
+    server.refuses("/api/point?theta1=1&theta2=1&pixel=1e-16", "pixel");
+    let address = server.url.trim_start_matches("http://").to_string();
+    let mut stream = std::net::TcpStream::connect(&address).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let head = format!(
+        "GET /api/info HTTP/1.1\r\nHost: {address}\r\nX-Big: {}\r\n\r\n",
+        "x".repeat(200_000)
+    );
+    // The server may close the connection before all 200 kB are written: that is fine.
+    let _ = std::io::Write::write_all(&mut stream, head.as_bytes());
+    let mut answer = String::new();
+    let _ = std::io::Read::read_to_string(&mut stream, &mut answer);
+    assert!(
+        answer.starts_with("HTTP/1.1 431"),
+        "{:?}",
+        &answer[..answer.len().min(80)]
+    );
+    let (status, _, _) = server.get("/api/info");
+    assert_eq!(status, 200);
+}

@@ -60,11 +60,14 @@ pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {
 /// around the start, so it runs in the tile's precision) and whether it is resolved.
 pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<(View, Grid)> {
-        let mut q = Query::new(q);
+        let mut q = Query::new(q)?;
         let mut view = shared.view(&mut q)?;
         view.kind = Kind::Flip;
         let start = view::start(&mut q)?;
-        let pixel = q.within("pixel", 1e-16, 1.0)?.unwrap_or(1e-3);
+        // At least 16 ulp of pi: a narrower pixel has no distinct edges in f64.
+        let pixel = q
+            .within("pixel", crate::spec::F64_MIN_PIXEL_STEP, 1.0)?
+            .unwrap_or(1e-3);
         q.finish()?;
         let around = |x: f64| Range {
             min: x - 0.5 * pixel,
@@ -120,7 +123,7 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
 /// every ~0.02 s), its reproducing command on the first line.
 pub(super) async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<TrajectoryJob> {
-        let mut q = Query::new(q);
+        let mut q = Query::new(q)?;
         let view = shared.view(&mut q)?;
         let start = view::start(&mut q)?;
         q.finish()?;
@@ -192,7 +195,7 @@ pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
 /// the metadata), over the region and at the size asked.
 pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<(View, Grid, bool)> {
-        let mut q = Query::new(q);
+        let mut q = Query::new(q)?;
         let view = shared.view(&mut q)?;
         let grid = view::region_grid(&mut q)?;
         let annotate = q.flag("annotate")?;

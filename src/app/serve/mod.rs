@@ -15,7 +15,6 @@ use self::api::*;
 use self::tiles::*;
 pub use self::tiles::{mask_rgb, tile_rgb};
 
-use std::collections::HashMap;
 use std::net::IpAddr;
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
@@ -57,6 +56,10 @@ pub const REQUEST_LIMIT: Duration = Duration::from_secs(60);
 /// last answer on a kept-alive connection), else it is closed: a client that never finishes
 /// its request does not hold its connection.
 pub const HEADER_READ_LIMIT: Duration = Duration::from_secs(5);
+
+/// A request's head (request line and headers) may take this many bytes at most (the page's
+/// longest is under 2 kB); a larger one is answered 431 and its connection closed.
+pub const MAX_HEAD_BYTES: usize = 16 << 10;
 
 /// Open connections at most; more are closed at once.
 pub const MAX_CONNECTIONS: usize = 512;
@@ -162,8 +165,8 @@ impl Shared {
     }
 
     /// The view of a query that holds nothing else.
-    fn view_only(&self, q: HashMap<String, String>) -> Result<View> {
-        let mut q = Query::new(q);
+    fn view_only(&self, q: Vec<(String, String)>) -> Result<View> {
+        let mut q = Query::new(q)?;
         let view = self.view(&mut q)?;
         q.finish()?;
         Ok(view)
@@ -294,7 +297,8 @@ async fn serve_connections(listener: tokio::net::TcpListener, app: Router) {
             let _permit = permit;
             let mut http = hyper::server::conn::http1::Builder::new();
             http.timer(hyper_util::rt::TokioTimer::new())
-                .header_read_timeout(HEADER_READ_LIMIT);
+                .header_read_timeout(HEADER_READ_LIMIT)
+                .max_buf_size(MAX_HEAD_BYTES);
             let io = hyper_util::rt::TokioIo::new(stream);
             // A connection's errors (reset, timeout) end it and nothing else.
             let _ = http.serve_connection(io, service).await;
@@ -323,4 +327,4 @@ async fn asset(Path(path): Path<String>) -> Response {
     assets::get(&path)
 }
 
-type Params = AxumQuery<HashMap<String, String>>;
+type Params = AxumQuery<Vec<(String, String)>>;

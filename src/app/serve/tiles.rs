@@ -22,7 +22,7 @@ pub(super) async fn tile(
         };
         let y = y.strip_suffix(".png").unwrap_or(&y);
         let (z, x, y) = (int("z", &z)?, int("x", &x)?, int("y", y)?);
-        let mut q = Query::new(q);
+        let mut q = Query::new(q)?;
         let view = shared.view(&mut q)?;
         let size = q
             .count("size", view::TILE_SIZES.0, view::TILE_SIZES.1)?

@@ -95,8 +95,22 @@ pub struct Query {
 }
 
 impl Query {
-    pub fn new(values: HashMap<String, String>) -> Self {
-        Query { values }
+    /// The query's pairs, each key once: a repeated key (`size=16&size=512`) is refused
+    /// naming it, rather than one of its values being taken silently.
+    pub fn new(pairs: Vec<(String, String)>) -> Result<Self> {
+        let mut values = HashMap::with_capacity(pairs.len());
+        for (key, value) in pairs {
+            if values.contains_key(&key) {
+                let key = KNOWN_KEYS
+                    .iter()
+                    .copied()
+                    .find(|k| *k == key)
+                    .unwrap_or("query");
+                return Err(Error::invalid(key, "is given more than once"));
+            }
+            values.insert(key, value);
+        }
+        Ok(Query { values })
     }
 
     fn take(&mut self, key: &'static str) -> Option<String> {
@@ -252,6 +266,35 @@ impl Query {
 }
 
 /// The query's keys for the physics and the stepping, which a store's command fixes.
+/// Every key a query may hold (a repeated one is named from here).
+const KNOWN_KEYS: [&str; 25] = [
+    "kind",
+    "t_max",
+    "dt",
+    "cmap",
+    "m1",
+    "m2",
+    "l1",
+    "l2",
+    "g",
+    "damping",
+    "accurate",
+    "unresolved",
+    "lo",
+    "hi",
+    "size",
+    "pixel",
+    "theta1",
+    "theta2",
+    "width",
+    "annotate",
+    "theta1_min",
+    "theta1_max",
+    "theta2_min",
+    "theta2_max",
+    "omega1",
+];
+
 pub const PHYSICS_KEYS: [&str; 9] = [
     "m1", "m2", "l1", "l2", "g", "damping", "t_max", "dt", "accurate",
 ];
@@ -511,6 +554,7 @@ mod tests {
                     .map(|(k, v)| (k.to_string(), v.to_string()))
                     .collect(),
             )
+            .unwrap()
         };
         let base = ParamSources::default();
         for (pairs, field) in [
