@@ -253,10 +253,15 @@ fn a_killed_task_resubmitted_equals_an_uninterrupted_run() {
         !missing.is_empty(),
         "the task finished before the kill: make it longer"
     );
-    // Every chunk file that exists is whole (a chunk is 128 rows of 2048 f32).
+    // Every chunk file that exists is whole (a chunk is 128 rows of 2048 f32 and its 4-byte
+    // crc32c checksum).
     for f in common::walk(&store.join("map/c")) {
         if !f.contains(".tmp-") {
-            assert_eq!(std::fs::metadata(&f).unwrap().len(), 128 * 2048 * 4, "{f}");
+            assert_eq!(
+                std::fs::metadata(&f).unwrap().len(),
+                128 * 2048 * 4 + 4,
+                "{f}"
+            );
         }
     }
     chaoscope()
@@ -349,6 +354,10 @@ assert abs(t1[0] - (-2 + 5 / 192)) < 1e-15 and t2[0] > t2[-1]
 assert ds.attrs["chaoscope:command"].startswith("chaoscope flip --size 96x64")
 n = np.load({npy:?})
 assert np.array_equal(m.values.view(np.uint32), n.view(np.uint32))
+# The chunks are checksummed (crc32c), and zarr-python reads them through the checksum.
+import zarr
+codecs = [c.to_dict()["name"] for c in zarr.open_array({store:?} + "/map", mode="r").metadata.codecs]
+assert "crc32c" in codecs, codecs
 print("ok")
 "#
     );
@@ -586,4 +595,80 @@ fn a_store_is_read_as_data_and_never_opens_what_it_names() {
     .stderr(predicates::str::contains(
         "`--m2 1` where this run has `--m2 1.5`",
     ));
+}
+
+/// Issue 25's audit: a chunk that was truncated, emptied, overwritten with garbage of the
+/// right size, or replaced by a directory counted as written (`status` said complete, a
+/// resume left it, `render` drew garbage). Chunks now carry Zarr's crc32c checksum and must
+/// decode: `status` lists such a chunk as missing, `render` refuses naming it, and running
+/// the command again rewrites it, after which the store equals the `.npy` bit for bit.
+#[test]
+fn a_damaged_chunk_is_missing_until_rewritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let (store, npy) = (dir.path().join("m.zarr"), dir.path().join("m.npy"));
+    let s = store.to_str().unwrap();
+    let map = ["--size", "1024", "--t-max", "2"];
+    flip(&map, &["--data", s]).success();
+    flip(&map, &["--data", npy.to_str().unwrap()]).success();
+    let chunk = store.join("map/c/1/0");
+    let size = std::fs::metadata(&chunk).unwrap().len() as usize;
+    let damages: [(&str, &dyn Fn()); 4] = [
+        ("truncated", &|| {
+            std::fs::write(&chunk, vec![0u8; 100]).unwrap()
+        }),
+        ("empty", &|| std::fs::write(&chunk, []).unwrap()),
+        ("garbage of the right size", &|| {
+            std::fs::write(&chunk, vec![0x5au8; size]).unwrap()
+        }),
+        ("a directory", &|| {
+            std::fs::remove_file(&chunk).unwrap();
+            std::fs::create_dir(&chunk).unwrap();
+        }),
+    ];
+    for (what, damage) in damages {
+        damage();
+        chaoscope()
+            .args(["status", s])
+            .assert()
+            .success()
+            .stdout(predicates::str::contains("missing rows: 256..512"));
+        chaoscope()
+            .args(["render", s, "--output"])
+            .arg(dir.path().join("r.png"))
+            .assert()
+            .failure()
+            .stderr(predicates::str::contains(
+                "chunk 1 (rows 256..512) is damaged",
+            ));
+        flip(&map, &["--data", s]).success();
+        chaoscope()
+            .args(["status", s])
+            .assert()
+            .success()
+            .stdout(predicates::str::contains("complete"));
+        assert_eq!(store_bits(&store), npy_bits(&npy), "{what}, rewritten");
+    }
+}
+
+/// Issue 25's audit: the memory check counted the whole map for a store run, which holds one
+/// band, so a 65536^2 store could not be made on a 24 GB machine, though maps past one
+/// machine are what stores exist for. A task of it runs as its band; `status` follows it
+/// (and ends quietly when its reader leaves early).
+#[test]
+fn a_65536_square_store_runs_as_tiles() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("big.zarr");
+    let s = store.to_str().unwrap();
+    flip(
+        &["--size", "65536", "--t-max", "0.01"],
+        &["--data", s, "--tile", "8191/8192"],
+    )
+    .success();
+    chaoscope()
+        .args(["status", s])
+        .assert()
+        .success()
+        .stdout(predicates::str::contains(
+            "65536x65536 map, 2 of 16384 chunks written",
+        ));
 }

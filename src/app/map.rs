@@ -17,7 +17,15 @@ use crate::verdict;
 
 /// Everything checked before any work: the spec, the files, the verdict's finer map, the tile.
 pub fn validate(spec: &impl MapSpec, files: &MapOutputs, tile: Option<(u32, u32)>) -> Result<()> {
-    spec.validate()?;
+    match files.store() {
+        // A store's run holds one band at a time: its memory is a band's, not the map's.
+        Some(_) => {
+            let g = spec.grid();
+            let rows = crate::render::store::chunk_rows(g.width, g.height);
+            spec.with_band((0, rows)).validate()?;
+        }
+        None => spec.validate()?,
+    }
     files.validate()?;
     if files.wants_verdict() {
         check_finer(verdict::finer(spec, true).validate())?;

@@ -220,6 +220,20 @@ fn json(summary: &impl serde::Serialize) -> crate::Result<serde_json::Value> {
     serde_json::to_value(summary).map_err(|e| crate::Error::Format(format!("summary: {e}")))
 }
 
+/// `text` on standard output; a reader that went away (`status ... | head`) ends the
+/// output quietly instead of a panic.
+pub fn out(text: &str) -> crate::Result<()> {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}
+
 /// Notices from a run, one a line.
 fn say(notices: &[String]) {
     for n in notices {

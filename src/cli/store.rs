@@ -26,8 +26,8 @@ pub fn status(args: &StatusArgs) -> Result<serde_json::Value> {
         store: args.store.clone(),
         tiles: args.tiles,
     })?;
-    println!(
-        "{}: {}x{} map, {} of {} chunks written",
+    let mut text = format!(
+        "{}: {}x{} map, {} of {} chunks written\n",
         s.store.display(),
         s.width,
         s.height,
@@ -35,22 +35,23 @@ pub fn status(args: &StatusArgs) -> Result<serde_json::Value> {
         s.chunks
     );
     if s.complete {
-        println!("complete");
+        text += "complete\n";
     } else {
         let rows: Vec<String> = s
             .missing
             .iter()
             .map(|(first, rows)| format!("{first}..{}", first + rows))
             .collect();
-        println!("missing rows: {}", rows.join(", "));
+        text += &format!("missing rows: {}\n", rows.join(", "));
         let tiles: Vec<String> = s.tiles_to_run.iter().map(u32::to_string).collect();
-        println!(
-            "to fill them: --tile I/{} for I in {} (with the store's command: {})",
+        text += &format!(
+            "to fill them: --tile I/{} for I in {} (with the store's command: {})\n",
             s.tiles,
             tiles.join(" "),
             s.command
         );
     }
+    super::out(&text)?;
     json(&s)
 }
 

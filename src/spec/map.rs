@@ -2,8 +2,8 @@
 
 use super::stability::{validate_speeds, validate_stability};
 use super::{
-    ACCURATE, ACCURATE_FTLE, Grid, Integrator, Precision, Stepping, validate_grid, validate_params,
-    validate_stepping,
+    ACCURATE, ACCURATE_FTLE, Grid, Integrator, Precision, Stepping, validate_grid_holding,
+    validate_params, validate_stepping,
 };
 use crate::error::{Error, Result};
 use crate::model::Params;
@@ -141,7 +141,7 @@ impl FlipSpec {
 
     pub fn validate(&self) -> Result<()> {
         validate_params(&self.params)?;
-        validate_grid(&self.grid)?;
+        validate_grid_holding(&self.grid, self.band.map_or(self.grid.height, |b| b.1))?;
         validate_stepping(&self.stepping)?;
         if self.measure == FlipMeasure::Kind && self.integrator != Integrator::Rk4 {
             return Err(Error::invalid(
@@ -258,7 +258,7 @@ impl LyapunovSpec {
 
     pub fn validate(&self) -> Result<()> {
         validate_params(&self.params)?;
-        validate_grid(&self.grid)?;
+        validate_grid_holding(&self.grid, self.band.map_or(self.grid.height, |b| b.1))?;
         self.validate_run()
     }
 

@@ -248,7 +248,14 @@ fn validate_range(field: &'static str, r: &Range) -> Result<()> {
     Ok(())
 }
 
+/// The grid in range, its whole map within the memory this process may take.
 pub fn validate_grid(g: &Grid) -> Result<()> {
+    validate_grid_holding(g, g.height)
+}
+
+/// The grid in range, `rows` of its map (all, or a store's band) within the memory this
+/// process may take.
+pub fn validate_grid_holding(g: &Grid, rows: u32) -> Result<()> {
     const MAX_SIDE: u32 = 1 << 16;
     if g.width == 0 || g.height == 0 || g.width > MAX_SIDE || g.height > MAX_SIDE {
         return Err(Error::invalid(
@@ -259,12 +266,13 @@ pub fn validate_grid(g: &Grid) -> Result<()> {
             ),
         ));
     }
-    // The map (4 B), its colours (3 B) and the PNG encoder's copy (3 B) live in memory at once.
-    check_memory(
-        "size",
-        g.pixels() * 10,
-        &format!("a {}x{} map", g.width, g.height),
-    )?;
+    // The map (4 B), its colours (3 B) and the PNG encoder's copy (3 B) live in memory at
+    // once; a store's run holds one band of them.
+    let held = match rows == g.height {
+        true => format!("a {}x{} map", g.width, g.height),
+        false => format!("a band of {rows} rows of a {}x{} map", g.width, g.height),
+    };
+    check_memory("size", g.width as u64 * rows as u64 * 10, &held)?;
     validate_range("theta1", &g.theta1)?;
     validate_range("theta2", &g.theta2)?;
     if !g.omega1.is_finite() {

@@ -57,6 +57,11 @@ impl WritableStorageTraits for AtomicStore {
             TEMPORARY.fetch_add(1, Ordering::Relaxed)
         );
         let temporary = dir.join(name);
+        // A directory where the chunk belongs (a damaged store) is cleared, so the chunk is
+        // rewritten rather than failing for ever.
+        if path.is_dir() {
+            std::fs::remove_dir_all(&path).ok();
+        }
         let written =
             std::fs::write(&temporary, &value).and_then(|()| std::fs::rename(&temporary, &path));
         if written.is_err() {

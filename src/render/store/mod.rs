@@ -90,6 +90,14 @@ fn padded<T: Copy>(values: &[T], len: usize, fill: T) -> Vec<T> {
     out
 }
 
+/// The checksum every chunk carries (Zarr v3's `crc32c` codec, which zarr-python reads), so
+/// a damaged chunk does not decode instead of reading as numbers.
+fn checksummed() -> Vec<Arc<dyn zarrs::array::BytesToBytesCodecTraits>> {
+    vec![Arc::new(
+        zarrs::array::codec::bytes_to_bytes::crc32c::Crc32cCodec::new(),
+    )]
+}
+
 fn store_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::format(path, e)
 }
@@ -133,6 +141,7 @@ impl MapStore {
         let map = ArrayBuilder::new(vec![h, w], vec![rows, w], data_type::float32(), f32::NAN)
             .dimension_names(["theta2", "theta1"].into())
             .attributes(attributes)
+            .bytes_to_bytes_codecs(checksummed())
             .build(store.clone(), "/map")
             .map_err(|e| err(&e))?;
         map.store_metadata().map_err(|e| err(&e))?;
@@ -146,6 +155,7 @@ impl MapStore {
                 ArrayBuilder::new(vec![h, w], vec![rows, w], data_type::uint8(), NOT_COMPUTED)
                     .dimension_names(["theta2", "theta1"].into())
                     .attributes(attributes)
+                    .bytes_to_bytes_codecs(checksummed())
                     .build(store.clone(), "/resolved")
                     .map_err(|e| err(&e))?;
             mask.store_metadata().map_err(|e| err(&e))?;
@@ -224,21 +234,45 @@ impl MapStore {
         (first, self.chunk_rows.min(self.height - first))
     }
 
-    /// Whether chunk `c` is written (its files exist: they are complete), the verdict's too
-    /// where the store holds one.
+    /// Whether chunk `c` is written: its files exist (they are complete when written by
+    /// chaoscope) and decode, checksum and size, the verdict's too where the store holds one.
+    /// A truncated, empty, oversized, garbled chunk, or a directory in its place, is not
+    /// written: `status` lists it, a resume rewrites it.
     pub fn is_written(&self, c: u32) -> Result<bool> {
+        let at = [c as u64, 0];
         for array in std::iter::once(&self.map).chain(&self.resolved) {
-            let key = array.chunk_key(&[c as u64, 0]);
-            let there = self
-                .store
-                .size_key(&key)
-                .map_err(|e| store_error(&self.path, e))?
-                .is_some();
-            if !there {
-                return Ok(false);
+            let key = array.chunk_key(&at);
+            match self.store.size_key(&key) {
+                Ok(Some(_)) => {}
+                Ok(None) | Err(_) => return Ok(false),
             }
         }
-        Ok(true)
+        let decodes = self.map.retrieve_chunk::<Vec<f32>>(&at).is_ok()
+            && self
+                .resolved
+                .as_ref()
+                .is_none_or(|r| r.retrieve_chunk::<Vec<u8>>(&at).is_ok());
+        Ok(decodes)
+    }
+
+    /// The error for rows `first..first + rows` that do not read: the first damaged chunk
+    /// among them, named with its rows (`status` gives the `--tile` that rewrites it).
+    fn damaged(&self, first: u32, rows: u32, e: impl std::fmt::Display) -> Error {
+        let chunks = first / self.chunk_rows..(first + rows).div_ceil(self.chunk_rows);
+        match chunks
+            .clone()
+            .find(|&c| !self.is_written(c).unwrap_or(false))
+        {
+            Some(c) => {
+                let (a, n) = self.chunk_span(c);
+                Error::Format(format!(
+                    "{}: chunk {c} (rows {a}..{}) is damaged ({e}): run `chaoscope status` on the store and the --tile task it names again",
+                    self.path.display(),
+                    a + n
+                ))
+            }
+            None => store_error(&self.path, e),
+        }
     }
 
     /// The chunks not written yet.
@@ -306,7 +340,7 @@ impl MapStore {
         array
             .retrieve_array_subset::<Vec<u8>>(&subset)
             .map(Some)
-            .map_err(|e| store_error(&self.path, e))
+            .map_err(|e| self.damaged(first, rows, e))
     }
 
     /// Rows `first..first + rows` of the map (NaN where not written).
@@ -317,7 +351,7 @@ impl MapStore {
         ]);
         self.map
             .retrieve_array_subset::<Vec<f32>>(&subset)
-            .map_err(|e| store_error(&self.path, e))
+            .map_err(|e| self.damaged(first, rows, e))
     }
 }
 

@@ -62,6 +62,7 @@ impl SweepStore {
         )
         .dimension_names(["frame", "theta2", "theta1"].into())
         .attributes(attributes)
+        .bytes_to_bytes_codecs(checksummed())
         .build(store.clone(), "/map")
         .map_err(|e| err(&e))?;
         map.store_metadata().map_err(|e| err(&e))?;
