@@ -672,3 +672,127 @@ fn a_65536_square_store_runs_as_tiles() {
             "65536x65536 map, 2 of 16384 chunks written",
         ));
 }
+
+/// Issue 25's audit: metadata that disagreed with the map was taken as it stood (a 0-d shape
+/// panicked, other shapes made status report nonsense, resumes wrote maps unlike the
+/// command's, a store narrower than its command made the explorer's worker panic). Every
+/// reader now checks the arrays' layout (shape, data type, chunk rows, endianness, checksum)
+/// and the recorded map against the arrays (size, mirrored chunks) before any work; a mismatch
+/// is an error naming the field, never a panic.
+#[test]
+fn metadata_unlike_the_map_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("m.zarr");
+    let s = store.to_str().unwrap();
+    let map = ["--size", "256", "--t-max", "2"];
+    flip(&map, &["--data", s]).success();
+    let edit = |file: &str, change: &dyn Fn(&mut serde_json::Value)| {
+        let path = store.join(file);
+        let mut meta: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let before = meta.clone();
+        change(&mut meta);
+        std::fs::write(&path, meta.to_string()).unwrap();
+        move || std::fs::write(&path, before.to_string()).unwrap()
+    };
+    // (the metadata file, what is changed, the change, what the error names)
+    type Case<'a> = (
+        &'a str,
+        &'a str,
+        &'a dyn Fn(&mut serde_json::Value),
+        &'a str,
+    );
+    let cases: [Case; 7] = [
+        (
+            "map/zarr.json",
+            "0-d shape",
+            &|m| {
+                m["shape"] = serde_json::json!([]);
+                m["chunk_grid"]["configuration"]["chunk_shape"] = serde_json::json!([]);
+            },
+            "dimensionality",
+        ),
+        (
+            "map/zarr.json",
+            "chunk rows",
+            &|m| {
+                m["chunk_grid"]["configuration"]["chunk_shape"] = serde_json::json!([3, 256]);
+            },
+            "chunk_shape",
+        ),
+        (
+            "map/zarr.json",
+            "big endian",
+            &|m| {
+                m["codecs"][0]["configuration"]["endian"] = "big".into();
+            },
+            "little endian",
+        ),
+        (
+            "map/zarr.json",
+            "data type",
+            &|m| m["data_type"] = "float64".into(),
+            "data_type",
+        ),
+        (
+            "map/zarr.json",
+            "no checksum",
+            &|m| {
+                m["codecs"] = serde_json::json!([m["codecs"][0].clone()]);
+            },
+            "crc32c",
+        ),
+        (
+            "map/zarr.json",
+            "narrower than its map",
+            &|m| {
+                m["shape"] = serde_json::json!([256, 128]);
+                m["chunk_grid"]["configuration"]["chunk_shape"] = serde_json::json!([256, 128]);
+            },
+            "256x256",
+        ),
+        (
+            "zarr.json",
+            "mirrored",
+            &|m| {
+                m["attributes"]["chaoscope:mirrored"] = false.into();
+            },
+            "mirrored",
+        ),
+    ];
+    for (file, what, change, named) in cases {
+        let restore = edit(file, change);
+        for args in [
+            vec!["status".to_string(), s.to_string()],
+            vec![
+                "render".into(),
+                s.into(),
+                "--output".into(),
+                dir.path().join("r.png").to_string_lossy().into(),
+            ],
+            [
+                "flip",
+                "--size",
+                "256",
+                "--t-max",
+                "2",
+                "--backend",
+                backend(),
+                "--data",
+                s,
+            ]
+            .map(String::from)
+            .to_vec(),
+        ] {
+            let out = chaoscope().args(&args).output().unwrap();
+            let said = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                !out.status.success() && said.contains(named) && !said.contains("panicked"),
+                "{what}, {}: {said}",
+                args[0]
+            );
+        }
+        restore();
+    }
+    chaoscope().args(["status", s]).assert().success();
+}

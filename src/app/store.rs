@@ -11,7 +11,7 @@ use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::render::store::{self, MapStore};
 use crate::render::{self, Outputs, PictureSpec};
-use crate::spec::{FlipSpec, Grid, LyapunovSpec};
+use crate::spec::{FlipSpec, Grid, LyapunovSpec, MapSpec};
 
 /// A map job into a store: which store, the grid, the command, which part.
 pub struct StoreFill<'a> {
@@ -148,7 +148,8 @@ pub fn missing_note(filled: &Filled, path: &Path) -> Vec<String> {
 /// that made it. The command is shown, never parsed: it may name files, and a store may come
 /// from anyone.
 pub fn stored_map(path: &Path) -> Result<(String, FrameMap)> {
-    let info = MapStore::open(path)?.info;
+    let store = MapStore::open(path)?;
+    let info = store.info.clone();
     let bad = |why: String| Error::Format(format!("{}: {why}", path.display()));
     let map = info
         .identity
@@ -160,9 +161,31 @@ pub fn stored_map(path: &Path) -> Result<(String, FrameMap)> {
             "its recorded map (chaoscope:identity) is not one: {e}"
         ))
     })?;
-    match &map {
-        FrameMap::Flip(spec) => spec.validate()?,
-        FrameMap::Lyapunov(spec) => spec.validate()?,
+    // Checked as a store's task holds it: a band at a time (a 65536^2 map is no whole-map
+    // memory check's business here).
+    let band = |g: &Grid| (0, store::chunk_rows(g.width, g.height));
+    let (grid, mirrors) = match &map {
+        FrameMap::Flip(spec) => {
+            spec.with_band(band(&spec.grid)).validate()?;
+            (spec.grid, spec.mirrors())
+        }
+        FrameMap::Lyapunov(spec) => {
+            spec.with_band(band(&spec.grid)).validate()?;
+            (spec.grid, spec.mirrors())
+        }
+    };
+    // The arrays as the recorded map makes them, and its mirrored chunks as it pairs them.
+    if (grid.width, grid.height) != (store.width, store.height) {
+        return Err(bad(format!(
+            "its map is {}x{} but its arrays are {}x{}: start a new store",
+            grid.width, grid.height, store.width, store.height
+        )));
+    }
+    if info.mirrored != store::pairs_mirrored(&grid, mirrors) {
+        return Err(bad(format!(
+            "chaoscope:mirrored says {}, which its map does not: start a new store",
+            info.mirrored
+        )));
     }
     Ok((info.command, map))
 }
@@ -192,6 +215,8 @@ pub struct StatusSummary {
 }
 
 pub fn status(job: &StatusJob) -> Result<StatusSummary> {
+    // The recorded map checked against the arrays first: the units follow from both.
+    stored_map(&job.store)?;
     let s = MapStore::open(&job.store)?;
     let tiles = job.tiles.unwrap_or(s.info.tiles).max(1);
     let missing = s.missing()?;

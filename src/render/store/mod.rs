@@ -90,6 +90,77 @@ fn padded<T: Copy>(values: &[T], len: usize, fill: T) -> Vec<T> {
     out
 }
 
+/// The layout chaoscope writes, checked before any work: the array `name` 2-D (at most
+/// 65536 a side), of `data_type`, in chunks of whole rows as [`chunk_rows`] makes them, little
+/// endian, checksummed; `shape` its map's (height, width) where given. A mismatch is an error
+/// naming the metadata field: a store's metadata may come from anywhere.
+fn check_layout(
+    path: &Path,
+    name: &str,
+    array: &Array<AtomicStore>,
+    data_type: &str,
+    shape: Option<(u32, u32)>,
+) -> Result<(u32, u32)> {
+    let wrong = |field: &str, what: String| {
+        Error::Format(format!(
+            "{}: the array `{name}` has {field} {what}: its metadata is not a chaoscope map's; start a new store",
+            path.display()
+        ))
+    };
+    let meta = serde_json::to_value(array.metadata()).unwrap_or_default();
+    let dims: Vec<u64> = array.shape().to_vec();
+    let side = 1..=(1u64 << 16);
+    if dims.len() != 2 || !dims.iter().all(|d| side.contains(d)) {
+        return Err(wrong(
+            "shape",
+            format!("{dims:?} (a map is 2-D, 1 to 65536 a side)"),
+        ));
+    }
+    let (height, width) = (dims[0] as u32, dims[1] as u32);
+    if let Some(expected) = shape
+        && expected != (height, width)
+    {
+        return Err(wrong(
+            "shape",
+            format!("{dims:?}, not the map's {expected:?}"),
+        ));
+    }
+    if meta["data_type"] != data_type {
+        return Err(wrong(
+            "data_type",
+            format!("{} (not {data_type})", meta["data_type"]),
+        ));
+    }
+    let chunk = &meta["chunk_grid"]["configuration"]["chunk_shape"];
+    let rows = chunk_rows(width, height) as u64;
+    if *chunk != serde_json::json!([rows, width]) {
+        return Err(wrong(
+            "chunk_shape",
+            format!("{chunk}, not [{rows}, {width}]"),
+        ));
+    }
+    // A codec is named by a string or by its "name" (with a configuration).
+    let codecs = &meta["codecs"];
+    let named = |c: &serde_json::Value, name: &str| c == name || c["name"] == name;
+    let endian = &codecs[0]["configuration"]["endian"];
+    if !named(&codecs[0], "bytes") || !(endian.is_null() || *endian == "little") {
+        return Err(wrong(
+            "codecs",
+            format!("{codecs} (bytes must be little endian)"),
+        ));
+    }
+    if codecs
+        .as_array()
+        .is_none_or(|c| !c.iter().any(|c| named(c, "crc32c")))
+    {
+        return Err(wrong(
+            "codecs",
+            format!("{codecs}, without the crc32c checksum"),
+        ));
+    }
+    Ok((height, width))
+}
+
 /// The checksum every chunk carries (Zarr v3's `crc32c` codec, which zarr-python reads), so
 /// a damaged chunk does not decode instead of reading as numbers.
 fn checksummed() -> Vec<Arc<dyn zarrs::array::BytesToBytesCodecTraits>> {
@@ -117,14 +188,31 @@ impl MapStore {
         if path.join("zarr.json").is_file() {
             let store = Self::open(path)?;
             check_same(field, path, &store.info, info)?;
+            if store.info.mirrored != info.mirrored {
+                return Err(Error::invalid(
+                    field,
+                    format!(
+                        "{} says chaoscope:mirrored {}, but its map's mirrored chunks are {}: its metadata was changed; start a new store",
+                        path.display(),
+                        store.info.mirrored,
+                        if info.mirrored {
+                            "paired"
+                        } else {
+                            "not paired"
+                        }
+                    ),
+                ));
+            }
             if (store.width, store.height) != (grid.width, grid.height) {
                 return Err(Error::invalid(
                     field,
                     format!(
-                        "{} holds a {}x{} map",
+                        "{} holds a {}x{} map, not this run's {}x{}",
                         path.display(),
                         store.width,
-                        store.height
+                        store.height,
+                        grid.width,
+                        grid.height
                     ),
                 ));
             }
@@ -210,8 +298,10 @@ impl MapStore {
             true => Some(Array::open(store.clone(), "/resolved").map_err(|e| err(&e))?),
             false => None,
         };
-        let shape = map.shape().to_vec();
-        let (height, width) = (shape[0] as u32, shape[1] as u32);
+        let (height, width) = check_layout(path, "map", &map, "float32", None)?;
+        if let Some(r) = &resolved {
+            check_layout(path, "resolved", r, "uint8", Some((height, width)))?;
+        }
         Ok(MapStore {
             path: path.to_path_buf(),
             chunk_rows: first_chunk_rows(&map, 0).map_err(|e| err(&e))?,
