@@ -341,6 +341,50 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     fn any(&self) -> AnyMap;
 }
 
+/// The accessors every spec type shares (its fields of the same names, and its own mirrors
+/// and validate).
+macro_rules! map_spec_fields {
+    ($t:ident) => {
+        fn grid(&self) -> &Grid {
+            &self.grid
+        }
+        fn stepping(&self) -> Stepping {
+            self.stepping
+        }
+        fn precision(&self) -> Precision {
+            self.precision
+        }
+        fn integrator(&self) -> Integrator {
+            self.integrator
+        }
+        fn mirrors(&self) -> bool {
+            $t::mirrors(self)
+        }
+        fn validate(&self) -> Result<()> {
+            $t::validate(self)
+        }
+        fn with_band(&self, band: (u32, u32)) -> Self {
+            $t {
+                band: Some(band),
+                ..*self
+            }
+        }
+        fn restepped(
+            &self,
+            stepping: Stepping,
+            integrator: Integrator,
+            precision: Precision,
+        ) -> Self {
+            $t {
+                stepping,
+                integrator,
+                precision,
+                ..*self
+            }
+        }
+    };
+}
+
 impl MapSpec for FlipSpec {
     fn quantity(&self) -> &'static crate::quantity::Quantity {
         match self.measure {
@@ -348,38 +392,7 @@ impl MapSpec for FlipSpec {
             FlipMeasure::Kind => &crate::quantity::FLIP_KIND,
         }
     }
-    fn grid(&self) -> &Grid {
-        &self.grid
-    }
-    fn stepping(&self) -> Stepping {
-        self.stepping
-    }
-    fn precision(&self) -> Precision {
-        self.precision
-    }
-    fn integrator(&self) -> Integrator {
-        self.integrator
-    }
-    fn mirrors(&self) -> bool {
-        FlipSpec::mirrors(self)
-    }
-    fn validate(&self) -> Result<()> {
-        FlipSpec::validate(self)
-    }
-    fn with_band(&self, band: (u32, u32)) -> Self {
-        FlipSpec {
-            band: Some(band),
-            ..*self
-        }
-    }
-    fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self {
-        FlipSpec {
-            stepping,
-            integrator,
-            precision,
-            ..*self
-        }
-    }
+    map_spec_fields!(FlipSpec);
     fn any(&self) -> AnyMap {
         AnyMap::Flip(*self)
     }
@@ -395,38 +408,7 @@ impl MapSpec for LyapunovSpec {
     fn quantity(&self) -> &'static crate::quantity::Quantity {
         &crate::quantity::FTLE
     }
-    fn grid(&self) -> &Grid {
-        &self.grid
-    }
-    fn stepping(&self) -> Stepping {
-        self.stepping
-    }
-    fn precision(&self) -> Precision {
-        self.precision
-    }
-    fn integrator(&self) -> Integrator {
-        self.integrator
-    }
-    fn mirrors(&self) -> bool {
-        LyapunovSpec::mirrors(self)
-    }
-    fn validate(&self) -> Result<()> {
-        LyapunovSpec::validate(self)
-    }
-    fn with_band(&self, band: (u32, u32)) -> Self {
-        LyapunovSpec {
-            band: Some(band),
-            ..*self
-        }
-    }
-    fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self {
-        LyapunovSpec {
-            stepping,
-            integrator,
-            precision,
-            ..*self
-        }
-    }
+    map_spec_fields!(LyapunovSpec);
     fn any(&self) -> AnyMap {
         AnyMap::Lyapunov(*self)
     }

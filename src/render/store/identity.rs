@@ -1,0 +1,151 @@
+//! A store's identity: what it holds, compared with what a task would add to it (the version,
+//! the verdict, and its settings as data, field by field).
+
+use super::*;
+
+/// `theirs` (a store's) and `ours` made by the same command and version, else an error naming
+/// `field` and what differs.
+pub(super) fn check_same(
+    field: &'static str,
+    path: &Path,
+    theirs: &StoreInfo,
+    ours: &StoreInfo,
+) -> Result<()> {
+    if theirs.version != ours.version {
+        return Err(Error::invalid(
+            field,
+            format!(
+                "{} was made by chaoscope {}, this is {}: start a new store",
+                path.display(),
+                theirs.version,
+                ours.version
+            ),
+        ));
+    }
+    if theirs.resolved != ours.resolved {
+        return Err(Error::invalid(
+            field,
+            format!(
+                "{} was made {} the verdict (--resolved): ask for it {}",
+                path.display(),
+                if theirs.resolved { "with" } else { "without" },
+                if theirs.resolved {
+                    "too"
+                } else {
+                    "in a new store"
+                }
+            ),
+        ));
+    }
+    if theirs.identity.is_null() {
+        return Err(Error::invalid(
+            field,
+            format!(
+                "{} records no settings as data (chaoscope:identity): it was made by an older chaoscope; start a new store",
+                path.display()
+            ),
+        ));
+    }
+    let mut differences = Vec::new();
+    differ(
+        &mut Vec::new(),
+        &theirs.identity,
+        &ours.identity,
+        &mut differences,
+    );
+    if !differences.is_empty() {
+        return Err(Error::StoreDiffers {
+            field,
+            path: path.to_path_buf(),
+            differences,
+            command: theirs.command.clone(),
+        });
+    }
+    Ok(())
+}
+
+/// The settings in which two identities differ: (spec field, theirs, ours), one entry a
+/// field, in the order of the identity.
+pub(super) fn differ(
+    at: &mut Vec<String>,
+    theirs: &serde_json::Value,
+    ours: &serde_json::Value,
+    out: &mut Vec<(&'static str, String, String)>,
+) {
+    use serde_json::Value;
+    match (theirs, ours) {
+        (Value::Object(a), Value::Object(b)) if a.keys().eq(b.keys()) => {
+            for (key, value) in a {
+                at.push(key.clone());
+                differ(at, value, &b[key], out);
+                at.pop();
+            }
+        }
+        (Value::Array(a), Value::Array(b)) if a.len() == b.len() => {
+            for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                at.push(k.to_string());
+                differ(at, x, y, out);
+                at.pop();
+            }
+        }
+        (a, b) if a == b => {}
+        (a, b) => {
+            let field = setting(at);
+            if out.iter().all(|(f, _, _)| *f != field) {
+                out.push((field, shown(a), shown(b)));
+            }
+        }
+    }
+}
+
+/// A value as a command line writes it: numbers as Rust prints them (1, not 1.0), enum
+/// variants by name, the rest as JSON.
+pub(super) fn shown(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Number(n) => n.as_f64().map_or(n.to_string(), |x| x.to_string()),
+        serde_json::Value::String(s) => s.to_lowercase(),
+        serde_json::Value::Object(o) if o.len() == 1 => o.keys().next().unwrap().to_lowercase(),
+        v => v.to_string(),
+    }
+}
+
+/// The spec field an identity's path names (the names the command line maps to its flags).
+pub(super) fn setting(at: &[String]) -> &'static str {
+    let leaf = at.last().map(String::as_str).unwrap_or("");
+    let parent = at.len().checked_sub(2).map_or("", |k| at[k].as_str());
+    match (parent, leaf) {
+        ("", "map") | (_, "Flip") | (_, "Lyapunov") | ("map", _) => "data",
+        (_, "width" | "height") => "size",
+        ("theta1", "min" | "max") => "theta1",
+        ("theta2", "min" | "max") => "theta2",
+        (_, "joint1" | "joint2") => "joint_damping",
+        (_, "rod1" | "rod2") => "rod_mass",
+        (_, "bob_area1" | "bob_area2") => "drag_area",
+        (_, "rod_area1" | "rod_area2") => "rod_drag_area",
+        (_, "bearing") => "bearing_friction",
+        (_, "measure") => "colour_by",
+        (_, "early_exit") => "full",
+        (_, "use_symmetry") => "no_symmetry",
+        (_, "rtol") => "rtol",
+        (_, "atol") => "atol",
+        (_, "eps") => "eps",
+        ("integrator", _) | (_, "integrator") | ("Dp54" | "Dop853", _) => "integrator",
+        ("method", _) | (_, "method") | ("Twin", _) => "method",
+        (_, "m1") => "m1",
+        (_, "m2") => "m2",
+        (_, "l1") => "l1",
+        (_, "l2") => "l2",
+        (_, "g") => "g",
+        (_, "t_max") => "t_max",
+        (_, "dt") => "dt",
+        (_, "omega1") => "omega1",
+        (_, "omega2") => "omega2",
+        (_, "renorm") => "renorm",
+        (_, "precision") => "precision",
+        (_, "backend") => "backend",
+        (_, "rho") => "rho",
+        (_, "cw") => "cw",
+        (_, "bearing_radius") => "bearing_radius",
+        _ => "data",
+    }
+}
