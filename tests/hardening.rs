@@ -806,3 +806,58 @@ fn small_findings_of_the_audit() {
                 .and(predicate::str::contains("use --precision f64").not()),
         );
 }
+
+/// Issue 25's audit: `status --json` and `serve --json` printed other lines beside the JSON,
+/// `completions --json` printed no JSON. With --json, standard output now holds JSON alone
+/// (status's words go to standard error; serve's URL comes as `{"url": ...}`), and
+/// completions refuses --json naming it.
+#[test]
+fn json_output_is_json_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("m.zarr");
+    chaoscope()
+        .args(["flip", "--size", "32", "--t-max", "1", "--data"])
+        .arg(&store)
+        .assert()
+        .success();
+    let out = chaoscope()
+        .args(["--json", "status"])
+        .arg(&store)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for line in stdout.lines() {
+        serde_json::from_str::<serde_json::Value>(line)
+            .unwrap_or_else(|e| panic!("not JSON ({e}): {line}"));
+    }
+    assert!(String::from_utf8_lossy(&out.stderr).contains("complete"));
+    chaoscope()
+        .args(["--json", "completions", "bash"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--json"));
+    let mut serve = std::process::Command::new(assert_cmd::cargo::cargo_bin("chaoscope"))
+        .args(["--json", "serve", "--port", "0", "--backend", "cpu"])
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    std::io::BufRead::read_line(
+        &mut std::io::BufReader::new(serve.stdout.take().unwrap()),
+        &mut first,
+    )
+    .unwrap();
+    serve.kill().unwrap();
+    serve.wait().unwrap();
+    let ready: serde_json::Value = serde_json::from_str(&first).unwrap();
+    assert!(
+        ready["url"]
+            .as_str()
+            .unwrap()
+            .starts_with("http://127.0.0.1:"),
+        "{first}"
+    );
+}

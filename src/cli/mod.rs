@@ -257,11 +257,16 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Traces(args) => traces::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
         Command::Fit(args) => fit::run(args, monitor),
-        Command::Serve(args) => serve::run(args, monitor),
-        Command::Status(args) => store::status(args),
+        Command::Serve(args) => serve::run(args, monitor, cli.json),
+        Command::Status(args) => store::status(args, cli.json),
         Command::Render(args) => store::render(args, monitor),
         Command::Info => info::run(cli.json),
         Command::Bench(args) => bench::run(args, monitor, cli.json),
+        // A shell script is no summary: there is no JSON to give.
+        Command::Completions { .. } if cli.json => Err(Error::invalid(
+            "json",
+            "completions writes a shell script to standard output, not a summary",
+        )),
         Command::Completions { shell } => {
             use clap::CommandFactory;
             use std::io::Write;

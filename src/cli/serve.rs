@@ -70,11 +70,15 @@ pub const COMMANDS: Commands = Commands {
     trajectory: command_line::trajectory,
 };
 
-pub fn run(args: &ServeArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+/// Serves until Ctrl-C. Standard output holds the URL once listening (scripts and tests read
+/// it), and with `json` only JSON: the URL as `{"url": ...}`, then the summary.
+pub fn run(args: &ServeArgs, monitor: &Monitor, json_out: bool) -> Result<serde_json::Value> {
     let summary = serve::run(&args.job()?, COMMANDS, monitor, |ready| {
         say(&ready.notices);
-        // The URL on standard output (scripts and tests read it), the rest on stderr.
-        println!("{}", ready.url);
+        match json_out {
+            true => println!("{}", serde_json::json!({ "url": ready.url })),
+            false => println!("{}", ready.url),
+        }
         eprintln!(
             "chaoscope explorer at {} (tiles on {}); Ctrl-C stops it",
             ready.url, ready.place

@@ -21,7 +21,9 @@ pub struct StatusArgs {
     pub tiles: Option<u32>,
 }
 
-pub fn status(args: &StatusArgs) -> Result<serde_json::Value> {
+/// What a store lacks, in words on standard output (on standard error with `json`, whose
+/// standard output holds the summary alone).
+pub fn status(args: &StatusArgs, json_out: bool) -> Result<serde_json::Value> {
     let s = store::status(&StatusJob {
         store: args.store.clone(),
         tiles: args.tiles,
@@ -51,7 +53,10 @@ pub fn status(args: &StatusArgs) -> Result<serde_json::Value> {
             s.command
         );
     }
-    super::out(&text)?;
+    match json_out {
+        true => eprint!("{text}"),
+        false => super::out(&text)?,
+    }
     json(&s)
 }
 
