@@ -148,7 +148,12 @@ pub fn missing_note(filled: &Filled, path: &Path) -> Vec<String> {
 /// that made it. The command is shown, never parsed: it may name files, and a store may come
 /// from anyone.
 pub fn stored_map(path: &Path) -> Result<(String, FrameMap)> {
-    let store = MapStore::open(path)?;
+    map_of(&MapStore::open(path)?)
+}
+
+/// The map `store` holds ([`stored_map`]), checked against its arrays.
+fn map_of(store: &MapStore) -> Result<(String, FrameMap)> {
+    let path = store.path();
     let info = store.info.clone();
     let bad = |why: String| Error::Format(format!("{}: {why}", path.display()));
     let map = info
@@ -215,9 +220,9 @@ pub struct StatusSummary {
 }
 
 pub fn status(job: &StatusJob) -> Result<StatusSummary> {
-    // The recorded map checked against the arrays first: the units follow from both.
-    stored_map(&job.store)?;
     let s = MapStore::open(&job.store)?;
+    // The recorded map checked against the arrays first: the units follow from both.
+    map_of(&s)?;
     let tiles = job.tiles.unwrap_or(s.info.tiles).max(1);
     let missing = s.missing()?;
     let units = store::units(s.height, s.chunk_rows, s.info.mirrored);

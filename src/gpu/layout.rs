@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::model::Params;
-use crate::spec::{Grid, Precision};
+use crate::spec::Grid;
 
 /// Invocations per workgroup. 64 fills eight 8-lane SIMD groups on lavapipe and two warps
 /// on discrete GPUs.
@@ -212,9 +212,8 @@ impl GpuParams64 {
 
 /// A scalar the GPU kernels run in, as a type: its precision, its mirrors of the WGSL structs,
 /// and the conversions. Kernels are written once over it; `with_real!` turns a run's
-/// [`Precision`] into it, the one place where a precision is matched on the host.
+/// [`Precision`](crate::spec::Precision) into it, the one place where a precision is matched on the host.
 pub trait Real: Pod + Copy + Default + PartialEq + std::fmt::Debug + Send + Sync + 'static {
-    const PRECISION: Precision;
     /// Its WGSL file: `alias real = ...` and the functions whose form differs by precision.
     const WGSL: &'static str;
     type Params: TileParams + RunParams;
@@ -226,9 +225,8 @@ pub trait Real: Pod + Copy + Default + PartialEq + std::fmt::Debug + Send + Sync
 }
 
 macro_rules! real {
-    ($r:ident, $precision:expr, $wgsl:literal, $params:ident, $pendulum:ident, $slot:ident, $adaptive:ident) => {
+    ($r:ident, $wgsl:literal, $params:ident, $pendulum:ident, $slot:ident, $adaptive:ident) => {
         impl Real for $r {
-            const PRECISION: Precision = $precision;
             const WGSL: &'static str = include_str!($wgsl);
             type Params = $params;
             type Pendulum = $pendulum;
@@ -265,7 +263,6 @@ macro_rules! real {
 }
 real!(
     f32,
-    Precision::F32,
     "../../shaders/real_f32.wgsl",
     GpuParams,
     GpuPendulum,
@@ -274,7 +271,6 @@ real!(
 );
 real!(
     f64,
-    Precision::F64,
     "../../shaders/real_f64.wgsl",
     GpuParams64,
     GpuPendulum64,

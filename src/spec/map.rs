@@ -72,6 +72,20 @@ impl RowSpan {
         }
     }
 
+    /// The rows a map over `grid` integrates: the `band`'s, or the top half when the map
+    /// `mirrors` a point-symmetric grid, or all.
+    pub fn of(grid: &Grid, band: Option<(u32, u32)>, mirrors: bool) -> Self {
+        match band {
+            Some((first, count)) => RowSpan {
+                first,
+                count,
+                whole: false,
+            },
+            None if mirrors && grid.point_symmetric() => RowSpan::top(grid.height.div_ceil(2)),
+            None => RowSpan::top(grid.height),
+        }
+    }
+
     /// Rows of the field this span gives on `grid`.
     pub fn field_rows(&self, grid: &Grid) -> u32 {
         if self.whole { grid.height } else { self.count }
@@ -119,17 +133,7 @@ impl FlipSpec {
     }
 
     pub fn row_span(&self) -> RowSpan {
-        match self.band {
-            Some((first, count)) => RowSpan {
-                first,
-                count,
-                whole: false,
-            },
-            None if self.mirrors() && self.grid.point_symmetric() => {
-                RowSpan::top(self.grid.height.div_ceil(2))
-            }
-            None => RowSpan::top(self.grid.height),
-        }
+        RowSpan::of(&self.grid, self.band, self.mirrors())
     }
 
     /// Whether a point-symmetric grid's bottom half is the top half mirrored: flip times
@@ -238,17 +242,7 @@ impl LyapunovSpec {
     }
 
     pub fn row_span(&self) -> RowSpan {
-        match self.band {
-            Some((first, count)) => RowSpan {
-                first,
-                count,
-                whole: false,
-            },
-            None if self.mirrors() && self.grid.point_symmetric() => {
-                RowSpan::top(self.grid.height.div_ceil(2))
-            }
-            None => RowSpan::top(self.grid.height),
-        }
+        RowSpan::of(&self.grid, self.band, self.mirrors())
     }
 
     /// Steps between renormalisations (the last interval may be shorter).

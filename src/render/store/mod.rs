@@ -316,6 +316,11 @@ impl MapStore {
         })
     }
 
+    /// Where the store is.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
     pub fn chunks(&self) -> u32 {
         self.height.div_ceil(self.chunk_rows)
     }
