@@ -409,3 +409,59 @@ fn json_summaries_on_stdout() {
         .code(2)
         .stderr(predicate::str::contains("--json"));
 }
+
+/// Issue 25's audit: `--precision f32 --backend cpu` ran f64 without a word. Now it says so
+/// (the CPU computes in f64 only), on every command with --precision; without --precision,
+/// or with f64, nothing is said.
+#[test]
+fn f32_asked_of_the_cpu_is_said_to_run_in_f64() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("x.png");
+    let note = "--precision f32 is the GPU's; the CPU backend computes in f64";
+    let map = [
+        "--size",
+        "8",
+        "--t-max",
+        "0.5",
+        "--backend",
+        "cpu",
+        "--output",
+    ];
+    for (command, precision, said) in [
+        ("flip", Some("f32"), true),
+        ("flip", None, false),
+        ("flip", Some("f64"), false),
+        ("lyapunov", Some("f32"), true),
+    ] {
+        let mut run = chaoscope();
+        run.arg(command).args(map).arg(&png);
+        if let Some(p) = precision {
+            run.args(["--precision", p]);
+        }
+        let out = run.output().unwrap();
+        assert!(out.status.success(), "{command} {precision:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            stderr.contains(note),
+            said,
+            "{command} {precision:?}: {stderr}"
+        );
+    }
+    // trajectory runs on the CPU by default.
+    let out = chaoscope()
+        .args([
+            "trajectory",
+            "--theta1",
+            "1",
+            "--theta2",
+            "1",
+            "--t-max",
+            "0.1",
+        ])
+        .args(["--precision", "f32", "--output"])
+        .arg(dir.path().join("t.csv"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains(note));
+}

@@ -441,6 +441,10 @@ fn maps_finer_than_f32_run_in_f64_with_a_note() {
     );
 }
 
+fn data_of_lab() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv")
+}
+
 #[test]
 fn bad_inputs_are_refused_naming_their_flag() {
     let dir = tempfile::tempdir().unwrap();
@@ -456,6 +460,16 @@ fn bad_inputs_are_refused_naming_their_flag() {
         );
     }
     std::fs::write(&line, text).unwrap();
+    // Issue 25's fit findings: a header naming `t` twice, and times of 1e300 s.
+    let lab = std::fs::read_to_string(&data_of_lab()).unwrap();
+    let twice = dir.path().join("twice.csv");
+    std::fs::write(&twice, lab.replace("t,x1,y1,x2,y2", "t,x1,y1,x2,y2,t")).unwrap();
+    let huge = dir.path().join("huge.csv");
+    let mut text = String::from("t,x1,y1,x2,y2\n");
+    for k in 1..20 {
+        text += &format!("{}e300,0.1,-0.3,0.2,-0.5\n", k);
+    }
+    std::fs::write(&huge, text).unwrap();
     let toml3 = dir.path().join("three.toml");
     std::fs::write(&toml3, "rod_mass = [0.1, 0.2, 0.3]\n").unwrap();
     let no_area = dir.path().join("no-area.toml");
@@ -470,6 +484,16 @@ fn bad_inputs_are_refused_naming_their_flag() {
             "--start",
         ),
         (vec!["fit".into(), p(&line)], "FILE"),
+        (vec!["fit".into(), p(&twice)], "`t` twice"),
+        (vec!["fit".into(), p(&huge)], "are the times in seconds"),
+        (
+            vec!["fit".into(), p(&data), "--start".into(), "-1".into()],
+            "--start",
+        ),
+        (
+            vec!["fit".into(), p(&data), "--start".into(), "1e300".into()],
+            "--start",
+        ),
         (
             vec!["phase".into(), "--spread".into(), "nan".into()],
             "--spread",

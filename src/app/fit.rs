@@ -72,6 +72,18 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
     check_writable("output", &job.output.join("summary.json"))?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    // The fit starts at a data row with a neighbour on each side (its velocities are central
+    // differences); a start outside them was moved to the nearest silently.
+    let (first, last) = (t[1], t[t.len() - 2]);
+    if !(first..=last).contains(&job.start) {
+        return Err(Error::invalid(
+            "start",
+            format!(
+                "must lie within the data's times with a row either side, {first}..{last} s (got {})",
+                job.start
+            ),
+        ));
+    }
 
     // Pivot: least-squares circle, and the report's grid search beside it.
     let pivot = fit_pivot(&frames)?;

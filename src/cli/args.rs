@@ -13,6 +13,14 @@ use crate::render::{Colormap, PictureSpec};
 use crate::spec::{Grid, Range, Stepping};
 
 /// `--backend auto|gpu|cpu`.
+/// `--precision f32` given for a run on the CPU, which computes in f64 only: said once, not
+/// run in f64 silently (issue 25's audit).
+pub fn f32_on_the_cpu(precision: Option<crate::spec::Precision>, backend: Backend) {
+    if precision == Some(crate::spec::Precision::F32) && backend == Backend::Cpu {
+        eprintln!("note: --precision f32 is the GPU's; the CPU backend computes in f64");
+    }
+}
+
 pub fn backend_parser() -> impl clap::builder::TypedValueParser<Value = Backend> {
     one_of(&Backend::ALL, Backend::name)
 }

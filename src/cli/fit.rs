@@ -26,7 +26,7 @@ pub struct FitArgs {
     #[arg(long, default_value = "out/fit")]
     pub output: PathBuf,
     /// Time (s) to start the model fit (the report: 0.8 s, where dx2/dt ~ 0); the nearest
-    /// data row is used.
+    /// data row is used. Within the data's times, a row either side.
     #[arg(long, default_value = "0.8", value_parser = parse_number, allow_hyphen_values = true)]
     pub start: f64,
     /// Length of data (s) the model is fitted to.
@@ -47,8 +47,9 @@ pub struct FitArgs {
     #[arg(long, default_value = "auto", value_parser = backend_parser())]
     pub backend: Backend,
     /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Precision,
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Option<Precision>,
 }
 
 impl FitArgs {
@@ -63,12 +64,13 @@ impl FitArgs {
             velocity_error: self.velocity_error,
             params: self.physical.sources(),
             backend: self.backend,
-            precision: self.precision,
+            precision: self.precision.unwrap_or_default(),
         }
     }
 }
 
 pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
     let s = fit::run(&job, command_line::fit(&job), monitor)?;
     say(&s.notices);

@@ -57,8 +57,9 @@ pub struct FlipArgs {
     pub no_symmetry: bool,
     /// The GPU's floating-point precision: f32 (fastest) or f64 (an adapter with f64, e.g.
     /// lavapipe; elsewhere auto runs f64 on the CPU). The CPU is always f64.
-    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Precision,
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Option<Precision>,
     /// How each pendulum is stepped: rk4 (fixed --dt), dp54 (Dormand-Prince 5(4): every
     /// pendulum takes its own steps to --rtol/--atol; --dt is then its first and largest step)
     /// or dop853 (Dormand-Prince 8(5,3), the same way: fewer, longer steps at tight tolerances).
@@ -80,7 +81,8 @@ pub struct FlipArgs {
 impl FlipArgs {
     /// The map the flags ask for (`--accurate` expanded by the spec).
     pub fn spec(&self) -> Result<FlipSpec> {
-        let f32_gpu = self.precision == Precision::F32 && self.backend != Backend::Cpu;
+        let f32_gpu =
+            self.precision.unwrap_or_default() == Precision::F32 && self.backend != Backend::Cpu;
         let integrator = match self.accurate {
             true => Integrator::Rk4,
             false => integrator_of(&self.integrator, self.rtol, self.atol, f32_gpu)?,
@@ -89,7 +91,7 @@ impl FlipArgs {
             measure: self.colour_by,
             early_exit: !self.full,
             use_symmetry: !(self.full || self.no_symmetry),
-            precision: self.precision,
+            precision: self.precision.unwrap_or_default(),
             integrator,
             ..FlipSpec::new(
                 self.physical.sources().resolve()?,
@@ -165,6 +167,7 @@ pub fn nan_note(nan: usize) -> String {
 }
 
 pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let s = flip::run(&job, command_line::flip(&job), monitor)?;
     say(&s.notices);

@@ -63,8 +63,9 @@ pub struct LyapunovArgs {
     #[arg(long)]
     pub no_symmetry: bool,
     /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Precision,
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Option<Precision>,
     #[command(flatten)]
     pub physical: PhysicalArgs,
     /// auto, gpu or cpu. Default: auto for a map, cpu (f64) for a single point.
@@ -115,7 +116,8 @@ pub enum LyapunovJob {
 impl LyapunovArgs {
     /// The integrator the flags ask for (tolerances only with dp54).
     fn integrator(&self) -> Result<Integrator> {
-        let gpu_f32 = self.precision == Precision::F32 && self.backend != Some(Backend::Cpu);
+        let gpu_f32 = self.precision.unwrap_or_default() == Precision::F32
+            && self.backend != Some(Backend::Cpu);
         super::flip::integrator_of(&self.integrator, self.rtol, self.atol, gpu_f32)
     }
 
@@ -144,7 +146,7 @@ impl LyapunovArgs {
             },
             renorm: self.renorm,
             use_symmetry: !self.no_symmetry,
-            precision: self.precision,
+            precision: self.precision.unwrap_or_default(),
             band: None,
             integrator,
         };
@@ -235,6 +237,7 @@ impl LyapunovArgs {
 pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     match args.job()? {
         LyapunovJob::Map(job) => {
+            super::args::f32_on_the_cpu(args.precision, job.backend);
             let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
             say(&s.notices);
             eprintln!(
@@ -260,6 +263,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             json(&s)
         }
         LyapunovJob::Point(job) => {
+            super::args::f32_on_the_cpu(args.precision, job.backend);
             let command = command_line::lyapunov_point(&job);
             let s = lyapunov::run_point(&job, command, monitor, &mut std::io::stdout().lock())?;
             say(&s.notices);

@@ -52,8 +52,9 @@ pub struct PhaseArgs {
     #[arg(long, default_value = "auto", value_parser = backend_parser())]
     pub backend: Backend,
     /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Precision,
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Option<Precision>,
     /// Colour map of the densities (default inferno).
     #[arg(long, value_parser = colormap_parser())]
     pub colormap: Option<Colormap>,
@@ -78,7 +79,7 @@ impl PhaseArgs {
             size: self.size,
             single: self.single,
             backend: self.backend,
-            precision: self.precision,
+            precision: self.precision.unwrap_or_default(),
             colormap: self.colormap,
             output: self.output.clone(),
         })
@@ -86,6 +87,7 @@ impl PhaseArgs {
 }
 
 pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let s = phase::run(&job, command_line::phase(&job), monitor)?;
     say(&s.notices);

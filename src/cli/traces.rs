@@ -38,8 +38,9 @@ pub struct TracesArgs {
     #[arg(long, default_value = "auto", value_parser = backend_parser())]
     pub backend: Backend,
     /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Precision,
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Option<Precision>,
     /// PNG to write.
     #[arg(long, default_value = "out/traces.png")]
     pub output: PathBuf,
@@ -64,7 +65,7 @@ impl TracesArgs {
             },
             size: self.size,
             backend: self.backend,
-            precision: self.precision,
+            precision: self.precision.unwrap_or_default(),
             output: self.output.clone(),
             gif: self.gif.clone(),
             data: self.data.clone(),
@@ -73,6 +74,7 @@ impl TracesArgs {
 }
 
 pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let s = traces::run(&job, command_line::traces(&job), monitor)?;
     say(&s.notices);

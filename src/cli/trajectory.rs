@@ -27,8 +27,9 @@ pub struct TrajectoryArgs {
     #[arg(long, default_value = "cpu", value_parser = backend_parser())]
     pub backend: Backend,
     /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    #[arg(long, default_value = "f32", value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Precision,
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Option<Precision>,
     #[command(flatten)]
     pub physical: PhysicalArgs,
     /// CSV to write; standard output if absent.
@@ -44,13 +45,14 @@ impl TrajectoryArgs {
             stepping: self.step.stepping(),
             every: self.every,
             backend: self.backend,
-            precision: self.precision,
+            precision: self.precision.unwrap_or_default(),
             output: self.output.clone(),
         })
     }
 }
 
 pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let command = command_line::trajectory(&job);
     let s = trajectory::run(&job, command, monitor, &mut std::io::stdout().lock())?;

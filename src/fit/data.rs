@@ -21,6 +21,10 @@ pub struct Frame {
 /// Smallest time step (s) between tracked rows.
 const MIN_TIME_STEP: f64 = 1e-6;
 
+/// Times beyond this many seconds (eleven days) are a unit mistake for a tracked pendulum
+/// (issue 25's audit: times of 1e300 s were fitted and reported as nonsense).
+const MAX_TIME: f64 = 1e6;
+
 fn bad(path: &Path, line: usize, what: String) -> Error {
     Error::invalid("file", format!("{}:{line}: {what}", path.display()))
 }
@@ -50,6 +54,22 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
             )
         })
     };
+    // A column named twice would be read from its first copy silently.
+    for (k, name) in names.iter().enumerate() {
+        if let Some(again) = names[k + 1..].iter().position(|n| n == name)
+            && ["t", "x1", "y1", "x2", "y2"].contains(name)
+        {
+            return Err(bad(
+                path,
+                header_line,
+                format!(
+                    "the header names `{name}` twice (columns {} and {})",
+                    k + 1,
+                    k + again + 2
+                ),
+            ));
+        }
+    }
     let cols = [
         column("t")?,
         column("x1")?,
@@ -76,6 +96,16 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
                         format!("`{cell}` in column `{}` is not a number", names[c]),
                     )
                 })?;
+        }
+        if v[0].abs() > MAX_TIME {
+            return Err(bad(
+                path,
+                n,
+                format!(
+                    "time {:e} s is beyond {MAX_TIME:e} s: are the times in seconds?",
+                    v[0]
+                ),
+            ));
         }
         if let Some(prev) = frames.last().map(|f: &Frame| f.t)
             && v[0] <= prev
