@@ -709,6 +709,16 @@ fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
         "{report}"
     );
     assert!(dir.path().join("pendulum.png").exists());
+    // Issue 25's audit: the first view of a 1400 x 900 window filled a third of it (zoom 1,
+    // whole steps). The world's square now fills the map's shorter side to within a quarter
+    // zoom step (2^-0.25 = 0.84) and stays inside it.
+    let fill = &report["first_fill"];
+    let [w, h, bw, bh] = [0, 1, 2, 3].map(|k| fill[k].as_f64().unwrap());
+    let side = bw.min(bh);
+    assert!(
+        w >= 0.84 * side && w <= side + 1.0 && (w - h).abs() < 1.0,
+        "first view {w} x {h} in a {bw} x {bh} map"
+    );
 }
 
 #[test]

@@ -31,6 +31,20 @@ try:
         driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
             "width": width, "height": height, "deviceScaleFactor": 1, "mobile": False})
 
+    # The first view of a 1400 x 900 window (no view in the address): the whole turn fills
+    # the map's shorter side, to within Leaflet's quarter zoom step.
+    viewport(1400, 900)
+    driver.get(url + "#t_max=2")
+    wait.until(lambda d: d.execute_script(
+        "return window.chaoscope && window.chaoscope.firstView !== null"))
+    report["first_fill"] = driver.execute_script("""
+        const m = window.chaoscope.map, box = m.getSize(), u = 256;
+        const a = m.latLngToContainerPoint([0, 0]), b = m.latLngToContainerPoint([-u, u]);
+        return [Math.abs(b.x - a.x), Math.abs(b.y - a.y), box.x, box.y, m.getZoom()];""")
+    time.sleep(0.5)  # Leaflet fades new tiles in
+    driver.save_screenshot(out + "/first.png")
+    driver.get("about:blank")
+
     viewport(872, 512)
     driver.get(url + "#z=0&theta1=0&theta2=0&t_max=20")
     wait.until(lambda d: d.execute_script(
