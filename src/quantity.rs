@@ -20,6 +20,8 @@ pub struct Quantity {
     pub tolerance: &'static str,
     /// The pixels the summary counts (flipped, chaotic).
     pub counted: fn(f32) -> bool,
+    /// The summary's key for their share.
+    pub counted_as: &'static str,
 }
 
 /// The time until either arm first flips over (s; +inf = never within t-max).
@@ -30,6 +32,7 @@ pub const FLIP_TIME: Quantity = Quantity {
     agreement: "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
     tolerance: "1 % or 0.02 s",
     counted: f32::is_finite,
+    counted_as: "flipped",
 };
 
 /// The largest finite-time Lyapunov exponent (1/s).
@@ -40,6 +43,7 @@ pub const FTLE: Quantity = Quantity {
     agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
     tolerance: "5 % or 0.02 /s",
     counted: |x| x > CHAOTIC_FTLE,
+    counted_as: "chaotic",
 };
 
 /// Which arm flips first and which way: a class per pixel (its code in the map, as f32; NaN
@@ -51,6 +55,7 @@ pub const FLIP_KIND: Quantity = Quantity {
     agreement: "the same arm flipping first the same way at a flip time within 1 % or 0.02 s, or neither flipping (NaN never agrees)",
     tolerance: "its class and 1 % or 0.02 s",
     counted: |x| x.is_finite() && x != FlipKind::Never.code(),
+    counted_as: "flipped",
 };
 
 /// The classes of [`FLIP_KIND`]: + is past +pi (the angle growing), - past -pi.

@@ -408,6 +408,36 @@ fn json_summaries_on_stdout() {
         .assert()
         .code(2)
         .stderr(predicate::str::contains("--json"));
+    // A divergence map into a store has no CSV on standard output (it was refused as if it
+    // were a single-point run): its summary counts the chaotic share, and a store has no
+    // colour range.
+    let store = dir.path().join("l.zarr");
+    let out = chaoscope()
+        .args([
+            "lyapunov",
+            "--size",
+            "16",
+            "--t-max",
+            "1",
+            "--backend",
+            "cpu",
+        ])
+        .args(["--json", "--data"])
+        .arg(&store)
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let v: serde_json::Value = serde_json::from_slice(&out).expect("one JSON object");
+    assert_eq!(v["command"], "lyapunov");
+    assert!(
+        v["chaotic"]
+            .as_f64()
+            .is_some_and(|f| (0.0..=1.0).contains(&f)),
+        "{v}"
+    );
+    assert!(v["range"][0].is_null() && v.get("flipped").is_none(), "{v}");
 }
 
 /// Issue 25's audit: `--precision f32 --backend cpu` ran f64 without a word. Now it says so

@@ -461,7 +461,7 @@ fn bad_inputs_are_refused_naming_their_flag() {
     }
     std::fs::write(&line, text).unwrap();
     // Issue 25's fit findings: a header naming `t` twice, and times of 1e300 s.
-    let lab = std::fs::read_to_string(&data_of_lab()).unwrap();
+    let lab = std::fs::read_to_string(data_of_lab()).unwrap();
     let twice = dir.path().join("twice.csv");
     std::fs::write(&twice, lab.replace("t,x1,y1,x2,y2", "t,x1,y1,x2,y2,t")).unwrap();
     let huge = dir.path().join("huge.csv");

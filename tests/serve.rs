@@ -879,3 +879,97 @@ fn heads_and_keys_are_bounded() {
     let (status, _, _) = server.get("/api/info");
     assert_eq!(status, 200);
 }
+
+/// Issue 25: every query key of every endpoint with extreme values (1e+-300, 1e308, -0, a
+/// subnormal, infinities, NaN, a huge whole number): each answered within 10 s (a watchdog's
+/// bound, not a speed target), 200 or a 400 naming the key it was given for, never a server
+/// error; then a normal tile still comes.
+#[test]
+fn extreme_values_of_every_query_key_are_answered_or_refused_naming_it() {
+    let server = Server::start(&["--backend", "cpu"]);
+    let physics = ["t_max", "dt", "m1", "m2", "l1", "l2", "g", "damping"];
+    let endpoints: [(&str, &[&str]); 7] = [
+        ("/tile/0/0/0.png?size=16", &["size"]),
+        ("/tile/0/0/0.png?size=16&kind=ftle&lo=0&hi=1", &["lo", "hi"]),
+        (
+            "/api/point?theta1=1&theta2=1&pixel=0.01",
+            &["theta1", "theta2", "pixel"],
+        ),
+        ("/api/trajectory?theta1=1&theta2=1", &["theta1", "theta2"]),
+        ("/api/range?kind=ftle&t_max=2", &[]),
+        (
+            "/api/save?theta1_min=0&theta1_max=1&theta2_min=0&theta2_max=1&width=16",
+            &[
+                "theta1_min",
+                "theta1_max",
+                "theta2_min",
+                "theta2_max",
+                "width",
+            ],
+        ),
+        ("/api/legend?kind=ftle&lo=0&hi=1", &["lo", "hi"]),
+    ];
+    let values = [
+        "1e300",
+        "-1e300",
+        "1e308",
+        "1e-300",
+        "-0",
+        "5e-324",
+        "inf",
+        "-inf",
+        "nan",
+        "4294967296",
+        "-1",
+    ];
+    let (mut answered, mut refused, mut failures) = (0, 0, Vec::new());
+    let mut slowest = (Duration::ZERO, String::new());
+    for (base, own) in endpoints {
+        let (path, query) = base.split_once('?').unwrap();
+        let keys = own.iter().chain(if path == "/api/legend" {
+            &[][..]
+        } else {
+            &physics[..]
+        });
+        for key in keys {
+            for value in values {
+                let mut pairs: Vec<String> = query
+                    .split('&')
+                    .filter(|p| p.split('=').next() != Some(*key))
+                    .map(String::from)
+                    .collect();
+                pairs.push(format!("{key}={value}"));
+                let url = format!("{path}?{}", pairs.join("&"));
+                let sent = Instant::now();
+                let (status, _, body) = server.get(&url);
+                let took = sent.elapsed();
+                if took > slowest.0 {
+                    slowest = (took, url.clone());
+                }
+                let body = String::from_utf8_lossy(&body);
+                match status {
+                    200 => answered += 1,
+                    400 if body.starts_with(&format!("invalid value for {key}:")) => refused += 1,
+                    // Physics the step cannot follow: the refusal names the step to change.
+                    400 if physics.contains(key)
+                        && body.starts_with("invalid value for dt:")
+                        && body.contains("unstable") =>
+                    {
+                        refused += 1
+                    }
+                    _ => failures.push(format!("{url}: {status} {body}")),
+                }
+                if took > Duration::from_secs(10) {
+                    failures.push(format!("{url}: answered in {took:?}"));
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{answered} answered, {refused} refused naming their key, slowest {:?} ({})",
+        slowest.0, slowest.1
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let (status, _, _) = server.get("/tile/0/0/0.png?size=16&t_max=3.3");
+    assert_eq!(status, 200, "a normal tile after the extremes");
+}

@@ -1,9 +1,10 @@
-//! The one path of every map, whichever quantity it measures: checked once, planned once on
-//! the engine (with its verdict's finer map), computed with its verdict or filled into a store
-//! band by band. `flip` and `lyapunov` are two front doors of it: they add their picture and
-//! their summary.
+//! The one path of every map, whichever quantity it measures: one job, checked once, planned
+//! once on the engine (with its verdict's finer map), computed with its verdict or filled into
+//! a store band by band, drawn as its quantity draws it, summed up in one summary. `flip` and
+//! `lyapunov` are two front doors of it.
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use super::check_output;
 use super::store::{Filled, StoreFill, fill_store, missing_note};
@@ -11,9 +12,156 @@ use crate::engine::{Backend, Engine, MapKernels, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
-use crate::render::{Outputs, Picture, check_writable};
+use crate::quantity::Quantity;
+use crate::render::{self, MapPicture, Outputs, Picture, PictureSpec, check_writable};
 use crate::spec::{Grid, Integrator, MapSpec, Precision};
 use crate::verdict;
+
+/// A map to make, whatever it measures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapJob<S> {
+    pub spec: S,
+    pub backend: Backend,
+    pub picture: PictureSpec,
+    /// The PNG, the raw values (the quantity's unit), the verdict.
+    pub files: MapOutputs,
+    /// With a .zarr store: compute only part `index` of `count` of it.
+    pub tile: Option<(u32, u32)>,
+    /// The colours' range (low, high, the quantity's unit) where its colours span one; None:
+    /// the quantity's default for the map.
+    pub colour_range: Option<(f32, f32)>,
+}
+
+/// What a map run did, whatever it measured.
+#[derive(Clone, Debug)]
+pub struct MapSummary {
+    pub quantity: &'static Quantity,
+    pub width: u32,
+    pub height: u32,
+    /// Where it ran: the adapter's name or "the CPU".
+    pub place: String,
+    pub seconds: f64,
+    /// The share of the pixels the quantity counts (flipped, chaotic), under its key.
+    pub counted: f64,
+    /// Pixels whose state left the numbers (NaN in the data).
+    pub nan: usize,
+    /// The fraction of the pixels resolved, when the verdict was asked for.
+    pub resolved: Option<f64>,
+    /// How the verdict's finer map differs, in a few words.
+    pub rule: String,
+    pub t_max: f64,
+    /// The colour range, where the quantity's colours span one (NaN for a store: no picture).
+    pub range: Option<(f32, f32)>,
+    pub output: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    pub notices: Vec<String>,
+}
+
+impl serde::Serialize for MapSummary {
+    fn serialize<Se: serde::Serializer>(&self, s: Se) -> std::result::Result<Se::Ok, Se::Error> {
+        use serde::ser::SerializeStruct;
+        let mut m = s.serialize_struct("MapSummary", 12 + self.range.is_some() as usize)?;
+        m.serialize_field("width", &self.width)?;
+        m.serialize_field("height", &self.height)?;
+        m.serialize_field("place", &self.place)?;
+        m.serialize_field("seconds", &self.seconds)?;
+        m.serialize_field(self.quantity.counted_as, &self.counted)?;
+        m.serialize_field("nan", &self.nan)?;
+        m.serialize_field("resolved", &self.resolved)?;
+        m.serialize_field("rule", &self.rule)?;
+        m.serialize_field("t_max", &self.t_max)?;
+        if let Some(range) = &self.range {
+            m.serialize_field("range", range)?;
+        }
+        m.serialize_field("output", &self.output)?;
+        m.serialize_field("files", &self.files)?;
+        m.serialize_field("notices", &self.notices)?;
+        m.end()
+    }
+}
+
+/// Runs `job`: its map (and verdict) into files, or its part of a store; `command` (the line
+/// that reproduces it) goes into the PNG or the store.
+pub fn run<S: MapKernels + MapPicture>(
+    job: &MapJob<S>,
+    command: String,
+    monitor: &Monitor,
+) -> Result<MapSummary> {
+    job.spec.check_picture(&job.picture, job.colour_range)?;
+    validate(&job.spec, &job.files, job.tile)?;
+    let started = Instant::now();
+    let verdict = job.files.wants_verdict();
+    let summary = |info: &RunInfo, counted: usize, nan: usize, pixels: usize| MapSummary {
+        quantity: job.spec.quantity(),
+        width: job.spec.grid().width,
+        height: job.spec.grid().height,
+        place: info.place().to_string(),
+        seconds: started.elapsed().as_secs_f64(),
+        counted: counted as f64 / pixels.max(1) as f64,
+        nan,
+        resolved: None,
+        rule: String::new(),
+        t_max: job.spec.stepping().t_max,
+        range: None,
+        output: job.files.output.clone(),
+        files: job.files.files(),
+        notices: Vec::new(),
+    };
+    if let Some(store) = job.files.store() {
+        let made = make_store(
+            &job.spec,
+            job.backend,
+            store,
+            command,
+            job.tile,
+            verdict,
+            monitor,
+        )?;
+        let filled = &made.made;
+        return Ok(MapSummary {
+            resolved: verdict.then(|| filled.resolved as f64 / filled.pixels.max(1) as f64),
+            rule: made.rule,
+            range: job.spec.ranged().then_some((f32::NAN, f32::NAN)),
+            output: store.to_path_buf(),
+            files: vec![store.to_path_buf()],
+            notices: made.notices,
+            ..summary(&made.info, filled.counted, filled.nan, filled.pixels)
+        });
+    }
+    let made = make(&job.spec, job.backend, verdict, monitor)?;
+    let (field, mask) = &made.made;
+    let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
+    let drawn = job
+        .spec
+        .draw(field, &job.picture, job.colour_range, shown)?;
+    let mut text = drawn.text;
+    if shown.is_some() {
+        text.push(("chaoscope:resolved-rule".into(), made.rule_in_full.clone()));
+    }
+    write_map(
+        &drawn.picture,
+        render::provenance(command, &made.info),
+        text,
+        &job.files,
+        field,
+        mask.as_deref(),
+        monitor,
+    )?;
+    let counted = field
+        .data
+        .iter()
+        .filter(|&&x| (job.spec.quantity().counted)(x))
+        .count();
+    let nan = field.data.iter().filter(|x| x.is_nan()).count();
+    Ok(MapSummary {
+        resolved: mask.as_deref().map(verdict::fraction),
+        rule: made.rule,
+        range: drawn.range,
+        notices: made.notices,
+        ..summary(&made.info, counted, nan, field.data.len())
+    })
+}
 
 /// Everything checked before any work: the spec, the files, the verdict's finer map, the tile.
 pub fn validate(spec: &impl MapSpec, files: &MapOutputs, tile: Option<(u32, u32)>) -> Result<()> {

@@ -9,9 +9,10 @@ use crate::engine::{Path as RunPath, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
+use crate::render::MapPicture;
 use crate::render::store::{self, MapStore};
 use crate::render::{self, Outputs, PictureSpec};
-use crate::spec::{FlipSpec, Grid, LyapunovSpec, MapSpec};
+use crate::spec::{Grid, MapSpec};
 
 /// A map job into a store: which store, the grid, the command, which part.
 pub struct StoreFill<'a> {
@@ -169,13 +170,26 @@ fn map_of(store: &MapStore) -> Result<(String, FrameMap)> {
     // Checked as a store's task holds it: a band at a time (a 65536^2 map is no whole-map
     // memory check's business here).
     let band = |g: &Grid| (0, store::chunk_rows(g.width, g.height));
+    // Refused as the flag would be, saying the value is the store's, not this command's.
+    let runnable = |checked: Result<()>| {
+        checked.map_err(|e| match e {
+            Error::InvalidSpec { field, reason } => Error::invalid(
+                field,
+                format!(
+                    "in {}'s recorded map (chaoscope:identity): {reason}; start a new store",
+                    path.display()
+                ),
+            ),
+            e => e,
+        })
+    };
     let (grid, mirrors) = match &map {
         FrameMap::Flip(spec) => {
-            spec.with_band(band(&spec.grid)).validate()?;
+            runnable(spec.with_band(band(&spec.grid)).validate())?;
             (spec.grid, spec.mirrors())
         }
         FrameMap::Lyapunov(spec) => {
-            spec.with_band(band(&spec.grid)).validate()?;
+            runnable(spec.with_band(band(&spec.grid)).validate())?;
             (spec.grid, spec.mirrors())
         }
     };
@@ -331,16 +345,11 @@ pub fn render(job: &RenderJob, command: String, monitor: &Monitor) -> Result<Ren
         height: h,
         ..grid
     };
-    let picture = match job.spec {
-        FrameMap::Flip(spec) => {
-            render::flip_picture(&small, &FlipSpec { grid, ..spec }, &job.picture, None)?
-        }
-        FrameMap::Lyapunov(spec) => {
-            let range = render::ftle_range(&small);
-            let spec = LyapunovSpec { grid, ..spec };
-            render::lyapunov_picture(&small, &spec, range, &job.picture, None)?
-        }
-    };
+    let picture = job
+        .spec
+        .on_grid(grid)
+        .draw(&small, &job.picture, None, None)?
+        .picture;
     let info = RunInfo {
         path: RunPath::Store,
         adapter: None,

@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
 use crate::monitor::Monitor;
-use crate::render::{self, Picture, PictureSpec};
+use crate::render::{self, MapPicture, Picture, PictureSpec};
 use crate::spec::{
     self, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method,
     Precision, Range, Stepping,
@@ -261,10 +261,26 @@ pub fn run(
 ) -> Result<SweepSummary> {
     let frames = frames(job)?;
     spec::validate_stepping(&job.stepping)?;
-    for f in &frames {
-        spec::validate_grid(&f.grid)?;
-        spec::validate_stability(&f.params, &job.stepping)?;
-        spec::validate_speeds(&f.params, &job.stepping, f.grid.omega1, f.grid.omega2)?;
+    for (k, f) in frames.iter().enumerate() {
+        let checked = spec::validate_grid(&f.grid)
+            .and_then(|()| spec::validate_stability(&f.params, &job.stepping))
+            .and_then(|()| {
+                spec::validate_speeds(&f.params, &job.stepping, f.grid.omega1, f.grid.omega2)
+            });
+        // A frame the varied parameter made impossible is the range's fault (--vary).
+        match (checked, job.vary) {
+            (Err(Error::InvalidSpec { field, reason }), Some(v)) => {
+                return Err(Error::invalid(
+                    "vary",
+                    format!(
+                        "at frame {k} ({} = {:e}): {field}: {reason}",
+                        v.param.name(),
+                        v.from + (v.to - v.from) * k as f64 / (frames.len() - 1).max(1) as f64
+                    ),
+                ));
+            }
+            (checked, _) => checked?,
+        }
     }
     if job.map == MapKind::Lyapunov {
         lyapunov_spec(job, &frames[0]).validate()?;
@@ -462,10 +478,7 @@ fn frame_field(map: &FrameMap, engine: &Engine, monitor: &Monitor) -> Result<Fie
 
 /// One frame's picture.
 fn frame_picture(job: &SweepJob, map: &FrameMap, field: &Field) -> Result<Picture> {
-    match map {
-        FrameMap::Flip(spec) => render::flip_picture(field, spec, &job.picture, None),
-        FrameMap::Lyapunov(spec) => {
-            render::lyapunov_picture(field, spec, (0.0, job.ftle_max as f32), &job.picture, None)
-        }
-    }
+    // One colour range for every frame, where the quantity's colours span one.
+    let range = map.ranged().then_some((0.0, job.ftle_max as f32));
+    Ok(map.draw(field, &job.picture, range, None)?.picture)
 }

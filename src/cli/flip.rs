@@ -119,6 +119,7 @@ impl FlipArgs {
                 show_unresolved: self.verdict.show_unresolved,
             },
             tile: self.tile,
+            colour_range: None,
         })
     }
 }
@@ -177,7 +178,7 @@ pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         s.height,
         s.place,
         s.seconds,
-        100.0 * s.flipped,
+        100.0 * s.counted,
         s.t_max,
         nan_note(s.nan),
         resolved_note(

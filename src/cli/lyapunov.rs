@@ -246,17 +246,17 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
                 s.height,
                 s.place,
                 s.seconds,
-                100.0 * s.chaotic,
+                100.0 * s.counted,
                 s.t_max,
                 super::flip::nan_note(s.nan),
                 super::flip::resolved_note(
                     s.resolved,
                     &format!("the same map {} within {}", s.rule, FTLE.tolerance)
                 ),
-                match s.range.0.is_nan() {
+                match s.range {
                     // A store has no picture, so no colour range.
-                    true => String::new(),
-                    false => format!(", colour range {:.2}..{:.2} /s", s.range.0, s.range.1),
+                    Some((lo, hi)) if !lo.is_nan() => format!(", colour range {lo:.2}..{hi:.2} /s"),
+                    _ => String::new(),
                 },
                 s.output.display()
             );

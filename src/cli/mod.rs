@@ -249,7 +249,12 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
     let result = match &cli.command {
         // Their CSV goes to standard output without --output: no room for JSON there too.
         Command::Trajectory(a) if cli.json && a.output.is_none() => Err(json_needs_output()),
-        Command::Lyapunov(a) if cli.json && a.output.is_none() => Err(json_needs_output()),
+        // Only a single-point run's CSV goes there; a map writes its PNG or store.
+        Command::Lyapunov(a)
+            if cli.json && a.output.is_none() && matches!(a.job(), Ok(LyapunovJob::Point(_))) =>
+        {
+            Err(json_needs_output())
+        }
         Command::Flip(args) => flip::run(args, monitor),
         Command::Lyapunov(args) => lyapunov::run(args, monitor),
         Command::Trajectory(args) => trajectory::run(args, monitor),

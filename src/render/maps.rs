@@ -2,10 +2,10 @@
 //! title; and the PNG text chunks that say how a picture was made.
 
 use crate::engine::RunInfo;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
-use crate::spec::{FlipMeasure, FlipSpec, Grid, LyapunovSpec};
+use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec};
 
 use super::{
     Annotation, Axis, ColorBar, Colormap, FlipColors, NEVER_RGB, annotate, decimal_ticks,
@@ -283,4 +283,138 @@ pub fn lyapunov_picture(
             },
         }
     })
+}
+
+/// A map drawn as its quantity draws it: the picture, the PNG text beyond the run's
+/// provenance, and the colour range used where the quantity's colours span one.
+pub struct Drawn {
+    pub picture: Picture,
+    pub text: Vec<(String, String)>,
+    pub range: Option<(f32, f32)>,
+}
+
+/// How a map's quantity is drawn, the one picture entry of every map path (command, sweep,
+/// store render, explorer tiles): its colours, scale, legend and how NaN, never and unresolved
+/// look are its picture function's (below); a new quantity is one more impl.
+pub trait MapPicture {
+    /// Whether its colours span a range the user may set (`--colour-range`), which the
+    /// summary then reports.
+    fn ranged(&self) -> bool;
+    /// `picture` and `range` checked against what the quantity's colours allow.
+    fn check_picture(&self, picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()>;
+    /// `field` (this spec's map) drawn; `range` None: the quantity's default for the field.
+    fn draw(
+        &self,
+        field: &Field,
+        picture: &PictureSpec,
+        range: Option<(f32, f32)>,
+        unresolved: Option<&[u8]>,
+    ) -> Result<Drawn>;
+}
+
+impl MapPicture for FlipSpec {
+    fn ranged(&self) -> bool {
+        false
+    }
+
+    fn check_picture(&self, picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()> {
+        if self.measure == FlipMeasure::Kind && picture.colormap.is_some() {
+            return Err(Error::invalid(
+                "colormap",
+                "the flip kind has a colour a class of its own; leave out --colormap",
+            ));
+        }
+        match range {
+            Some(_) => Err(Error::invalid(
+                "colour_range",
+                "applies to the divergence map only",
+            )),
+            None => Ok(()),
+        }
+    }
+
+    fn draw(
+        &self,
+        field: &Field,
+        picture: &PictureSpec,
+        _range: Option<(f32, f32)>,
+        unresolved: Option<&[u8]>,
+    ) -> Result<Drawn> {
+        Ok(Drawn {
+            picture: flip_picture(field, self, picture, unresolved)?,
+            text: Vec::new(),
+            range: None,
+        })
+    }
+}
+
+impl MapPicture for LyapunovSpec {
+    fn ranged(&self) -> bool {
+        true
+    }
+
+    fn check_picture(&self, _picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()> {
+        match range {
+            Some((lo, hi)) if !(lo.is_finite() && hi.is_finite() && lo < hi) => {
+                Err(Error::invalid(
+                    "colour_range",
+                    format!("{lo}:{hi} must be LOW:HIGH with LOW < HIGH (1/s)"),
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    fn draw(
+        &self,
+        field: &Field,
+        picture: &PictureSpec,
+        range: Option<(f32, f32)>,
+        unresolved: Option<&[u8]>,
+    ) -> Result<Drawn> {
+        let range = range.unwrap_or_else(|| super::ftle_range(field));
+        let text = vec![(
+            "chaoscope:colour-range".into(),
+            format!(
+                "FTLE {} .. {} 1/s, {}, linear (low = regular)",
+                range.0,
+                range.1,
+                picture.colormap.unwrap_or(Colormap::Magma).name()
+            ),
+        )];
+        Ok(Drawn {
+            picture: lyapunov_picture(field, self, range, picture, unresolved)?,
+            text,
+            range: Some(range),
+        })
+    }
+}
+
+impl MapPicture for AnyMap {
+    fn ranged(&self) -> bool {
+        match self {
+            AnyMap::Flip(s) => s.ranged(),
+            AnyMap::Lyapunov(s) => s.ranged(),
+        }
+    }
+
+    fn check_picture(&self, picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()> {
+        match self {
+            AnyMap::Flip(s) => s.check_picture(picture, range),
+            AnyMap::Lyapunov(s) => s.check_picture(picture, range),
+        }
+    }
+
+    fn draw(
+        &self,
+        field: &Field,
+        picture: &PictureSpec,
+        range: Option<(f32, f32)>,
+        unresolved: Option<&[u8]>,
+    ) -> Result<Drawn> {
+        match self {
+            AnyMap::Flip(s) => s.draw(field, picture, range, unresolved),
+            AnyMap::Lyapunov(s) => s.draw(field, picture, range, unresolved),
+        }
+    }
 }

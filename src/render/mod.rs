@@ -21,4 +21,7 @@ pub use files::{
     Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic, write_gif,
     write_npy, write_npy_shaped, write_png,
 };
-pub use maps::{Picture, PictureSpec, UNRESOLVED_RGB, flip_picture, lyapunov_picture, provenance};
+pub use maps::{
+    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, flip_picture, lyapunov_picture,
+    provenance,
+};

@@ -306,6 +306,16 @@ pub enum AnyMap {
     Lyapunov(LyapunovSpec),
 }
 
+impl AnyMap {
+    /// The same map over `grid` (a store's picture at another size).
+    pub fn on_grid(&self, grid: Grid) -> AnyMap {
+        match *self {
+            AnyMap::Flip(s) => AnyMap::Flip(FlipSpec { grid, ..s }),
+            AnyMap::Lyapunov(s) => AnyMap::Lyapunov(LyapunovSpec { grid, ..s }),
+        }
+    }
+}
+
 /// What the one map path (the engine's entry, the verdict, the store) needs of a map's spec,
 /// whichever quantity it measures: a map is its quantity's settings over a grid, stepped in a
 /// precision by an integrator, optionally over a band of rows.

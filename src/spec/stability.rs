@@ -108,8 +108,13 @@ pub fn speed_bound(p: &Params, omega1: f64, omega2: f64) -> f64 {
 pub fn validate_speeds(p: &Params, s: &Stepping, omega1: f64, omega2: f64) -> Result<()> {
     let omega = speed_bound(p, omega1, omega2);
     if !(omega.is_finite() && omega > 0.0) {
+        // The larger starting speed is the likelier cause (masses and lengths are bounded).
         return Err(Error::invalid(
-            "omega1",
+            if omega2.abs() > omega1.abs() {
+                "omega2"
+            } else {
+                "omega1"
+            },
             format!(
                 "the speeds these starts can reach are not finite ({omega:e} rad/s): check the starting speeds, masses and lengths"
             ),

@@ -227,6 +227,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     picture,
                     files: files.clone(),
                     tile: None,
+                    colour_range: None,
                 };
                 crate::app::flip::run(&job, (commands.flip)(&job), monitor)?;
                 "chaoscope-flip.png"

@@ -228,6 +228,15 @@ impl Query {
         }
         let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
         let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
+        if kind == Kind::Ftle && t_max < renorm_of(dt) {
+            return Err(Error::invalid(
+                "t_max",
+                format!(
+                    "{t_max:e} s is shorter than the divergence map's renormalisation interval, {} s",
+                    renorm_of(dt)
+                ),
+            ));
+        }
         Ok(View {
             kind,
             params,
@@ -342,7 +351,7 @@ impl View {
             grid,
             stepping: self.stepping,
             method: Method::Tangent,
-            renorm: 0.1,
+            renorm: renorm_of(self.stepping.dt),
             use_symmetry: true,
             precision: Precision::F32,
             band: None,
@@ -350,6 +359,12 @@ impl View {
         };
         if self.accurate { spec.accurate() } else { spec }
     }
+}
+
+/// The divergence map's renormalisation interval at step `dt`: the whole number of steps
+/// nearest 0.1 s (`chaoscope lyapunov`'s default), at least one.
+fn renorm_of(dt: f64) -> f64 {
+    (0.1 / dt).round().max(1.0) * dt
 }
 
 /// What the map's tiles cover: a region of starts that is `width` x `height` pixels at zoom

@@ -98,14 +98,23 @@ pub(super) fn differ(
     }
 }
 
-/// A value as a command line writes it: numbers as Rust prints them (1, not 1.0), enum
-/// variants by name, the rest as JSON.
+/// A value as a command line writes it: numbers as Rust prints them (1, not 1.0; 1e-300, not
+/// three hundred zeros), enum variants by name, the rest as JSON cut at 60 characters (a
+/// damaged store's record can be any size).
 pub(super) fn shown(v: &serde_json::Value) -> String {
-    match v {
-        serde_json::Value::Number(n) => n.as_f64().map_or(n.to_string(), |x| x.to_string()),
+    let text = match v {
+        serde_json::Value::Number(n) => match n.as_f64() {
+            Some(x) if x != 0.0 && !(1e-4..1e16).contains(&x.abs()) => format!("{x:e}"),
+            Some(x) => x.to_string(),
+            None => n.to_string(),
+        },
         serde_json::Value::String(s) => s.to_lowercase(),
         serde_json::Value::Object(o) if o.len() == 1 => o.keys().next().unwrap().to_lowercase(),
         v => v.to_string(),
+    };
+    match text.char_indices().nth(60) {
+        Some((cut, _)) => format!("{}...", &text[..cut]),
+        None => text,
     }
 }
 

@@ -133,6 +133,13 @@ fn check_layout(
             format!("{} (not {data_type})", meta["data_type"]),
         ));
     }
+    // A chunk not written reads as the fill value: NaN ("not computed"), never a number.
+    if data_type == "float32" && meta["fill_value"] != "NaN" {
+        return Err(wrong(
+            "fill_value",
+            format!("{} (not \"NaN\")", meta["fill_value"]),
+        ));
+    }
     let chunk = &meta["chunk_grid"]["configuration"]["chunk_shape"];
     let rows = chunk_rows(width, height) as u64;
     if *chunk != serde_json::json!([rows, width]) {
