@@ -2,6 +2,7 @@
 //! a store down to its own pixels; and the colour bar they are coloured with.
 
 use super::*;
+use crate::render::MapPicture;
 
 /// Where a map over `grid` runs and in which precision, in words ("f32", "f64").
 pub(super) fn precision_of(engine: &Engine, grid: &Grid, asked: Precision) -> &'static str {
@@ -101,7 +102,7 @@ pub fn tile_rgb(
                 (Kind::Resolved, Some(mask)) => mask_rgb(&mask),
                 (_, mask) => {
                     let shown = mask.as_deref().filter(|_| view.unresolved);
-                    render::flip_picture(&field, &spec, &picture, shown)?.rgb
+                    spec.draw(&field, &picture, None, shown)?.picture.rgb
                 }
             };
             Ok((rgb, precision))
@@ -111,8 +112,10 @@ pub fn tile_rgb(
             spec.validate()?;
             let (field, mask) =
                 crate::app::map_and_verdict(engine, &spec, view.unresolved, monitor)?;
-            let rgb =
-                render::lyapunov_picture(&field, &spec, view.range, &picture, mask.as_deref())?.rgb;
+            let rgb = spec
+                .draw(&field, &picture, Some(view.range), mask.as_deref())?
+                .picture
+                .rgb;
             Ok((rgb, precision_of(engine, &grid, spec.precision)))
         }
     }
@@ -188,11 +191,16 @@ pub(super) fn stored_rgb(
     let mut rgb = match view.kind {
         Kind::Resolved => mask_rgb(&mask),
         Kind::Flip | Kind::FlipKind => {
-            render::flip_picture(&field, &view.flip_spec(grid), &picture, shown)?.rgb
+            view.flip_spec(grid)
+                .draw(&field, &picture, None, shown)?
+                .picture
+                .rgb
         }
         Kind::Ftle => {
             let spec = view.lyapunov_spec(grid);
-            render::lyapunov_picture(&field, &spec, view.range, &picture, shown)?.rgb
+            spec.draw(&field, &picture, Some(view.range), shown)?
+                .picture
+                .rgb
         }
     };
     for (px, _) in rgb.chunks_exact_mut(3).zip(&outside).filter(|(_, o)| **o) {
