@@ -24,11 +24,11 @@ pub fn rule_short<S: MapSpec>(spec: &S, finer: &S) -> String {
         Integrator::Rk4 => "at half the time step and at a quarter",
         Integrator::Dp54 { .. } | Integrator::Dop853 { .. } => "at a tenth of the tolerances",
     };
-    let precision = match (spec.precision(), finer.precision()) {
-        (Precision::F32, Precision::F64) => " in f64",
-        _ => "",
-    };
-    format!("{how}{precision}")
+    // The finer map only ever moves up, to f64.
+    match finer.precision() == spec.precision() {
+        true => how.to_string(),
+        false => format!("{how} in {}", finer.precision().name()),
+    }
 }
 
 /// The largest fixed step (s) the verdict vouches at: measured on a chaotic region (1.5:2.5

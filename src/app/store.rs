@@ -183,16 +183,8 @@ fn map_of(store: &MapStore) -> Result<(String, FrameMap)> {
             e => e,
         })
     };
-    let (grid, mirrors) = match &map {
-        FrameMap::Flip(spec) => {
-            runnable(spec.with_band(band(&spec.grid)).validate())?;
-            (spec.grid, spec.mirrors())
-        }
-        FrameMap::Lyapunov(spec) => {
-            runnable(spec.with_band(band(&spec.grid)).validate())?;
-            (spec.grid, spec.mirrors())
-        }
-    };
+    runnable(map.with_band(band(map.grid())).validate())?;
+    let (grid, mirrors) = (*map.grid(), map.mirrors());
     // The arrays as the recorded map makes them, and its mirrored chunks as it pairs them.
     if (grid.width, grid.height) != (store.width, store.height) {
         return Err(bad(format!(
@@ -294,10 +286,7 @@ pub fn render(job: &RenderJob, command: String, monitor: &Monitor) -> Result<Ren
     }
     let started = Instant::now();
     let s = MapStore::open(&job.store)?;
-    let grid = match &job.spec {
-        FrameMap::Flip(spec) => spec.grid,
-        FrameMap::Lyapunov(spec) => spec.grid,
-    };
+    let grid = *job.spec.grid();
     if (s.width, s.height) != (grid.width, grid.height) {
         return Err(Error::Format(format!(
             "{}: the map is {}x{} but its command says {}x{}",

@@ -99,6 +99,21 @@ pub struct Vary {
     pub to: f64,
 }
 
+impl Vary {
+    /// The parameter's value at `progress` (0 the first frame, 1 the last).
+    pub fn at(&self, progress: f64) -> f64 {
+        self.from + (self.to - self.from) * progress
+    }
+}
+
+/// How far frame `k` of `n` is through the sweep, 0 to 1 (0 for a single frame).
+fn progress(k: usize, n: usize) -> f64 {
+    match n {
+        0 | 1 => 0.0,
+        _ => k as f64 / (n - 1) as f64,
+    }
+}
+
 /// A zoom into a point: the last frame is `factor` times magnified around `to` (theta1,
 /// theta2), which keeps its place in the picture.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -164,15 +179,11 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
     let n = args.frames;
     let mut out = Vec::with_capacity(n as usize);
     for k in 0..n {
-        let s = if n == 1 {
-            0.0
-        } else {
-            k as f64 / (n - 1) as f64
-        };
+        let s = progress(k as usize, n as usize);
         let mut p = base_params;
         let mut g = base_grid;
         if let Some(v) = args.vary {
-            let x = v.from + (v.to - v.from) * s;
+            let x = v.at(s);
             match v.param {
                 Param::M1 => p.m1 = x,
                 Param::M2 => p.m2 = x,
@@ -275,7 +286,7 @@ pub fn run(
                     format!(
                         "at frame {k} ({} = {:e}): {field}: {reason}",
                         v.param.name(),
-                        v.from + (v.to - v.from) * k as f64 / (frames.len() - 1).max(1) as f64
+                        v.at(progress(k, frames.len()))
                     ),
                 ));
             }
@@ -309,16 +320,7 @@ pub fn run(
     let store = match (&job.data, job.vary) {
         (Some(path), Some(vary)) => {
             let n = frames.len();
-            let values: Vec<f64> = (0..n)
-                .map(|k| {
-                    let s = if n == 1 {
-                        0.0
-                    } else {
-                        k as f64 / (n - 1) as f64
-                    };
-                    vary.from + (vary.to - vary.from) * s
-                })
-                .collect();
+            let values: Vec<f64> = (0..n).map(|k| vary.at(progress(k, n))).collect();
             let info = crate::render::store::StoreInfo {
                 command: command.clone(),
                 version: env!("CARGO_PKG_VERSION").to_string(),
@@ -330,10 +332,7 @@ pub fn run(
                     "backend": job.backend.name(),
                 }),
             };
-            let quantity = match frame_map(job, &frames[0]) {
-                FrameMap::Flip(spec) => spec.quantity(),
-                FrameMap::Lyapunov(spec) => spec.quantity(),
-            };
+            let quantity = frame_map(job, &frames[0]).quantity();
             let map = (quantity.name, quantity.unit);
             Some(crate::render::store::SweepStore::create_or_open(
                 path,
@@ -352,10 +351,7 @@ pub fn run(
         monitor.check()?;
         let path = frame_path(&job.output, k as u32);
         let map = frame_map(job, frame);
-        let info = match &map {
-            FrameMap::Flip(spec) => engine.map_info(&spec.grid, spec.precision),
-            FrameMap::Lyapunov(spec) => engine.map_info(&spec.grid, spec.precision),
-        };
+        let info = engine.map_info(map.grid(), map.precision());
         let on = if info.path.on_gpu() {
             Backend::Gpu
         } else {

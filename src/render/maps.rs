@@ -5,7 +5,7 @@ use crate::engine::RunInfo;
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
-use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec};
+use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, on_any};
 
 use super::{
     Annotation, Axis, ColorBar, Colormap, FlipColors, NEVER_RGB, annotate, decimal_ticks,
@@ -392,17 +392,11 @@ impl MapPicture for LyapunovSpec {
 
 impl MapPicture for AnyMap {
     fn ranged(&self) -> bool {
-        match self {
-            AnyMap::Flip(s) => s.ranged(),
-            AnyMap::Lyapunov(s) => s.ranged(),
-        }
+        on_any!(self, s => s.ranged())
     }
 
     fn check_picture(&self, picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()> {
-        match self {
-            AnyMap::Flip(s) => s.check_picture(picture, range),
-            AnyMap::Lyapunov(s) => s.check_picture(picture, range),
-        }
+        on_any!(self, s => s.check_picture(picture, range))
     }
 
     fn draw(
@@ -412,9 +406,6 @@ impl MapPicture for AnyMap {
         range: Option<(f32, f32)>,
         unresolved: Option<&[u8]>,
     ) -> Result<Drawn> {
-        match self {
-            AnyMap::Flip(s) => s.draw(field, picture, range, unresolved),
-            AnyMap::Lyapunov(s) => s.draw(field, picture, range, unresolved),
-        }
+        on_any!(self, s => s.draw(field, picture, range, unresolved))
     }
 }

@@ -306,6 +306,17 @@ pub enum AnyMap {
     Lyapunov(LyapunovSpec),
 }
 
+/// `$body` with `$s` bound to the spec of either family inside `$map` (an [`AnyMap`]).
+macro_rules! on_any {
+    ($map:expr, $s:ident => $body:expr) => {
+        match $map {
+            $crate::spec::AnyMap::Flip($s) => $body,
+            $crate::spec::AnyMap::Lyapunov($s) => $body,
+        }
+    };
+}
+pub(crate) use on_any;
+
 impl AnyMap {
     /// The same map over `grid` (a store's picture at another size).
     pub fn on_grid(&self, grid: Grid) -> AnyMap {
@@ -316,12 +327,52 @@ impl AnyMap {
     }
 }
 
+impl MapSpec for AnyMap {
+    fn quantity(&self) -> &'static crate::quantity::Quantity {
+        on_any!(self, s => s.quantity())
+    }
+    fn params(&self) -> Params {
+        on_any!(self, s => s.params())
+    }
+    fn grid(&self) -> &Grid {
+        on_any!(self, s => s.grid())
+    }
+    fn stepping(&self) -> Stepping {
+        on_any!(self, s => s.stepping())
+    }
+    fn precision(&self) -> Precision {
+        on_any!(self, s => s.precision())
+    }
+    fn integrator(&self) -> Integrator {
+        on_any!(self, s => s.integrator())
+    }
+    fn mirrors(&self) -> bool {
+        on_any!(self, s => s.mirrors())
+    }
+    fn validate(&self) -> Result<()> {
+        on_any!(self, s => MapSpec::validate(s))
+    }
+    fn with_band(&self, band: (u32, u32)) -> Self {
+        on_any!(self, s => s.with_band(band).any())
+    }
+    fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self {
+        on_any!(self, s => s.restepped(stepping, integrator, precision).any())
+    }
+    fn underlying(&self) -> Option<Self> {
+        on_any!(self, s => s.underlying().map(|u| u.any()))
+    }
+    fn any(&self) -> AnyMap {
+        *self
+    }
+}
+
 /// What the one map path (the engine's entry, the verdict, the store) needs of a map's spec,
 /// whichever quantity it measures: a map is its quantity's settings over a grid, stepped in a
 /// precision by an integrator, optionally over a band of rows.
 pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     /// The quantity's entry in [`crate::quantity::QUANTITIES`].
     fn quantity(&self) -> &'static crate::quantity::Quantity;
+    fn params(&self) -> Params;
     fn grid(&self) -> &Grid;
     fn stepping(&self) -> Stepping;
     fn precision(&self) -> Precision;
@@ -349,6 +400,9 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
 /// and validate).
 macro_rules! map_spec_fields {
     ($t:ident) => {
+        fn params(&self) -> Params {
+            self.params
+        }
         fn grid(&self) -> &Grid {
             &self.grid
         }

@@ -10,6 +10,7 @@ mod memory;
 mod method;
 mod stability;
 
+pub(crate) use map::on_any;
 pub use map::{AnyMap, FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};
 pub use memory::{available_memory, check_memory};
 pub use method::{

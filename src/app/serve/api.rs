@@ -21,15 +21,8 @@ pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {
             "height": w.height,
         })
     });
-    let stepping = shared.stored().map(|m| match m {
-        FrameMap::Flip(s) => s.stepping,
-        FrameMap::Lyapunov(s) => s.stepping,
-    });
-    let p = match shared.stored() {
-        Some(FrameMap::Flip(s)) => s.params,
-        Some(FrameMap::Lyapunov(s)) => s.params,
-        None => p,
-    };
+    let stepping = shared.stored().map(|m| m.stepping());
+    let p = shared.stored().map_or(p, |m| m.params());
     json(serde_json::json!({
         "version": env!("CARGO_PKG_VERSION"),
         "place": shared.place,

@@ -43,7 +43,7 @@ use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::store::MapStore;
 use crate::render::{self, PictureSpec};
-use crate::spec::{Grid, Precision, Range};
+use crate::spec::{Grid, MapSpec, Precision, Range};
 
 /// Requests waiting for (or holding) the engine at most; more get 503 at once, so a burst
 /// of requests holds a bounded amount of memory.
@@ -91,10 +91,7 @@ pub struct StoredMap {
 
 impl StoredMap {
     fn grid(&self) -> Grid {
-        match self.map {
-            FrameMap::Flip(s) => s.grid,
-            FrameMap::Lyapunov(s) => s.grid,
-        }
+        *self.map.grid()
     }
 
     fn kind(&self) -> Kind {

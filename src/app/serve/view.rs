@@ -10,7 +10,9 @@ use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
-use crate::spec::{FlipMeasure, FlipSpec, Grid, LyapunovSpec, Method, Precision, Range, Stepping};
+use crate::spec::{
+    FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method, Precision, Range, Stepping,
+};
 
 /// The deepest zoom level: 256 * 2^42 pixels across a turn, a pixel step of 5.6e-15 rad,
 /// below what f64 resolves (the verdict then says so); Leaflet's pixel coordinates stay
@@ -188,10 +190,7 @@ impl Query {
                     ));
                 }
             }
-            let (params, stepping) = match map {
-                FrameMap::Flip(s) => (s.params, s.stepping),
-                FrameMap::Lyapunov(s) => (s.params, s.stepping),
-            };
+            let (params, stepping) = (map.params(), map.stepping());
             return Ok(View {
                 kind,
                 params,
