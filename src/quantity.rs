@@ -3,7 +3,31 @@
 //! one map path (engine, verdict, store, summary) reads a quantity from here; its kernels are
 //! in `engine::MapKernels`.
 
-use crate::verdict;
+/// Flip times agree within this fraction of the time ...
+pub const FLIP_RELATIVE: f64 = 0.01;
+/// ... or within this many seconds, whichever is larger.
+pub const FLIP_ABSOLUTE: f64 = 0.02;
+
+/// Exponents agree within this fraction ...
+pub const FTLE_RELATIVE: f64 = 0.05;
+/// ... or within this many 1/s, whichever is larger.
+pub const FTLE_ABSOLUTE: f64 = 0.02;
+
+/// Whether two flip times (s; inf = never) agree.
+pub fn flip_times_agree(a: f32, b: f32) -> bool {
+    if a.is_infinite() || b.is_infinite() {
+        return a == b;
+    }
+    let (a, b) = (a as f64, b as f64);
+    // NaN compares false: never resolved.
+    (a - b).abs() <= (FLIP_RELATIVE * a.abs().max(b.abs())).max(FLIP_ABSOLUTE)
+}
+
+/// Whether two exponents (1/s) agree.
+pub fn exponents_agree(a: f32, b: f32) -> bool {
+    let (a, b) = (a as f64, b as f64);
+    (a - b).abs() <= (FTLE_RELATIVE * a.abs().max(b.abs())).max(FTLE_ABSOLUTE)
+}
 
 /// One quantity a map can measure.
 #[derive(Debug)]
@@ -28,7 +52,7 @@ pub struct Quantity {
 pub const FLIP_TIME: Quantity = Quantity {
     name: "flip time",
     unit: "s",
-    agree: verdict::flip_times_agree,
+    agree: flip_times_agree,
     agreement: "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
     tolerance: "1 % or 0.02 s",
     counted: f32::is_finite,
@@ -39,7 +63,7 @@ pub const FLIP_TIME: Quantity = Quantity {
 pub const FTLE: Quantity = Quantity {
     name: "finite-time Lyapunov exponent",
     unit: "1/s",
-    agree: verdict::exponents_agree,
+    agree: exponents_agree,
     agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
     tolerance: "5 % or 0.02 /s",
     counted: |x| x > CHAOTIC_FTLE,
@@ -112,3 +136,23 @@ impl FlipKind {
 /// Exponent (1/s) above which the summary counts a pixel as chaotic: regular orbits stay
 /// below ln(1 + K t) / t, about 0.27 /s at 20 s (tests/lyapunov.rs).
 pub const CHAOTIC_FTLE: f32 = 0.5;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn agreement_rules() {
+        let inf = f32::INFINITY;
+        assert!(flip_times_agree(inf, inf));
+        assert!(!flip_times_agree(29.9, inf));
+        assert!(!flip_times_agree(f32::NAN, f32::NAN));
+        // 0.02 s absolute below 2 s, 1 % above.
+        assert!(flip_times_agree(1.0, 1.019));
+        assert!(!flip_times_agree(1.0, 1.03));
+        assert!(flip_times_agree(20.0, 20.19));
+        assert!(!flip_times_agree(20.0, 20.25));
+        assert!(exponents_agree(1.0, 1.04) && !exponents_agree(1.0, 1.1));
+        assert!(exponents_agree(0.0, 0.015) && !exponents_agree(f32::NAN, 1.0));
+    }
+}

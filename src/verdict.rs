@@ -6,6 +6,8 @@
 //! step's error (issue 11's measurements).
 
 use crate::field::Field;
+// The rules live with their quantities (src/quantity.rs); named here too, as the verdict applies them.
+pub use crate::quantity::{exponents_agree, flip_times_agree};
 use crate::spec::{Grid, Integrator, MapSpec, Precision, Stepping};
 
 /// The rule for a map `spec` checked against `finer` ([`finer`]), as the PNG metadata
@@ -50,32 +52,6 @@ pub fn check_step(spec: &impl MapSpec, verdict: bool) -> crate::error::Result<()
         ));
     }
     Ok(())
-}
-
-/// Flip times agree within this fraction of the time ...
-pub const FLIP_RELATIVE: f64 = 0.01;
-/// ... or within this many seconds, whichever is larger.
-pub const FLIP_ABSOLUTE: f64 = 0.02;
-
-/// Exponents agree within this fraction ...
-pub const FTLE_RELATIVE: f64 = 0.05;
-/// ... or within this many 1/s, whichever is larger.
-pub const FTLE_ABSOLUTE: f64 = 0.02;
-
-/// Whether two flip times (s; inf = never) agree.
-pub fn flip_times_agree(a: f32, b: f32) -> bool {
-    if a.is_infinite() || b.is_infinite() {
-        return a == b;
-    }
-    let (a, b) = (a as f64, b as f64);
-    // NaN compares false: never resolved.
-    (a - b).abs() <= (FLIP_RELATIVE * a.abs().max(b.abs())).max(FLIP_ABSOLUTE)
-}
-
-/// Whether two exponents (1/s) agree.
-pub fn exponents_agree(a: f32, b: f32) -> bool {
-    let (a, b) = (a as f64, b as f64);
-    (a - b).abs() <= (FTLE_RELATIVE * a.abs().max(b.abs())).max(FTLE_ABSOLUTE)
 }
 
 /// 1 where `map` and `finer` agree by `agree`, else 0; the layout of the maps.
@@ -132,18 +108,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn agreement_rules() {
-        let inf = f32::INFINITY;
-        assert!(flip_times_agree(inf, inf));
-        assert!(!flip_times_agree(29.9, inf));
-        assert!(!flip_times_agree(f32::NAN, f32::NAN));
-        // 0.02 s absolute below 2 s, 1 % above.
-        assert!(flip_times_agree(1.0, 1.019));
-        assert!(!flip_times_agree(1.0, 1.03));
-        assert!(flip_times_agree(20.0, 20.19));
-        assert!(!flip_times_agree(20.0, 20.25));
-        assert!(exponents_agree(1.0, 1.04) && !exponents_agree(1.0, 1.1));
-        assert!(exponents_agree(0.0, 0.015) && !exponents_agree(f32::NAN, 1.0));
+    fn fractions() {
         assert_eq!(fraction(&[1, 0, 1, 1]), 0.75);
     }
 }

@@ -709,6 +709,13 @@ fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
         "{report}"
     );
     assert!(dir.path().join("pendulum.png").exists());
+    // The page's menu of maps is the kinds' table, and the verdict.
+    let mut kinds: Vec<&str> = chaoscope::spec::MapKind::TABLE
+        .iter()
+        .map(|e| e.short)
+        .collect();
+    kinds.push("resolved");
+    assert_eq!(report["kinds"], serde_json::json!(kinds), "{report}");
     // Issue 25's audit: the first view of a 1400 x 900 window filled a third of it (zoom 1,
     // whole steps). The world's square now fills the map's shorter side to within a quarter
     // zoom step (2^-0.25 = 0.84) and stays inside it.
@@ -972,4 +979,41 @@ fn extreme_values_of_every_query_key_are_answered_or_refused_naming_it() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     let (status, _, _) = server.get("/tile/0/0/0.png?size=16&t_max=3.3");
     assert_eq!(status, 200, "a normal tile after the extremes");
+}
+
+/// A stored map of every kind in the kinds' table is named in /api/info as the page's menu
+/// names it (a flip-kind store was named "flipkind", which no menu entry matches, so the
+/// page removed every entry but the verdict).
+#[test]
+fn every_kind_of_store_is_named_as_the_menu_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, (args, name)) in [
+        (vec!["flip"], "flip"),
+        (vec!["flip", "--colour-by", "kind"], "flip-kind"),
+        (vec!["lyapunov"], "ftle"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let store = dir.path().join(format!("m{k}.zarr"));
+        chaoscope()
+            .args(args)
+            .args(["--size", "32", "--t-max", "1", "--backend", "cpu", "--data"])
+            .arg(&store)
+            .assert()
+            .success();
+        let server = Server::start(&["--backend", "cpu", "--store", store.to_str().unwrap()]);
+        let (status, _, body) = server.get("/api/info");
+        assert_eq!(status, 200);
+        let info: serde_json::Value = serde_json::from_slice(&body).unwrap();
+        assert_eq!(info["store"]["kind"], name);
+        assert!(
+            info["kinds"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|k| k["name"] == name),
+            "{info}"
+        );
+    }
 }

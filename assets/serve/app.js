@@ -36,7 +36,7 @@ function query(extra) {
   for (const k of KEYS) {
     const v = state[k];
     if (v === undefined || v === "" || v === false) continue;
-    if ((k === "lo" || k === "hi") && state.kind !== "ftle") continue;
+    if ((k === "lo" || k === "hi") && !kindInfo().ranged) continue;
     if (page.info.store && PHYSICS.includes(k)) continue;
     q.set(k, v === true ? "1" : String(v));
   }
@@ -72,11 +72,11 @@ function fillForm() {
     if (el.type === "checkbox") el.checked = !!state[k]; else el.value = state[k] ?? "";
     if (page.info.store && PHYSICS.includes(k)) el.disabled = true;
   }
-  document.getElementById("ftle-range").hidden = state.kind !== "ftle";
-  // The flip kind is located with RK4 only: no accurate settings for it.
-  if (state.kind === "flip-kind") state.accurate = false;
+  document.getElementById("ftle-range").hidden = !kindInfo().ranged;
+  // A map without accurate settings (the flip kind is located with RK4 only).
+  if (!kindInfo().accurate) state.accurate = false;
   form.elements.accurate.checked = !!state.accurate;
-  form.elements.accurate.disabled = state.kind === "flip-kind";
+  form.elements.accurate.disabled = !kindInfo().accurate;
 }
 
 // The pixel step (rad) at zoom z, and what precision that needs.
@@ -106,18 +106,14 @@ function showStatus(extra, isError) {
     ` · tiles by ${page.info.place}` + (extra ? ` · ${extra}` : "");
 }
 
+// The kind of map shown, as the server's table describes it (/api/info's kinds).
+function kindInfo() {
+  return page.info.kinds.find((k) => k.name === state.kind) || {};
+}
+
 function legend() {
-  const text = {
-    flip: "Colour: time until an arm first flips (dark: soon, bright: late); black: no flip " +
-      "within t-max; green: NaN.",
-    "flip-kind": "Colour: which arm flips over first, and which way (+: past +π, −: past −π); " +
-      "black: no flip within t-max; green: NaN.",
-    ftle: "Colour: largest finite-time Lyapunov exponent (black: regular, bright: chaotic).",
-    resolved: "White: the pixel's flip time agrees with a finer run (resolved); black: it " +
-      "does not, so its colour cannot be trusted.",
-  }[state.kind] || "";
-  document.getElementById("legend").textContent =
-    text + (state.unresolved && state.kind !== "resolved" ? " Grey: not resolved." : "");
+  document.getElementById("legend").textContent = (kindInfo().legend || "") +
+    (state.unresolved && state.kind !== "resolved" ? " Grey: not resolved." : "");
   drawBar();
 }
 
@@ -155,6 +151,8 @@ async function start() {
   Object.assign(state, { kind: "flip", t_max: d.t_max, cmap: "", m1: d.m1, m2: d.m2,
     l1: d.l1, l2: d.l2, damping: d.damping, accurate: false, unresolved: false,
     lo: "", hi: "" });
+  // The menu of maps is the server's table: a new quantity appears here by itself.
+  for (const k of page.info.kinds) form.elements.kind.add(new Option(k.label, k.name));
   if (page.info.store) {
     const s = page.info.store;
     state.kind = s.kind;
@@ -188,8 +186,8 @@ async function start() {
 }
 
 async function setLayer() {
-  if (state.kind === "ftle" && (state.lo === "" || state.hi === "")) {
-    const r = await fetch("/api/range?" + query({ kind: "ftle" }));
+  if (kindInfo().ranged && (state.lo === "" || state.hi === "")) {
+    const r = await fetch("/api/range?" + query());
     if (r.ok) {
       const { lo, hi } = await r.json();
       state.lo = Number(lo.toPrecision(3));
@@ -231,7 +229,7 @@ function onChange(e) {
   const el = e.target;
   if (!(el.name in state)) return;
   state[el.name] = el.type === "checkbox" ? el.checked : el.value;
-  if (el.name !== "lo" && el.name !== "hi" && state.kind === "ftle" &&
+  if (el.name !== "lo" && el.name !== "hi" && kindInfo().ranged &&
     ["kind", "t_max", "m1", "m2", "l1", "l2", "damping"].includes(el.name)) {
     state.lo = ""; state.hi = "";   // a new physics, a new colour range
   }

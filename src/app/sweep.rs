@@ -15,27 +15,7 @@ use crate::spec::{
     Precision, Range, Stepping,
 };
 
-/// Which map each frame shows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MapKind {
-    Flip,
-    /// Which arm flips first and which way.
-    FlipKind,
-    Lyapunov,
-}
-
-impl MapKind {
-    pub const ALL: [MapKind; 3] = [MapKind::Flip, MapKind::FlipKind, MapKind::Lyapunov];
-
-    /// Its name in `--map`.
-    pub fn name(self) -> &'static str {
-        match self {
-            MapKind::Flip => "flip",
-            MapKind::FlipKind => "flip-kind",
-            MapKind::Lyapunov => "lyapunov",
-        }
-    }
-}
+pub use crate::spec::MapKind;
 
 /// The parameters a sweep can vary. Ratios keep the denominator and change the numerator;
 /// `mass` scales both masses (the motion does not change: a check of the pipeline).
@@ -293,7 +273,7 @@ pub fn run(
             (checked, _) => checked?,
         }
     }
-    if job.map == MapKind::Lyapunov {
+    if job.map == MapKind::Ftle {
         lyapunov_spec(job, &frames[0]).validate()?;
     }
     if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
@@ -455,12 +435,12 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
 
 fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
     match job.map {
-        MapKind::Flip => FrameMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
+        MapKind::FlipTime => FrameMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
         MapKind::FlipKind => FrameMap::Flip(FlipSpec {
             measure: FlipMeasure::Kind,
             ..FlipSpec::new(frame.params, frame.grid, job.stepping)
         }),
-        MapKind::Lyapunov => FrameMap::Lyapunov(lyapunov_spec(job, frame)),
+        MapKind::Ftle => FrameMap::Lyapunov(lyapunov_spec(job, frame)),
     }
 }
 

@@ -5,7 +5,7 @@ use crate::engine::RunInfo;
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
-use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, on_any};
+use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapKind, MapSpec, on_any};
 
 use super::{
     Annotation, Axis, ColorBar, Colormap, FlipColors, NEVER_RGB, annotate, decimal_ticks,
@@ -296,10 +296,12 @@ pub struct Drawn {
 /// How a map's quantity is drawn, the one picture entry of every map path (command, sweep,
 /// store render, explorer tiles): its colours, scale, legend and how NaN, never and unresolved
 /// look are its picture function's (below); a new quantity is one more impl.
-pub trait MapPicture {
+pub trait MapPicture: MapSpec {
     /// Whether its colours span a range the user may set (`--colour-range`), which the
-    /// summary then reports.
-    fn ranged(&self) -> bool;
+    /// summary then reports: its kind's table line.
+    fn ranged(&self) -> bool {
+        MapKind::of(&self.any()).entry().ranged
+    }
     /// `picture` and `range` checked against what the quantity's colours allow.
     fn check_picture(&self, picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()>;
     /// `field` (this spec's map) drawn; `range` None: the quantity's default for the field.
@@ -313,10 +315,6 @@ pub trait MapPicture {
 }
 
 impl MapPicture for FlipSpec {
-    fn ranged(&self) -> bool {
-        false
-    }
-
     fn check_picture(&self, picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()> {
         if self.measure == FlipMeasure::Kind && picture.colormap.is_some() {
             return Err(Error::invalid(
@@ -349,10 +347,6 @@ impl MapPicture for FlipSpec {
 }
 
 impl MapPicture for LyapunovSpec {
-    fn ranged(&self) -> bool {
-        true
-    }
-
     fn check_picture(&self, _picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()> {
         match range {
             Some((lo, hi)) if !(lo.is_finite() && hi.is_finite() && lo < hi) => {
@@ -391,10 +385,6 @@ impl MapPicture for LyapunovSpec {
 }
 
 impl MapPicture for AnyMap {
-    fn ranged(&self) -> bool {
-        on_any!(self, s => s.ranged())
-    }
-
     fn check_picture(&self, picture: &PictureSpec, range: Option<(f32, f32)>) -> Result<()> {
         on_any!(self, s => s.check_picture(picture, range))
     }

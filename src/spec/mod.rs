@@ -5,11 +5,13 @@
 use crate::error::{Error, Result, finite_positive};
 use crate::model::{Params, State};
 
+mod kind;
 mod map;
 mod memory;
 mod method;
 mod stability;
 
+pub use kind::{MapKind, MapKindEntry};
 pub(crate) use map::on_any;
 pub use map::{AnyMap, FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};
 pub use memory::{available_memory, check_memory};

@@ -54,6 +54,8 @@ try:
     box = driver.find_element(By.ID, "map").rect
     report["map_box"] = [int(box["x"]), int(box["y"]), int(box["width"]), int(box["height"])]
     report["status"] = driver.find_element(By.ID, "status").text
+    report["kinds"] = driver.execute_script(
+        "return [...document.querySelector('select[name=kind]').options].map(o => o.value)")
     driver.save_screenshot(out + "/map.png")
 
     started = driver.execute_script("""

@@ -46,7 +46,7 @@ pub(super) fn right(map: &[f32], reference: &Field) -> f64 {
             ..reference.clone()
         },
         reference,
-        crate::verdict::flip_times_agree,
+        crate::quantity::flip_times_agree,
     ))
 }
 
@@ -205,7 +205,7 @@ pub(super) fn ftle_accuracy_samples(
         let t0 = Instant::now();
         let field = engine.map(&spec, quiet)?;
         let wall_s = t0.elapsed().as_secs_f64();
-        let agree = crate::verdict::mask(&field, reference, crate::verdict::exponents_agree);
+        let agree = crate::verdict::mask(&field, reference, crate::quantity::exponents_agree);
         out.push(Sample {
             name: name.to_string(),
             mode: "accurate-ftle",

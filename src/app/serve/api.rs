@@ -31,7 +31,7 @@ pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {
         "f64_min_pixel_step": crate::spec::F64_MIN_PIXEL_STEP,
         "max_zoom": view::MAX_ZOOM,
         "max_t_max": view::MAX_T_MAX,
-        "kinds": Kind::NAMES,
+        "kinds": Kind::all().map(Kind::describe).collect::<Vec<_>>(),
         "colormaps": colormaps,
         "defaults": {
             "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,
@@ -55,7 +55,7 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
     let parsed = (|| -> Result<(View, Grid)> {
         let mut q = Query::new(q)?;
         let mut view = shared.view(&mut q)?;
-        view.kind = Kind::Flip;
+        view.kind = Kind::FLIP;
         let start = view::start(&mut q)?;
         // At least 16 ulp of pi: a narrower pixel has no distinct edges in f64.
         let pixel = q
@@ -213,7 +213,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
             colormap: view.colormap,
         };
         let name = match view.kind {
-            Kind::Flip | Kind::FlipKind | Kind::Resolved => {
+            Kind::FLIP | Kind::FLIP_KIND | Kind::Resolved => {
                 let job = FlipJob {
                     spec: view.flip_spec(grid),
                     backend,
@@ -225,7 +225,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                 crate::app::flip::run(&job, (commands.flip)(&job), monitor)?;
                 "chaoscope-flip.png"
             }
-            Kind::Ftle => {
+            Kind::FTLE => {
                 let job = LyapunovMapJob {
                     spec: view.lyapunov_spec(grid),
                     backend,

@@ -7,6 +7,7 @@
 mod answers;
 mod api;
 mod assets;
+mod kind;
 mod tiles;
 pub mod view;
 

@@ -92,7 +92,7 @@ pub fn tile_rgb(
         colormap: view.colormap,
     };
     match view.kind {
-        Kind::Flip | Kind::FlipKind | Kind::Resolved => {
+        Kind::FLIP | Kind::FLIP_KIND | Kind::Resolved => {
             let spec = view.flip_spec(grid);
             spec.validate()?;
             let precision = engine.plan(&spec)?.path.precision().name();
@@ -107,7 +107,7 @@ pub fn tile_rgb(
             };
             Ok((rgb, precision))
         }
-        Kind::Ftle => {
+        Kind::FTLE => {
             let spec = view.lyapunov_spec(grid);
             spec.validate()?;
             let (field, mask) =
@@ -190,13 +190,13 @@ pub(super) fn stored_rgb(
     let shown = Some(mask.as_slice()).filter(|_| view.unresolved);
     let mut rgb = match view.kind {
         Kind::Resolved => mask_rgb(&mask),
-        Kind::Flip | Kind::FlipKind => {
+        Kind::FLIP | Kind::FLIP_KIND => {
             view.flip_spec(grid)
                 .draw(&field, &picture, None, shown)?
                 .picture
                 .rgb
         }
-        Kind::Ftle => {
+        Kind::FTLE => {
             let spec = view.lyapunov_spec(grid);
             spec.draw(&field, &picture, Some(view.range), shown)?
                 .picture
@@ -225,7 +225,7 @@ pub(super) async fn legend(AxumState(shared): AxumState<S>, AxumQuery(q): Params
         Err(e) => return reply(e),
     };
     let (colors, ticks, label) = match view.kind {
-        Kind::Ftle => {
+        Kind::FTLE => {
             let (lo, hi) = (view.range.0 as f64, view.range.1 as f64);
             let ticks: Vec<(f64, String)> = render::decimal_ticks(lo, hi)
                 .into_iter()
@@ -234,11 +234,11 @@ pub(super) async fn legend(AxumState(shared): AxumState<S>, AxumQuery(q): Params
             let table = render::ftle_table(view.colormap.unwrap_or(render::Colormap::Magma));
             (table, ticks, "FTLE (1/s)")
         }
-        Kind::FlipKind => {
+        Kind::FLIP_KIND => {
             let (colors, ticks) = render::flip_kind_bar();
             (colors, ticks, "first flip")
         }
-        Kind::Flip | Kind::Resolved => {
+        Kind::FLIP | Kind::Resolved => {
             let colors = render::FlipColors {
                 t_lo: (view.params.l1 / view.params.g).sqrt(),
                 t_max: view.stepping.t_max,

@@ -14,6 +14,8 @@ use crate::spec::{
     FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method, Precision, Range, Stepping,
 };
 
+pub use super::kind::Kind;
+
 /// The deepest zoom level: 256 * 2^42 pixels across a turn, a pixel step of 5.6e-15 rad,
 /// below what f64 resolves (the verdict then says so); Leaflet's pixel coordinates stay
 /// exact integers in a double there.
@@ -32,46 +34,6 @@ pub const TILE_SIZES: (u32, u32) = (16, 512);
 /// Largest side of a saved view (pixels), and its most pixels.
 pub const MAX_SAVE_SIDE: u32 = 4096;
 pub const MAX_SAVE_PIXELS: u64 = 1 << 24;
-
-/// The map a tile shows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Kind {
-    /// Flip times.
-    Flip,
-    /// Which arm flips first and which way.
-    FlipKind,
-    /// Largest finite-time Lyapunov exponents.
-    Ftle,
-    /// The verdict on the flip map: white resolved, black not.
-    Resolved,
-}
-
-impl Kind {
-    pub const NAMES: [&'static str; 4] = ["flip", "flip-kind", "ftle", "resolved"];
-
-    /// The kind a stored map shows.
-    pub fn of(map: &FrameMap) -> Kind {
-        match map {
-            FrameMap::Flip(s) if s.measure == FlipMeasure::Kind => Kind::FlipKind,
-            FrameMap::Flip(_) => Kind::Flip,
-            FrameMap::Lyapunov(_) => Kind::Ftle,
-        }
-    }
-
-    fn parse(s: &str) -> Result<Kind> {
-        match s {
-            "flip" => Ok(Kind::Flip),
-            "flip-kind" => Ok(Kind::FlipKind),
-            "ftle" => Ok(Kind::Ftle),
-            "resolved" => Ok(Kind::Resolved),
-            _ => Err(Error::invalid(
-                "kind",
-                format!("{s:?}: one of {}", Kind::NAMES.join(", ")),
-            )),
-        }
-    }
-}
 
 /// Everything about a view but its region.
 #[derive(Clone, Debug, PartialEq)]
@@ -179,7 +141,7 @@ impl Query {
         let kind = match (kind.as_deref(), stored) {
             (Some(k), _) => Kind::parse(k)?,
             (None, Some(map)) => Kind::of(&map),
-            (None, None) => Kind::Flip,
+            (None, None) => Kind::FLIP,
         };
         if let Some(map) = stored {
             for key in PHYSICS_KEYS {
@@ -219,15 +181,21 @@ impl Query {
             .and_then(|p| crate::spec::validate_params(&p).map(|_| p))
             .map_err(|e| rename(e, "joint_damping", "damping"))?;
         let accurate = self.flag("accurate")?;
-        if accurate && kind == Kind::FlipKind {
+        if let Kind::Map(k) = kind
+            && accurate
+            && !k.entry().accurate
+        {
             return Err(Error::invalid(
                 "accurate",
-                "the flip kind is located with rk4 only; leave accurate off",
+                format!(
+                    "the map \"{}\" has no accurate settings; leave accurate off",
+                    k.entry().label
+                ),
             ));
         }
         let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
         let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
-        if kind == Kind::Ftle && t_max < renorm_of(dt) {
+        if kind == Kind::FTLE && t_max < renorm_of(dt) {
             return Err(Error::invalid(
                 "t_max",
                 format!(
@@ -327,8 +295,8 @@ impl View {
         }
         let spec = FlipSpec {
             measure: match self.kind {
-                Kind::FlipKind => FlipMeasure::Kind,
-                Kind::Flip | Kind::Ftle | Kind::Resolved => FlipMeasure::Time,
+                Kind::FLIP_KIND => FlipMeasure::Kind,
+                _ => FlipMeasure::Time,
             },
             ..FlipSpec::new(self.params, grid, self.stepping)
         };

@@ -1,0 +1,73 @@
+//! The maps the explorer shows: every line of the kinds' table ([`MapKind::TABLE`]), and the
+//! verdict; the page's menu and legends are built from [`Kind::describe`].
+
+use crate::app::sweep::FrameMap;
+use crate::error::{Error, Result};
+use crate::spec::MapKind;
+
+/// The map a tile shows: a map of the kinds' table ([`MapKind::TABLE`]), or the verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kind {
+    Map(MapKind),
+    /// The verdict on the flip map: white resolved, black not.
+    Resolved,
+}
+
+impl Kind {
+    pub const FLIP: Kind = Kind::Map(MapKind::FlipTime);
+    pub const FLIP_KIND: Kind = Kind::Map(MapKind::FlipKind);
+    pub const FTLE: Kind = Kind::Map(MapKind::Ftle);
+
+    const RESOLVED_LABEL: &str = "verdict (white: resolved)";
+    const RESOLVED_LEGEND: &str = "White: the pixel's flip time agrees with a finer run (resolved); black: it does not, so its colour cannot be trusted.";
+
+    /// Every kind, in the page's menu order.
+    pub fn all() -> impl Iterator<Item = Kind> {
+        MapKind::ALL
+            .into_iter()
+            .map(Kind::Map)
+            .chain([Kind::Resolved])
+    }
+
+    /// Its name in queries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Map(k) => k.short(),
+            Kind::Resolved => "resolved",
+        }
+    }
+
+    /// The page's menu entry and what its colours mean.
+    pub fn describe(self) -> serde_json::Value {
+        let (label, legend) = match self {
+            Kind::Map(k) => (k.entry().label, k.entry().legend),
+            Kind::Resolved => (Self::RESOLVED_LABEL, Self::RESOLVED_LEGEND),
+        };
+        let (ranged, accurate) = match self {
+            Kind::Map(k) => (k.entry().ranged, k.entry().accurate),
+            Kind::Resolved => (false, true),
+        };
+        serde_json::json!({
+            "name": self.name(), "label": label, "legend": legend,
+            "ranged": ranged, "accurate": accurate,
+        })
+    }
+
+    /// The kind a stored map shows.
+    pub fn of(map: &FrameMap) -> Kind {
+        Kind::Map(MapKind::of(map))
+    }
+
+    pub(super) fn parse(s: &str) -> Result<Kind> {
+        Kind::all().find(|k| k.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = Kind::all().map(Kind::name).collect();
+            Error::invalid("kind", format!("{s:?}: one of {}", names.join(", ")))
+        })
+    }
+}
+
+impl serde::Serialize for Kind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
