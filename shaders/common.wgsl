@@ -56,12 +56,12 @@ struct Params {
     // of the whole run, twin separation.
     interval: u32,
     total_steps: u32,
-    twin_eps: real,
+    setting: real,
     // Adaptive steps: relative and absolute tolerance, the run's end time (s).
     rtol: real,
     atol: real,
     t_max: real,
-    _pad0: u32,
+    measure: u32,
     _pad1: u32,
 }
 
@@ -220,7 +220,11 @@ fn advanced(p: Pendulum, h: real, r: Rate) -> Pendulum {
 // Classic fourth-order Runge-Kutta, the stages summed as they come (k1 + 2 k2 + 2 k3 + k4 in
 // the CPU's order): fewer values stay alive at once, which lavapipe's 16 vector registers feel.
 fn rk4_step(c: Coeffs, p: Pendulum, dt: real) -> Pendulum {
-    let k1 = rate(c, p);
+    return rk4_step_with(c, p, rate(c, p), dt);
+}
+
+// rk4_step with the rate at p, k1, given (a caller that needs it too).
+fn rk4_step_with(c: Coeffs, p: Pendulum, k1: Rate, dt: real) -> Pendulum {
     var sum = k1;
     let k2 = rate(c, advanced(p, 0.5 * dt, k1));
     sum = Rate(fma(vec4<real>(2.0), k2.dy, sum.dy), fma(vec4<real>(2.0), k2.du, sum.du));

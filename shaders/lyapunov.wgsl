@@ -312,7 +312,7 @@ fn twin_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let y = grid_start(params, i);
     let a = pendulum_from(y);
-    let b = pendulum_from(y + params.twin_eps * TANGENT_START);
+    let b = pendulum_from(y + params.setting * TANGENT_START);
     states[4u * i] = a.y;
     states[4u * i + 1u] = a.u;
     states[4u * i + 2u] = b.y;
@@ -328,7 +328,7 @@ fn twin_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     let c = coeffs_from(params);
     let dt = params.dt;
-    let eps = params.twin_eps;
+    let eps = params.setting;
     var a = Pendulum(states[4u * i], states[4u * i + 1u]);
     var b = Pendulum(states[4u * i + 2u], states[4u * i + 3u]);
     var log_sum = log_sums[i];

@@ -11,8 +11,8 @@ use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{
-    FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Method, Precision, Range,
-    Stepping,
+    FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, MapSpec, Method, Precision,
+    Range, Stepping,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -126,12 +126,19 @@ impl MapKernels for FlipSpec {
 
 impl MapKernels for LyapunovSpec {
     fn on_gpu(&self, k: &Kernels, precision: Precision, monitor: &Monitor) -> Result<Field> {
-        k.lyapunov(self.method, precision)
-            .run(&k.ctx, self, monitor)
+        match self.indicator {
+            Indicator::Ftle => k
+                .lyapunov(self.method, precision)
+                .run(&k.ctx, self, monitor),
+            _ => k.indicators(precision).run(&k.ctx, self, monitor),
+        }
     }
 
     fn on_cpu(&self, monitor: &Monitor) -> Result<Field> {
-        cpu::ftle_map(self, monitor)
+        match self.indicator {
+            Indicator::Ftle => cpu::ftle_map(self, monitor),
+            _ => cpu::indicator_map(self, monitor),
+        }
     }
 
     /// f32 cannot resolve a twin separation much below 1e-6 of the state: say so.
@@ -277,7 +284,7 @@ impl Engine {
     /// error estimate is round-off below [`crate::spec::MIN_TOLERANCE_F32`]).
     pub fn plan(&self, spec: &impl MapSpec) -> Result<RunInfo> {
         let info = self.map_info(spec.grid(), spec.precision());
-        spec.integrator().validate(info.path.precision())?;
+        spec.validate_in(info.path.precision())?;
         Ok(info)
     }
 

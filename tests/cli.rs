@@ -261,6 +261,7 @@ fn lyapunov_single_point_writes_the_convergence_csv() {
         precision: chaoscope::spec::Precision::F32,
         band: None,
         integrator: chaoscope::spec::Integrator::Rk4,
+        indicator: chaoscope::spec::Indicator::Ftle,
     };
     let start =
         chaoscope::model::State::at_rest(std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);

@@ -2,8 +2,8 @@
 //! their Rust mirrors in size and member offsets.
 
 use chaoscope::gpu::layout::{
-    GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuLyapunovSlot, GpuParams, GpuParams64, GpuPendulum,
-    GpuPendulum64,
+    GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuIndicatorSlot, GpuIndicatorSlot64, GpuLyapunovSlot,
+    GpuParams, GpuParams64, GpuPendulum, GpuPendulum64,
 };
 use chaoscope::gpu::shaders::all_shaders;
 use wgpu::naga;
@@ -62,7 +62,7 @@ fn params_struct_matches_its_rust_mirror() {
         omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
         mass_total, mass_lower, bearing,
         width, height, rows, row0, step0, steps, count, interval, total_steps,
-        twin_eps, rtol, atol, t_max, _pad0, _pad1);
+        setting, rtol, atol, t_max, measure, _pad1);
     // The f64 mirror's explicit padding (_pad_a) is implicit in WGSL.
     let rust64 = rust_offsets!(GpuParams64;
         a, b, c, p, q, l1, l2, dt, theta1_mid, theta1_half_step, theta2_mid, theta2_half_step,
@@ -70,7 +70,7 @@ fn params_struct_matches_its_rust_mirror() {
         omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
         mass_total, mass_lower, bearing,
         width, height, rows, row0, step0, steps, count, interval, total_steps,
-        twin_eps, rtol, atol, t_max, _pad0, _pad1);
+        setting, rtol, atol, t_max, measure, _pad1);
     for (name, source) in all_shaders() {
         let (wgsl, span) = wgsl_struct(&module(&name, &source), "Params");
         let (rust, size) = if name.ends_with("_f64") {
@@ -126,6 +126,22 @@ fn storage_structs_match_their_rust_mirrors() {
             };
             assert_eq!(span as usize, size, "{name}: AdaptiveSlot");
             assert_eq!(wgsl, rust, "{name}: members and offsets of AdaptiveSlot");
+        }
+        if name.starts_with("indicators") {
+            let (wgsl, span) = wgsl_struct(&module, "IndicatorSlot");
+            let (rust, size) = if name.ends_with("_f64") {
+                (
+                    rust_offsets!(GpuIndicatorSlot64; y, u, v, sums, unused),
+                    std::mem::size_of::<GpuIndicatorSlot64>(),
+                )
+            } else {
+                (
+                    rust_offsets!(GpuIndicatorSlot; y, u, v, sums, unused),
+                    std::mem::size_of::<GpuIndicatorSlot>(),
+                )
+            };
+            assert_eq!(span as usize, size, "{name}: IndicatorSlot");
+            assert_eq!(wgsl, rust, "{name}: members and offsets of IndicatorSlot");
         }
     }
 }

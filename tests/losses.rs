@@ -259,6 +259,7 @@ fn divergence_maps_carry_the_damping_on_both_paths() {
         precision: chaoscope::spec::Precision::F32,
         band: None,
         integrator: chaoscope::spec::Integrator::Rk4,
+        indicator: chaoscope::spec::Indicator::Ftle,
     };
     let c = cpu::ftle_map(&spec, &Monitor::hidden()).unwrap();
     let g = gpu::LyapunovKernel::new(&ctx, spec.method)

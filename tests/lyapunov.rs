@@ -34,6 +34,7 @@ fn spec(n: u32, t_max: f64, dt: f64, method: Method) -> LyapunovSpec {
         precision: chaoscope::spec::Precision::F32,
         band: None,
         integrator: chaoscope::spec::Integrator::Rk4,
+        indicator: chaoscope::spec::Indicator::Ftle,
     }
 }
 

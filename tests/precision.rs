@@ -219,6 +219,7 @@ fn f64_gpu_divergence_maps_match_the_f64_cpu() {
             precision: Precision::F64,
             band: None,
             integrator: chaoscope::spec::Integrator::Rk4,
+            indicator: chaoscope::spec::Indicator::Ftle,
         };
         let gpu = LyapunovKernel::with_precision(&ctx, method, Precision::F64)
             .run(&ctx, &spec, &Monitor::hidden())

@@ -273,8 +273,8 @@ pub fn run(
             (checked, _) => checked?,
         }
     }
-    if job.map == MapKind::Ftle {
-        lyapunov_spec(job, &frames[0]).validate()?;
+    if let FrameMap::Lyapunov(spec) = frame_map(job, &frames[0]) {
+        spec.validate()?;
     }
     if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
         return Err(Error::invalid("ftle_max", "must be > 0"));
@@ -430,6 +430,7 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
         precision: Precision::F32,
         band: None,
         integrator: crate::spec::Integrator::Rk4,
+        indicator: crate::spec::Indicator::Ftle,
     }
 }
 
@@ -440,7 +441,13 @@ fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
             measure: FlipMeasure::Kind,
             ..FlipSpec::new(frame.params, frame.grid, job.stepping)
         }),
-        MapKind::Ftle => FrameMap::Lyapunov(lyapunov_spec(job, frame)),
+        kind => FrameMap::Lyapunov(LyapunovSpec {
+            indicator: kind
+                .entry()
+                .indicator
+                .expect("every map but the flip maps is of the divergence family"),
+            ..lyapunov_spec(job, frame)
+        }),
     }
 }
 
@@ -454,7 +461,8 @@ fn frame_field(map: &FrameMap, engine: &Engine, monitor: &Monitor) -> Result<Fie
 
 /// One frame's picture.
 fn frame_picture(job: &SweepJob, map: &FrameMap, field: &Field) -> Result<Picture> {
-    // One colour range for every frame, where the quantity's colours span one.
-    let range = map.ranged().then_some((0.0, job.ftle_max as f32));
+    // One colour range for every frame of the FTLE (--ftle-max); the other indicators take
+    // their own default range per frame.
+    let range = (job.map == MapKind::Ftle).then_some((0.0, job.ftle_max as f32));
     Ok(map.draw(field, &job.picture, range, None)?.picture)
 }

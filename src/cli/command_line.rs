@@ -15,7 +15,8 @@ use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::PictureSpec;
 use crate::spec::{
-    FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Spread, Stepping,
+    Alignment, FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, Method, Precision,
+    Spread, Stepping,
 };
 
 /// The flags that reproduce `p` exactly.
@@ -182,7 +183,28 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
     }
     out += &precision(spec.precision);
     out += &integrator(&spec.integrator);
+    out += &indicator(spec.indicator);
     out + &picture(pic)
+}
+
+/// `--indicator` and its settings (nothing for the FTLE, the default).
+fn indicator(i: Indicator) -> String {
+    let alignment = |name: &str, index: Alignment, threshold: f64| match index {
+        Alignment::Sali => format!(" --indicator sali{name} --threshold {threshold:e}"),
+        Alignment::Gali(k) => {
+            format!(" --indicator gali{name} --gali {k} --threshold {threshold:e}")
+        }
+    };
+    match i {
+        Indicator::Ftle => String::new(),
+        Indicator::Exponent(k) => format!(" --indicator exponent --exponent {k}"),
+        Indicator::ExponentSum => " --indicator exponent-sum".into(),
+        Indicator::Alignment { index, threshold } => alignment("", index, threshold),
+        Indicator::AlignmentTime { index, threshold } => alignment("-time", index, threshold),
+        Indicator::Megno => " --indicator megno".into(),
+        Indicator::Fli => " --indicator fli".into(),
+        Indicator::Descriptor { p } => format!(" --indicator descriptor --ld-p {p}"),
+    }
 }
 
 pub fn lyapunov_map(job: &LyapunovMapJob) -> String {
@@ -206,6 +228,7 @@ pub fn lyapunov_point(job: &LyapunovPointJob) -> String {
         params(&s.params),
         job.backend.name()
     ) + &precision(s.precision)
+        + &indicator(s.indicator)
 }
 
 pub fn trajectory(job: &TrajectoryJob) -> String {

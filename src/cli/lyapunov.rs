@@ -10,13 +10,16 @@ use super::parse::{
 };
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
-use crate::app::lyapunov::{self, CHAOTIC_FTLE, LyapunovMapJob, LyapunovPointJob};
+use crate::app::lyapunov::{self, LyapunovMapJob, LyapunovPointJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::quantity::FTLE;
-use crate::spec::{Grid, Integrator, LyapunovSpec, Method, Precision, Range, Stepping};
+use crate::spec::MapSpec;
+use crate::spec::{
+    ALIGNED, ALIGNED_F32_FLOOR, Alignment, Grid, Indicator, Integrator, LyapunovSpec, Method,
+    Precision, Range, Stepping,
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MethodArg {
@@ -101,10 +104,55 @@ pub struct LyapunovArgs {
     /// renormalisation (the tangent method; the PNG records those flags).
     #[arg(long, conflicts_with_all = ["precision", "integrator", "rtol", "atol", "dt"])]
     pub accurate: bool,
-    /// The colours' range LOW:HIGH (1/s) [default: 0 to the map's 99.5th percentile].
+    /// The colours' range LOW:HIGH in the indicator's unit [default: 0 to the map's 99.5th
+    /// percentile for exponents, MEGNO and the FLI; --threshold's log10 to 0 for alignment
+    /// indices; 0 to --t-max for their times; the 0.5th to 99.5th percentile otherwise].
     #[arg(long, value_parser = parse_range, allow_hyphen_values = true)]
     pub colour_range: Option<Range>,
+    /// What to map of each start: ftle (the largest exponent), exponent (one of the four,
+    /// --exponent), exponent-sum, sali or gali (log10 of an alignment index of 2 or --gali
+    /// tangent vectors; a start stops, called chaotic, once it falls below --threshold),
+    /// sali-time or gali-time (the time that took), megno (<Y>), fli (the fast Lyapunov
+    /// indicator), descriptor (the Lagrangian descriptor M over [-t-max, t-max], --ld-p).
+    #[arg(long, default_value = "ftle", value_parser = clap::builder::PossibleValuesParser::new(INDICATORS))]
+    pub indicator: String,
+    /// Which exponent --indicator exponent maps, 1..4 (largest first).
+    #[arg(long)]
+    pub exponent: Option<u8>,
+    /// Tangent vectors of --indicator gali or gali-time, 2..4.
+    #[arg(long)]
+    pub gali: Option<u8>,
+    /// The alignment index below which a start is called chaotic and stops [default: 1e-8;
+    /// f32 resolves 1e-5 at best, its default there].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub threshold: Option<f64>,
+    /// The exponent p of the descriptor's sum of |f_i|^p: 0.25, 0.5, 1 or 2.
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub ld_p: Option<f64>,
 }
+
+/// A unit as the summary line writes it ("/s" for 1/s; nothing for a plain number).
+fn short_unit(unit: &str) -> &str {
+    match unit {
+        "1/s" => " /s",
+        "s" => " s",
+        _ => "",
+    }
+}
+
+/// The names `--indicator` takes.
+pub const INDICATORS: [&str; 10] = [
+    "ftle",
+    "exponent",
+    "exponent-sum",
+    "sali",
+    "sali-time",
+    "gali",
+    "gali-time",
+    "megno",
+    "fli",
+    "descriptor",
+];
 
 /// What the flags ask for: a map or a convergence run.
 #[derive(Clone, Debug, PartialEq)]
@@ -119,6 +167,70 @@ impl LyapunovArgs {
         let gpu_f32 = self.precision.unwrap_or_default() == Precision::F32
             && self.backend != Some(Backend::Cpu);
         super::flip::integrator_of(&self.integrator, self.rtol, self.atol, gpu_f32)
+    }
+
+    /// The indicator the flags ask for; a flag of another indicator is refused.
+    fn indicator(&self) -> Result<Indicator> {
+        let name = self.indicator.as_str();
+        let alignment = match name {
+            "sali" | "sali-time" => Some(Alignment::Sali),
+            "gali" | "gali-time" => Some(Alignment::Gali(self.gali.unwrap_or(4))),
+            _ => None,
+        };
+        let misplaced = [
+            (
+                "exponent",
+                self.exponent.is_some() && name != "exponent",
+                "exponent",
+            ),
+            (
+                "gali",
+                self.gali.is_some() && !name.starts_with("gali"),
+                "gali or gali-time",
+            ),
+            (
+                "threshold",
+                self.threshold.is_some() && alignment.is_none(),
+                "sali, gali, sali-time or gali-time",
+            ),
+            (
+                "ld_p",
+                self.ld_p.is_some() && name != "descriptor",
+                "descriptor",
+            ),
+        ];
+        if let Some((flag, _, of)) = misplaced.into_iter().find(|m| m.1) {
+            return Err(Error::invalid(flag, format!("is for --indicator {of}")));
+        }
+        if self.accurate && name != "ftle" {
+            return Err(Error::invalid(
+                "accurate",
+                format!(
+                    "is for the largest exponent; --indicator {name} steps with rk4 (set --dt and --precision)"
+                ),
+            ));
+        }
+        // f32 on the GPU resolves an alignment index to about 1e-5: its default there.
+        let gpu_f32 = self.precision.unwrap_or_default() == Precision::F32
+            && self.backend != Some(Backend::Cpu);
+        let threshold = self.threshold.unwrap_or(match gpu_f32 {
+            true => ALIGNED_F32_FLOOR,
+            false => ALIGNED,
+        });
+        Ok(match (name, alignment) {
+            ("exponent", _) => Indicator::Exponent(self.exponent.unwrap_or(1)),
+            ("exponent-sum", _) => Indicator::ExponentSum,
+            (n, Some(index)) if n.ends_with("-time") => {
+                Indicator::AlignmentTime { index, threshold }
+            }
+            (_, Some(index)) => Indicator::Alignment { index, threshold },
+            ("megno", _) => Indicator::Megno,
+            ("fli", _) => Indicator::Fli,
+            ("descriptor", _) => Indicator::Descriptor {
+                p: self.ld_p.unwrap_or(0.5),
+            },
+            _ => Indicator::Ftle,
+        })
     }
 
     /// The map the flags ask for over `grid` (`--accurate` expanded by the spec).
@@ -149,6 +261,7 @@ impl LyapunovArgs {
             precision: self.precision.unwrap_or_default(),
             band: None,
             integrator,
+            indicator: self.indicator()?,
         };
         Ok(if self.accurate { spec.accurate() } else { spec })
     }
@@ -240,22 +353,27 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             super::args::f32_on_the_cpu(args.precision, job.backend);
             let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
             say(&s.notices);
+            let q = job.spec.quantity();
             eprintln!(
-                "{}x{} on {} in {:.2} s: {:.1} % chaotic (FTLE > {CHAOTIC_FTLE} /s at {} s){}{}{} -> {}",
+                "{}x{} on {} in {:.2} s: {:.1} % {} ({} at {} s){}{}{} -> {}",
                 s.width,
                 s.height,
                 s.place,
                 s.seconds,
                 100.0 * s.counted,
+                q.counted_as,
+                q.counted_rule,
                 s.t_max,
                 super::flip::nan_note(s.nan),
                 super::flip::resolved_note(
                     s.resolved,
-                    &format!("the same map {} within {}", s.rule, FTLE.tolerance)
+                    &format!("the same map {} within {}", s.rule, q.tolerance)
                 ),
                 match s.range {
                     // A store has no picture, so no colour range.
-                    Some((lo, hi)) if !lo.is_nan() => format!(", colour range {lo:.2}..{hi:.2} /s"),
+                    Some((lo, hi)) if !lo.is_nan() => {
+                        format!(", colour range {lo:.2}..{hi:.2}{}", short_unit(q.unit))
+                    }
                     _ => String::new(),
                 },
                 s.output.display()
@@ -269,9 +387,10 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             say(&s.notices);
             if let Some(path) = &s.output {
                 eprintln!(
-                    "FTLE at {} s: {:.4} /s -> {}",
+                    "{} at {} s: {:.4} -> {}",
+                    job.spec.indicator.title(),
                     s.t_max,
-                    s.ftle,
+                    s.value,
                     path.display()
                 );
             }

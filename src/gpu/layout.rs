@@ -93,6 +93,16 @@ mirrors! {
         clock: [real; 4],
     }
 
+    /// Mirror of WGSL `IndicatorSlot` (shaders/indicators.wgsl), one per pixel of an
+    /// indicator map: the pendulum, four tangent vectors, the running sums.
+    struct GpuIndicatorSlot / GpuIndicatorSlot64 {
+        y: [real; 4],
+        u: [real; 4],
+        v: [real; 16],
+        sums: [real; 4],
+        unused: [real; 4],
+    }
+
     /// Mirror of WGSL `Params`, laid out by WGSL's rules (f64 aligned to 8 bytes; the padding
     /// made explicit for Pod).
     struct GpuParams / GpuParams64 {
@@ -130,17 +140,19 @@ mirrors! {
         steps: u32,
         count: u32,
         /// Steps between renormalisations (divergence maps) or between stored states
-        /// (trajectories); steps of the whole run; twin separation (Euclidean in (theta1,
-        /// omega1, theta2, omega2)).
+        /// (trajectories); steps of the whole run; the method's setting: the twin's
+        /// separation (Euclidean in (theta1, omega1, theta2, omega2)), an alignment index's
+        /// threshold, a Lagrangian descriptor's exponent p.
         interval: u32,
         total_steps: u32,
         _pad_a: pad64,
-        twin_eps: real,
+        setting: real,
         /// Adaptive steps: relative and absolute tolerance, the run's end time (s).
         rtol: real,
         atol: real,
         t_max: real,
-        _pad0: u32,
+        /// Which value an indicator kernel writes (shaders/indicators.wgsl).
+        measure: u32,
         _pad1: u32,
     }
 }
@@ -220,18 +232,20 @@ pub trait Real: Pod + Copy + Default + PartialEq + std::fmt::Debug + Send + Sync
     type Pendulum: Pod + Default;
     type LyapunovSlot: Pod + Default;
     type AdaptiveSlot: Pod + Default;
+    type IndicatorSlot: Pod + Default;
     fn from_f64(x: f64) -> Self;
     fn to_f64(self) -> f64;
 }
 
 macro_rules! real {
-    ($r:ident, $wgsl:literal, $params:ident, $pendulum:ident, $slot:ident, $adaptive:ident) => {
+    ($r:ident, $wgsl:literal, $params:ident, $pendulum:ident, $slot:ident, $adaptive:ident, $indicator:ident) => {
         impl Real for $r {
             const WGSL: &'static str = include_str!($wgsl);
             type Params = $params;
             type Pendulum = $pendulum;
             type LyapunovSlot = $slot;
             type AdaptiveSlot = $adaptive;
+            type IndicatorSlot = $indicator;
             fn from_f64(x: f64) -> Self {
                 x as $r
             }
@@ -252,7 +266,8 @@ macro_rules! real {
                 self.total_steps = run.total_steps;
                 self.steps = run.steps;
                 self.count = run.count;
-                self.twin_eps = run.twin_eps as $r;
+                self.setting = run.setting as $r;
+                self.measure = run.measure;
                 self.rtol = run.rtol as $r;
                 self.atol = run.atol as $r;
                 self.t_max = run.t_max as $r;
@@ -267,7 +282,8 @@ real!(
     GpuParams,
     GpuPendulum,
     GpuLyapunovSlot,
-    GpuAdaptiveSlot
+    GpuAdaptiveSlot,
+    GpuIndicatorSlot
 );
 real!(
     f64,
@@ -275,7 +291,8 @@ real!(
     GpuParams64,
     GpuPendulum64,
     GpuLyapunovSlot64,
-    GpuAdaptiveSlot64
+    GpuAdaptiveSlot64,
+    GpuIndicatorSlot64
 );
 
 /// `$body` with the type `$r` the [`Real`] of `$precision`.
@@ -310,7 +327,8 @@ pub struct Run {
     pub total_steps: u32,
     pub steps: u32,
     pub count: u32,
-    pub twin_eps: f64,
+    pub setting: f64,
+    pub measure: u32,
     pub rtol: f64,
     pub atol: f64,
     pub t_max: f64,

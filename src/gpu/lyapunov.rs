@@ -134,7 +134,7 @@ impl LyapunovKernel {
             .with_run(Run {
                 interval: spec.renorm_steps(),
                 total_steps: spec.stepping.steps(),
-                twin_eps: match spec.method {
+                setting: match spec.method {
                     Method::Twin { eps } => eps,
                     Method::Tangent => 0.0,
                 },

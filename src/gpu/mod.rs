@@ -3,6 +3,7 @@
 
 mod context;
 mod flip_time;
+mod indicators;
 pub mod layout;
 mod lyapunov;
 mod pipeline;
@@ -14,6 +15,7 @@ use std::sync::OnceLock;
 
 pub use context::{GpuContext, list_adapters, read_buffer};
 pub use flip_time::FlipTimeKernel;
+pub use indicators::IndicatorKernel;
 pub use lyapunov::{JacobianKernel, LyapunovKernel};
 pub use tiled::STEPS_PER_DISPATCH;
 pub use trajectory::TrajectoryKernel;
@@ -29,6 +31,8 @@ pub struct Kernels {
     /// Tangent and twin, f32 and f64.
     lyapunov: [OnceLock<LyapunovKernel>; 4],
     /// f32 and f64.
+    indicators: [OnceLock<IndicatorKernel>; 2],
+    /// f32 and f64.
     trajectory: [OnceLock<TrajectoryKernel>; 2],
     jacobian: OnceLock<JacobianKernel>,
 }
@@ -39,6 +43,7 @@ impl Kernels {
             ctx,
             flip: Default::default(),
             lyapunov: Default::default(),
+            indicators: Default::default(),
             trajectory: Default::default(),
             jacobian: OnceLock::new(),
         }
@@ -58,6 +63,12 @@ impl Kernels {
         } + 2 * precision as usize;
         self.lyapunov[slot]
             .get_or_init(|| LyapunovKernel::with_precision(&self.ctx, method, precision))
+    }
+
+    /// The indicators' kernel in `precision` (f64: the context must have it).
+    pub fn indicators(&self, precision: Precision) -> &IndicatorKernel {
+        self.indicators[precision as usize]
+            .get_or_init(|| IndicatorKernel::with_precision(&self.ctx, precision))
     }
 
     /// The trajectory kernel in `precision` (f64: the context must have it).

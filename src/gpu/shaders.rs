@@ -14,6 +14,7 @@ const DP54: &str = include_str!("../../shaders/dp54.wgsl");
 const FLIP_DP54: &str = include_str!("../../shaders/flip_adaptive.wgsl");
 const FLIP_DOP853: &str = include_str!("../../shaders/flip_dop853.wgsl");
 const LYAPUNOV: &str = include_str!("../../shaders/lyapunov.wgsl");
+const INDICATORS: &str = include_str!("../../shaders/indicators.wgsl");
 const TRAJECTORY: &str = include_str!("../../shaders/trajectory.wgsl");
 
 /// The kernels, each one WGSL module.
@@ -29,17 +30,20 @@ pub enum Kernel {
     FlipDop853,
     /// Divergence maps (tangent, twin, adaptive tangent; DP54's coefficients) and Jacobians.
     Lyapunov,
+    /// Chaos indicators: the divergence kernel's file and the indicators' own.
+    Indicators,
     /// Trajectories and ensembles.
     Trajectory,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 6] = [
+    pub const ALL: [Kernel; 7] = [
         Kernel::FlipTime,
         Kernel::FlipKind,
         Kernel::FlipDp54,
         Kernel::FlipDop853,
         Kernel::Lyapunov,
+        Kernel::Indicators,
         Kernel::Trajectory,
     ];
 
@@ -50,6 +54,7 @@ impl Kernel {
             Kernel::FlipDp54 => "flip_adaptive",
             Kernel::FlipDop853 => "flip_dop853",
             Kernel::Lyapunov => "lyapunov",
+            Kernel::Indicators => "indicators",
             Kernel::Trajectory => "trajectory",
         }
     }
@@ -62,6 +67,7 @@ impl Kernel {
             Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{}\n{FLIP_DP54}", dp54()),
             Kernel::FlipDop853 => flip_dop853(),
             Kernel::Lyapunov => format!("{}\n{LYAPUNOV}", dp54()),
+            Kernel::Indicators => format!("{}\n{LYAPUNOV}\n{INDICATORS}", dp54()),
             Kernel::Trajectory => TRAJECTORY.to_string(),
         }
     }

@@ -200,6 +200,27 @@ pub fn ftle_range(field: &Field) -> (f32, f32) {
     (0.0, hi.max(0.1))
 }
 
+/// The `low` and `high` quantiles of the finite values of `field` ((0, 1) when it has none;
+/// widened to a nonzero span).
+pub fn percentile_range(field: &Field, low: f64, high: f64) -> (f32, f32) {
+    let mut v: Vec<f32> = field
+        .data
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
+    if v.is_empty() {
+        return (0.0, 1.0);
+    }
+    v.sort_unstable_by(f32::total_cmp);
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    let (lo, hi) = (at(low), at(high));
+    match hi > lo {
+        true => (lo, hi),
+        false => (lo - 0.5, lo + 0.5),
+    }
+}
+
 /// The colour table of a divergence map, regular (low) to chaotic (high).
 pub fn ftle_table(colormap: Colormap) -> Vec<[u8; 3]> {
     lut(&*colormap.gradient(), 0.0, 1.0)

@@ -5,7 +5,9 @@ use crate::engine::RunInfo;
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
-use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapKind, MapSpec, on_any};
+use crate::spec::{
+    AnyMap, FlipMeasure, FlipSpec, Grid, Indicator, LyapunovSpec, MapKind, MapSpec, on_any,
+};
 
 use super::{
     Annotation, Axis, ColorBar, Colormap, FlipColors, NEVER_RGB, annotate, decimal_ticks,
@@ -243,7 +245,114 @@ fn flip_kind_picture(
     })
 }
 
-/// The divergence map as a picture, coloured over `range` (1/s).
+/// How a divergence-family map's indicator is drawn: its title, colour bar label and unit,
+/// and whether its low values are the chaotic ones (the colours then run the other way, so
+/// that chaos is bright in every map).
+struct Look {
+    title: String,
+    label: String,
+    unit: &'static str,
+    /// Low values chaotic (alignment indices and their times).
+    reversed: bool,
+}
+
+fn look(spec: &LyapunovSpec) -> Look {
+    let t_max = spec.stepping.t_max;
+    let over = |what: &str| format!("{what} over {t_max} s");
+    let (title, label, unit, reversed) = match spec.indicator {
+        Indicator::Ftle => (
+            over("Largest finite-time Lyapunov exponent"),
+            "FTLE (1/s)".to_string(),
+            "1/s",
+            false,
+        ),
+        Indicator::Exponent(k) => (
+            over(&format!("Lyapunov exponent {k} of 4")),
+            format!("λ{k} (1/s)"),
+            "1/s",
+            false,
+        ),
+        Indicator::ExponentSum => (
+            over("Sum of the four Lyapunov exponents"),
+            "λ1 + λ2 + λ3 + λ4 (1/s)".into(),
+            "1/s",
+            false,
+        ),
+        Indicator::Alignment { index, threshold } => (
+            over(&format!("Alignment index {}", index.name())),
+            format!("log10 {} (stops below {threshold:e})", index.name()),
+            "(log10)",
+            true,
+        ),
+        Indicator::AlignmentTime { index, threshold } => (
+            over(&format!("Time until {} < {threshold:e}", index.name())),
+            format!("time to {} < {threshold:e} (s); black: never", index.name()),
+            "s",
+            true,
+        ),
+        Indicator::Megno => (
+            over("MEGNO"),
+            "<Y> (2: regular; chaotic: grows like λt/2)".into(),
+            "",
+            false,
+        ),
+        Indicator::Fli => (
+            over("Fast Lyapunov indicator"),
+            "FLI, log10 |v|".into(),
+            "",
+            false,
+        ),
+        Indicator::Descriptor { p } => (
+            format!("Lagrangian descriptor over [-{t_max}, {t_max}] s"),
+            format!("M, p = {p}"),
+            "",
+            false,
+        ),
+    };
+    Look {
+        title,
+        label,
+        unit,
+        reversed,
+    }
+}
+
+/// The colour range a divergence-family map takes by default: 0 to the 99.5th percentile
+/// for exponents and growth indicators, the threshold to 1 for alignment indices, 0 to
+/// t-max for their times, the 0.5th to 99.5th percentile otherwise.
+pub fn default_range(spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+    let spread = || super::percentile_range(field, 0.005, 0.995);
+    let upper = |floor: f32| (0.0, super::percentile_range(field, 0.0, 0.995).1.max(floor));
+    match spec.indicator {
+        Indicator::Ftle | Indicator::Exponent(1) => super::ftle_range(field),
+        Indicator::Exponent(_) | Indicator::ExponentSum | Indicator::Descriptor { .. } => spread(),
+        Indicator::Alignment { threshold, .. } => (threshold.log10() as f32, 0.0),
+        Indicator::AlignmentTime { .. } => (0.0, spec.stepping.t_max as f32),
+        Indicator::Megno => upper(4.0),
+        Indicator::Fli => upper(1.0),
+    }
+}
+
+/// The colour bar of a divergence-family map over `range`: colours from left to right,
+/// ticks as (fraction, label), and its label.
+pub fn lyapunov_bar(
+    spec: &LyapunovSpec,
+    range: (f32, f32),
+    colormap: Colormap,
+) -> (Vec<[u8; 3]>, Vec<(f64, String)>, String) {
+    let look = look(spec);
+    let (lo, hi) = (range.0 as f64, range.1 as f64);
+    let ticks = decimal_ticks(lo, hi)
+        .into_iter()
+        .map(|(v, l)| {
+            let u = (v - lo) / (hi - lo);
+            (if look.reversed { 1.0 - u } else { u }, l)
+        })
+        .collect();
+    (ftle_table(colormap), ticks, look.label)
+}
+
+/// The divergence-family map as a picture, coloured over `range` (its quantity's unit).
 pub fn lyapunov_picture(
     field: &Field,
     spec: &LyapunovSpec,
@@ -251,21 +360,20 @@ pub fn lyapunov_picture(
     picture: &PictureSpec,
     unresolved: Option<&[u8]>,
 ) -> Result<Picture> {
+    let look = look(spec);
     let colormap = picture.colormap.unwrap_or(Colormap::Magma);
-    let mut rgb = ftle_colors(field, range, colormap);
+    // Reversed, the range's ends swap: its low end is then the bright one.
+    let ends = match look.reversed {
+        true => (range.1, range.0),
+        false => range,
+    };
+    let mut rgb = ftle_colors(field, ends, colormap);
     mark_unresolved(&mut rgb, unresolved);
     frame(field, rgb, picture.annotate, || {
         let (x, y) = axes(&spec.grid);
-        let (lo, hi) = (range.0 as f64, range.1 as f64);
-        let ticks = decimal_ticks(lo, hi)
-            .into_iter()
-            .map(|(v, l)| ((v - lo) / (hi - lo), l))
-            .collect();
+        let (colors, ticks, label) = lyapunov_bar(spec, range, colormap);
         Annotation {
-            title: format!(
-                "Largest finite-time Lyapunov exponent over {} s",
-                spec.stepping.t_max
-            ),
+            title: look.title,
             subtitle: format!(
                 "{} · RK4 dt {} s · renormalised every {} s{}",
                 physics_line(&spec.params, &spec.grid),
@@ -276,9 +384,9 @@ pub fn lyapunov_picture(
             x,
             y,
             bar: ColorBar {
-                colors: ftle_table(colormap),
+                colors,
                 ticks,
-                label: "FTLE (1/s)".into(),
+                label,
                 swatch: None,
             },
         }
@@ -366,15 +474,23 @@ impl MapPicture for LyapunovSpec {
         range: Option<(f32, f32)>,
         unresolved: Option<&[u8]>,
     ) -> Result<Drawn> {
-        let range = range.unwrap_or_else(|| super::ftle_range(field));
+        let look = look(self);
+        let range = range.unwrap_or_else(|| default_range(self, field));
+        let name = match self.indicator {
+            Indicator::Ftle => "FTLE".to_string(),
+            other => other.title(),
+        };
         let text = vec![(
             "chaoscope:colour-range".into(),
             format!(
-                "FTLE {} .. {} 1/s, {}, linear (low = regular)",
+                "{name} {} .. {} {}, {}, linear ({} = regular)",
                 range.0,
                 range.1,
-                picture.colormap.unwrap_or(Colormap::Magma).name()
-            ),
+                look.unit,
+                picture.colormap.unwrap_or(Colormap::Magma).name(),
+                if look.reversed { "high" } else { "low" }
+            )
+            .replace("  ", " "),
         )];
         Ok(Drawn {
             picture: lyapunov_picture(field, self, range, picture, unresolved)?,

@@ -14,7 +14,7 @@ pub use annotate::{
 };
 pub use colormap::{
     Colormap, FlipColors, NAN_RGB, NEVER_RGB, flip_colors, flip_kind_bar, flip_kind_colors,
-    flip_kind_rgb, ftle_colors, ftle_range, ftle_table,
+    flip_kind_rgb, ftle_colors, ftle_range, ftle_table, percentile_range,
 };
 pub use exposure::{Bobs, Film, View, draw_arms};
 pub use files::{
@@ -22,6 +22,6 @@ pub use files::{
     write_npy, write_npy_shaped, write_png,
 };
 pub use maps::{
-    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, flip_picture, lyapunov_picture,
-    provenance,
+    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, default_range, flip_picture,
+    lyapunov_bar, lyapunov_picture, provenance,
 };

@@ -1,8 +1,12 @@
 //! The maps a front door asks for by name (`sweep --map`, the explorer's menu), one table
 //! line each: a new quantity's map is one more line here, and both front doors list it.
 
+use super::{ALIGNED_F32_FLOOR, Alignment, Indicator};
 use super::{AnyMap, MapSpec};
-use crate::quantity::{FLIP_KIND, FLIP_TIME, FTLE, Quantity};
+use crate::quantity::{
+    ALIGNMENT_TIME, DESCRIPTOR, EXPONENT, EXPONENT_SUM, FLI, FLIP_KIND, FLIP_TIME, FTLE, GALI,
+    MEGNO, Quantity, SALI,
+};
 
 /// A map by what it measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -12,6 +16,18 @@ pub enum MapKind {
     FlipKind,
     /// The largest finite-time Lyapunov exponent.
     Ftle,
+    /// One exponent of the Lyapunov spectrum.
+    Exponent,
+    /// The sum of the four exponents.
+    ExponentSum,
+    Sali,
+    Gali,
+    /// The time an alignment index fell below its threshold.
+    AlignmentTime,
+    Megno,
+    Fli,
+    /// The Lagrangian descriptor.
+    Descriptor,
 }
 
 /// A map's line in [`MapKind::TABLE`].
@@ -30,10 +46,12 @@ pub struct MapKindEntry {
     pub ranged: bool,
     /// Whether it has accurate settings (`--accurate`: f64, adaptive steps).
     pub accurate: bool,
+    /// The divergence family's measure a front door asks for by this name (None: a flip map).
+    pub indicator: Option<Indicator>,
 }
 
 impl MapKind {
-    pub const TABLE: [MapKindEntry; 3] = [
+    pub const TABLE: [MapKindEntry; 11] = [
         MapKindEntry {
             kind: MapKind::FlipTime,
             quantity: &FLIP_TIME,
@@ -43,6 +61,7 @@ impl MapKind {
             legend: "Colour: time until an arm first flips (dark: soon, bright: late); black: no flip within t-max; green: NaN.",
             ranged: false,
             accurate: true,
+            indicator: None,
         },
         MapKindEntry {
             kind: MapKind::FlipKind,
@@ -54,6 +73,7 @@ impl MapKind {
             ranged: false,
             // Located by the RK4 flip-time loop only.
             accurate: false,
+            indicator: None,
         },
         MapKindEntry {
             kind: MapKind::Ftle,
@@ -64,11 +84,121 @@ impl MapKind {
             legend: "Colour: largest finite-time Lyapunov exponent (black: regular, bright: chaotic).",
             ranged: true,
             accurate: true,
+            indicator: Some(Indicator::Ftle),
+        },
+        MapKindEntry {
+            kind: MapKind::Exponent,
+            quantity: &EXPONENT,
+            name: "exponent",
+            short: "exponent",
+            label: "Lyapunov exponent λ2",
+            legend: "Colour: the second of the four Lyapunov exponents (four tangent vectors kept orthonormal); about 0 where the motion is regular or the chaos has one unstable direction.",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::Exponent(2)),
+        },
+        MapKindEntry {
+            kind: MapKind::ExponentSum,
+            quantity: &EXPONENT_SUM,
+            name: "exponent-sum",
+            short: "exponent-sum",
+            label: "sum of the exponents",
+            legend: "Colour: λ1 + λ2 + λ3 + λ4: 0 without losses (the flow keeps phase-space volume), the mean contraction rate with them.",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::ExponentSum),
+        },
+        MapKindEntry {
+            kind: MapKind::Sali,
+            quantity: &SALI,
+            name: "sali",
+            short: "sali",
+            label: "alignment index SALI",
+            legend: "Colour: log10 SALI of two tangent vectors (dark: regular, SALI stays near 1; bright: chaotic, SALI falls to the threshold 1e-8 and the pixel stops).",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::Alignment {
+                index: Alignment::Sali,
+                threshold: ALIGNED_F32_FLOOR,
+            }),
+        },
+        MapKindEntry {
+            kind: MapKind::Gali,
+            quantity: &GALI,
+            name: "gali",
+            short: "gali",
+            label: "alignment index GALI_4",
+            legend: "Colour: log10 GALI_4, the volume spanned by four unit tangent vectors (dark: regular, decays like a power of t; bright: chaotic, decays exponentially).",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::Alignment {
+                index: Alignment::Gali(4),
+                threshold: ALIGNED_F32_FLOOR,
+            }),
+        },
+        MapKindEntry {
+            kind: MapKind::AlignmentTime,
+            quantity: &ALIGNMENT_TIME,
+            name: "alignment-time",
+            short: "alignment-time",
+            label: "time until SALI aligns",
+            legend: "Colour: the time SALI took to fall below its threshold (bright: soon, strongly chaotic); black: not within t-max (regular).",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::AlignmentTime {
+                index: Alignment::Sali,
+                threshold: ALIGNED_F32_FLOOR,
+            }),
+        },
+        MapKindEntry {
+            kind: MapKind::Megno,
+            quantity: &MEGNO,
+            name: "megno",
+            short: "megno",
+            label: "MEGNO <Y>",
+            legend: "Colour: MEGNO <Y> (dark: regular, tends to 2, or 0 for isochronous motion; bright: chaotic, grows like λ t / 2).",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::Megno),
+        },
+        MapKindEntry {
+            kind: MapKind::Fli,
+            quantity: &FLI,
+            name: "fli",
+            short: "fli",
+            label: "fast Lyapunov indicator",
+            legend: "Colour: FLI, the largest log10 |v| of a tangent vector so far (dark: regular, grows like log t; bright: chaotic, like λ t).",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::Fli),
+        },
+        MapKindEntry {
+            kind: MapKind::Descriptor,
+            quantity: &DESCRIPTOR,
+            name: "descriptor",
+            short: "descriptor",
+            label: "Lagrangian descriptor",
+            legend: "Colour: the Lagrangian descriptor M, the integral of Σ|f_i|^0.5 of the phase-space velocity over [-t-max, t-max]; its sharp ridges and valleys trace the stable and unstable manifolds.",
+            ranged: true,
+            accurate: false,
+            indicator: Some(Indicator::Descriptor { p: 0.5 }),
         },
     ];
 
     /// Every kind, in the table's order.
-    pub const ALL: [MapKind; 3] = [MapKind::FlipTime, MapKind::FlipKind, MapKind::Ftle];
+    pub const ALL: [MapKind; 11] = [
+        MapKind::FlipTime,
+        MapKind::FlipKind,
+        MapKind::Ftle,
+        MapKind::Exponent,
+        MapKind::ExponentSum,
+        MapKind::Sali,
+        MapKind::Gali,
+        MapKind::AlignmentTime,
+        MapKind::Megno,
+        MapKind::Fli,
+        MapKind::Descriptor,
+    ];
 
     /// Its line in the table (the table is in the enum's order: the test below).
     pub fn entry(self) -> &'static MapKindEntry {

@@ -1,5 +1,6 @@
 //! The two map families' specs: flip-time maps and divergence maps, and the rows a run covers.
 
+use super::indicator::Indicator;
 use super::stability::{validate_speeds, validate_stability};
 use super::{
     ACCURATE, ACCURATE_FTLE, Grid, Integrator, Precision, Stepping, validate_grid_holding,
@@ -210,6 +211,9 @@ pub struct LyapunovSpec {
     /// exactly; the error is controlled over the state and the tangent vector. Tangent method
     /// only.
     pub integrator: Integrator,
+    /// What the map measures of each start (stores written before it hold the FTLE).
+    #[serde(default)]
+    pub indicator: Indicator,
 }
 
 impl LyapunovSpec {
@@ -278,6 +282,27 @@ impl LyapunovSpec {
             ));
         }
         self.integrator.validate(Precision::F64)?;
+        self.indicator.validate(Precision::F64)?;
+        if self.indicator != Indicator::Ftle {
+            if self.method != Method::Tangent {
+                return Err(Error::invalid(
+                    "method",
+                    format!(
+                        "the {} follows tangent vectors: take --method tangent",
+                        self.indicator.title()
+                    ),
+                ));
+            }
+            if self.integrator != Integrator::Rk4 {
+                return Err(Error::invalid(
+                    "integrator",
+                    format!(
+                        "the {} steps with rk4 only (take --integrator rk4)",
+                        self.indicator.title()
+                    ),
+                ));
+            }
+        }
         match (self.method, self.integrator) {
             (_, Integrator::Rk4) | (Method::Tangent, Integrator::Dp54 { .. }) => {}
             (Method::Twin { .. }, _) | (_, Integrator::Dop853 { .. }) => {
@@ -352,6 +377,9 @@ impl MapSpec for AnyMap {
     fn validate(&self) -> Result<()> {
         on_any!(self, s => MapSpec::validate(s))
     }
+    fn validate_in(&self, precision: Precision) -> Result<()> {
+        on_any!(self, s => s.validate_in(precision))
+    }
     fn with_band(&self, band: (u32, u32)) -> Self {
         on_any!(self, s => s.with_band(band).any())
     }
@@ -382,6 +410,11 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     /// Every field in range (the f64 tolerances; the f32 GPU's are checked once the engine
     /// has picked the path).
     fn validate(&self) -> Result<()>;
+    /// What the path's `precision` must hold beyond [`MapSpec::validate`] (the f32 GPU's
+    /// tolerance floor), once the engine has picked it.
+    fn validate_in(&self, precision: Precision) -> Result<()> {
+        self.integrator().validate(precision)
+    }
     /// The same map over rows `first..first + count` only.
     fn with_band(&self, band: (u32, u32)) -> Self;
     /// The same map stepped otherwise.
@@ -464,10 +497,14 @@ impl MapSpec for FlipSpec {
 
 impl MapSpec for LyapunovSpec {
     fn quantity(&self) -> &'static crate::quantity::Quantity {
-        &crate::quantity::FTLE
+        self.indicator.quantity()
     }
     map_spec_fields!(LyapunovSpec);
     fn any(&self) -> AnyMap {
         AnyMap::Lyapunov(*self)
+    }
+    fn validate_in(&self, precision: Precision) -> Result<()> {
+        self.integrator.validate(precision)?;
+        self.indicator.validate(precision)
     }
 }

@@ -5,12 +5,14 @@
 use crate::error::{Error, Result, finite_positive};
 use crate::model::{Params, State};
 
+mod indicator;
 mod kind;
 mod map;
 mod memory;
 mod method;
 mod stability;
 
+pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};
 pub use kind::{MapKind, MapKindEntry};
 pub(crate) use map::on_any;
 pub use map::{AnyMap, FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};

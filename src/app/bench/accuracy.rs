@@ -153,6 +153,7 @@ pub(super) fn ftle_accuracy_spec(
         precision,
         band: None,
         integrator,
+        indicator: crate::spec::Indicator::Ftle,
     }
 }
 

@@ -149,16 +149,17 @@ pub(super) async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Pa
     }
 }
 
-/// The divergence map's colour range for the page's physics: 0 to the 99.5th percentile of
-/// the whole turn's exponents (a 128^2 overview), as `chaoscope lyapunov` picks it.
+/// A divergence-family map's colour range for the page's physics and kind: its default
+/// (render::default_range) over the whole turn (a 128^2 overview), as `chaoscope lyapunov`
+/// picks it.
 pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let view = match shared.view_only(q) {
         Ok(v) => v,
         Err(e) => return reply(e),
     };
     let key = format!(
-        "range {:?} {:?} {:?}",
-        view.params, view.stepping, view.accurate
+        "range {:?} {:?} {:?} {:?}",
+        view.kind, view.params, view.stepping, view.accurate
     );
     if let Some(bytes) = cached(&shared, &key) {
         return json(serde_json::from_slice(&bytes).unwrap_or_default());
@@ -171,7 +172,7 @@ pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
             ..Grid::square(128)
         });
         spec.validate()?;
-        Ok(render::ftle_range(&engine.map(&spec, monitor)?))
+        Ok(render::default_range(&spec, &engine.map(&spec, monitor)?))
     })
     .await;
     match result {
@@ -225,7 +226,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                 crate::app::flip::run(&job, (commands.flip)(&job), monitor)?;
                 "chaoscope-flip.png"
             }
-            Kind::FTLE => {
+            Kind::Map(_) => {
                 let job = LyapunovMapJob {
                     spec: view.lyapunov_spec(grid),
                     backend,

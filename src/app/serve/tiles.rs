@@ -107,7 +107,7 @@ pub fn tile_rgb(
             };
             Ok((rgb, precision))
         }
-        Kind::FTLE => {
+        Kind::Map(_) => {
             let spec = view.lyapunov_spec(grid);
             spec.validate()?;
             let (field, mask) =
@@ -196,7 +196,7 @@ pub(super) fn stored_rgb(
                 .picture
                 .rgb
         }
-        Kind::FTLE => {
+        Kind::Map(_) => {
             let spec = view.lyapunov_spec(grid);
             spec.draw(&field, &picture, Some(view.range), shown)?
                 .picture
@@ -225,18 +225,9 @@ pub(super) async fn legend(AxumState(shared): AxumState<S>, AxumQuery(q): Params
         Err(e) => return reply(e),
     };
     let (colors, ticks, label) = match view.kind {
-        Kind::FTLE => {
-            let (lo, hi) = (view.range.0 as f64, view.range.1 as f64);
-            let ticks: Vec<(f64, String)> = render::decimal_ticks(lo, hi)
-                .into_iter()
-                .map(|(v, l)| ((v - lo) / (hi - lo), l))
-                .collect();
-            let table = render::ftle_table(view.colormap.unwrap_or(render::Colormap::Magma));
-            (table, ticks, "FTLE (1/s)")
-        }
         Kind::FLIP_KIND => {
             let (colors, ticks) = render::flip_kind_bar();
-            (colors, ticks, "first flip")
+            (colors, ticks, "first flip".to_string())
         }
         Kind::FLIP | Kind::Resolved => {
             let colors = render::FlipColors {
@@ -248,8 +239,13 @@ pub(super) async fn legend(AxumState(shared): AxumState<S>, AxumQuery(q): Params
             let (mut table, ticks) = colors.bar();
             table.reverse();
             let ticks = ticks.into_iter().map(|(f, l)| (1.0 - f, l)).collect();
-            (table, ticks, "flip time (s)")
+            (table, ticks, "flip time (s)".to_string())
         }
+        Kind::Map(_) => render::lyapunov_bar(
+            &view.lyapunov_spec(Grid::square(1)),
+            view.range,
+            view.colormap.unwrap_or(render::Colormap::Magma),
+        ),
     };
     let every = (colors.len() / 64).max(1);
     let colors: Vec<[u8; 3]> = colors.into_iter().step_by(every).collect();

@@ -195,7 +195,10 @@ impl Query {
         }
         let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
         let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
-        if kind == Kind::FTLE && t_max < renorm_of(dt) {
+        if let Kind::Map(k) = kind
+            && k.entry().indicator.is_some()
+            && t_max < renorm_of(dt)
+        {
             return Err(Error::invalid(
                 "t_max",
                 format!(
@@ -230,10 +233,10 @@ impl Query {
             })
     }
 
-    /// The FTLE colour range `lo`..`hi` (1/s).
+    /// The colour range `lo`..`hi` of a divergence-family map (its quantity's unit).
     fn range(&mut self) -> Result<(f32, f32)> {
-        let lo = self.within("lo", -100.0, 100.0)?.unwrap_or(0.0) as f32;
-        let hi = self.within("hi", -100.0, 100.0)?.unwrap_or(2.0) as f32;
+        let lo = self.within("lo", -1e6, 1e6)?.unwrap_or(0.0) as f32;
+        let hi = self.within("hi", -1e6, 1e6)?.unwrap_or(2.0) as f32;
         if lo >= hi {
             return Err(Error::invalid("hi", format!("{hi} must exceed lo = {lo}")));
         }
@@ -323,6 +326,10 @@ impl View {
             precision: Precision::F32,
             band: None,
             integrator: crate::spec::Integrator::Rk4,
+            indicator: match self.kind {
+                Kind::Map(k) => k.entry().indicator.unwrap_or_default(),
+                Kind::Resolved => crate::spec::Indicator::Ftle,
+            },
         };
         if self.accurate { spec.accurate() } else { spec }
     }

@@ -1,0 +1,280 @@
+// Chaos indicators beyond the largest exponent: the spectrum, SALI and GALI_k, MEGNO and the
+// FLI, Lagrangian descriptors. Twin of src/cpu/indicators.rs; driven by
+// src/gpu/indicators.rs. Appended to lyapunov.wgsl, whose bindings, Tangent and tangent_step
+// it uses: per pixel an IndicatorSlot in `states` (8 i ..= 8 i + 7), the map's value so far in
+// `log_sums` (an exponent as its log sum: the host divides by t-max, as for the FTLE).
+// `params.measure` picks the value; `params.setting` is the alignment threshold or the
+// descriptor's exponent p.
+
+// Mirror of src/gpu/layout.rs `GpuIndicatorSlot`.
+struct IndicatorSlot {
+    // The state; for a descriptor the forward run (the backward one is in v[0], v[1]).
+    y: vec4<real>,
+    u: vec4<real>,
+    // Tangent vectors (src/cpu/indicators.rs FRAME at the start).
+    v: array<vec4<real>, 4>,
+    // Spectrum: the four log sums. Alignment: (log10 index, the time it fell below the
+    // threshold, stopped, -). Growth: (s-weighted ln |v| sum, time integral of Y,
+    // ln |v| so far, the largest log10 |v|). Descriptor: (left sums of both ways, g at the start, -, -).
+    sums: vec4<real>,
+    unused: vec4<real>,
+}
+
+const SLOT: u32 = 8u;
+const LOG10_E: real = 0.4342944819032518;
+// As lyapunov.wgsl STALLED_LOG_SUM: the host reads a value below -1e38 as NaN.
+const LEFT_THE_NUMBERS: real = -3.0e38;
+
+fn frame_vector(j: u32) -> vec4<real> {
+    switch j {
+        case 0u: { return TANGENT_START; }
+        case 1u: { return vec4<real>(0.5, -0.5, 0.5, -0.5); }
+        case 2u: { return vec4<real>(0.5, 0.5, -0.5, -0.5); }
+        default: { return vec4<real>(0.5, -0.5, -0.5, 0.5); }
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn indicator_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let p = pendulum_from(grid_start(params, i));
+    let b = SLOT * i;
+    states[b] = p.y;
+    states[b + 1u] = p.u;
+    for (var j = 0u; j < 4u; j++) {
+        states[b + 2u + j] = frame_vector(j);
+    }
+    states[b + 6u] = vec4<real>();
+    states[b + 7u] = vec4<real>();
+    log_sums[i] = 0.0;
+}
+
+fn load_vectors(b: u32) -> array<vec4<real>, 4> {
+    return array<vec4<real>, 4>(states[b + 2u], states[b + 3u], states[b + 4u], states[b + 5u]);
+}
+
+fn store_vectors(b: u32, v: array<vec4<real>, 4>) {
+    for (var j = 0u; j < 4u; j++) {
+        states[b + 2u + j] = v[j];
+    }
+}
+
+// One RK4 step of the state and the first n vectors, each the FTLE's own tangent_step (so
+// the first vector and the state follow the FTLE map's bit for bit).
+fn step_vectors(c: Coeffs, t: ptr<function, Tangent>, v: ptr<function, array<vec4<real>, 4>>, n: u32, dt: real) {
+    let y = (*t).y;
+    let u = (*t).u;
+    for (var j = 0u; j < n; j++) {
+        let next = tangent_step(c, Tangent(y, u, (*v)[j]), dt);
+        (*v)[j] = next.v;
+        if j == 0u {
+            *t = next;
+        }
+    }
+}
+
+// Modified Gram-Schmidt of the first n vectors in place; the lengths they had (1 beyond n).
+fn gram_schmidt(v: ptr<function, array<vec4<real>, 4>>, n: u32) -> vec4<real> {
+    var lengths = vec4<real>(1.0);
+    for (var j = 0u; j < n; j++) {
+        var w = (*v)[j];
+        for (var i = 0u; i < j; i++) {
+            let e = (*v)[i];
+            w -= dot(e, w) * e;
+        }
+        let len = length(w);
+        (*v)[j] = w / len;
+        lengths[j] = len;
+    }
+    return lengths;
+}
+
+// The spectrum: four vectors, re-orthonormalised after every `interval`-th step.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn spectrum_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let c = coeffs_from(params);
+    let b = SLOT * i;
+    var t = Tangent(states[b], states[b + 1u], vec4<real>());
+    var v = load_vectors(b);
+    var sums = states[b + 6u];
+    for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
+        step_vectors(c, &t, &v, 4u, params.dt);
+        if renormalise_after(k) {
+            let l = gram_schmidt(&v, 4u);
+            sums += vec4<real>(ln_real(l.x), ln_real(l.y), ln_real(l.z), ln_real(l.w));
+        }
+    }
+    states[b] = t.y;
+    states[b + 1u] = t.u;
+    store_vectors(b, v);
+    states[b + 6u] = sums;
+    // measure 0..3: exponent 1..4; 4: their sum.
+    log_sums[i] = select(sums.x + sums.y + sums.z + sums.w, sums[min(params.measure, 3u)], params.measure < 4u);
+}
+
+// An alignment index of n vectors, normalised after every `interval`-th step; the pixel
+// stops once the index falls below params.setting. measure 0: log10 index, 1: the time.
+fn alignment_advance(i: u32, n: u32, sali: bool) {
+    let c = coeffs_from(params);
+    let b = SLOT * i;
+    var at = states[b + 6u];
+    if at.z == 0.0 {
+        var t = Tangent(states[b], states[b + 1u], vec4<real>());
+        var v = load_vectors(b);
+        for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
+            step_vectors(c, &t, &v, n, params.dt);
+            if renormalise_after(k) {
+                for (var j = 0u; j < n; j++) {
+                    v[j] = v[j] / length(v[j]);
+                }
+                var index: real;
+                if sali {
+                    index = min(length(v[0] + v[1]), length(v[0] - v[1]));
+                } else {
+                    var w = v;
+                    let l = gram_schmidt(&w, n);
+                    index = l.x * l.y * l.z * l.w;
+                }
+                at.x = ln_real(index) * LOG10_E;
+                if index < params.setting {
+                    at.y = real(k) * params.dt;
+                    at.z = 1.0;
+                    break;
+                }
+            }
+        }
+        states[b] = t.y;
+        states[b + 1u] = t.u;
+        store_vectors(b, v);
+        states[b + 6u] = at;
+    }
+    log_sums[i] = select(at.x, select(NEVER, at.y, at.z != 0.0), params.measure == 1u);
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn sali_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i < params.count {
+        alignment_advance(i, 2u, true);
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn gali2_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i < params.count {
+        alignment_advance(i, 2u, false);
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn gali3_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i < params.count {
+        alignment_advance(i, 3u, false);
+    }
+}
+
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn gali4_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i < params.count {
+        alignment_advance(i, 4u, false);
+    }
+}
+
+// MEGNO and the FLI of one vector, renormalised after every step: ln |v| of a step is the
+// integrand of both. measure 0: <Y>, 1: the FLI.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn growth_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let c = coeffs_from(params);
+    let b = SLOT * i;
+    let dt = params.dt;
+    var t = Tangent(states[b], states[b + 1u], states[b + 2u]);
+    var g = states[b + 6u];
+    for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
+        t = tangent_step(c, t, dt);
+        let n = length(t.v);
+        t.v = t.v / n;
+        let l = ln_real(n);
+        let s = real(k) * dt;
+        // Y(s) = 2/s int_0^s r d(ln |v|), r at the step's middle; <Y> its time mean.
+        g.x += (s - 0.5 * dt) * l;
+        g.y += dt * (2.0 * g.x / s);
+        g.z += l;
+        g.w = max(g.w, g.z * LOG10_E);
+    }
+    states[b] = t.y;
+    states[b + 1u] = t.u;
+    states[b + 2u] = t.v;
+    states[b + 6u] = g;
+    let now = real(params.step0 + params.steps) * dt;
+    // A NaN or infinite log makes max() meaningless: say the pixel left the numbers.
+    let finite = abs(g.z) <= 1.0e30 && abs(g.y) <= 1.0e30;
+    log_sums[i] = select(LEFT_THE_NUMBERS, select(g.y / now, g.w, params.measure == 1u), finite);
+}
+
+// sum_i |f_i|^p for p = params.setting in 0.25, 0.5, 1, 2 (the ones built from sqrt and
+// products, which f64 has on every driver).
+fn velocity_measure(f: vec4<real>) -> real {
+    let a = abs(f);
+    var m = a * a;
+    if params.setting == 0.5 {
+        m = sqrt(a);
+    } else if params.setting == 0.25 {
+        m = sqrt(sqrt(a));
+    } else if params.setting == 1.0 {
+        m = a;
+    }
+    return m.x + m.y + m.z + m.w;
+}
+
+// The descriptor: one plain trajectory forward and one backward, the trapezoid rule on
+// sum_i |f_i|^p each way (as left sums here, the end corrections on the last step).
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn descriptor_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let c = coeffs_from(params);
+    let b = SLOT * i;
+    let dt = params.dt;
+    var ahead = Pendulum(states[b], states[b + 1u]);
+    var back = Pendulum(states[b], states[b + 1u]);
+    var sums = states[b + 6u];
+    if params.step0 == 0u {
+        sums.y = velocity_measure(rate(c, ahead).dy);
+    } else {
+        back = Pendulum(states[b + 2u], states[b + 3u]);
+    }
+    for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
+        let ka = rate(c, ahead);
+        let kb = rate(c, back);
+        sums.x += dt * (velocity_measure(ka.dy) + velocity_measure(kb.dy));
+        ahead = rk4_step_with(c, ahead, ka, dt);
+        back = rk4_step_with(c, back, kb, -dt);
+    }
+    states[b] = ahead.y;
+    states[b + 1u] = ahead.u;
+    states[b + 2u] = back.y;
+    states[b + 3u] = back.u;
+    states[b + 6u] = sums;
+    var m = sums.x;
+    if params.step0 + params.steps == params.total_steps {
+        let ends = velocity_measure(rate(c, ahead).dy) + velocity_measure(rate(c, back).dy);
+        m += 0.5 * dt * (ends - 2.0 * sums.y);
+    }
+    log_sums[i] = select(LEFT_THE_NUMBERS, m, abs(m) <= 1.0e30);
+}

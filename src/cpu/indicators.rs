@@ -1,0 +1,257 @@
+//! The chaos indicators beyond the largest exponent, in f64: the CPU twin of
+//! `shaders/indicators.wgsl`. Every tangent vector takes the FTLE's own step (dual numbers
+//! through the mass-matrix solve, [`tangent_step`]), so the spectrum's first exponent is the
+//! FTLE map's bit for bit; the shader writes its dual numbers by hand over the closed form.
+
+use super::lyapunov::{TANGENT_START, tangent_step};
+use super::{derivative, map_pixels, rk4_step};
+use crate::error::Result;
+use crate::field::Field;
+use crate::model::{Params, State};
+use crate::monitor::Monitor;
+use crate::spec::{Alignment, Indicator, LyapunovSpec};
+
+/// The tangent vectors every run starts from: an orthonormal frame whose first vector is the
+/// FTLE's (the rows of a 4 x 4 Hadamard matrix, halved).
+pub const FRAME: [[f64; 4]; 4] = [
+    TANGENT_START,
+    [0.5, -0.5, 0.5, -0.5],
+    [0.5, 0.5, -0.5, -0.5],
+    [0.5, -0.5, -0.5, 0.5],
+];
+
+fn dot(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(v: &[f64; 4]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Modified Gram-Schmidt in place: each vector made orthogonal to those before it, then unit;
+/// the lengths it had (the diagonal of R in V = QR).
+pub fn gram_schmidt(v: &mut [[f64; 4]]) -> Vec<f64> {
+    let mut lengths = Vec::with_capacity(v.len());
+    for j in 0..v.len() {
+        for i in 0..j {
+            let d = dot(&v[i], &v[j]);
+            let vi = v[i];
+            for (x, e) in v[j].iter_mut().zip(vi) {
+                *x -= d * e;
+            }
+        }
+        let n = norm(&v[j]);
+        v[j] = v[j].map(|x| x / n);
+        lengths.push(n);
+    }
+    lengths
+}
+
+/// The alignment index of unit vectors `v`: SALI = min(|v1 + v2|, |v1 - v2|), GALI_k = the
+/// volume of their parallelotope (the product of Gram-Schmidt's lengths).
+pub fn alignment_index(index: Alignment, v: &[[f64; 4]]) -> f64 {
+    match index {
+        Alignment::Sali => {
+            let plus: [f64; 4] = std::array::from_fn(|i| v[0][i] + v[1][i]);
+            let minus: [f64; 4] = std::array::from_fn(|i| v[0][i] - v[1][i]);
+            norm(&plus).min(norm(&minus))
+        }
+        Alignment::Gali(_) => gram_schmidt(&mut v.to_vec()).iter().product(),
+    }
+}
+
+/// The columns a point run writes for `indicator` (after `t`).
+pub fn columns(indicator: Indicator) -> Vec<&'static str> {
+    match indicator {
+        Indicator::Ftle => vec!["ftle"],
+        Indicator::Exponent(_) | Indicator::ExponentSum => {
+            vec!["lambda1", "lambda2", "lambda3", "lambda4", "sum"]
+        }
+        Indicator::Alignment { .. } | Indicator::AlignmentTime { .. } => vec!["log10_index"],
+        Indicator::Megno | Indicator::Fli => vec!["megno", "y", "fli"],
+        Indicator::Descriptor { .. } => vec!["descriptor"],
+    }
+}
+
+/// One start's run of `spec`'s indicator: its map value, and `sample(t, columns)` at every
+/// renormalisation (see [`columns`]); progress and Ctrl-C there when `monitor` is given.
+pub fn indicator_run(
+    spec: &LyapunovSpec,
+    start: State,
+    monitor: Option<&Monitor>,
+    sample: &mut dyn FnMut(f64, &[f64]),
+) -> Result<f64> {
+    let p = &spec.params;
+    let dt = spec.stepping.dt;
+    let steps = spec.stepping.steps();
+    let every = spec.renorm_steps();
+    let renormalise = |k: u32| k.is_multiple_of(every) || k == steps;
+    let tick = |k: u32| -> Result<()> {
+        if let Some(m) = monitor {
+            m.check()?;
+            m.advance(every.min(k) as u64);
+        }
+        Ok(())
+    };
+    if let Some(m) = monitor {
+        m.start("steps", steps as u64);
+    }
+    let t_end = steps as f64 * dt;
+    let mut y = start.to_array();
+    let value = match spec.indicator {
+        Indicator::Ftle | Indicator::Exponent(_) | Indicator::ExponentSum => {
+            let n = spec.indicator.vectors() as usize;
+            let mut v = FRAME[..n].to_vec();
+            let mut sums = vec![0.0; n];
+            for k in 1..=steps {
+                y = step_vectors(p, &y, &mut v, dt);
+                if renormalise(k) {
+                    for (sum, l) in sums.iter_mut().zip(gram_schmidt(&mut v)) {
+                        *sum += l.ln();
+                    }
+                    let t = k as f64 * dt;
+                    let mut row: Vec<f64> = sums.iter().map(|s| s / t).collect();
+                    if n == 4 {
+                        row.push(row.iter().sum());
+                    }
+                    sample(t, &row);
+                    tick(k)?;
+                }
+            }
+            match spec.indicator {
+                Indicator::Exponent(k) => sums[k as usize - 1] / t_end,
+                Indicator::ExponentSum => sums.iter().sum::<f64>() / t_end,
+                _ => sums[0] / t_end,
+            }
+        }
+        Indicator::Alignment { index, threshold }
+        | Indicator::AlignmentTime { index, threshold } => {
+            let mut v = FRAME[..index.vectors() as usize].to_vec();
+            let mut log = 0.0;
+            let mut aligned_at = f64::INFINITY;
+            for k in 1..=steps {
+                y = step_vectors(p, &y, &mut v, dt);
+                if renormalise(k) {
+                    for v in &mut v {
+                        let n = norm(v);
+                        *v = v.map(|x| x / n);
+                    }
+                    let a = alignment_index(index, &v);
+                    log = a.log10();
+                    let t = k as f64 * dt;
+                    sample(t, &[log]);
+                    tick(k)?;
+                    if a < threshold {
+                        aligned_at = t;
+                        break;
+                    }
+                }
+            }
+            match (spec.indicator, log.is_nan()) {
+                (_, true) => f64::NAN,
+                (Indicator::AlignmentTime { .. }, false) => aligned_at,
+                _ => log,
+            }
+        }
+        Indicator::Megno | Indicator::Fli => {
+            // Renormalised every step: ln |v| of a step is the integrand of both.
+            let mut v = TANGENT_START;
+            let (mut weighted, mut mean, mut total, mut fli) = (0.0, 0.0, 0.0, 0.0f64);
+            for k in 1..=steps {
+                let (next, w) = tangent_step(p, &y, &v, dt);
+                let n = norm(&w);
+                (y, v) = (next, w.map(|x| x / n));
+                let t = k as f64 * dt;
+                // Y(t) = 2/t int_0^t s d(ln |v|), s at the step's middle; <Y> its time mean.
+                weighted += (t - 0.5 * dt) * n.ln();
+                let y_now = 2.0 * weighted / t;
+                mean += dt * y_now;
+                total += n.ln();
+                fli = fli.max(total / std::f64::consts::LN_10);
+                if renormalise(k) {
+                    sample(t, &[mean / t, y_now, fli]);
+                    tick(k)?;
+                }
+                if !total.is_finite() {
+                    (mean, fli) = (f64::NAN, f64::NAN);
+                    break;
+                }
+            }
+            match spec.indicator {
+                Indicator::Megno => mean / t_end,
+                _ => fli,
+            }
+        }
+        Indicator::Descriptor { p: power } => {
+            let g = |s: &State| -> f64 {
+                derivative(p, s)
+                    .to_array()
+                    .iter()
+                    .map(|f| f.abs().powf(power))
+                    .sum()
+            };
+            let (mut ahead, mut back) = (start, start);
+            let (mut g_ahead, mut g_back) = (g(&start), g(&start));
+            let mut m = 0.0;
+            for k in 1..=steps {
+                ahead = rk4_step(p, &ahead, dt);
+                back = rk4_step(p, &back, -dt);
+                let (ga, gb) = (g(&ahead), g(&back));
+                // The trapezoid rule each way.
+                m += 0.5 * dt * (g_ahead + ga) + 0.5 * dt * (g_back + gb);
+                (g_ahead, g_back) = (ga, gb);
+                if renormalise(k) {
+                    sample(k as f64 * dt, &[m]);
+                    tick(k)?;
+                }
+            }
+            if m.is_finite() { m } else { f64::NAN }
+        }
+    };
+    if let Some(m) = monitor {
+        m.finish();
+    }
+    Ok(value)
+}
+
+/// One RK4 step of the state and each of `v` along it (each vector the FTLE's own step); the
+/// next state.
+fn step_vectors(p: &Params, y: &[f64; 4], v: &mut [[f64; 4]], dt: f64) -> [f64; 4] {
+    let mut next = *y;
+    for (j, vj) in v.iter_mut().enumerate() {
+        let (ny, nv) = tangent_step(p, y, vj, dt);
+        *vj = nv;
+        if j == 0 {
+            next = ny;
+        }
+    }
+    next
+}
+
+/// The map of `spec`'s indicator, rows in parallel.
+pub fn indicator_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
+    map_pixels(&spec.grid, spec.row_span(), monitor, |start| {
+        indicator_run(spec, start, None, &mut |_, _| {}).expect("never cancelled") as f32
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_frame_is_orthonormal_and_gram_schmidt_keeps_it() {
+        let mut v = FRAME.to_vec();
+        for (i, a) in FRAME.iter().enumerate() {
+            for (j, b) in FRAME.iter().enumerate() {
+                assert_eq!(dot(a, b), (i == j) as u8 as f64);
+            }
+        }
+        assert_eq!(gram_schmidt(&mut v), vec![1.0; 4]);
+        assert_eq!(v, FRAME.to_vec());
+        // Orthonormal vectors span a unit volume; parallel ones none.
+        assert_eq!(alignment_index(Alignment::Gali(4), &FRAME), 1.0);
+        assert_eq!(alignment_index(Alignment::Sali, &[FRAME[0], FRAME[0]]), 0.0);
+        assert!((alignment_index(Alignment::Sali, &FRAME[..2]) - 2f64.sqrt()).abs() < 1e-15);
+    }
+}
