@@ -11,7 +11,7 @@ struct IndicatorSlot {
     // The state; for a descriptor the forward run (the backward one is in v[0], v[1]).
     y: vec4<real>,
     u: vec4<real>,
-    // Tangent vectors (src/cpu/indicators.rs FRAME at the start).
+    // Tangent vectors (src/cpu/indicators.rs FRAME at the start, and why its order).
     v: array<vec4<real>, 4>,
     // Spectrum: the four log sums. Alignment: (log10 index, the time it fell below the
     // threshold, stopped, -). Growth: (s-weighted ln |v| sum, time integral of Y,
@@ -28,8 +28,8 @@ const LEFT_THE_NUMBERS: real = -3.0e38;
 fn frame_vector(j: u32) -> vec4<real> {
     switch j {
         case 0u: { return TANGENT_START; }
-        case 1u: { return vec4<real>(0.5, -0.5, 0.5, -0.5); }
-        case 2u: { return vec4<real>(0.5, 0.5, -0.5, -0.5); }
+        case 1u: { return vec4<real>(0.5, 0.5, -0.5, -0.5); }
+        case 2u: { return vec4<real>(0.5, -0.5, 0.5, -0.5); }
         default: { return vec4<real>(0.5, -0.5, -0.5, 0.5); }
     }
 }

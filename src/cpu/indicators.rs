@@ -12,11 +12,15 @@ use crate::monitor::Monitor;
 use crate::spec::{Alignment, Indicator, LyapunovSpec};
 
 /// The tangent vectors every run starts from: an orthonormal frame whose first vector is the
-/// FTLE's (the rows of a 4 x 4 Hadamard matrix, halved).
+/// FTLE's (the rows of a 4 x 4 Hadamard matrix, halved). The first two differ in their angle
+/// parts: started at rest, a change of the speeds alone changes no action to first order
+/// (they are even in the momenta), so two vectors with the same angle part would shear along
+/// one direction of a torus and align like 1/t on regular orbits (SALI and GALI_2 would
+/// then read regular orbits as slowly chaotic; the order below keeps them constant).
 pub const FRAME: [[f64; 4]; 4] = [
     TANGENT_START,
-    [0.5, -0.5, 0.5, -0.5],
     [0.5, 0.5, -0.5, -0.5],
+    [0.5, -0.5, 0.5, -0.5],
     [0.5, -0.5, -0.5, 0.5],
 ];
 

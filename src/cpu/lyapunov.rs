@@ -190,7 +190,9 @@ fn tangent_adaptive(
 }
 
 /// All four Lyapunov exponents (1/s, descending) over `spec`'s time: four tangent vectors
-/// through the full Jacobian, re-orthonormalised by QR at every renormalisation.
+/// through the full Jacobian, re-orthonormalised by nalgebra's (Householder) QR at every
+/// renormalisation; they start from the indicators' frame (`indicators::FRAME`), so this is
+/// an independent reference for the spectrum the indicator maps compute.
 pub fn lyapunov_spectrum(spec: &LyapunovSpec, start: State) -> [f64; 4] {
     let p = &spec.params;
     let dt = spec.stepping.dt;
@@ -202,7 +204,7 @@ pub fn lyapunov_spectrum(spec: &LyapunovSpec, start: State) -> [f64; 4] {
         (State::from_array(a.into()), v + h * k.1)
     };
     let mut y = start;
-    let mut v = Matrix4::<f64>::identity();
+    let mut v = Matrix4::from_columns(&super::FRAME.map(Vector4::from));
     let mut sums = Vector4::<f64>::zeros();
     for k in 1..=steps {
         let k1 = rate(&y, &v);
