@@ -274,37 +274,43 @@ fn look(spec: &LyapunovSpec) -> Look {
         ),
         Indicator::ExponentSum => (
             over("Sum of the four Lyapunov exponents"),
-            "λ1 + λ2 + λ3 + λ4 (1/s)".into(),
+            "Σλ (1/s)".into(),
             "1/s",
             false,
         ),
         Indicator::Alignment { index, threshold } => (
-            over(&format!("Alignment index {}", index.name())),
-            format!("log10 {} (stops below {threshold:e})", index.name()),
+            format!(
+                "Alignment index {} over {t_max} s (a start stops below {threshold:e})",
+                index.name()
+            ),
+            format!("log10 {}", index.name()),
             "(log10)",
             true,
         ),
         Indicator::AlignmentTime { index, threshold } => (
-            over(&format!("Time until {} < {threshold:e}", index.name())),
-            format!("time to {} < {threshold:e} (s); black: never", index.name()),
+            format!(
+                "Time until {} < {threshold:e} within {t_max} s (black: never)",
+                index.name()
+            ),
+            "time (s)".into(),
             "s",
             true,
         ),
         Indicator::Megno => (
-            over("MEGNO"),
-            "<Y> (2: regular; chaotic: grows like λt/2)".into(),
+            format!("MEGNO over {t_max} s (2: regular; chaotic: grows like λt/2)"),
+            "<Y>".into(),
             "",
             false,
         ),
         Indicator::Fli => (
-            over("Fast Lyapunov indicator"),
-            "FLI, log10 |v|".into(),
+            format!("Fast Lyapunov indicator over {t_max} s: the largest log10 |v|"),
+            "FLI".into(),
             "",
             false,
         ),
         Indicator::Descriptor { p } => (
-            format!("Lagrangian descriptor over [-{t_max}, {t_max}] s"),
-            format!("M, p = {p}"),
+            format!("Lagrangian descriptor M over [-{t_max}, {t_max}] s, p = {p}"),
+            "M".into(),
             "",
             false,
         ),
@@ -375,10 +381,14 @@ pub fn lyapunov_picture(
         Annotation {
             title: look.title,
             subtitle: format!(
-                "{} · RK4 dt {} s · renormalised every {} s{}",
+                "{} · RK4 dt {} s{}{}",
                 physics_line(&spec.params, &spec.grid),
                 spec.stepping.dt,
-                spec.renorm,
+                match spec.indicator {
+                    // One plain trajectory each way: nothing renormalised.
+                    Indicator::Descriptor { .. } => String::new(),
+                    _ => format!(" · renormalised every {} s", spec.renorm),
+                },
                 unresolved_note(unresolved, false)
             ),
             x,
