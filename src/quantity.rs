@@ -118,6 +118,7 @@ pub const SALI: Quantity = Quantity {
     agree: alignments_agree,
     agreement: "log10 SALI within 0.5 (NaN never agrees)",
     tolerance: "0.5 decades",
+    // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
     counted: |x| x <= ALIGNED_LOG10,
     counted_as: "chaotic",
     counted_rule: "log10 SALI <= -4",
@@ -130,6 +131,7 @@ pub const GALI: Quantity = Quantity {
     agree: alignments_agree,
     agreement: "log10 GALI within 0.5 (NaN never agrees)",
     tolerance: "0.5 decades",
+    // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
     counted: |x| x <= ALIGNED_LOG10,
     counted_as: "chaotic",
     counted_rule: "log10 GALI <= -4",

@@ -73,6 +73,7 @@ function fillForm() {
     if (page.info.store && PHYSICS.includes(k)) el.disabled = true;
   }
   document.getElementById("ftle-range").hidden = !kindInfo().ranged;
+  document.getElementById("range-unit").textContent = kindInfo().unit ? `(${kindInfo().unit})` : "";
   // A map without accurate settings (the flip kind is located with RK4 only).
   if (!kindInfo().accurate) state.accurate = false;
   form.elements.accurate.checked = !!state.accurate;

@@ -148,11 +148,7 @@ pub fn run<S: MapKernels + MapPicture>(
         mask.as_deref(),
         monitor,
     )?;
-    let counted = field
-        .data
-        .iter()
-        .filter(|&&x| (job.spec.quantity().counted)(x))
-        .count();
+    let counted = field.data.iter().filter(|&&x| job.spec.counted(x)).count();
     let nan = field.data.iter().filter(|x| x.is_nan()).count();
     Ok(MapSummary {
         resolved: mask.as_deref().map(verdict::fraction),
@@ -239,7 +235,7 @@ pub fn make_store<S: MapKernels>(
         &fill,
         monitor,
         |rows, monitor| map_and_verdict(&engine, &spec.with_band(rows), verdict, monitor),
-        quantity.counted,
+        |x| spec.counted(x),
     )?;
     notices.extend(missing_note(&filled, path));
     Ok(Made {

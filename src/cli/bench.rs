@@ -50,6 +50,10 @@ pub struct BenchArgs {
     /// Simulated time of the accurate-map rows (s).
     #[arg(long, default_value = "30", value_parser = parse_number, allow_hyphen_values = true)]
     pub accurate_t_max: f64,
+    /// Grid side of the chaos indicators' rows (each indicator beside the FTLE map, f32 and
+    /// f64, and beside the Numba indicators peer with --peers; 0 leaves them out).
+    #[arg(long, default_value = "256", value_parser = parse_u32, allow_hyphen_values = true)]
+    pub indicator_size: u32,
 }
 
 impl BenchArgs {
@@ -63,10 +67,18 @@ impl BenchArgs {
             no_cpu: self.no_cpu,
             no_ftle: self.no_ftle,
             peers: self.peers.clone(),
-            python: self.python.clone(),
+            // The peers run in their own directory: a relative path to Python is the
+            // caller's, made absolute here.
+            python: match self.python.contains('/') {
+                true => std::path::absolute(&self.python)
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_else(|_| self.python.clone()),
+                false => self.python.clone(),
+            },
             peer: self.peer.clone(),
             accurate_size: self.accurate_size,
             accurate_t_max: self.accurate_t_max,
+            indicator_size: self.indicator_size,
         }
     }
 }

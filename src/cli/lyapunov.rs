@@ -362,7 +362,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
                 s.seconds,
                 100.0 * s.counted,
                 q.counted_as,
-                q.counted_rule,
+                job.spec.counted_rule(),
                 s.t_max,
                 super::flip::nan_note(s.nan),
                 super::flip::resolved_note(

@@ -114,7 +114,7 @@ impl MapKind {
             name: "sali",
             short: "sali",
             label: "alignment index SALI",
-            legend: "Colour: log10 SALI of two tangent vectors (dark: regular, SALI stays near 1; bright: chaotic, SALI falls to the threshold 1e-8 and the pixel stops).",
+            legend: "Colour: log10 SALI of two tangent vectors (dark: regular, SALI stays near 1; bright: chaotic, SALI falls to its threshold, 1e-5 here, and the pixel stops).",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Alignment {
@@ -128,7 +128,7 @@ impl MapKind {
             name: "gali",
             short: "gali",
             label: "alignment index GALI_4",
-            legend: "Colour: log10 GALI_4, the volume spanned by four unit tangent vectors (dark: regular, decays like a power of t; bright: chaotic, decays exponentially).",
+            legend: "Colour: log10 GALI_4, the volume spanned by four unit tangent vectors (dark: regular, decays like t^-4, so it brightens with t-max too; bright: chaotic, decays exponentially to the threshold, 1e-5 here).",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Alignment {
@@ -142,7 +142,7 @@ impl MapKind {
             name: "alignment-time",
             short: "alignment-time",
             label: "time until SALI aligns",
-            legend: "Colour: the time SALI took to fall below its threshold (bright: soon, strongly chaotic); black: not within t-max (regular).",
+            legend: "Colour: the time SALI took to fall below its threshold, 1e-5 here (bright: soon, strongly chaotic); black: not within t-max (regular).",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::AlignmentTime {

@@ -380,6 +380,12 @@ impl MapSpec for AnyMap {
     fn validate_in(&self, precision: Precision) -> Result<()> {
         on_any!(self, s => s.validate_in(precision))
     }
+    fn counted(&self, x: f32) -> bool {
+        on_any!(self, s => s.counted(x))
+    }
+    fn counted_rule(&self) -> String {
+        on_any!(self, s => s.counted_rule())
+    }
     fn with_band(&self, band: (u32, u32)) -> Self {
         on_any!(self, s => s.with_band(band).any())
     }
@@ -410,6 +416,14 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     /// Every field in range (the f64 tolerances; the f32 GPU's are checked once the engine
     /// has picked the path).
     fn validate(&self) -> Result<()>;
+    /// Whether the summary counts a pixel of value `x` (its quantity's rule).
+    fn counted(&self, x: f32) -> bool {
+        (self.quantity().counted)(x)
+    }
+    /// Which pixels those are, in words.
+    fn counted_rule(&self) -> String {
+        self.quantity().counted_rule.to_string()
+    }
     /// What the path's `precision` must hold beyond [`MapSpec::validate`] (the f32 GPU's
     /// tolerance floor), once the engine has picked it.
     fn validate_in(&self, precision: Precision) -> Result<()> {
@@ -506,5 +520,21 @@ impl MapSpec for LyapunovSpec {
     fn validate_in(&self, precision: Precision) -> Result<()> {
         self.integrator.validate(precision)?;
         self.indicator.validate(precision)
+    }
+    /// An alignment index counts the starts it stopped: those below its threshold (a
+    /// running pixel's last value is at or above it).
+    fn counted(&self, x: f32) -> bool {
+        match self.indicator {
+            Indicator::Alignment { threshold, .. } => (x as f64) < threshold.log10(),
+            _ => (self.quantity().counted)(x),
+        }
+    }
+    fn counted_rule(&self) -> String {
+        match self.indicator {
+            Indicator::Alignment { index, threshold } => {
+                format!("{} fell below {threshold:e}", index.name())
+            }
+            _ => self.quantity().counted_rule.to_string(),
+        }
     }
 }

@@ -6,6 +6,7 @@
 //! part is everything else: buffer set-up, all dispatches, and the read-back of the times.
 
 mod accuracy;
+mod indicators;
 mod peers;
 
 pub use self::accuracy::ftle_accuracy_size;
@@ -48,6 +49,9 @@ pub struct BenchJob {
     /// Grid side of the "accurate map" rows (0: none) and their simulated time (s).
     pub accurate_size: u32,
     pub accurate_t_max: f64,
+    /// Grid side of the chaos indicators' rows (0: none); with `peers`, the Numba
+    /// indicators peer runs them too.
+    pub indicator_size: u32,
 }
 
 /// One row of the report: the median of the repetitions of one path and mode.
@@ -257,6 +261,15 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
         }
         _ => None,
     };
+    // The indicators' rows go through an engine on the GPU (the path users get).
+    let indicator_engine = match args.indicator_size {
+        0 => None,
+        _ => {
+            let engine = crate::engine::Engine::on_gpu(GpuContext::new()?);
+            indicators::warm_up(args, &engine, &quiet)?;
+            Some(engine)
+        }
+    };
     let mut samples: Vec<Sample> = Vec::new();
     let mut notices = Vec::new();
     monitor.start("bench", args.repeat as u64);
@@ -319,6 +332,9 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
             if !early && let (Some((engine, _)), Some(reference)) = (&accurate, &ftle_reference) {
                 samples.extend(ftle_accuracy_samples(args, engine, reference, &quiet)?);
             }
+            if !early && let Some(engine) = &indicator_engine {
+                samples.extend(indicators::samples(args, engine, &quiet, &mut notices)?);
+            }
             if let Some(dir) = &args.peers {
                 for peer in &args.peer {
                     match run_peer(args, dir, peer, &PeerRun::flip512(args, !early)) {
@@ -350,7 +366,8 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
             right: mine[0].right,
         });
     }
-    let ratios = ratios(&rows);
+    let mut ratios = ratios(&rows);
+    ratios.extend(indicators::ratios(&rows));
     Ok(BenchReport {
         adapter: ctx.adapter_name(),
         rows,

@@ -56,6 +56,18 @@ pub(super) fn run_peer(
     if let Some(out) = run.out {
         cmd.arg("--out").arg(out);
     }
+    let (wall_s, pendulum_steps) = peer_report(cmd, peer)?;
+    Ok(Sample {
+        name: format!("peer {peer} {}", if run.f64 { "f64" } else { "f32" }),
+        mode: if run.full { "full" } else { "early" },
+        wall_s,
+        pendulum_steps,
+        right: None,
+    })
+}
+
+/// Runs a peer's `cmd` and reads its one JSON line: (wall_s, pendulum_steps).
+pub(super) fn peer_report(mut cmd: Command, peer: &str) -> Result<(f64, f64)> {
     let out = cmd.output()?;
     let text = String::from_utf8_lossy(&out.stdout);
     let line = text
@@ -78,11 +90,5 @@ pub(super) fn run_peer(
             .and_then(|v| v.trim().parse().ok())
             .unwrap_or(f64::NAN)
     };
-    Ok(Sample {
-        name: format!("peer {peer} {}", if run.f64 { "f64" } else { "f32" }),
-        mode: if run.full { "full" } else { "early" },
-        wall_s: field("wall_s"),
-        pendulum_steps: field("pendulum_steps"),
-        right: None,
-    })
+    Ok((field("wall_s"), field("pendulum_steps")))
 }

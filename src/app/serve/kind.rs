@@ -47,9 +47,14 @@ impl Kind {
             Kind::Map(k) => (k.entry().ranged, k.entry().accurate),
             Kind::Resolved => (false, true),
         };
+        // The colour range's unit beside its inputs, where it has one worth writing.
+        let unit = match self {
+            Kind::Map(k) if matches!(k.quantity().unit, "1/s" | "s") => k.quantity().unit,
+            _ => "",
+        };
         serde_json::json!({
             "name": self.name(), "label": label, "legend": legend,
-            "ranged": ranged, "accurate": accurate,
+            "ranged": ranged, "accurate": accurate, "unit": unit,
         })
     }
 
