@@ -482,3 +482,121 @@ fn indicator_maps_are_point_symmetric_bit_for_bit_and_the_first_exponent_is_the_
     );
     assert_eq!(map_on(&cpu, &ftle).data, map_on(&cpu, &first).data, "cpu");
 }
+
+#[test]
+fn the_command_line_refuses_a_flag_of_another_indicator_naming_it() {
+    for (args, flag) in [
+        (vec!["--indicator", "sali", "--exponent", "2"], "--exponent"),
+        (vec!["--indicator", "megno", "--gali", "3"], "--gali"),
+        (
+            vec!["--indicator", "fli", "--threshold", "1e-6"],
+            "--threshold",
+        ),
+        (vec!["--indicator", "sali", "--ld-p", "1"], "--ld-p"),
+        (
+            vec!["--indicator", "exponent", "--exponent", "5"],
+            "--exponent",
+        ),
+        (vec!["--indicator", "gali", "--gali", "5"], "--gali"),
+        (vec!["--indicator", "descriptor", "--ld-p", "3"], "--ld-p"),
+        (
+            vec!["--indicator", "sali", "--threshold", "2"],
+            "--threshold",
+        ),
+        // f32 on the GPU cannot see an alignment index below its round-off.
+        (
+            vec![
+                "--indicator",
+                "sali",
+                "--threshold",
+                "1e-8",
+                "--backend",
+                "gpu",
+            ],
+            "--threshold",
+        ),
+        (vec!["--indicator", "megno", "--accurate"], "--accurate"),
+        (vec!["--indicator", "sali", "--method", "twin"], "--method"),
+        (
+            vec!["--indicator", "sali", "--integrator", "dp54"],
+            "--integrator",
+        ),
+        (vec!["--indicator", "spectrum"], "--indicator"),
+    ] {
+        let out = common::chaoscope()
+            .args(["lyapunov", "--size", "8", "--t-max", "1"])
+            .args(&args)
+            .args(["--output", "/nonexistent/x.png"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(flag),
+            "{args:?} should name {flag}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn an_indicator_map_writes_its_values_and_a_single_start_its_running_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let npy = dir.path().join("m.npy");
+    let out = common::chaoscope()
+        .args([
+            "lyapunov",
+            "--size",
+            "12",
+            "--t-max",
+            "3",
+            "--indicator",
+            "megno",
+        ])
+        .args(["--backend", "cpu", "--json", "--output"])
+        .arg(dir.path().join("m.png"))
+        .arg("--data")
+        .arg(&npy)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["quantity"], "MEGNO", "{summary}");
+    let (shape, values) = common::read_npy(&npy);
+    assert_eq!(shape, vec![12, 12]);
+    // The CPU twin's own value at one pixel (the map's pixel 0: the grid's top-left start).
+    let s = LyapunovSpec {
+        grid: Grid::square(12),
+        ..spec(Indicator::Megno, 3.0)
+    };
+    let start = s.grid.start(0, 0);
+    let expected = cpu::indicator_run(&s, start, None, &mut |_, _| {}).unwrap();
+    assert_eq!(values[0], expected as f32);
+    // A single start's running spectrum, one row per renormalisation.
+    let out = common::chaoscope()
+        .args(["lyapunov", "--theta1", "2", "--theta2", "1", "--t-max", "1"])
+        .args(["--indicator", "exponent-sum"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(
+        lines[0].starts_with("# chaoscope lyapunov")
+            && lines[0].contains("--indicator exponent-sum")
+    );
+    assert_eq!(lines[1], "t,lambda1,lambda2,lambda3,lambda4,sum");
+    assert_eq!(lines.len(), 2 + 10, "{csv}");
+    let last: Vec<f64> = lines[11].split(',').map(|x| x.parse().unwrap()).collect();
+    assert!(
+        (last[5] - last[1..5].iter().sum::<f64>()).abs() < 1e-12,
+        "{csv}"
+    );
+}

@@ -61,7 +61,8 @@ pub struct MapSummary {
 impl serde::Serialize for MapSummary {
     fn serialize<Se: serde::Serializer>(&self, s: Se) -> std::result::Result<Se::Ok, Se::Error> {
         use serde::ser::SerializeStruct;
-        let mut m = s.serialize_struct("MapSummary", 12 + self.range.is_some() as usize)?;
+        let mut m = s.serialize_struct("MapSummary", 13 + self.range.is_some() as usize)?;
+        m.serialize_field("quantity", self.quantity.name)?;
         m.serialize_field("width", &self.width)?;
         m.serialize_field("height", &self.height)?;
         m.serialize_field("place", &self.place)?;
