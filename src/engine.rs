@@ -296,6 +296,15 @@ impl Engine {
         }
     }
 
+    /// All four Lyapunov exponents of a validated `spec` (an exponent or their sum), from one
+    /// run of four tangent vectors a pixel.
+    pub fn spectrum(&self, spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]> {
+        match self.map_gpu(&spec.grid, spec.precision) {
+            Some((k, precision)) => k.indicators(precision).spectrum(&k.ctx, spec, monitor),
+            None => cpu::spectrum_map(spec, monitor),
+        }
+    }
+
     /// The running FTLE of one start (`spec`'s grid is not used).
     pub fn ftle_convergence(
         &self,

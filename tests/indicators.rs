@@ -600,3 +600,77 @@ fn an_indicator_map_writes_its_values_and_a_single_start_its_running_columns() {
         "{csv}"
     );
 }
+
+#[test]
+fn the_spectrum_of_one_run_is_each_exponents_map_and_the_command_writes_it_with_a_leading_axis() {
+    let cpu = Engine::new(chaoscope::engine::Backend::Cpu).unwrap();
+    let mut engines = vec![("cpu", cpu)];
+    if let Some(ctx) = common::f64_gpu() {
+        engines.push(("gpu", Engine::on_gpu(ctx)));
+    }
+    for (name, engine) in &engines {
+        for precision in Precision::ALL {
+            let s = LyapunovSpec {
+                grid: Grid {
+                    width: 10,
+                    height: 7,
+                    ..Grid::square(1)
+                },
+                precision,
+                ..spec(Indicator::ExponentSum, 2.0)
+            };
+            let layers = engine.spectrum(&s, &Monitor::hidden()).unwrap();
+            for (k, layer) in layers.iter().enumerate() {
+                let one = LyapunovSpec {
+                    indicator: Indicator::Exponent(k as u8 + 1),
+                    ..s
+                };
+                // The same kernel, the same run: the same bits.
+                assert_eq!(
+                    layer.data,
+                    map_on(engine, &one).data,
+                    "{name} {precision:?} exponent {}",
+                    k + 1
+                );
+            }
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("spectrum.npy");
+    let out = common::chaoscope()
+        .args([
+            "lyapunov",
+            "--size",
+            "9x6",
+            "--t-max",
+            "2",
+            "--indicator",
+            "exponent",
+        ])
+        .args(["--exponent", "3", "--output"])
+        .arg(dir.path().join("l3.png"))
+        .arg("--data")
+        .arg(dir.path().join("l3.npy"))
+        .arg("--spectrum")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (shape, all) = common::read_npy(&path);
+    assert_eq!(shape, vec![4, 6, 9]);
+    let (_, third) = common::read_npy(&dir.path().join("l3.npy"));
+    assert_eq!(&all[2 * 54..3 * 54], third.as_slice(), "layer 3 is the map");
+    // The four sum to the volume change over t: |sum| <= ln 2 / t (det M varies by at most a
+    // factor 1 + m2 / m1 = 2), RK4 adding <= 1e-3 / t.
+    for i in 0..54 {
+        let sum: f32 = (0..4).map(|k| all[54 * k + i]).sum();
+        assert!(
+            sum.abs() <= (2f32.ln() + 1e-3) / 2.0,
+            "pixel {i}: sum {sum}"
+        );
+    }
+}

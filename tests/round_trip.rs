@@ -200,6 +200,45 @@ fn lyapunov_maps_and_points_round_trip() {
         &[Path::new("--output"), &png2],
         &[(&png, &png2)],
     );
+    // Every indicator and its settings come back from the PNG's command.
+    for (k, flags) in [
+        &["--indicator", "exponent", "--exponent", "3"][..],
+        &["--indicator", "exponent-sum"],
+        &["--indicator", "sali"],
+        &[
+            "--indicator",
+            "gali-time",
+            "--gali",
+            "3",
+            "--threshold",
+            "1e-4",
+        ],
+        &["--indicator", "megno"],
+        &["--indicator", "fli"],
+        &["--indicator", "descriptor", "--ld-p", "0.25"],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let (png, png2) = (d(&format!("i{k}.png")), d(&format!("j{k}.png")));
+        let mut args = vec![
+            "lyapunov",
+            "--size",
+            "8x6",
+            "--t-max",
+            "1",
+            "--backend",
+            backend(),
+        ];
+        args.extend(flags);
+        round_trip(
+            &args,
+            &[Path::new("--output"), &png],
+            || png_text(&png, "chaoscope:command"),
+            &[Path::new("--output"), &png2],
+            &[(&png, &png2)],
+        );
+    }
     let (csv, csv2) = (d("a.csv"), d("b.csv"));
     round_trip(
         &[

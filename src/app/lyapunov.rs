@@ -13,6 +13,8 @@ use crate::model::State;
 use crate::monitor::Monitor;
 use crate::spec::{self, Indicator, LyapunovSpec, MapSpec};
 
+use super::map::MapSummary;
+
 pub use crate::quantity::CHAOTIC_FTLE;
 
 /// A divergence map to make: the one map job ([`super::map`]) over a [`LyapunovSpec`]; its
@@ -111,6 +113,87 @@ pub fn run_point(
         ftle: (indicator == Indicator::Ftle).then_some(value),
         output: job.output.clone(),
         files: job.output.iter().cloned().collect(),
+        notices,
+    })
+}
+
+/// `job`'s map (an exponent of the spectrum, or their sum) drawn from one run of the four
+/// tangent vectors, with all four exponents (1/s, largest first) written to `spectrum` as
+/// float32 of shape (4, height, width). No verdict and no store: they hold one quantity.
+pub fn run_spectrum(
+    job: &LyapunovMapJob,
+    spectrum: &std::path::Path,
+    command: String,
+    monitor: &Monitor,
+) -> Result<MapSummary> {
+    use crate::render::MapPicture;
+    let started = std::time::Instant::now();
+    let spec = &job.spec;
+    if !matches!(
+        spec.indicator,
+        Indicator::Exponent(_) | Indicator::ExponentSum
+    ) {
+        return Err(Error::invalid(
+            "spectrum",
+            "is for --indicator exponent or exponent-sum",
+        ));
+    }
+    if job.files.store().is_some() || job.tile.is_some() {
+        return Err(Error::invalid(
+            "spectrum",
+            "writes a .npy beside a map; a Zarr store holds one quantity (leave out --spectrum)",
+        ));
+    }
+    if job.files.wants_verdict() {
+        return Err(Error::invalid(
+            "spectrum",
+            "has no verdict: leave out --resolved and --show-unresolved, or --spectrum",
+        ));
+    }
+    spec.check_picture(&job.picture, job.colour_range)?;
+    super::map::validate(spec, &job.files, job.tile)?;
+    check_output("spectrum", spectrum, "npy")?;
+    let (engine, info, notices) = super::map::map_engine(job.backend, spec, false)?;
+    let layers = engine.spectrum(spec, monitor)?;
+    let field = match spec.indicator {
+        Indicator::Exponent(k) => layers[k as usize - 1].clone(),
+        _ => crate::field::Field {
+            data: (0..layers[0].data.len())
+                .map(|i| layers.iter().map(|l| l.data[i]).sum())
+                .collect(),
+            ..layers[0].clone()
+        },
+    };
+    let drawn = spec.draw(&field, &job.picture, job.colour_range, None)?;
+    super::map::write_map(
+        &drawn.picture,
+        crate::render::provenance(command, &info),
+        drawn.text,
+        &job.files,
+        &field,
+        None,
+        monitor,
+    )?;
+    let (width, height) = (spec.grid.width, spec.grid.height);
+    let data: Vec<f32> = layers.iter().flat_map(|l| l.data.iter().copied()).collect();
+    crate::render::write_npy_shaped(spectrum, &[4, height as u64, width as u64], &data)?;
+    let mut files = job.files.files();
+    files.push(spectrum.to_path_buf());
+    Ok(MapSummary {
+        quantity: spec.quantity(),
+        width,
+        height,
+        place: info.place().to_string(),
+        seconds: started.elapsed().as_secs_f64(),
+        counted: field.data.iter().filter(|&&x| spec.counted(x)).count() as f64
+            / field.data.len().max(1) as f64,
+        nan: field.data.iter().filter(|x| x.is_nan()).count(),
+        resolved: None,
+        rule: String::new(),
+        t_max: spec.stepping.t_max,
+        range: drawn.range,
+        output: job.files.output.clone(),
+        files,
         notices,
     })
 }

@@ -126,6 +126,10 @@ pub struct LyapunovArgs {
     /// f32 resolves 1e-5 at best, its default there].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub threshold: Option<f64>,
+    /// All four exponents (1/s, largest first) as float32 .npy of shape (4, height, width),
+    /// from the same run as the map of --indicator exponent or exponent-sum.
+    #[arg(long)]
+    pub spectrum: Option<PathBuf>,
     /// The exponent p of the descriptor's sum of |f_i|^p: 0.25, 0.5, 1 or 2.
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub ld_p: Option<f64>,
@@ -297,6 +301,12 @@ impl LyapunovArgs {
                 }))
             }
             (Angles::Point(theta1), Angles::Point(theta2)) => {
+                if self.spectrum.is_some() {
+                    return Err(Error::invalid(
+                        "spectrum",
+                        "is for maps; a single start's running spectrum is its CSV (--indicator exponent)",
+                    ));
+                }
                 if self.data.is_some() || self.tile.is_some() {
                     return Err(Error::invalid(
                         "data",
@@ -351,7 +361,14 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
     match args.job()? {
         LyapunovJob::Map(job) => {
             super::args::f32_on_the_cpu(args.precision, job.backend);
-            let s = lyapunov::run_map(&job, command_line::lyapunov_map(&job), monitor)?;
+            let command = command_line::lyapunov_map(&job);
+            let s = match &args.spectrum {
+                Some(path) => {
+                    let command = format!("{command} --spectrum {}", path.display());
+                    lyapunov::run_spectrum(&job, path, command, monitor)?
+                }
+                None => lyapunov::run_map(&job, command, monitor)?,
+            };
             say(&s.notices);
             let q = job.spec.quantity();
             eprintln!(

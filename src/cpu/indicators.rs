@@ -232,6 +232,47 @@ fn step_vectors(p: &Params, y: &[f64; 4], v: &mut [[f64; 4]], dt: f64) -> [f64; 
     next
 }
 
+/// All four exponents of `spec`'s grid (1/s, largest first), one run of four vectors a
+/// pixel, rows in parallel.
+pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]> {
+    use rayon::prelude::*;
+    let four = LyapunovSpec {
+        indicator: Indicator::ExponentSum,
+        ..*spec
+    };
+    let (grid, span) = (&spec.grid, spec.row_span());
+    monitor.start("cpu", span.count as u64);
+    let rows: Vec<Vec<[f64; 4]>> = (0..span.count)
+        .into_par_iter()
+        .map(|row| {
+            monitor.check()?;
+            let values = (0..grid.width)
+                .map(|col| {
+                    let mut last = [f64::NAN; 4];
+                    let start = grid.start(col, span.first + row);
+                    indicator_run(&four, start, None, &mut |_, r| {
+                        last = [r[0], r[1], r[2], r[3]];
+                    })?;
+                    Ok(last)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            monitor.advance(1);
+            Ok(values)
+        })
+        .collect::<Result<_>>()?;
+    monitor.finish();
+    Ok(std::array::from_fn(|k| {
+        let mut field = Field::new(grid.width, span.field_rows(grid), 0.0);
+        for (i, v) in rows.iter().flatten().enumerate() {
+            field.data[i] = v[k] as f32;
+        }
+        if span.whole {
+            field.mirror_below(span.count);
+        }
+        field
+    }))
+}
+
 /// The map of `spec`'s indicator, rows in parallel.
 pub fn indicator_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
     map_pixels(&spec.grid, spec.row_span(), monitor, |start| {

@@ -14,7 +14,9 @@ pub use adaptive::{Adaptive, DP54, Stall, Step, step_factor};
 pub use flip_adaptive::{flip_map_adaptive, flip_time_adaptive};
 pub use flip_kind::flip_kind_map;
 pub use flip_time::{FirstFlip, first_flip, flip_map, flip_time};
-pub use indicators::{FRAME, alignment_index, columns, gram_schmidt, indicator_map, indicator_run};
+pub use indicators::{
+    FRAME, alignment_index, columns, gram_schmidt, indicator_map, indicator_run, spectrum_map,
+};
 pub use lyapunov::{ftle, ftle_map, ftle_monitored, lyapunov_spectrum};
 
 use nalgebra::{Matrix2, Matrix4, RealField, Vector2, Vector4};

@@ -76,14 +76,48 @@ impl IndicatorKernel {
 
     /// The map of `spec`'s indicator (its quantity's unit).
     pub fn run(&self, ctx: &GpuContext, spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-        with_real!(self.precision, R => self.run_in::<R>(ctx, spec, monitor))
+        with_real!(self.precision, R => self.run_in::<R>(ctx, spec, monitor, None))
     }
 
+    /// All four exponents of `spec`'s grid (1/s, the Gram-Schmidt order: largest first), from
+    /// one run of the spectrum kernel; `spec`'s indicator must be an exponent or their sum.
+    pub fn spectrum(
+        &self,
+        ctx: &GpuContext,
+        spec: &LyapunovSpec,
+        monitor: &Monitor,
+    ) -> Result<[Field; 4]> {
+        assert!(
+            entry_of(spec.indicator).0 == 0,
+            "the spectrum comes from the spectrum kernel"
+        );
+        let mut layers: [Vec<f64>; 4] = Default::default();
+        with_real!(self.precision, R => self.run_in::<R>(ctx, spec, monitor, Some(&mut layers)))?;
+        let t_end = spec.stepping.steps() as f64 * spec.stepping.dt;
+        let span = spec.row_span();
+        Ok(layers.map(|sums| {
+            let mut field = Field {
+                width: spec.grid.width,
+                height: span.field_rows(&spec.grid),
+                data: sums.into_iter().map(|s| (s / t_end) as f32).collect(),
+            };
+            field
+                .data
+                .resize(field.width as usize * field.height as usize, 0.0);
+            if span.whole {
+                field.mirror_below(span.count);
+            }
+            field
+        }))
+    }
+
+    /// The tiled loop; `layers`, if given, receives each pixel's four log sums in tile order.
     fn run_in<R: Real>(
         &self,
         ctx: &GpuContext,
         spec: &LyapunovSpec,
         monitor: &Monitor,
+        mut layers: Option<&mut [Vec<f64>; 4]>,
     ) -> Result<Field> {
         use std::mem::size_of;
         let indicator = spec.indicator;
@@ -166,6 +200,15 @@ impl IndicatorKernel {
                 },
             )?;
             let raw = read_reals::<R>(&read_buffer(ctx, &values, pixels as u64 * value_bytes)?);
+            if let Some(layers) = layers.as_deref_mut() {
+                // IndicatorSlot: y, u, four vectors, then the four log sums.
+                let slots = read_reals::<R>(&read_buffer(ctx, &states, pixels as u64 * slot)?);
+                for sums in slots.chunks_exact(32).map(|s| &s[24..28]) {
+                    for (layer, &sum) in layers.iter_mut().zip(sums) {
+                        layer.push(sum);
+                    }
+                }
+            }
             Ok(raw.into_iter().map(finish).collect())
         })
     }
