@@ -13,6 +13,13 @@ pub const FTLE_RELATIVE: f64 = 0.05;
 /// ... or within this many 1/s, whichever is larger.
 pub const FTLE_ABSOLUTE: f64 = 0.02;
 
+/// Whether `a` and `b` lie within `relative` of the larger or `absolute`, whichever is larger
+/// (NaN never does).
+fn within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
+    let (a, b) = (a as f64, b as f64);
+    (a - b).abs() <= (relative * a.abs().max(b.abs())).max(absolute)
+}
+
 /// Whether two flip times (s; inf = never) agree.
 pub fn flip_times_agree(a: f32, b: f32) -> bool {
     if a.is_infinite() || b.is_infinite() {
@@ -36,12 +43,20 @@ pub struct Quantity {
     pub name: &'static str,
     /// Its unit (a store's `units` attribute).
     pub unit: &'static str,
-    /// Whether two values of one pixel agree: the verdict's rule.
+    /// Whether two values of one pixel agree: the accuracy a resolved pixel is promised.
     pub agree: fn(f32, f32) -> bool,
     /// The rule in words: "the same map ... gives <agreement>".
     pub agreement: &'static str,
     /// The tolerance alone, in a few words.
     pub tolerance: &'static str,
+    /// The verdict's rule: two runs at different steps must agree this closely for the map
+    /// to vouch that the pixel is right within `agree`. Where chaos can make two runs of a
+    /// start diverge and still land within `agree` by chance (a finite-time exponent of a
+    /// diverged orbit is a draw from a spread of about 0.1 /s), this is a fifth of it.
+    pub vouch: fn(f32, f32) -> bool,
+    /// `vouch` in words, and its tolerance alone.
+    pub vouching: &'static str,
+    pub vouch_tolerance: &'static str,
     /// The pixels the summary counts (flipped, chaotic).
     pub counted: fn(f32) -> bool,
     /// The summary's key for their share.
@@ -57,6 +72,9 @@ pub const FLIP_TIME: Quantity = Quantity {
     agree: flip_times_agree,
     agreement: "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
     tolerance: "1 % or 0.02 s",
+    vouch: flip_times_agree,
+    vouching: "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
+    vouch_tolerance: "1 % or 0.02 s",
     counted: f32::is_finite,
     counted_as: "flipped",
     counted_rule: "a flip within t-max",
@@ -69,6 +87,9 @@ pub const FTLE: Quantity = Quantity {
     agree: exponents_agree,
     agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
     tolerance: "5 % or 0.02 /s",
+    vouch: |a, b| within(a, b, 0.01, 0.004),
+    vouching: "an exponent within 1 % or 0.004 /s (NaN never agrees)",
+    vouch_tolerance: "1 % or 0.004 /s",
     counted: |x| x > CHAOTIC_FTLE,
     counted_as: "chaotic",
     counted_rule: "FTLE > 0.5 /s",
@@ -81,6 +102,9 @@ pub const EXPONENT: Quantity = Quantity {
     agree: exponents_agree,
     agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
     tolerance: "5 % or 0.02 /s",
+    vouch: |a, b| within(a, b, 0.01, 0.004),
+    vouching: "an exponent within 1 % or 0.004 /s (NaN never agrees)",
+    vouch_tolerance: "1 % or 0.004 /s",
     counted: |x| x > CHAOTIC_FTLE,
     counted_as: "chaotic",
     counted_rule: "exponent > 0.5 /s",
@@ -91,9 +115,14 @@ pub const EXPONENT: Quantity = Quantity {
 pub const EXPONENT_SUM: Quantity = Quantity {
     name: "sum of the Lyapunov exponents",
     unit: "1/s",
-    agree: exponents_agree,
-    agreement: "a sum within 5 % or 0.02 /s (NaN never agrees)",
-    tolerance: "5 % or 0.02 /s",
+    // Its scale is the volume change over t (ln 2 / t at most for equal masses), not the
+    // exponents': 0.005 /s absolute.
+    agree: |a, b| within(a, b, 0.05, 0.005),
+    agreement: "a sum within 5 % or 0.005 /s (NaN never agrees)",
+    tolerance: "5 % or 0.005 /s",
+    vouch: |a, b| within(a, b, 0.01, 0.001),
+    vouching: "a sum within 1 % or 0.001 /s (NaN never agrees)",
+    vouch_tolerance: "1 % or 0.001 /s",
     counted: |x| x < -FTLE_ABSOLUTE as f32,
     counted_as: "contracting",
     counted_rule: "sum < -0.02 /s",
@@ -118,6 +147,9 @@ pub const SALI: Quantity = Quantity {
     agree: alignments_agree,
     agreement: "log10 SALI within 0.5 (NaN never agrees)",
     tolerance: "0.5 decades",
+    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
+    vouching: "log10 SALI within 0.1 (NaN never agrees)",
+    vouch_tolerance: "0.1 decades",
     // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
     counted: |x| x <= ALIGNED_LOG10,
     counted_as: "chaotic",
@@ -131,6 +163,9 @@ pub const GALI: Quantity = Quantity {
     agree: alignments_agree,
     agreement: "log10 GALI within 0.5 (NaN never agrees)",
     tolerance: "0.5 decades",
+    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
+    vouching: "log10 GALI within 0.1 (NaN never agrees)",
+    vouch_tolerance: "0.1 decades",
     // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
     counted: |x| x <= ALIGNED_LOG10,
     counted_as: "chaotic",
@@ -150,6 +185,12 @@ pub const ALIGNMENT_TIME: Quantity = Quantity {
     },
     agreement: "a time within 5 % or 0.1 s (both never aligning agrees; NaN never does)",
     tolerance: "5 % or 0.1 s",
+    vouch: |a, b| match a.is_infinite() || b.is_infinite() {
+        true => a == b,
+        false => within(a, b, 0.01, 0.02),
+    },
+    vouching: "a time within 1 % or 0.02 s (both never aligning agrees; NaN never does)",
+    vouch_tolerance: "1 % or 0.02 s",
     counted: f32::is_finite,
     counted_as: "chaotic",
     counted_rule: "aligned within t-max",
@@ -168,6 +209,9 @@ pub const MEGNO: Quantity = Quantity {
     },
     agreement: "<Y> within 10 % or 0.2 (NaN never agrees)",
     tolerance: "10 % or 0.2",
+    vouch: |a, b| within(a, b, 0.02, 0.04),
+    vouching: "<Y> within 2 % or 0.04 (NaN never agrees)",
+    vouch_tolerance: "2 % or 0.04",
     counted: |x| x > CHAOTIC_MEGNO,
     counted_as: "chaotic",
     counted_rule: "<Y> > 4",
@@ -187,6 +231,9 @@ pub const FLI: Quantity = Quantity {
     },
     agreement: "an FLI within 5 % or 0.1 (NaN never agrees)",
     tolerance: "5 % or 0.1",
+    vouch: |a, b| within(a, b, 0.01, 0.02),
+    vouching: "an FLI within 1 % or 0.02 (NaN never agrees)",
+    vouch_tolerance: "1 % or 0.02",
     counted: |x| x > CHAOTIC_FLI,
     counted_as: "chaotic",
     counted_rule: "FLI > 5",
@@ -202,6 +249,9 @@ pub const DESCRIPTOR: Quantity = Quantity {
     },
     agreement: "M within 1 % (NaN never agrees)",
     tolerance: "1 %",
+    vouch: |a, b| within(a, b, 0.002, 2e-4),
+    vouching: "M within 0.2 % (NaN never agrees)",
+    vouch_tolerance: "0.2 %",
     counted: f32::is_finite,
     counted_as: "finite",
     counted_rule: "M finite",
@@ -215,6 +265,9 @@ pub const FLIP_KIND: Quantity = Quantity {
     agree: |a, b| a == b,
     agreement: "the same arm flipping first the same way at a flip time within 1 % or 0.02 s, or neither flipping (NaN never agrees)",
     tolerance: "its class and 1 % or 0.02 s",
+    vouch: |a, b| a == b,
+    vouching: "the same arm flipping first the same way at a flip time within 1 % or 0.02 s, or neither flipping (NaN never agrees)",
+    vouch_tolerance: "its class and 1 % or 0.02 s",
     counted: |x| x.is_finite() && x != FlipKind::Never.code(),
     counted_as: "flipped",
     counted_rule: "a flip within t-max",

@@ -16,7 +16,7 @@ pub fn rule<S: MapSpec>(spec: &S, finer: &S) -> String {
     format!(
         "resolved: the same map {} gives {}",
         rule_short(spec, finer),
-        spec.quantity().agreement
+        spec.quantity().vouching
     )
 }
 

@@ -280,7 +280,8 @@ fn the_divergence_verdict_compares_with_f64() {
     let finer = run("finer", &["--precision", "f64", "--dt", "0.005"]);
     let finest = run("finest", &["--precision", "f64", "--dt", "0.0025"]);
     let (_, mask) = read_mask(&mask_path);
-    let agree = chaoscope::verdict::exponents_agree;
+    // The verdict's own rule (a fifth of the accuracy rule: quantity::FTLE.vouch).
+    let agree = chaoscope::quantity::FTLE.vouch;
     let expected: Vec<u8> = (0..map.len())
         .map(|i| (agree(map[i], finer[i]) && agree(finer[i], finest[i])) as u8)
         .collect();

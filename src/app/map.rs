@@ -394,7 +394,7 @@ pub fn map_and_verdict<S: MapKernels>(
         return Ok((field, None));
     }
     let agree = |spec: &S, a: &Field, b: &Field| {
-        verdict::grid_mask(spec.grid(), a, b, spec.quantity().agree)
+        verdict::grid_mask(spec.grid(), a, b, spec.quantity().vouch)
     };
     let agreement = |spec: &S, map: &Field| -> Result<Vec<u8>> {
         let finer_spec = verdict::finer(spec, engine.has_f64());
