@@ -73,9 +73,14 @@ fn store_vectors(b: u32, v: Vectors) {
     states[b + 5u] = v.d;
 }
 
-// One RK4 step of the state and the first n vectors (n a constant at every call), each the
-// FTLE's own tangent_step (so the first vector and the state follow the FTLE map's).
+// One RK4 step of the state and the first n vectors (n a constant at every call). Without air
+// drag and bearing friction, by the closed-form Jacobian (`rate_jacobian`), once a stage for
+// every vector; with them, each vector by the FTLE's own dual-number tangent_step.
 fn step_vectors(c: Coeffs, t: ptr<function, Tangent>, v: ptr<function, Vectors>, n: u32, dt: real) {
+    if (LOSSES & 6u) == 0u {
+        step_vectors_closed(c, t, v, n, dt);
+        return;
+    }
     let y = (*t).y;
     let u = (*t).u;
     let first = tangent_step(c, Tangent(y, u, (*v).a), dt);
@@ -90,6 +95,97 @@ fn step_vectors(c: Coeffs, t: ptr<function, Tangent>, v: ptr<function, Vectors>,
         (*v).d = tangent_step(c, Tangent(y, u, (*v).d), dt).v;
     }
     *t = first;
+}
+
+// The rate at a pendulum and the two nontrivial rows of its Jacobian, d(a1, a2)/d(theta1,
+// omega1, theta2, omega2), in closed form for the conservative forces and joint damping (the
+// rows of theta-dot are unit vectors): a_i = N_i / det with N1 = B f1 - C cos D f2,
+// N2 = A f2 - C cos D f1 (common.wgsl), so d a_i = (d N_i - a_i d det) / det.
+struct RateJacobian {
+    r: Rate,
+    a1: vec4<real>,
+    a2: vec4<real>,
+}
+
+fn rate_jacobian(c: Coeffs, p: Pendulum) -> RateJacobian {
+    let w1 = p.y.y;
+    let w2 = p.y.w;
+    let c1 = p.u.x;
+    let s1 = p.u.y;
+    let c2 = p.u.z;
+    let s2 = p.u.w;
+    let sd = s1 * c2 - c1 * s2;
+    let cd = c1 * c2 + s1 * s2;
+    // Joint damping: tau = -(j1 + j2) w1 + j2 w2 and j2 w1 - j2 w2 (0 when compiled out).
+    var j1: real = 0.0;
+    var j2: real = 0.0;
+    if has_losses() {
+        j1 = c.joint1;
+        j2 = c.joint2;
+    }
+    let tau1 = -(j1 + j2) * w1 + j2 * w2;
+    let tau2 = j2 * w1 - j2 * w2;
+    let csd = c.c * sd;
+    let ccd = c.c * cd;
+    let f1 = -csd * w2 * w2 - c.p * s1 + tau1;
+    let f2 = csd * w1 * w1 - c.q * s2 + tau2;
+    let inv_det = 1.0 / (c.a * c.b - ccd * ccd);
+    let a1 = (c.b * f1 - ccd * f2) * inv_det;
+    let a2 = (c.a * f2 - ccd * f1) * inv_det;
+    // Over (theta1, omega1, theta2, omega2): d sin D = cos D (1, 0, -1, 0), d cos D = -sin D
+    // (1, 0, -1, 0).
+    let df1 = vec4<real>(-ccd * w2 * w2 - c.p * c1, -(j1 + j2), ccd * w2 * w2, -2.0 * csd * w2 + j2);
+    let df2 = vec4<real>(ccd * w1 * w1, 2.0 * csd * w1 + j2, -ccd * w1 * w1 - c.q * c2, -j2);
+    let dccd = vec4<real>(-csd, 0.0, csd, 0.0);
+    let ddet = -2.0 * ccd * dccd;
+    let dn1 = c.b * df1 - f2 * dccd - ccd * df2;
+    let dn2 = c.a * df2 - f1 * dccd - ccd * df1;
+    return RateJacobian(
+        Rate(vec4<real>(w1, a1, w2, a2), vec4<real>(-w1 * s1, w1 * c1, -w2 * s2, w2 * c2)),
+        (dn1 - a1 * ddet) * inv_det,
+        (dn2 - a2 * ddet) * inv_det,
+    );
+}
+
+// J v for the Jacobian of `k`.
+fn jacobian_times(k: RateJacobian, v: vec4<real>) -> vec4<real> {
+    return vec4<real>(v.y, dot(k.a1, v), v.w, dot(k.a2, v));
+}
+
+// RK4 over the state and the first n vectors, the Jacobian evaluated once a stage.
+fn step_vectors_closed(c: Coeffs, t: ptr<function, Tangent>, v: ptr<function, Vectors>, n: u32, dt: real) {
+    let p = Pendulum((*t).y, (*t).u);
+    let h = 0.5 * dt;
+    let v0 = *v;
+    let k1 = rate_jacobian(c, p);
+    var s = Vectors(jacobian_times(k1, v0.a), jacobian_times(k1, v0.b), jacobian_times(k1, v0.c), jacobian_times(k1, v0.d));
+    var sum = s;
+    var r = k1.r;
+    let k2 = rate_jacobian(c, advanced(p, h, k1.r));
+    s = Vectors(jacobian_times(k2, v0.a + h * s.a), jacobian_times(k2, v0.b + h * s.b), jacobian_times(k2, v0.c + h * s.c), jacobian_times(k2, v0.d + h * s.d));
+    sum = Vectors(sum.a + 2.0 * s.a, sum.b + 2.0 * s.b, sum.c + 2.0 * s.c, sum.d + 2.0 * s.d);
+    r = Rate(r.dy + 2.0 * k2.r.dy, r.du + 2.0 * k2.r.du);
+    let k3 = rate_jacobian(c, advanced(p, h, k2.r));
+    s = Vectors(jacobian_times(k3, v0.a + h * s.a), jacobian_times(k3, v0.b + h * s.b), jacobian_times(k3, v0.c + h * s.c), jacobian_times(k3, v0.d + h * s.d));
+    sum = Vectors(sum.a + 2.0 * s.a, sum.b + 2.0 * s.b, sum.c + 2.0 * s.c, sum.d + 2.0 * s.d);
+    r = Rate(r.dy + 2.0 * k3.r.dy, r.du + 2.0 * k3.r.du);
+    let k4 = rate_jacobian(c, advanced(p, dt, k3.r));
+    s = Vectors(jacobian_times(k4, v0.a + dt * s.a), jacobian_times(k4, v0.b + dt * s.b), jacobian_times(k4, v0.c + dt * s.c), jacobian_times(k4, v0.d + dt * s.d));
+    sum = Vectors(sum.a + s.a, sum.b + s.b, sum.c + s.c, sum.d + s.d);
+    r = Rate(r.dy + k4.r.dy, r.du + k4.r.du);
+    let w = dt / 6.0;
+    let next = tangent_on_circles(Tangent(p.y + w * r.dy, p.u + w * r.du, vec4<real>()));
+    *t = next;
+    (*v).a = v0.a + w * sum.a;
+    if n > 1u {
+        (*v).b = v0.b + w * sum.b;
+    }
+    if n > 2u {
+        (*v).c = v0.c + w * sum.c;
+    }
+    if n > 3u {
+        (*v).d = v0.d + w * sum.d;
+    }
 }
 
 // `w` made orthogonal to the unit vector `e`.

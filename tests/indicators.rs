@@ -461,14 +461,16 @@ fn indicator_maps_are_point_symmetric_bit_for_bit_and_the_first_exponent_is_the_
             LyapunovSpec { precision, ..ftle },
             LyapunovSpec { precision, ..first },
         );
-        // Separate pipelines: the driver may fuse a * b + c into fma differently in each,
-        // one rounding per operation, which chaos amplifies (measured <= 3e-7 /s in f32 at
-        // 5 s); the CPU's one code path is bit for bit (below).
+        // The FTLE kernel differentiates the rate by dual numbers, the spectrum kernel by its
+        // closed-form Jacobian (without drag and bearings): one derivative two ways, equal up
+        // to round-off, which chaos amplifies by up to e^(3 x 5) in 5 s. Measured on 64 x 64:
+        // f32 <= 8.1e-5 /s (median 2.4e-7), f64 below f32's resolution of the stored value;
+        // the CPU twin's one code path is bit for bit (below).
         let (a, b) = (map_on(&gpu, &ftle), map_on(&gpu, &first));
         for (x, y) in a.data.iter().zip(&b.data) {
             let tolerance = match precision {
-                Precision::F32 => 1e-4,
-                Precision::F64 => 1e-12,
+                Precision::F32 => 1e-3,
+                Precision::F64 => 1e-9,
             };
             assert!(
                 (x - y).abs() as f64 <= tolerance,
@@ -737,5 +739,69 @@ fn the_verdict_vouches_only_for_pixels_a_converged_reference_confirms() {
             share >= 0.995,
             "{indicator:?}: {right} of {vouched} vouched pixels right"
         );
+    }
+}
+
+#[test]
+fn with_losses_the_gpu_indicators_equal_the_cpu_twin() {
+    // Joint damping runs through the shader's closed-form Jacobian, drag and bearing friction
+    // through its dual numbers: both against the CPU's dual numbers through the mass matrix.
+    let Some(ctx) = common::f64_gpu() else { return };
+    let gpu = Engine::on_gpu(ctx);
+    let cpu = Engine::new(chaoscope::engine::Backend::Cpu).unwrap();
+    let mut damped = Params::default();
+    damped.losses.joint1 = 0.05;
+    damped.losses.joint2 = 0.03;
+    for (name, params) in [
+        ("joint damping", damped),
+        ("every loss", common::rods_and_every_loss()),
+    ] {
+        for indicator in [
+            Indicator::Exponent(1),
+            Indicator::Exponent(4),
+            Indicator::ExponentSum,
+            Indicator::Alignment {
+                index: Alignment::Sali,
+                threshold: 1e-12,
+            },
+            Indicator::Alignment {
+                index: Alignment::Gali(3),
+                threshold: 1e-12,
+            },
+        ] {
+            let s = LyapunovSpec {
+                params,
+                grid: Grid::square(16),
+                ..spec(indicator, 3.0)
+            };
+            let (g, c) = (map_on(&gpu, &s), map_on(&cpu, &s));
+            let mut d: Vec<f64> = g
+                .data
+                .iter()
+                .zip(&c.data)
+                .map(|(a, b)| ((a - b) / (1.0 + b.abs())).abs() as f64)
+                .collect();
+            d.sort_by(f64::total_cmp);
+            let agreeing = g
+                .data
+                .iter()
+                .zip(&c.data)
+                .filter(|(a, b)| (s.quantity().agree)(**a, **b))
+                .count();
+            eprintln!(
+                "{name} {indicator:?}: median {:.1e}, agreeing {agreeing} of 256",
+                d[128]
+            );
+            // As the lossless case (gpu_maps_equal_the_cpu_twin_on_every_indicator), over 3 s.
+            assert!(
+                d[128] < 1e-3,
+                "{name} {indicator:?}: median difference {}",
+                d[128]
+            );
+            assert!(
+                agreeing >= 253,
+                "{name} {indicator:?}: {agreeing} of 256 agree"
+            );
+        }
     }
 }

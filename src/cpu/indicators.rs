@@ -1,7 +1,8 @@
 //! The chaos indicators beyond the largest exponent, in f64: the CPU twin of
 //! `shaders/indicators.wgsl`. Every tangent vector takes the FTLE's own step (dual numbers
 //! through the mass-matrix solve, [`tangent_step`]), so the spectrum's first exponent is the
-//! FTLE map's bit for bit; the shader writes its dual numbers by hand over the closed form.
+//! FTLE map's bit for bit; the shader differentiates its closed form instead (a hand-derived
+//! Jacobian, or its own dual numbers with drag and bearings).
 
 use super::lyapunov::{TANGENT_START, tangent_step};
 use super::{derivative, map_pixels, rk4_step};
