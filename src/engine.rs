@@ -141,8 +141,16 @@ impl MapKernels for LyapunovSpec {
         }
     }
 
-    /// f32 cannot resolve a twin separation much below 1e-6 of the state: say so.
+    /// f32 cannot resolve a twin separation much below 1e-6 of the state: say so. A
+    /// descriptor's backward half runs anti-damped where there are losses: say that too.
     fn notices(&self, path: Path) -> Vec<String> {
+        if matches!(self.indicator, Indicator::Descriptor { .. }) && self.params.losses.kinds() != 0
+        {
+            return vec![
+                "note: with losses the descriptor's backward run is anti-damped (energy grows as it goes back), and a start may leave the numbers (NaN); a shorter --t-max keeps more"
+                    .into(),
+            ];
+        }
         match self.method {
             Method::Twin { eps } if eps < 1e-4 && path == Path::Gpu(Precision::F32) => {
                 vec![format!(

@@ -470,7 +470,10 @@ impl MapPicture for LyapunovSpec {
             Some((lo, hi)) if !(lo.is_finite() && hi.is_finite() && lo < hi) => {
                 Err(Error::invalid(
                     "colour_range",
-                    format!("{lo}:{hi} must be LOW:HIGH with LOW < HIGH (1/s)"),
+                    format!(
+                        "{lo}:{hi} must be LOW:HIGH with LOW < HIGH ({})",
+                        self.quantity().unit
+                    ),
                 ))
             }
             _ => Ok(()),
