@@ -243,6 +243,120 @@ fn spectrum_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     log_sums[i] = select(sums.x + sums.y + sums.z + sums.w, sums[min(params.measure, 3u)], params.measure < 4u);
 }
 
+// A state and four vectors, and their rates: the adaptive spectrum's variables.
+struct Set {
+    y: vec4<real>,
+    u: vec4<real>,
+    v: Vectors,
+}
+
+// The rates of a set: the pendulum's, and J v for each vector (closed form without drag and
+// bearings, else the dual-number tangent rate of each).
+fn set_rate(c: Coeffs, x: Set) -> Set {
+    if (LOSSES & 6u) == 0u {
+        let k = rate_jacobian(c, Pendulum(x.y, x.u));
+        return Set(k.r.dy, k.r.du, Vectors(jacobian_times(k, x.v.a), jacobian_times(k, x.v.b), jacobian_times(k, x.v.c), jacobian_times(k, x.v.d)));
+    }
+    let a = tangent_rate(c, Tangent(x.y, x.u, x.v.a));
+    let b = tangent_rate(c, Tangent(x.y, x.u, x.v.b)).v;
+    let cc = tangent_rate(c, Tangent(x.y, x.u, x.v.c)).v;
+    let d = tangent_rate(c, Tangent(x.y, x.u, x.v.d)).v;
+    return Set(a.y, a.u, Vectors(a.v, b, cc, d));
+}
+
+fn set_ahead(x: Set, h: real, k: Set) -> Set {
+    return Set(x.y + h * k.y, x.u + h * k.u, Vectors(x.v.a + h * k.v.a, x.v.b + h * k.v.b, x.v.c + h * k.v.c, x.v.d + h * k.v.d));
+}
+
+// Sum of squares of e / (atol + rtol max(|x|, |next|)) over a vec4.
+fn scaled_squares(e: vec4<real>, x: vec4<real>, next: vec4<real>) -> real {
+    let q = e / (params.atol + params.rtol * max(abs(x), abs(next)));
+    return dot(q, q);
+}
+
+// The spectrum with DP54 steps (dp54.wgsl) over the state and the four vectors, the error
+// controlled over the twenty components (RMS), as lyapunov.wgsl's tangent_adaptive does for
+// one: step0 and steps count renormalisation windows, every pixel lands on each exactly, steps
+// are at most dt. The clock (next step, attempts, stalled) is the slot's last vec4.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = linear_index(gid, groups);
+    if i >= params.count {
+        return;
+    }
+    let c = coeffs_from(params);
+    let b = SLOT * i;
+    var x = Set(states[b], states[b + 1u], load_vectors(b));
+    var sums = states[b + 6u];
+    var clock = states[b + 7u];
+    var h = select(clock.x, params.dt, params.step0 == 0u);
+    var attempts = clock.y;
+    var stalled = clock.z != 0.0;
+    for (var k = params.step0 + 1u; k <= params.step0 + params.steps && !stalled; k++) {
+        let first = (k - 1u) * params.interval;
+        let window = real(min(k * params.interval, params.total_steps) - first) * params.dt;
+        var s: real = 0.0;
+        var k1 = set_rate(c, x);
+        loop {
+            if s >= window {
+                break;
+            }
+            if attempts >= 16777216.0 {
+                stalled = true;
+                break;
+            }
+            attempts += 1.0;
+            let last = s + h >= window;
+            var step = h;
+            if last {
+                step = window - s;
+            }
+            if !(s + step > s) {
+                stalled = true;
+                break;
+            }
+            let k2 = set_rate(c, set_ahead(x, A21 * step, k1));
+            let k3 = set_rate(c, set_ahead(set_ahead(x, A31 * step, k1), A32 * step, k2));
+            let k4 = set_rate(c, set_ahead(set_ahead(set_ahead(x, A41 * step, k1), A42 * step, k2), A43 * step, k3));
+            let k5 = set_rate(c, set_ahead(set_ahead(set_ahead(set_ahead(x, A51 * step, k1), A52 * step, k2), A53 * step, k3), A54 * step, k4));
+            let k6 = set_rate(c, set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(x, A61 * step, k1), A62 * step, k2), A63 * step, k3), A64 * step, k4), A65 * step, k5));
+            let next = set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(x, B1 * step, k1), B3 * step, k3), B4 * step, k4), B5 * step, k5), B6 * step, k6);
+            let k7 = set_rate(c, next);
+            // The error estimate: sum_j E_j k_j, times the step.
+            let e = set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(Set(vec4<real>(), vec4<real>(), Vectors(vec4<real>(), vec4<real>(), vec4<real>(), vec4<real>())), E1, k1), E3, k3), E4, k4), E5, k5), E6, k6), E7, k7);
+            let squares = scaled_squares(step * e.y, x.y, next.y)
+                + scaled_squares(step * e.v.a, x.v.a, next.v.a)
+                + scaled_squares(step * e.v.b, x.v.b, next.v.b)
+                + scaled_squares(step * e.v.c, x.v.c, next.v.c)
+                + scaled_squares(step * e.v.d, x.v.d, next.v.d);
+            let err = sqrt(squares / 20.0);
+            let factor = clamp(SAFETY / sqrt(sqrt(err)), SHRINK, GROW);
+            if err <= 1.0 {
+                s = select(s + step, window, last);
+                let on = tangent_on_circles(Tangent(next.y, next.u, vec4<real>()));
+                x = Set(on.y, on.u, next.v);
+                k1 = k7;
+            }
+            h = min(h * factor, params.dt);
+        }
+        if stalled {
+            sums = vec4<real>(LEFT_THE_NUMBERS);
+        } else {
+            // (A pointer to a member of `x` trips naga 30's SPIR-V writer: a copy.)
+            var v = x.v;
+            let l = gram_schmidt(&v, 4u);
+            x.v = v;
+            sums += vec4<real>(ln_real(l.x), ln_real(l.y), ln_real(l.z), ln_real(l.w));
+        }
+    }
+    states[b] = x.y;
+    states[b + 1u] = x.u;
+    store_vectors(b, x.v);
+    states[b + 6u] = sums;
+    states[b + 7u] = vec4<real>(h, attempts, real(select(0u, 1u, stalled)), 0.0);
+    log_sums[i] = select(sums.x + sums.y + sums.z + sums.w, sums[min(params.measure, 3u)], params.measure < 4u);
+}
+
 // An alignment index of n vectors, normalised after every `interval`-th step; the pixel
 // stops once the index falls below params.setting. measure 0: log10 index, 1: the time.
 fn alignment_advance(i: u32, n: u32, sali: bool) {

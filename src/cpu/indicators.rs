@@ -104,6 +104,11 @@ pub fn indicator_run(
     let t_end = steps as f64 * dt;
     let mut y = start.to_array();
     let value = match spec.indicator {
+        Indicator::Exponent(_) | Indicator::ExponentSum
+            if spec.integrator.tolerances().is_some() =>
+        {
+            spectrum_adaptive(spec, start, &mut |t, row| sample(t, row), &tick)?
+        }
         Indicator::Ftle | Indicator::Exponent(_) | Indicator::ExponentSum => {
             let n = spec.indicator.vectors() as usize;
             let mut v = FRAME[..n].to_vec();
@@ -217,6 +222,98 @@ pub fn indicator_run(
         m.finish();
     }
     Ok(value)
+}
+
+/// The spectrum with DP54 steps (`spec.integrator`'s tolerances, steps of at most dt) over
+/// the state and the four vectors together, the error controlled over all twenty components,
+/// every renormalisation window landed on exactly; a stalled run ends in NaN. The map's value.
+fn spectrum_adaptive(
+    spec: &LyapunovSpec,
+    start: State,
+    sample: &mut dyn FnMut(f64, &[f64]),
+    tick: &dyn Fn(u32) -> Result<()>,
+) -> Result<f64> {
+    use super::adaptive::{Clock, DP54, step_factor};
+    use num_dual::Dual64;
+    const N: usize = 20;
+    let p = &spec.params;
+    let (rtol, atol) = spec.integrator.tolerances().expect("adaptive");
+    let (dt, steps, every) = (spec.stepping.dt, spec.stepping.steps(), spec.renorm_steps());
+    // x = (y, v1, v2, v3, v4); each vector's rate is the dual part of the rate at y + eps v.
+    let rate = |x: &[f64; N]| -> [f64; N] {
+        let mut out = [0.0; N];
+        for j in 0..4 {
+            let d: [Dual64; 4] = std::array::from_fn(|i| Dual64::new(x[i], x[4 + 4 * j + i]));
+            let r = super::rate_of(p, &d);
+            for i in 0..4 {
+                out[i] = r[i].re;
+                out[4 + 4 * j + i] = r[i].eps;
+            }
+        }
+        out
+    };
+    let mut x = [0.0; N];
+    x[..4].copy_from_slice(&start.to_array());
+    for (j, v) in FRAME.iter().enumerate() {
+        x[4 + 4 * j..8 + 4 * j].copy_from_slice(v);
+    }
+    let mut clock = Clock::new(dt);
+    let mut sums = [0.0; 4];
+    let mut done = 0;
+    while done < steps {
+        let end = (done + every).min(steps);
+        let t_end = end as f64 * dt;
+        let mut k1 = rate(&x);
+        while clock.t < t_end {
+            let Ok((h, last)) = clock.attempt(t_end) else {
+                sample(t_end, &[f64::NAN; 5]);
+                return Ok(f64::NAN);
+            };
+            let mut k = [[0.0; N]; 7];
+            k[0] = k1;
+            for st in 1..7 {
+                let stage: [f64; N] = std::array::from_fn(|i| {
+                    x[i] + h * (0..st).map(|j| DP54.a[st][j] * k[j][i]).sum::<f64>()
+                });
+                k[st] = rate(&stage);
+            }
+            let next: [f64; N] = std::array::from_fn(|i| {
+                x[i] + h * (0..7).map(|j| DP54.b[j] * k[j][i]).sum::<f64>()
+            });
+            let err = ((0..N)
+                .map(|i| {
+                    let e = h * (0..7).map(|j| DP54.e[0][j] * k[j][i]).sum::<f64>();
+                    (e / (atol + rtol * x[i].abs().max(next[i].abs()))).powi(2)
+                })
+                .sum::<f64>()
+                / N as f64)
+                .sqrt();
+            clock.settle(h, last, t_end, step_factor(err), err <= 1.0);
+            if err <= 1.0 {
+                x = next;
+                k1 = k[6];
+            }
+        }
+        let mut v: Vec<[f64; 4]> = (0..4)
+            .map(|j| std::array::from_fn(|i| x[4 + 4 * j + i]))
+            .collect();
+        for (sum, l) in sums.iter_mut().zip(gram_schmidt(&mut v)) {
+            *sum += l.ln();
+        }
+        for (j, vj) in v.iter().enumerate() {
+            x[4 + 4 * j..8 + 4 * j].copy_from_slice(vj);
+        }
+        let mut row: Vec<f64> = sums.iter().map(|s| s / t_end).collect();
+        row.push(row.iter().sum());
+        sample(t_end, &row);
+        tick(end)?;
+        done = end;
+    }
+    let t = steps as f64 * dt;
+    Ok(match spec.indicator {
+        Indicator::Exponent(k) => sums[k as usize - 1] / t,
+        _ => sums.iter().sum::<f64>() / t,
+    })
 }
 
 /// One RK4 step of the state and each of `v` along it (each vector the FTLE's own step); the

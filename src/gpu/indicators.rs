@@ -22,7 +22,7 @@ const TANGENT_COST: u64 = 3;
 const LEFT_BELOW: f64 = -1e38;
 
 /// The (init, advance) entries of each indicator family, in the order of [`entry_of`].
-const FAMILIES: [[&str; 2]; 7] = [
+const FAMILIES: [[&str; 2]; 8] = [
     ["indicator_init", "spectrum_advance"],
     ["indicator_init", "sali_advance"],
     ["indicator_init", "gali2_advance"],
@@ -30,6 +30,8 @@ const FAMILIES: [[&str; 2]; 7] = [
     ["indicator_init", "gali4_advance"],
     ["indicator_init", "growth_advance"],
     ["indicator_init", "descriptor_advance"],
+    // The spectrum with DP54 steps (its windows as the dispatches' units).
+    ["indicator_init", "spectrum_adaptive"],
 ];
 
 /// The kernel's entry for `indicator` (an index into [`FAMILIES`]) and the value it writes
@@ -122,6 +124,18 @@ impl IndicatorKernel {
         use std::mem::size_of;
         let indicator = spec.indicator;
         let (family, measure) = entry_of(indicator);
+        let adaptive = spec.integrator.tolerances();
+        let family = match adaptive {
+            Some(_) if family == 0 => 7,
+            Some(_) => {
+                return Err(crate::Error::invalid(
+                    "integrator",
+                    "only the spectrum steps with dp54",
+                ));
+            }
+            None => family,
+        };
+        let (rtol, atol) = adaptive.unwrap_or_default();
         let total_steps = spec.stepping.steps();
         let base = R::Params::of(&spec.params, spec.stepping.dt)
             .over(&spec.grid)
@@ -133,6 +147,8 @@ impl IndicatorKernel {
                     other => other.threshold().unwrap_or(0.0),
                 },
                 measure,
+                rtol,
+                atol,
                 ..Run::default()
             });
         let [init, advance] = self.families[family].get(ctx, spec.params.losses.kinds(), false)
@@ -166,6 +182,13 @@ impl IndicatorKernel {
             0 => 2,
             n => TANGENT_COST * n as u64,
         };
+        // The adaptive kernel's dispatches count renormalisation windows, each about
+        // `interval` steps of DP54's six rates.
+        let interval = spec.renorm_steps();
+        let (units, unit_cost) = match adaptive {
+            Some(_) => (total_steps.div_ceil(interval), cost * 2 * interval as u64),
+            None => (total_steps, cost),
+        };
         let t_end = total_steps as f64 * spec.stepping.dt;
         let finish = |raw: f64| -> f32 {
             if raw < LEFT_BELOW {
@@ -186,10 +209,10 @@ impl IndicatorKernel {
             params.set_tile(row0, rows, pixels);
             dispatch(init, &params)?;
             time_loop(
-                total_steps,
+                units,
                 pixels,
                 pixels,
-                cost,
+                unit_cost,
                 None,
                 later,
                 monitor,

@@ -152,16 +152,16 @@ fn unresolved_note(mask: Option<&[u8]>, adaptive: bool) -> &'static str {
 }
 
 /// How a flip map was stepped, for its subtitle.
-fn stepping_note(spec: &FlipSpec) -> String {
-    let Some((rtol, atol)) = spec.integrator.tolerances() else {
-        return format!("RK4 dt {} s", spec.stepping.dt);
+fn stepping_note(spec: &impl MapSpec) -> String {
+    let Some((rtol, atol)) = spec.integrator().tolerances() else {
+        return format!("RK4 dt {} s", spec.stepping().dt);
     };
-    let method = spec.integrator.name().to_uppercase();
+    let method = spec.integrator().name().to_uppercase();
     match rtol == atol {
-        true => format!("{method} tol {rtol:e} {}", spec.precision.name()),
+        true => format!("{method} tol {rtol:e} {}", spec.precision().name()),
         false => format!(
             "{method} rtol {rtol:e} atol {atol:e} {}",
-            spec.precision.name()
+            spec.precision().name()
         ),
     }
 }
@@ -381,9 +381,9 @@ pub fn lyapunov_picture(
         Annotation {
             title: look.title,
             subtitle: format!(
-                "{} · RK4 dt {} s{}{}",
+                "{} · {}{}{}",
                 physics_line(&spec.params, &spec.grid),
-                spec.stepping.dt,
+                stepping_note(spec),
                 match spec.indicator {
                     // One plain trajectory each way: nothing renormalised.
                     Indicator::Descriptor { .. } => String::new(),

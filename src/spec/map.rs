@@ -293,11 +293,17 @@ impl LyapunovSpec {
                     ),
                 ));
             }
-            if self.integrator != Integrator::Rk4 {
+            let spectrum = matches!(
+                self.indicator,
+                Indicator::Exponent(_) | Indicator::ExponentSum
+            );
+            if !(self.integrator == Integrator::Rk4
+                || spectrum && matches!(self.integrator, Integrator::Dp54 { .. }))
+            {
                 return Err(Error::invalid(
                     "integrator",
                     format!(
-                        "the {} steps with rk4 only (take --integrator rk4)",
+                        "the {} steps with rk4 only (the spectrum also with dp54)",
                         self.indicator.title()
                     ),
                 ));
