@@ -22,18 +22,20 @@ fn within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
 
 /// Whether two flip times (s; inf = never) agree.
 pub fn flip_times_agree(a: f32, b: f32) -> bool {
-    if a.is_infinite() || b.is_infinite() {
-        return a == b;
-    }
-    let (a, b) = (a as f64, b as f64);
-    // NaN compares false: never resolved.
-    (a - b).abs() <= (FLIP_RELATIVE * a.abs().max(b.abs())).max(FLIP_ABSOLUTE)
+    times_within(a, b, FLIP_RELATIVE, FLIP_ABSOLUTE)
 }
 
 /// Whether two exponents (1/s) agree.
 pub fn exponents_agree(a: f32, b: f32) -> bool {
-    let (a, b) = (a as f64, b as f64);
-    (a - b).abs() <= (FTLE_RELATIVE * a.abs().max(b.abs())).max(FTLE_ABSOLUTE)
+    within(a, b, FTLE_RELATIVE, FTLE_ABSOLUTE)
+}
+
+/// [`within`] for times where +inf is "never": two nevers agree, a never and a time do not.
+fn times_within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
+    match a.is_infinite() || b.is_infinite() {
+        true => a == b,
+        false => within(a, b, relative, absolute),
+    }
 }
 
 /// One quantity a map can measure.
@@ -176,19 +178,10 @@ pub const GALI: Quantity = Quantity {
 pub const ALIGNMENT_TIME: Quantity = Quantity {
     name: "time to alignment",
     unit: "s",
-    agree: |a, b| {
-        if a.is_infinite() || b.is_infinite() {
-            return a == b;
-        }
-        let (a, b) = (a as f64, b as f64);
-        (a - b).abs() <= (0.05 * a.abs().max(b.abs())).max(0.1)
-    },
+    agree: |a, b| times_within(a, b, 0.05, 0.1),
     agreement: "a time within 5 % or 0.1 s (both never aligning agrees; NaN never does)",
     tolerance: "5 % or 0.1 s",
-    vouch: |a, b| match a.is_infinite() || b.is_infinite() {
-        true => a == b,
-        false => within(a, b, 0.01, 0.02),
-    },
+    vouch: |a, b| times_within(a, b, 0.01, 0.02),
     vouching: "a time within 1 % or 0.02 s (both never aligning agrees; NaN never does)",
     vouch_tolerance: "1 % or 0.02 s",
     counted: f32::is_finite,
@@ -203,10 +196,7 @@ pub const CHAOTIC_MEGNO: f32 = 4.0;
 pub const MEGNO: Quantity = Quantity {
     name: "MEGNO",
     unit: "1",
-    agree: |a, b| {
-        let (a, b) = (a as f64, b as f64);
-        (a - b).abs() <= (0.1 * a.abs().max(b.abs())).max(0.2)
-    },
+    agree: |a, b| within(a, b, 0.1, 0.2),
     agreement: "<Y> within 10 % or 0.2 (NaN never agrees)",
     tolerance: "10 % or 0.2",
     vouch: |a, b| within(a, b, 0.02, 0.04),
@@ -225,10 +215,7 @@ pub const CHAOTIC_FLI: f32 = 5.0;
 pub const FLI: Quantity = Quantity {
     name: "fast Lyapunov indicator",
     unit: "1 (log10)",
-    agree: |a, b| {
-        let (a, b) = (a as f64, b as f64);
-        (a - b).abs() <= (0.05 * a.abs().max(b.abs())).max(0.1)
-    },
+    agree: |a, b| within(a, b, 0.05, 0.1),
     agreement: "an FLI within 5 % or 0.1 (NaN never agrees)",
     tolerance: "5 % or 0.1",
     vouch: |a, b| within(a, b, 0.01, 0.02),
@@ -243,10 +230,7 @@ pub const FLI: Quantity = Quantity {
 pub const DESCRIPTOR: Quantity = Quantity {
     name: "Lagrangian descriptor",
     unit: "sum of |f_i|^p s",
-    agree: |a, b| {
-        let (a, b) = (a as f64, b as f64);
-        (a - b).abs() <= (0.01 * a.abs().max(b.abs())).max(1e-3)
-    },
+    agree: |a, b| within(a, b, 0.01, 1e-3),
     agreement: "M within 1 % (NaN never agrees)",
     tolerance: "1 %",
     vouch: |a, b| within(a, b, 0.002, 2e-4),
