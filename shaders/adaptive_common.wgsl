@@ -158,7 +158,7 @@ fn flip_adaptive_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     let p = pendulum_from(y);
     states[i] = AdaptiveSlot(p.y, p.u, vec4<real>(0.0, params.dt, 0.0, 0.0));
     times[i] = NEVER;
-    if !EARLY_EXIT || energy(coeffs_from(params), y) >= params.no_flip_energy {
+    if !EARLY_EXIT || can_flip(params, i, y) {
         push_active(i);
     }
 }

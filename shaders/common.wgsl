@@ -22,10 +22,12 @@ struct Params {
     l1: real,
     l2: real,
     dt: real,
-    theta1_mid: real,
-    theta1_half_step: real,
-    theta2_mid: real,
-    theta2_half_step: real,
+    // The plane: the middle and half a pixel of each axis (shaders: VAR_* say what it varies).
+    x_mid: real,
+    x_half_step: real,
+    y_mid: real,
+    y_half_step: real,
+    // The start where no axis sets it (with theta1, theta2 below).
     omega1: real,
     omega2: real,
     // Starts below this energy (J) can never flip (src/model.rs `no_flip_threshold`).
@@ -42,6 +44,14 @@ struct Params {
     mass_total: real,
     mass_lower: real,
     bearing: real,
+    theta1: real,
+    theta2: real,
+    // The bobs' and rods' masses, scaled as a..q: a parameter plane forms its coefficients
+    // from them per pixel.
+    m1: real,
+    m2: real,
+    rod1: real,
+    rod2: real,
     // Grid size, and the tile: `rows` rows of `width` pixels from grid row `row0`.
     width: u32,
     height: u32,
@@ -62,6 +72,9 @@ struct Params {
     atol: real,
     t_max: real,
     measure: u32,
+    // What the axes vary (src/spec/grid.rs `Var::code`).
+    x_var: u32,
+    y_var: u32,
     _pad1: u32,
 }
 
@@ -263,18 +276,107 @@ fn hermite_crossing(ta: real, wa: real, tb: real, wb: real, h: real) -> real {
     return hi;
 }
 
-// Start (theta1, omega1, theta2, omega2) of pixel i of the tile: pixel centres, row 0 at the
-// top (theta2 at its maximum). As src/spec.rs `Grid::theta1_at`: the middle plus an odd number
-// of half steps, so mirrored pixels of a range centred on 0 get exactly opposite angles.
-fn grid_start(p: Params, i: u32) -> vec4<real> {
+// The axes' values (x, y) at pixel i of the tile: pixel centres, row 0 at the top (y at its
+// maximum). As src/spec/grid.rs `Axis::at`: the middle plus an odd number of half steps, so
+// mirrored pixels of a range centred on 0 get exactly opposite values.
+fn pixel_xy(p: Params, i: u32) -> vec2<real> {
     let col = i % p.width;
     let row = p.row0 + i / p.width;
-    return vec4<real>(
-        p.theta1_mid + real(i32(2u * col + 1u) - i32(p.width)) * p.theta1_half_step,
-        p.omega1,
-        p.theta2_mid - real(i32(2u * row + 1u) - i32(p.height)) * p.theta2_half_step,
-        p.omega2,
+    return vec2<real>(
+        p.x_mid + real(i32(2u * col + 1u) - i32(p.width)) * p.x_half_step,
+        p.y_mid - real(i32(2u * row + 1u) - i32(p.height)) * p.y_half_step,
     );
+}
+
+// Start (theta1, omega1, theta2, omega2) of pixel i: the fixed start with the components the
+// axes vary (codes 0..3, the state's order) set.
+fn grid_start(p: Params, i: u32) -> vec4<real> {
+    let xy = pixel_xy(p, i);
+    let lanes = vec4<u32>(0u, 1u, 2u, 3u);
+    var s = vec4<real>(p.theta1, p.omega1, p.theta2, p.omega2);
+    s = select(s, vec4<real>(xy.x), lanes == vec4<u32>(p.x_var));
+    return select(s, vec4<real>(xy.y), lanes == vec4<u32>(p.y_var));
+}
+
+// Set per pipeline (src/gpu/pipeline.rs): true when an axis varies a parameter, so each
+// pixel forms its own coefficients; false keeps them uniform (the common case costs nothing).
+override PER_PIXEL: bool = false;
+
+// The parameters a plane's axis may vary (masses scaled as in Params).
+struct Physical {
+    m1: real,
+    m2: real,
+    l1: real,
+    l2: real,
+    g: real,
+    rod1: real,
+    rod2: real,
+    joint1: real,
+    joint2: real,
+}
+
+// `r` with parameter `code` (src/spec/grid.rs `Var::code`, 4..15) set to `v`.
+fn with_var(r: Physical, code: u32, v: real) -> Physical {
+    var o = r;
+    switch code {
+        case 4u: { o.m1 = v; }
+        case 5u: { o.m2 = v; }
+        case 6u: { o.m2 = v * o.m1; }
+        case 7u: { o.l1 = v; }
+        case 8u: { o.l2 = v; }
+        case 9u: { o.l2 = v * o.l1; }
+        case 10u: { o.g = v; }
+        case 11u: { o.joint1 = v; o.joint2 = v; }
+        case 12u: { o.joint1 = v; }
+        case 13u: { o.joint2 = v; }
+        case 14u: { o.rod1 = v; }
+        case 15u: { o.rod2 = v; }
+        default: {}
+    }
+    return o;
+}
+
+fn is_ratio(code: u32) -> bool {
+    return code == 6u || code == 9u;
+}
+
+// The coefficients of pixel i: the uniform ones, or (PER_PIXEL) those of its parameters, as
+// src/model.rs `Params::inertia` forms them (ratios set after the values they multiply).
+fn pixel_coeffs(p: Params, i: u32) -> Coeffs {
+    if !PER_PIXEL {
+        return coeffs_from(p);
+    }
+    let xy = pixel_xy(p, i);
+    var r = Physical(p.m1, p.m2, p.l1, p.l2, p.g, p.rod1, p.rod2, p.joint1, p.joint2);
+    if is_ratio(p.x_var) {
+        r = with_var(with_var(r, p.y_var, xy.y), p.x_var, xy.x);
+    } else {
+        r = with_var(with_var(r, p.x_var, xy.x), p.y_var, xy.y);
+    }
+    let outer = r.m2 + 0.5 * r.rod2;
+    let lower = r.m2 + r.rod2;
+    return Coeffs(
+        (r.m1 + lower + r.rod1 / 3.0) * r.l1 * r.l1,
+        (r.m2 + r.rod2 / 3.0) * r.l2 * r.l2,
+        outer * r.l1 * r.l2,
+        (r.m1 + lower + 0.5 * r.rod1) * r.g * r.l1,
+        outer * r.g * r.l2,
+        r.l1, r.l2, r.joint1, r.joint2,
+        p.drag_bob1, p.drag_bob2, p.drag_rod1, p.drag_rod2,
+        r.g, r.m1 + r.rod1 + lower, lower, p.bearing,
+    );
+}
+
+// Whether start y of pixel i has the energy to flip: at or above src/model.rs
+// `no_flip_threshold`, the host's value or (PER_PIXEL) the same formula over the pixel's own
+// coefficients, its margin of 100 epsilon covering their rounding here.
+fn can_flip(p: Params, i: u32, y: vec4<real>) -> bool {
+    let c = pixel_coeffs(p, i);
+    var threshold = p.no_flip_energy;
+    if PER_PIXEL {
+        threshold = -abs(c.p - c.q) - 100.0 * EPSILON * (c.p + c.q);
+    }
+    return energy(c, y) >= threshold;
 }
 
 // Linear invocation index over a 2-D dispatch (more than 65535 workgroups need two dimensions).

@@ -74,7 +74,7 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         return;
     }
     let i = active_in[n];
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let t_max = params.t_max;
     let slot = states[i];
     var p = Pendulum(slot.y, slot.u);

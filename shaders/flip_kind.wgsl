@@ -16,7 +16,7 @@ fn flip_kind(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     var p = Pendulum(states[2u * i], states[2u * i + 1u]);
     var kind = times[i];
-    let f = advance(coeffs_from(params), &p, kind != NEVER);
+    let f = advance(pixel_coeffs(params, i), &p, kind != NEVER);
     if f.flipped {
         let at = crossing(f, params.dt);
         // The flip time exactly as flip_time writes it: a flip past t-max is none.

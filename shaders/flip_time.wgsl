@@ -34,7 +34,7 @@ fn flip_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     states[2u * i] = p.y;
     states[2u * i + 1u] = p.u;
     times[i] = NEVER;
-    if EARLY_EXIT && energy(coeffs_from(params), y) >= params.no_flip_energy {
+    if EARLY_EXIT && can_flip(params, i, y) {
         push_active(i);
     }
 }
@@ -98,7 +98,7 @@ fn flip_time(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     var p = Pendulum(states[2u * i], states[2u * i + 1u]);
     var t_flip = times[i];
-    let f = advance(coeffs_from(params), &p, t_flip != NEVER);
+    let f = advance(pixel_coeffs(params, i), &p, t_flip != NEVER);
     if f.flipped {
         t_flip = (real(f.k) + crossing(f, params.dt).x) * params.dt;
     }

@@ -223,7 +223,7 @@ fn spectrum_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     if i >= params.count {
         return;
     }
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let b = SLOT * i;
     var t = Tangent(states[b], states[b + 1u], vec4<real>());
     var v = load_vectors(b);
@@ -284,7 +284,7 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if i >= params.count {
         return;
     }
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let b = SLOT * i;
     var x = Set(states[b], states[b + 1u], load_vectors(b));
     var sums = states[b + 6u];
@@ -360,7 +360,7 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
 // An alignment index of n vectors, normalised after every `interval`-th step; the pixel
 // stops once the index falls below params.setting. measure 0: log10 index, 1: the time.
 fn alignment_advance(i: u32, n: u32, sali: bool) {
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let b = SLOT * i;
     var at = states[b + 6u];
     if at.z == 0.0 {
@@ -434,7 +434,7 @@ fn growth_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     if i >= params.count {
         return;
     }
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let b = SLOT * i;
     let dt = params.dt;
     var t = Tangent(states[b], states[b + 1u], states[b + 2u]);
@@ -484,7 +484,7 @@ fn descriptor_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
     if i >= params.count {
         return;
     }
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let b = SLOT * i;
     let dt = params.dt;
     var ahead = Pendulum(states[b], states[b + 1u]);

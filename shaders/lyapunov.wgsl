@@ -216,7 +216,7 @@ fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     if i >= params.count {
         return;
     }
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u]);
     let clock = states[4u * i + 3u];
     var h = clock.x;
@@ -287,7 +287,7 @@ fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     if i >= params.count {
         return;
     }
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let dt = params.dt;
     var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u]);
     var log_sum = log_sums[i];
@@ -326,7 +326,7 @@ fn twin_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     if i >= params.count {
         return;
     }
-    let c = coeffs_from(params);
+    let c = pixel_coeffs(params, i);
     let dt = params.dt;
     let eps = params.setting;
     var a = Pendulum(states[4u * i], states[4u * i + 1u]);

@@ -4,6 +4,8 @@
 
 alias real = f32;
 
+// Machine epsilon of real.
+const EPSILON: real = 1.1920929e-7;
 // f32(pi) rounds up to 3.1415927, so |theta| > PI is the f32 form of |theta| > pi.
 const PI: f32 = 3.14159265358979;
 

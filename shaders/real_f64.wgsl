@@ -7,6 +7,8 @@ alias real = f64;
 
 const PI: f64 = 3.141592653589793;
 
+// Machine epsilon of real.
+const EPSILON: real = 2.220446049250313e-16;
 // 3-point Gauss-Legendre on [0, 1] for the drag along the lower rod.
 const GAUSS_X: vec3<f64> = vec3<f64>(0.1127016653792583, 0.5, 0.8872983346207417);
 const GAUSS_W: vec3<f64> = vec3<f64>(0.2777777777777778, 0.4444444444444444, 0.2777777777777778);

@@ -328,14 +328,14 @@ impl Engine {
                     max: x + 1e-3,
                 };
                 let one = LyapunovSpec {
-                    grid: Grid {
-                        width: 1,
-                        height: 1,
-                        theta1: around(start.theta1),
-                        theta2: around(start.theta2),
-                        omega1: start.omega1,
-                        omega2: start.omega2,
-                    },
+                    grid: Grid::angles(
+                        1,
+                        1,
+                        around(start.theta1),
+                        around(start.theta2),
+                        start.omega1,
+                        start.omega2,
+                    ),
                     ..*spec
                 };
                 let precision = match k.ctx.has_f64() {

@@ -125,7 +125,7 @@ pub struct Inertia {
 }
 
 /// State `(theta1, omega1, theta2, omega2)` in rad and rad/s.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct State {
     pub theta1: f64,
     pub omega1: f64,

@@ -201,17 +201,11 @@ fn f64_gpu_rk4_error_falls_like_dt4() {
 fn adaptive_maps_keep_the_no_flip_region_and_the_symmetry() {
     let Some(ctx) = common::f64_gpu() else { return };
     let p = Params::default();
-    let grid = Grid {
-        theta1: Range {
-            min: -2.5,
-            max: 2.5,
-        },
-        theta2: Range {
-            min: -2.5,
-            max: 2.5,
-        },
-        ..Grid::square(33)
+    let r = Range {
+        min: -2.5,
+        max: 2.5,
     };
+    let grid = Grid::angles(33, 33, r, r, 0.0, 0.0);
     let threshold = p.no_flip_threshold(1e-6);
     for (name, precision, k) in [
         ("gpu f32", Precision::F32, 0),

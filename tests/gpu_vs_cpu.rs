@@ -298,13 +298,13 @@ fn only_symmetric_grids_are_mirrored() {
     odd.grid.height = 7;
     assert_eq!(odd.rows_to_integrate(), 4);
     let mut shifted = s;
-    shifted.grid.theta1 = Range {
+    shifted.grid.x.range = Range {
         min: -3.0,
         max: 3.1,
     };
     assert_eq!(shifted.rows_to_integrate(), 64);
     let mut moving = s;
-    moving.grid.omega2 = 0.5;
+    moving.grid.fixed.omega2 = 0.5;
     assert_eq!(moving.rows_to_integrate(), 64);
     let mut off = s;
     off.use_symmetry = false;
@@ -315,19 +315,19 @@ fn only_symmetric_grids_are_mirrored() {
 fn zoomed_grid_uses_pixel_centres() {
     let Some(ctx) = common::gpu() else { return };
     // A 2x1 grid over theta1 in [0, 1], theta2 in [-0.5, 0.5]: the centres are 0.25 and 0.75.
-    let grid = Grid {
-        width: 2,
-        height: 1,
-        theta1: Range { min: 0.0, max: 1.0 },
-        theta2: Range {
+    let grid = Grid::angles(
+        2,
+        1,
+        Range { min: 0.0, max: 1.0 },
+        Range {
             min: -0.5,
             max: 0.5,
         },
-        omega1: 0.0,
-        omega2: 0.0,
-    };
+        0.0,
+        0.0,
+    );
     assert_eq!(
-        (grid.theta1_at(0), grid.theta1_at(1), grid.theta2_at(0)),
+        (grid.x_at(0), grid.x_at(1), grid.y_at(0)),
         (0.25, 0.75, 0.0)
     );
     let s = FlipSpec {

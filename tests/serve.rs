@@ -112,9 +112,9 @@ fn tile_ranges(z: u32, x: u64, y: u64) -> [String; 4] {
         .unwrap();
     [
         "--theta1".into(),
-        format!("{}:{}", g.theta1.min, g.theta1.max),
+        format!("{}:{}", g.x.range.min, g.x.range.max),
         "--theta2".into(),
-        format!("{}:{}", g.theta2.min, g.theta2.max),
+        format!("{}:{}", g.y.range.min, g.y.range.max),
     ]
 }
 
@@ -537,19 +537,20 @@ fn a_stored_map_is_served_from_its_pixels_and_computed_below_them() {
     let server = Server::start(&["--backend", "gpu", "--store", store.to_str().unwrap()]);
     let s = chaoscope::render::store::MapStore::open(&store).unwrap();
     let mask = s.read_resolved(0, 300).unwrap().unwrap();
-    let grid = chaoscope::spec::Grid {
-        width: 600,
-        height: 300,
-        theta1: chaoscope::spec::Range {
+    let grid = chaoscope::spec::Grid::angles(
+        600,
+        300,
+        chaoscope::spec::Range {
             min: -2.0,
             max: 3.0,
         },
-        theta2: chaoscope::spec::Range {
+        chaoscope::spec::Range {
             min: -1.0,
             max: 2.0,
         },
-        ..chaoscope::spec::Grid::square(1)
-    };
+        0.0,
+        0.0,
+    );
     let world = World::of_grid(&grid);
     const OUTSIDE: [u8; 3] = [42, 42, 48];
     for (z, x, y) in [(2, 2, 1), (2, 0, 0), (0, 0, 0), (1, 1, 0)] {
@@ -602,9 +603,9 @@ fn a_stored_map_is_served_from_its_pixels_and_computed_below_them() {
             "gpu",
             "--theta1",
         ])
-        .arg(format!("{}:{}", g.theta1.min, g.theta1.max))
+        .arg(format!("{}:{}", g.x.range.min, g.x.range.max))
         .arg("--theta2")
-        .arg(format!("{}:{}", g.theta2.min, g.theta2.max))
+        .arg(format!("{}:{}", g.y.range.min, g.y.range.max))
         .arg("--output")
         .arg(&out)
         .assert()

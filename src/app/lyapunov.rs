@@ -191,6 +191,7 @@ pub fn run_spectrum(
         resolved: None,
         rule: String::new(),
         t_max: spec.stepping.t_max,
+        mirrored: spec.mirrors() && spec.grid.point_symmetric(),
         range: drawn.range,
         output: job.files.output.clone(),
         files,

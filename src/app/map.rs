@@ -50,6 +50,8 @@ pub struct MapSummary {
     /// How the verdict's finer map differs, in a few words.
     pub rule: String,
     pub t_max: f64,
+    /// Whether half the map is the other half mirrored (a point-symmetric plane).
+    pub mirrored: bool,
     /// The colour range, where the quantity's colours span one (NaN for a store: no picture).
     pub range: Option<(f32, f32)>,
     pub output: PathBuf,
@@ -61,7 +63,7 @@ pub struct MapSummary {
 impl serde::Serialize for MapSummary {
     fn serialize<Se: serde::Serializer>(&self, s: Se) -> std::result::Result<Se::Ok, Se::Error> {
         use serde::ser::SerializeStruct;
-        let mut m = s.serialize_struct("MapSummary", 13 + self.range.is_some() as usize)?;
+        let mut m = s.serialize_struct("MapSummary", 14 + self.range.is_some() as usize)?;
         m.serialize_field("quantity", self.quantity.name)?;
         m.serialize_field("width", &self.width)?;
         m.serialize_field("height", &self.height)?;
@@ -72,6 +74,7 @@ impl serde::Serialize for MapSummary {
         m.serialize_field("resolved", &self.resolved)?;
         m.serialize_field("rule", &self.rule)?;
         m.serialize_field("t_max", &self.t_max)?;
+        m.serialize_field("mirrored", &self.mirrored)?;
         if let Some(range) = &self.range {
             m.serialize_field("range", range)?;
         }
@@ -104,6 +107,7 @@ pub fn run<S: MapKernels + MapPicture>(
         resolved: None,
         rule: String::new(),
         t_max: job.spec.stepping().t_max,
+        mirrored: job.spec.mirrors() && job.spec.grid().point_symmetric(),
         range: None,
         output: job.files.output.clone(),
         files: job.files.files(),
@@ -455,17 +459,26 @@ pub fn precision_notices(
     info: &RunInfo,
 ) -> Result<Vec<String>> {
     let mut notices: Vec<String> = engine.check_f64(precision, backend)?.into_iter().collect();
+    // Today's plane says it as it always has; any other names its axes.
+    let below = |step: f64, float: &str| match grid.is_angle_plane() {
+        true => format!("below {step:.1e} rad, finer than {float} resolves near pi"),
+        false => format!(
+            "finer along {} or {} than {float} resolves",
+            grid.x.var.name(),
+            grid.y.var.name()
+        ),
+    };
     if engine.gpu().is_some() && precision == Precision::F32 && grid.needs_f64() {
         notices.push(format!(
-            "note: the pixel step is below {:.1e} rad, finer than f32 resolves near pi; the map runs on the {} in f64",
-            crate::spec::F32_MIN_PIXEL_STEP,
+            "note: the pixel step is {}; the map runs on the {} in f64",
+            below(crate::spec::F32_MIN_PIXEL_STEP, "f32"),
             if info.path.on_gpu() { "GPU" } else { "CPU" }
         ));
     }
     if grid.beyond_f64() {
         notices.push(format!(
-            "note: the pixel step is below {:.1e} rad, finer than even f64 resolves near pi: neighbouring pixels start from the same numbers, and the verdict (--resolved) marks every pixel unresolved",
-            crate::spec::F64_MIN_PIXEL_STEP
+            "note: the pixel step is {}: neighbouring pixels start from the same numbers, and the verdict (--resolved) marks every pixel unresolved",
+            below(crate::spec::F64_MIN_PIXEL_STEP, "even f64")
         ));
     }
     Ok(notices)

@@ -176,8 +176,8 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
                     p.m1 *= x;
                     p.m2 *= x;
                 }
-                Param::Omega1 => g.omega1 = x,
-                Param::Omega2 => g.omega2 = x,
+                Param::Omega1 => g.fixed.omega1 = x,
+                Param::Omega2 => g.fixed.omega2 = x,
                 Param::Damping => {
                     p.losses.joint1 = x;
                     p.losses.joint2 = x;
@@ -194,7 +194,7 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
             // Beyond this, neighbouring pixels of the last frame would start from the same
             // f64 angle (8 ulps of the point apart at least).
             let ulp = f64::EPSILON * t1.abs().max(t2.abs()).max(1.0);
-            let max_zoom = base_grid.theta1_step().min(base_grid.theta2_step()) / (8.0 * ulp);
+            let max_zoom = base_grid.x_step().min(base_grid.y_step()) / (8.0 * ulp);
             if !(factor.is_finite() && factor >= 1.0 && factor <= max_zoom) {
                 return Err(Error::invalid(
                     "zoom",
@@ -203,12 +203,11 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
                     ),
                 ));
             }
-            if !(base_grid.theta1.min..=base_grid.theta1.max).contains(&t1)
-                || !(base_grid.theta2.min..=base_grid.theta2.max).contains(&t2)
-            {
+            let (r1, r2) = (base_grid.x.range, base_grid.y.range);
+            if !(r1.min..=r1.max).contains(&t1) || !(r2.min..=r2.max).contains(&t2) {
                 return Err(Error::invalid(
                     "zoom_to",
-                    "must lie inside the theta1 and theta2 ranges",
+                    "must lie inside the x and y ranges",
                 ));
             }
             // The point keeps its place in the picture while the window shrinks.
@@ -217,8 +216,8 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
                 min: c + (r.min - c) * scale,
                 max: c + (r.max - c) * scale,
             };
-            g.theta1 = shrink(base_grid.theta1, t1);
-            g.theta2 = shrink(base_grid.theta2, t2);
+            g.x.range = shrink(base_grid.x.range, t1);
+            g.y.range = shrink(base_grid.y.range, t2);
         }
         out.push(Frame { params: p, grid: g });
     }
@@ -255,9 +254,7 @@ pub fn run(
     for (k, f) in frames.iter().enumerate() {
         let checked = spec::validate_grid(&f.grid)
             .and_then(|()| spec::validate_stability(&f.params, &job.stepping))
-            .and_then(|()| {
-                spec::validate_speeds(&f.params, &job.stepping, f.grid.omega1, f.grid.omega2)
-            });
+            .and_then(|()| spec::validate_plane(&f.params, &f.grid, &job.stepping));
         // A frame the varied parameter made impossible is the range's fault (--vary).
         match (checked, job.vary) {
             (Err(Error::InvalidSpec { field, reason }), Some(v)) => {

@@ -5,12 +5,14 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::parse::{one_of, parse_number, parse_pair, parse_range, parse_size};
+use super::parse::{
+    Angles, AxisArg, one_of, parse_angles, parse_axis, parse_number, parse_pair, parse_size,
+};
 use crate::engine::Backend;
 use crate::model::State;
 use crate::params::{ParamSources, Preset};
 use crate::render::{Colormap, PictureSpec};
-use crate::spec::{Grid, Range, Stepping};
+use crate::spec::{Axis, Grid, Range, Stepping, Var};
 
 /// `--backend auto|gpu|cpu`.
 /// `--precision f32` given for a run on the CPU, which computes in f64 only: said once, not
@@ -121,31 +123,132 @@ pub struct GridArgs {
     /// Grid size: N (square) or WxH, one pendulum per pixel.
     #[arg(long, default_value = "512", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: (u32, u32),
-    /// theta1 range along x, MIN:MAX in rad (`pi` is understood: -pi:pi).
-    #[arg(long, default_value = "-pi:pi", value_parser = parse_range, allow_hyphen_values = true)]
-    pub theta1: Range,
-    /// theta2 range along y (top = MAX), MIN:MAX in rad.
-    #[arg(long, default_value = "-pi:pi", value_parser = parse_range, allow_hyphen_values = true)]
-    pub theta2: Range,
-    /// Initial angular velocity of the upper arm (rad/s), the same for every pixel.
-    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
-    pub omega1: f64,
-    /// Initial angular velocity of the lower arm (rad/s).
-    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
-    pub omega2: f64,
+    #[command(flatten)]
+    pub plane: PlaneArgs,
 }
 
 impl GridArgs {
-    pub fn grid(&self) -> Grid {
-        let (width, height) = self.size;
-        Grid {
+    pub fn grid(&self) -> crate::Result<Grid> {
+        self.plane.grid(self.size)
+    }
+}
+
+/// What the axes of a map vary, and the start's other values.
+#[derive(Args, Debug, Clone, Default)]
+pub struct PlaneArgs {
+    /// What varies along x: NAME or NAME=MIN:MAX, NAME one of theta1 omega1 theta2 omega2 (rad,
+    /// rad/s), m1 m2 (kg), m2/m1 (m1 held), l1 l2 (m), l2/l1 (l1 held), g (m/s^2), damping
+    /// (both joints), joint1 joint2 (N m s), rod1 rod2 (kg). The other parameters come from
+    /// their flags [default theta1].
+    #[arg(long, value_parser = parse_axis, allow_hyphen_values = true)]
+    pub x: Option<AxisArg>,
+    /// What varies along y (top = MAX), as --x [default theta2].
+    #[arg(long, value_parser = parse_axis, allow_hyphen_values = true)]
+    pub y: Option<AxisArg>,
+    /// theta1: its range MIN:MAX (rad, `pi` is understood) when it lies along an axis
+    /// [default -pi:pi], else its start (rad) [default 0].
+    #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
+    pub theta1: Option<Angles>,
+    /// theta2, as --theta1.
+    #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
+    pub theta2: Option<Angles>,
+    /// Initial angular velocity of the upper arm (rad/s), the same for every pixel unless
+    /// it lies along an axis [default 0].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: Option<f64>,
+    /// Initial angular velocity of the lower arm (rad/s) [default 0].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: Option<f64>,
+}
+
+impl PlaneArgs {
+    /// The grid of `size` pixels these flags describe: an angle flag gives its range when
+    /// the angle lies along an axis (unless --x/--y give it) and its start otherwise; a
+    /// parameter or angular velocity along an axis takes its range from --x/--y.
+    pub fn grid(&self, (width, height): (u32, u32)) -> crate::Result<Grid> {
+        use crate::Error;
+        let x = self.x.unwrap_or(AxisArg {
+            var: Var::Theta1,
+            range: None,
+        });
+        let y = self.y.unwrap_or(AxisArg {
+            var: Var::Theta2,
+            range: None,
+        });
+        let given = |var: Var| -> Option<Angles> {
+            match var {
+                Var::Theta1 => self.theta1,
+                Var::Theta2 => self.theta2,
+                Var::Omega1 => self.omega1.map(Angles::Point),
+                Var::Omega2 => self.omega2.map(Angles::Point),
+                _ => None,
+            }
+        };
+        let axis = |field: &'static str, a: AxisArg| -> crate::Result<Axis> {
+            let range = match (a.range, given(a.var)) {
+                (Some(_), Some(_)) => {
+                    return Err(Error::invalid(
+                        a.var.name(),
+                        format!(
+                            "{} lies along {field}, whose range --{field} gives",
+                            a.var.name()
+                        ),
+                    ));
+                }
+                (Some(r), None) | (None, Some(Angles::Range(r))) => r,
+                (None, None) if a.var.is_angle() => Range::FULL_TURN,
+                (None, Some(Angles::Point(_))) if a.var.is_angle() => {
+                    return Err(Error::invalid(
+                        a.var.name(),
+                        format!(
+                            "{} lies along {field}: give its range MIN:MAX",
+                            a.var.name()
+                        ),
+                    ));
+                }
+                _ => {
+                    return Err(Error::invalid(
+                        field,
+                        format!(
+                            "{} needs a range: --{field} {}=MIN:MAX",
+                            a.var.name(),
+                            a.var.name()
+                        ),
+                    ));
+                }
+            };
+            Ok(Axis { var: a.var, range })
+        };
+        let (x, y) = (axis("x", x)?, axis("y", y)?);
+        let mut fixed = crate::model::State::default();
+        let mut params = crate::model::Params::default();
+        for var in [Var::Theta1, Var::Omega1, Var::Theta2, Var::Omega2] {
+            if var == x.var || var == y.var {
+                continue;
+            }
+            match given(var) {
+                Some(Angles::Point(v)) => var.set(v, &mut params, &mut fixed),
+                Some(Angles::Range(_)) => {
+                    return Err(Error::invalid(
+                        var.name(),
+                        format!(
+                            "{} lies along no axis (x is {}, y is {}): give its start, one angle",
+                            var.name(),
+                            x.var.name(),
+                            y.var.name()
+                        ),
+                    ));
+                }
+                None => {}
+            }
+        }
+        Ok(Grid {
             width,
             height,
-            theta1: self.theta1,
-            theta2: self.theta2,
-            omega1: self.omega1,
-            omega2: self.omega2,
-        }
+            x,
+            y,
+            fixed,
+        })
     }
 }
 

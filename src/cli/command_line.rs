@@ -16,7 +16,7 @@ use crate::params::ParamSources;
 use crate::render::PictureSpec;
 use crate::spec::{
     Alignment, FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, Method, Precision,
-    Spread, Stepping,
+    Spread, Stepping, Var,
 };
 
 /// The flags that reproduce `p` exactly.
@@ -97,18 +97,33 @@ fn picture(p: &PictureSpec) -> String {
     out
 }
 
+/// The (theta1, theta2) plane as its own flags have always written it; any other plane by
+/// --x and --y and the start's values that lie along no axis.
 fn grid(g: &Grid) -> String {
-    format!(
-        "--size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {}",
-        g.width,
-        g.height,
-        g.theta1.min,
-        g.theta1.max,
-        g.theta2.min,
-        g.theta2.max,
-        g.omega1,
-        g.omega2
-    )
+    let s = g.fixed;
+    if g.is_angle_plane() {
+        return format!(
+            "--size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {}",
+            g.width,
+            g.height,
+            g.x.range.min,
+            g.x.range.max,
+            g.y.range.min,
+            g.y.range.max,
+            s.omega1,
+            s.omega2
+        );
+    }
+    let mut out = format!("--size {}x{}", g.width, g.height);
+    for (flag, a) in [("x", g.x), ("y", g.y)] {
+        out += &format!(" --{flag} {}={}:{}", a.var.name(), a.range.min, a.range.max);
+    }
+    for var in [Var::Theta1, Var::Theta2, Var::Omega1, Var::Omega2] {
+        if var != g.x.var && var != g.y.var {
+            out += &format!(" --{} {}", var.name(), var.get(&Default::default(), &s));
+        }
+    }
+    out
 }
 
 fn start(s: &State) -> String {

@@ -95,7 +95,7 @@ impl FlipArgs {
             integrator,
             ..FlipSpec::new(
                 self.physical.sources().resolve()?,
-                self.grid.grid(),
+                self.grid.grid()?,
                 self.step.stepping(),
             )
         };

@@ -4,10 +4,8 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use super::args::{PhysicalArgs, PictureArgs, VerdictArgs, backend_parser};
-use super::parse::{
-    Angles, one_of, parse_angles, parse_number, parse_range, parse_size, parse_tile,
-};
+use super::args::{PhysicalArgs, PictureArgs, PlaneArgs, VerdictArgs, backend_parser};
+use super::parse::{Angles, one_of, parse_number, parse_range, parse_size, parse_tile};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::lyapunov::{self, LyapunovMapJob, LyapunovPointJob};
@@ -34,18 +32,10 @@ pub struct LyapunovArgs {
     /// Grid size: N (square) or WxH, one pendulum per pixel.
     #[arg(long, default_value = "512", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: (u32, u32),
-    /// theta1 range along x, MIN:MAX in rad; or one angle for a single-point convergence run.
-    #[arg(long, default_value = "-pi:pi", value_parser = parse_angles, allow_hyphen_values = true)]
-    pub theta1: Angles,
-    /// theta2 range along y (top = MAX), MIN:MAX in rad; or one angle.
-    #[arg(long, default_value = "-pi:pi", value_parser = parse_angles, allow_hyphen_values = true)]
-    pub theta2: Angles,
-    /// Initial angular velocity of the upper arm (rad/s).
-    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
-    pub omega1: f64,
-    /// Initial angular velocity of the lower arm (rad/s).
-    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
-    pub omega2: f64,
+    /// The map's plane; one angle in each of --theta1 and --theta2 (without --x and --y)
+    /// makes a single-point convergence run instead.
+    #[command(flatten)]
+    pub plane: PlaneArgs,
     /// Simulated time (s); the exponent is the mean log stretch rate over [0, t-max].
     #[arg(long, default_value = "20", value_parser = parse_number, allow_hyphen_values = true)]
     pub t_max: f64,
@@ -271,18 +261,29 @@ impl LyapunovArgs {
     }
 
     pub fn job(&self) -> Result<LyapunovJob> {
-        let (width, height) = self.size;
-        match (self.theta1, self.theta2) {
-            (Angles::Range(theta1), Angles::Range(theta2)) => {
+        let plane = &self.plane;
+        let point = match (plane.x.or(plane.y), plane.theta1, plane.theta2) {
+            (None, Some(Angles::Point(theta1)), Some(Angles::Point(theta2))) => {
+                Some((theta1, theta2))
+            }
+            (None, Some(Angles::Point(_)), _) => {
+                return Err(Error::invalid(
+                    "theta2",
+                    "must be one angle too when --theta1 is one angle (a single-point run)",
+                ));
+            }
+            (None, _, Some(Angles::Point(_))) => {
+                return Err(Error::invalid(
+                    "theta1",
+                    "must be one angle too when --theta2 is one angle (a single-point run)",
+                ));
+            }
+            _ => None,
+        };
+        match point {
+            None => {
                 super::args::no_picture_with_a_store(self.data.as_deref(), self.output.as_deref())?;
-                let grid = Grid {
-                    width,
-                    height,
-                    theta1,
-                    theta2,
-                    omega1: self.omega1,
-                    omega2: self.omega2,
-                };
+                let grid = plane.grid(self.size)?;
                 Ok(LyapunovJob::Map(LyapunovMapJob {
                     spec: self.spec(grid)?,
                     backend: self.backend.unwrap_or(Backend::Auto),
@@ -300,7 +301,7 @@ impl LyapunovArgs {
                     colour_range: self.colour_range.map(|r| (r.min as f32, r.max as f32)),
                 }))
             }
-            (Angles::Point(theta1), Angles::Point(theta2)) => {
+            Some((theta1, theta2)) => {
                 if self.spectrum.is_some() {
                     return Err(Error::invalid(
                         "spectrum",
@@ -321,23 +322,23 @@ impl LyapunovArgs {
                 }
                 let start = State {
                     theta1,
-                    omega1: self.omega1,
+                    omega1: plane.omega1.unwrap_or(0.0),
                     theta2,
-                    omega2: self.omega2,
+                    omega2: plane.omega2.unwrap_or(0.0),
                 };
                 // A convergence run has no grid: the start's own, one pixel.
                 let around = |x: f64| Range {
                     min: x - 1e-3,
                     max: x + 1e-3,
                 };
-                let grid = Grid {
-                    width: 1,
-                    height: 1,
-                    theta1: around(theta1),
-                    theta2: around(theta2),
-                    omega1: self.omega1,
-                    omega2: self.omega2,
-                };
+                let grid = Grid::angles(
+                    1,
+                    1,
+                    around(theta1),
+                    around(theta2),
+                    start.omega1,
+                    start.omega2,
+                );
                 Ok(LyapunovJob::Point(LyapunovPointJob {
                     spec: self.spec(grid)?,
                     start,
@@ -345,14 +346,6 @@ impl LyapunovArgs {
                     output: self.output.clone(),
                 }))
             }
-            (Angles::Point(_), Angles::Range(_)) => Err(Error::invalid(
-                "theta2",
-                "must be one angle too when --theta1 is one angle (a single-point run)",
-            )),
-            (Angles::Range(_), Angles::Point(_)) => Err(Error::invalid(
-                "theta1",
-                "must be one angle too when --theta2 is one angle (a single-point run)",
-            )),
         }
     }
 }

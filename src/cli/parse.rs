@@ -134,6 +134,26 @@ pub enum Angles {
     Point(f64),
 }
 
+/// `--x`/`--y`: what an axis varies, `NAME` or `NAME=MIN:MAX`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisArg {
+    pub var: crate::spec::Var,
+    pub range: Option<Range>,
+}
+
+pub fn parse_axis(s: &str) -> Result<AxisArg, String> {
+    not_a_flag(s)?;
+    let (name, range) = match s.split_once('=') {
+        Some((name, range)) => (name, Some(parse_range(range)?)),
+        None => (s, None),
+    };
+    let var = crate::spec::Var::parse(name).ok_or_else(|| {
+        let names: Vec<_> = crate::spec::Var::ALL.iter().map(|v| v.name()).collect();
+        format!("`{name}` is none of {}", names.join(" "))
+    })?;
+    Ok(AxisArg { var, range })
+}
+
 pub fn parse_angles(s: &str) -> Result<Angles, String> {
     if s.contains(':') {
         parse_range(s).map(Angles::Range)

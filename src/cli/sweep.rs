@@ -73,7 +73,7 @@ impl SweepArgs {
             frames: self.frames,
             fps: self.fps,
             params: self.physical.sources().resolve()?,
-            grid: self.grid.grid(),
+            grid: self.grid.grid()?,
             stepping: self.step.stepping(),
             renorm: self.renorm,
             ftle_max: self.ftle_max,

@@ -347,7 +347,8 @@ pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]
             let values = (0..grid.width)
                 .map(|col| {
                     let mut last = [f64::NAN; 4];
-                    let start = grid.start(col, span.first + row);
+                    let (params, start) = grid.pixel(&spec.params, col, span.first + row);
+                    let four = LyapunovSpec { params, ..four };
                     indicator_run(&four, start, None, &mut |_, r| {
                         last = [r[0], r[1], r[2], r[3]];
                     })?;
@@ -373,9 +374,19 @@ pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]
 
 /// The map of `spec`'s indicator, rows in parallel.
 pub fn indicator_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(&spec.grid, spec.row_span(), monitor, |start| {
-        indicator_run(spec, start, None, &mut |_, _| {}).expect("never cancelled") as f32
-    })
+    map_pixels(
+        &spec.grid,
+        &spec.params,
+        spec.row_span(),
+        monitor,
+        |p, start| {
+            let spec = LyapunovSpec {
+                params: *p,
+                ..*spec
+            };
+            indicator_run(&spec, start, None, &mut |_, _| {}).expect("never cancelled") as f32
+        },
+    )
 }
 
 #[cfg(test)]

@@ -314,14 +314,16 @@ pub fn trajectory(p: &Params, start: State, dt: f64, steps: u32) -> Vec<State> {
     out
 }
 
-/// A map over the rows `span` of `grid`: `value(start)` for every pixel of its rows (the
-/// rest mirrored from them when the span is the whole grid), rows in parallel on all cores,
+/// A map over the rows `span` of `grid`: `value(parameters, start)` for every pixel of its
+/// rows, each with its own parameters where an axis varies one (`params` elsewhere), the
+/// rest mirrored from them when the span is the whole grid; rows in parallel on all cores,
 /// with progress and interruption.
 pub fn map_pixels(
     grid: &Grid,
+    params: &Params,
     span: RowSpan,
     monitor: &Monitor,
-    value: impl Fn(State) -> f32 + Sync,
+    value: impl Fn(&Params, State) -> f32 + Sync,
 ) -> Result<Field> {
     let mut field = Field::new(grid.width, span.field_rows(grid), 0.0);
     monitor.start("cpu", span.count as u64);
@@ -332,7 +334,8 @@ pub fn map_pixels(
         .try_for_each(|(row, out)| {
             monitor.check()?;
             for (col, v) in out.iter_mut().enumerate() {
-                *v = value(grid.start(col as u32, span.first + row as u32));
+                let (p, start) = grid.pixel(params, col as u32, span.first + row as u32);
+                *v = value(&p, start);
             }
             monitor.advance(1);
             Ok::<(), crate::error::Error>(())

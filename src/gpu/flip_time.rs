@@ -66,14 +66,14 @@ const ESTIMATE_ABOVE: u64 = 1 << 20;
 fn sample_spec(spec: &FlipSpec) -> FlipSpec {
     let g = &spec.grid;
     let rows = spec.rows_to_integrate();
-    let grid = Grid {
+    let mut grid = Grid {
         width: (g.width / 16).max(1),
         height: (rows / 16).max(1),
-        theta2: Range {
-            min: g.theta2.max - rows as f64 * g.theta2_step(),
-            max: g.theta2.max,
-        },
         ..*g
+    };
+    grid.y.range = Range {
+        min: g.y.range.max - rows as f64 * g.y_step(),
+        max: g.y.range.max,
     };
     FlipSpec {
         grid,
@@ -87,7 +87,6 @@ fn sample_spec(spec: &FlipSpec) -> FlipSpec {
 /// flipped (or blew up), none if it lay below the no-flip energy.
 fn work_per_pixel(spec: &FlipSpec, sample: &Field) -> f64 {
     let steps = spec.stepping.steps() as f64;
-    let threshold = spec.params.no_flip_threshold(f32::EPSILON as f64);
     let g = sample_spec(spec).grid;
     let total: f64 = (0..g.height)
         .flat_map(|row| (0..g.width).map(move |col| (col, row)))
@@ -95,7 +94,9 @@ fn work_per_pixel(spec: &FlipSpec, sample: &Field) -> f64 {
             let t = sample.get(col, row) as f64;
             if t.is_finite() {
                 (t / spec.stepping.dt).ceil().clamp(1.0, steps)
-            } else if spec.params.energy(&g.start(col, row)) < threshold {
+            } else if let (p, s) = g.pixel(&spec.params, col, row)
+                && p.energy(&s) < p.no_flip_threshold(f32::EPSILON as f64)
+            {
                 0.0
             } else {
                 steps
@@ -149,7 +150,7 @@ impl FlipTimeKernel {
         };
         // Compile what a map needs (lossless, early exit) now, so callers can time runs
         // without the compile; other variants compile on first use.
-        kernel.pipelines.get(ctx, 0, true);
+        kernel.pipelines.get(ctx, 0, true, false);
         kernel
     }
 
@@ -256,7 +257,7 @@ impl FlipTimeKernel {
     ) -> Result<Field> {
         let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
         let base = R::Params::of(&spec.params, spec.stepping.dt)
-            .over(&spec.grid)
+            .over(&spec.grid, &spec.params)
             .with_run(Run {
                 rtol,
                 atol,
@@ -271,7 +272,12 @@ impl FlipTimeKernel {
             (FlipMeasure::Time, Integrator::Dp54 { .. }) => &self.adaptive,
             (FlipMeasure::Time, Integrator::Dop853 { .. }) => &self.dop853,
         };
-        let [init, advance] = variants.get(ctx, spec.params.losses.kinds(), spec.early_exit) else {
+        let [init, advance] = variants.get(
+            ctx,
+            spec.params.losses.kinds(),
+            spec.early_exit,
+            spec.grid.varies_params(),
+        ) else {
             unreachable!("two entry points")
         };
         let total_steps = spec.stepping.steps();

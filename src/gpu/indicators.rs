@@ -138,7 +138,7 @@ impl IndicatorKernel {
         let (rtol, atol) = adaptive.unwrap_or_default();
         let total_steps = spec.stepping.steps();
         let base = R::Params::of(&spec.params, spec.stepping.dt)
-            .over(&spec.grid)
+            .over(&spec.grid, &spec.params)
             .with_run(Run {
                 interval: spec.renorm_steps(),
                 total_steps,
@@ -151,8 +151,12 @@ impl IndicatorKernel {
                 atol,
                 ..Run::default()
             });
-        let [init, advance] = self.families[family].get(ctx, spec.params.losses.kinds(), false)
-        else {
+        let [init, advance] = self.families[family].get(
+            ctx,
+            spec.params.losses.kinds(),
+            false,
+            spec.grid.varies_params(),
+        ) else {
             unreachable!("two entry points")
         };
         let slot = size_of::<R::IndicatorSlot>() as u64;

@@ -114,10 +114,10 @@ mirrors! {
         l1: real,
         l2: real,
         dt: real,
-        theta1_mid: real,
-        theta1_half_step: real,
-        theta2_mid: real,
-        theta2_half_step: real,
+        x_mid: real,
+        x_half_step: real,
+        y_mid: real,
+        y_half_step: real,
         omega1: real,
         omega2: real,
         no_flip_energy: real,
@@ -132,6 +132,14 @@ mirrors! {
         mass_total: real,
         mass_lower: real,
         bearing: real,
+        /// The start's angles where no axis sets them; the masses (scaled) a parameter
+        /// plane forms its coefficients from.
+        theta1: real,
+        theta2: real,
+        m1: real,
+        m2: real,
+        rod1: real,
+        rod2: real,
         width: u32,
         height: u32,
         rows: u32,
@@ -153,14 +161,17 @@ mirrors! {
         t_max: real,
         /// Which value an indicator kernel writes (shaders/indicators.wgsl).
         measure: u32,
+        /// What the axes vary (`Var::code`).
+        x_var: u32,
+        y_var: u32,
         _pad1: u32,
     }
 }
 
 // A uniform buffer's size must be a multiple of 16 bytes; f64's is WGSL's size of the struct
 // (its alignment, 8), the buffer rounded up to 16 bytes.
-const _: () = assert!(std::mem::size_of::<GpuParams>() == 160);
-const _: () = assert!(std::mem::size_of::<GpuParams64>() == 280);
+const _: () = assert!(std::mem::size_of::<GpuParams>() == 192);
+const _: () = assert!(std::mem::size_of::<GpuParams64>() == 336);
 
 /// `new` (physics and step) and `with_grid` (the grid) of a params mirror whose floats are
 /// `$float`, `$eps` its machine epsilon (the margin of the no-flip energy).
@@ -172,7 +183,7 @@ macro_rules! params_constructors {
         /// overflow or underflow. A power of two scales exactly, so results keep every bit.
         pub fn new(p: &Params, dt: f64) -> Self {
             let i = p.inertia();
-            let s = (-i.a.log2().round()).exp2();
+            let s = mass_scale(p);
             let m = |x: f64| (x * s) as $float;
             let [drag_bob1, drag_bob2, drag_rod1, drag_rod2] = p.losses.drag_factors();
             let (mass_total, mass_lower) = p.moving_mass();
@@ -196,22 +207,41 @@ macro_rules! params_constructors {
                 mass_total: m(mass_total),
                 mass_lower: m(mass_lower),
                 bearing: (p.losses.bearing * p.losses.bearing_radius) as $float,
+                m1: m(p.m1),
+                m2: m(p.m2),
+                rod1: m(p.rod1),
+                rod2: m(p.rod2),
                 ..Default::default()
             }
         }
 
-        pub fn with_grid(mut self, g: &Grid) -> Self {
-            self.theta1_mid = g.theta1.mid() as $float;
-            self.theta1_half_step = (0.5 * g.theta1_step()) as $float;
-            self.theta2_mid = g.theta2.mid() as $float;
-            self.theta2_half_step = (0.5 * g.theta2_step()) as $float;
-            self.omega1 = g.omega1 as $float;
-            self.omega2 = g.omega2 as $float;
+        /// The plane of `g`; an axis measured in mass in the mass scale of `new`.
+        pub fn with_grid(mut self, g: &Grid, p: &Params) -> Self {
+            let scale = |a: &crate::spec::Axis| match a.var.is_mass() {
+                true => mass_scale(p),
+                false => 1.0,
+            };
+            let (sx, sy) = (scale(&g.x), scale(&g.y));
+            self.x_mid = (g.x.range.mid() * sx) as $float;
+            self.x_half_step = (0.5 * g.x_step() * sx) as $float;
+            self.y_mid = (g.y.range.mid() * sy) as $float;
+            self.y_half_step = (0.5 * g.y_step() * sy) as $float;
+            self.x_var = g.x.var.code();
+            self.y_var = g.y.var.code();
+            self.theta1 = g.fixed.theta1 as $float;
+            self.theta2 = g.fixed.theta2 as $float;
+            self.omega1 = g.fixed.omega1 as $float;
+            self.omega2 = g.fixed.omega2 as $float;
             self.width = g.width;
             self.height = g.height;
             self
         }
     };
+}
+
+/// The power of two nearest 1 / A that the GPU's mass-measured values are scaled by.
+fn mass_scale(p: &Params) -> f64 {
+    (-p.inertia().a.log2().round()).exp2()
 }
 
 impl GpuParams {
@@ -258,8 +288,8 @@ macro_rules! real {
             fn of(p: &Params, dt: f64) -> Self {
                 $params::new(p, dt)
             }
-            fn over(self, g: &Grid) -> Self {
-                self.with_grid(g)
+            fn over(self, g: &Grid, p: &Params) -> Self {
+                self.with_grid(g, p)
             }
             fn with_run(mut self, run: Run) -> Self {
                 self.interval = run.interval;
@@ -337,7 +367,8 @@ pub struct Run {
 /// A params mirror built from the run's physics, grid and settings, whichever its scalar.
 pub trait RunParams: Sized {
     fn of(p: &Params, dt: f64) -> Self;
-    fn over(self, g: &Grid) -> Self;
+    /// The plane of `g` over the map's parameters `p` (those `of` was made from).
+    fn over(self, g: &Grid, p: &Params) -> Self;
     fn with_run(self, run: Run) -> Self;
 }
 

@@ -73,7 +73,7 @@ impl LyapunovKernel {
             adaptive,
             layout,
         };
-        kernel.pipelines.get(ctx, 0, false);
+        kernel.pipelines.get(ctx, 0, false, false);
         kernel
     }
 
@@ -130,7 +130,7 @@ impl LyapunovKernel {
     ) -> Result<Field> {
         let (rtol, atol) = spec.integrator.tolerances().unwrap_or_default();
         let base = R::Params::of(&spec.params, spec.stepping.dt)
-            .over(&spec.grid)
+            .over(&spec.grid, &spec.params)
             .with_run(Run {
                 interval: spec.renorm_steps(),
                 total_steps: spec.stepping.steps(),
@@ -155,7 +155,12 @@ impl LyapunovKernel {
             }
             (_, false) => &self.pipelines,
         };
-        let [init, advance] = variants.get(ctx, spec.params.losses.kinds(), false) else {
+        let [init, advance] = variants.get(
+            ctx,
+            spec.params.losses.kinds(),
+            false,
+            spec.grid.varies_params(),
+        ) else {
             unreachable!("two entry points")
         };
         let total_steps = spec.stepping.steps();
@@ -272,7 +277,7 @@ impl JacobianKernel {
         p: &Params,
         states: &[State],
     ) -> Result<Vec<[[f64; 4]; 4]>> {
-        let [pipeline] = self.pipelines.get(ctx, p.losses.kinds(), false) else {
+        let [pipeline] = self.pipelines.get(ctx, p.losses.kinds(), false, false) else {
             unreachable!("one entry point")
         };
         let params = GpuParams {

@@ -50,13 +50,14 @@ pub fn compute_pipeline(
 }
 
 /// The pipelines of a kernel's entry points (setup, advance, ...), compiled on first use for
-/// each `LOSSES` value and, if the kernel has one, each value of its boolean `switch` override.
+/// each `LOSSES` value, each value of the kernel's boolean `switch` override if it has one, and
+/// with `PER_PIXEL` (shaders/common.wgsl: a plane with a parameter along an axis) on or off.
 pub struct Variants {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     entries: &'static [&'static str],
     switch: Option<&'static str>,
-    compiled: [std::sync::OnceLock<Vec<wgpu::ComputePipeline>>; 16],
+    compiled: [std::sync::OnceLock<Vec<wgpu::ComputePipeline>>; 32],
 }
 
 impl Variants {
@@ -76,13 +77,24 @@ impl Variants {
     }
 
     /// The pipelines of the entry points, in order, for `losses` (see `Losses::kinds`) with
-    /// the switch `on` (ignored by kernels without one).
-    pub fn get(&self, ctx: &GpuContext, losses: u32, on: bool) -> &[wgpu::ComputePipeline] {
+    /// the switch `on` (ignored by kernels without one), for a grid whose pixels have their
+    /// own parameters if `per_pixel`.
+    pub fn get(
+        &self,
+        ctx: &GpuContext,
+        losses: u32,
+        on: bool,
+        per_pixel: bool,
+    ) -> &[wgpu::ComputePipeline] {
         let on = on && self.switch.is_some();
-        let slot = (losses as usize & 7) | (on as usize) << 3;
+        let slot = (losses as usize & 7) | (on as usize) << 3 | (per_pixel as usize) << 4;
         self.compiled[slot].get_or_init(|| {
-            let switches: Vec<(&str, bool)> =
+            let mut switches: Vec<(&str, bool)> =
                 self.switch.map(|name| (name, on)).into_iter().collect();
+            // Only set when on: kernels without a plane (trajectories) have no such override.
+            if per_pixel {
+                switches.push(("PER_PIXEL", true));
+            }
             self.entries
                 .iter()
                 .map(|entry| {

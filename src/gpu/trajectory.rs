@@ -75,7 +75,7 @@ impl TrajectoryKernel {
                 ),
             ));
         }
-        let [pipeline] = self.pipelines.get(ctx, p.losses.kinds(), false) else {
+        let [pipeline] = self.pipelines.get(ctx, p.losses.kinds(), false, false) else {
             unreachable!("one entry point")
         };
         let count = starts.len() as u32;

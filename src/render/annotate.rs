@@ -228,12 +228,14 @@ pub fn annotate(map: &[u8], w: u32, h: u32, a: &Annotation) -> Result<Annotated>
             root.draw_text(&label, &right_font, (l - tick - 3, y))
                 .map_err(draw_err)?;
         }
-        root.draw_text(
-            &a.y.label,
-            &text(font, Pos::new(HPos::Center, VPos::Center)),
-            (f(0.8) as i32, (top + h / 2) as i32),
-        )
-        .map_err(draw_err)?;
+        // A short label (today's θ2) stands upright; a longer one runs up the side.
+        let y_label = text(font, Pos::new(HPos::Center, VPos::Center));
+        let y_label = match a.y.label.chars().count() > 3 {
+            true => y_label.transform(FontTransform::Rotate270),
+            false => y_label,
+        };
+        root.draw_text(&a.y.label, &y_label, (f(0.8) as i32, (top + h / 2) as i32))
+            .map_err(draw_err)?;
         // Colour bar ticks, label and swatch.
         let left_font = text(font * 0.8, Pos::new(HPos::Left, VPos::Center));
         let bx = (bar_x + bar_w) as i32;

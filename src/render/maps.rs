@@ -87,28 +87,75 @@ fn frame(
     })
 }
 
+/// The picture's axes: what they vary and its unit (today's plane as it always was: θ1 (rad)
+/// and θ2), angles ticked at multiples of pi, everything else at round decimals.
 fn axes(grid: &Grid) -> (Axis, Axis) {
-    (
-        Axis {
-            label: "θ1 (rad)".into(),
-            min: grid.theta1.min,
-            max: grid.theta1.max,
-            decimal: false,
-        },
-        Axis {
-            label: "θ2".into(),
-            min: grid.theta2.min,
-            max: grid.theta2.max,
-            decimal: false,
-        },
-    )
+    let axis = |a: &crate::spec::Axis, label: String| Axis {
+        label,
+        min: a.range.min,
+        max: a.range.max,
+        decimal: !a.var.is_angle(),
+    };
+    let label = |a: &crate::spec::Axis| match a.var.unit() {
+        "1" => a.var.symbol().to_string(),
+        unit => format!("{} ({})", a.var.symbol(), unit.replace("^2", "²")),
+    };
+    if grid.is_angle_plane() {
+        return (axis(&grid.x, "θ1 (rad)".into()), axis(&grid.y, "θ2".into()));
+    }
+    (axis(&grid.x, label(&grid.x)), axis(&grid.y, label(&grid.y)))
 }
 
+/// The parameters and start the picture holds fixed (today's plane: as it always said).
 fn physics_line(p: &Params, grid: &Grid) -> String {
-    let mut line = format!(
+    if !grid.is_angle_plane() {
+        return plane_line(p, grid);
+    }
+    let line = format!(
         "m1 {} kg · m2 {} kg · l1 {} m · l2 {} m · g {} m/s² · ω0 ({}, {}) rad/s",
-        p.m1, p.m2, p.l1, p.l2, p.g, grid.omega1, grid.omega2
+        p.m1, p.m2, p.l1, p.l2, p.g, grid.fixed.omega1, grid.fixed.omega2
     );
+    line + &losses_line(p)
+}
+
+/// Any other plane: what no axis sets, the start among it.
+fn plane_line(p: &Params, grid: &Grid) -> String {
+    use crate::spec::Var;
+    let on_axis = |v: Var| {
+        [grid.x.var, grid.y.var]
+            .iter()
+            .any(|a| a.writes() == v.writes())
+    };
+    let s = &grid.fixed;
+    let mut items: Vec<String> = [
+        (Var::M1, "kg"),
+        (Var::M2, "kg"),
+        (Var::L1, "m"),
+        (Var::L2, "m"),
+        (Var::G, "m/s²"),
+    ]
+    .iter()
+    .filter(|(v, _)| !on_axis(*v))
+    .map(|(v, unit)| format!("{} {} {unit}", v.name(), v.get(p, s)))
+    .collect();
+    let start: Vec<String> = [Var::Theta1, Var::Theta2, Var::Omega1, Var::Omega2]
+        .iter()
+        .filter(|v| !on_axis(**v))
+        .map(|v| format!("{} {}", v.symbol(), v.get(p, s)))
+        .collect();
+    items.push(format!("start {}", start.join(", ")));
+    let mut losses = *p;
+    if on_axis(Var::Damping) {
+        (losses.losses.joint1, losses.losses.joint2) = (0.0, 0.0);
+    }
+    if on_axis(Var::Rod1) || on_axis(Var::Rod2) {
+        (losses.rod1, losses.rod2) = (0.0, 0.0);
+    }
+    items.join(" · ") + &losses_line(&losses)
+}
+
+fn losses_line(p: &Params) -> String {
+    let mut line = String::new();
     if p.rod1 != 0.0 || p.rod2 != 0.0 {
         line += &format!(" · rods {}/{} kg", p.rod1, p.rod2);
     }

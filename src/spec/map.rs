@@ -4,7 +4,7 @@ use super::indicator::Indicator;
 use super::stability::{validate_speeds, validate_stability};
 use super::{
     ACCURATE, ACCURATE_FTLE, Grid, Integrator, Precision, Stepping, validate_grid_holding,
-    validate_params, validate_stepping,
+    validate_params, validate_plane, validate_stepping,
 };
 use crate::error::{Error, Result};
 use crate::model::Params;
@@ -168,13 +168,7 @@ impl FlipSpec {
                 ),
             ));
         }
-        validate_stability(&self.params, &self.stepping)?;
-        validate_speeds(
-            &self.params,
-            &self.stepping,
-            self.grid.omega1,
-            self.grid.omega2,
-        )
+        validate_plane(&self.params, &self.grid, &self.stepping)
     }
 }
 
@@ -257,6 +251,7 @@ impl LyapunovSpec {
     pub fn validate(&self) -> Result<()> {
         validate_params(&self.params)?;
         validate_grid_holding(&self.grid, self.band.map_or(self.grid.height, |b| b.1))?;
+        validate_plane(&self.params, &self.grid, &self.stepping)?;
         self.validate_run()
     }
 
@@ -266,7 +261,7 @@ impl LyapunovSpec {
         validate_stepping(&self.stepping)?;
         validate_stability(&self.params, &self.stepping)?;
         let g = &self.grid;
-        validate_speeds(&self.params, &self.stepping, g.omega1, g.omega2)?;
+        validate_speeds(&self.params, &self.stepping, g.fixed.omega1, g.fixed.omega2)?;
         let k = self.renorm / self.stepping.dt;
         if !(self.renorm.is_finite() && self.renorm > 0.0)
             || k.round() < 1.0

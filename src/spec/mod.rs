@@ -5,6 +5,7 @@
 use crate::error::{Error, Result, finite_positive};
 use crate::model::{Params, State};
 
+mod grid;
 mod indicator;
 mod kind;
 mod map;
@@ -12,6 +13,7 @@ mod memory;
 mod method;
 mod stability;
 
+pub use grid::{Axis, Grid, Var};
 pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};
 pub use kind::{MapKind, MapKindEntry};
 pub(crate) use map::on_any;
@@ -38,90 +40,6 @@ impl Range {
         min: -std::f64::consts::PI,
         max: std::f64::consts::PI,
     };
-}
-
-/// The initial-condition grid: theta1 along x (left to right), theta2 along y (top = max),
-/// every start with the same angular velocities. Pixel centres, not edges.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Grid {
-    pub width: u32,
-    pub height: u32,
-    pub theta1: Range,
-    pub theta2: Range,
-    /// Initial angular velocities (rad/s), the same for every pixel.
-    pub omega1: f64,
-    pub omega2: f64,
-}
-
-impl Grid {
-    pub fn square(n: u32) -> Self {
-        Grid {
-            width: n,
-            height: n,
-            theta1: Range::FULL_TURN,
-            theta2: Range::FULL_TURN,
-            omega1: 0.0,
-            omega2: 0.0,
-        }
-    }
-
-    pub fn theta1_step(&self) -> f64 {
-        (self.theta1.max - self.theta1.min) / self.width as f64
-    }
-
-    pub fn theta2_step(&self) -> f64 {
-        (self.theta2.max - self.theta2.min) / self.height as f64
-    }
-
-    /// theta1 at the centre of column `col`: the range's middle plus an odd whole number of
-    /// half steps, so columns mirrored about the middle get exactly opposite angles (the map's
-    /// symmetry, see `point_symmetric`, then holds bit for bit).
-    pub fn theta1_at(&self, col: u32) -> f64 {
-        let half_steps = 2.0 * col as f64 + 1.0 - self.width as f64;
-        self.theta1.mid() + half_steps * (0.5 * self.theta1_step())
-    }
-
-    /// theta2 at the centre of row `row` (row 0 is the top, theta2 near its maximum).
-    pub fn theta2_at(&self, row: u32) -> f64 {
-        let half_steps = 2.0 * row as f64 + 1.0 - self.height as f64;
-        self.theta2.mid() - half_steps * (0.5 * self.theta2_step())
-    }
-
-    /// Whether the starts come in opposite pairs (theta1, theta2) <-> (-theta1, -theta2), i.e.
-    /// pixel (col, row) <-> (width-1-col, height-1-row): both ranges centred on 0 and released
-    /// from rest. The equations of motion are odd under y -> -y (losses included), so mirrored
-    /// starts follow mirrored trajectories and flip at the same time: half the map is enough.
-    pub fn point_symmetric(&self) -> bool {
-        self.theta1.mid() == 0.0
-            && self.theta2.mid() == 0.0
-            && self.omega1 == 0.0
-            && self.omega2 == 0.0
-    }
-
-    pub fn start(&self, col: u32, row: u32) -> State {
-        State {
-            theta1: self.theta1_at(col),
-            omega1: self.omega1,
-            theta2: self.theta2_at(row),
-            omega2: self.omega2,
-        }
-    }
-
-    pub fn pixels(&self) -> u64 {
-        self.width as u64 * self.height as u64
-    }
-
-    /// Whether neighbouring pixels are closer than f32 resolves near |theta| = pi
-    /// ([`F32_MIN_PIXEL_STEP`]): such a grid must be integrated in f64.
-    pub fn needs_f64(&self) -> bool {
-        self.theta1_step().min(self.theta2_step()) < F32_MIN_PIXEL_STEP
-    }
-
-    /// Whether neighbouring pixels are closer than even f64 resolves near |theta| = pi
-    /// ([`F64_MIN_PIXEL_STEP`]): the map is computed, but no pixel of it is resolved.
-    pub fn beyond_f64(&self) -> bool {
-        self.theta1_step().min(self.theta2_step()) < F64_MIN_PIXEL_STEP
-    }
 }
 
 /// Smallest angle step between pixels that f32 still resolves near |theta| = pi: 16 ulp of
@@ -233,26 +151,6 @@ pub fn validate_start(s: &State) -> Result<()> {
     Ok(())
 }
 
-/// Angles must stay strictly inside (-pi, pi): a start outside has already flipped.
-fn validate_range(field: &'static str, r: &Range) -> Result<()> {
-    use std::f64::consts::PI;
-    // Allow the user's "-pi:pi" written with a rounded pi.
-    let limit = PI + 1e-9;
-    if !(r.min.is_finite() && r.max.is_finite()) || r.min >= r.max {
-        return Err(Error::invalid(
-            field,
-            format!("{}:{} must be MIN:MAX with MIN < MAX", r.min, r.max),
-        ));
-    }
-    if r.min < -limit || r.max > limit {
-        return Err(Error::invalid(
-            field,
-            format!("{}:{} must lie within -pi:pi", r.min, r.max),
-        ));
-    }
-    Ok(())
-}
-
 /// The grid in range, its whole map within the memory this process may take.
 pub fn validate_grid(g: &Grid) -> Result<()> {
     validate_grid_holding(g, g.height)
@@ -278,15 +176,54 @@ pub fn validate_grid_holding(g: &Grid, rows: u32) -> Result<()> {
         false => format!("a band of {rows} rows of a {}x{} map", g.width, g.height),
     };
     check_memory("size", g.width as u64 * rows as u64 * 10, &held)?;
-    validate_range("theta1", &g.theta1)?;
-    validate_range("theta2", &g.theta2)?;
-    if !g.omega1.is_finite() {
-        return Err(Error::invalid("omega1", "must be a finite number"));
-    }
-    if !g.omega2.is_finite() {
-        return Err(Error::invalid("omega2", "must be a finite number"));
+    g.validate_axes()
+}
+
+/// The map's physics over its whole plane: the parameters in range, the step stable and
+/// the speeds the starts can reach within RK4's reach, at the plane's corners and a lattice
+/// between them ([`Grid::lattice`]; exact for the speeds, which grow with |omega|, and for
+/// monotone parameters). A parameter the axes take out of range is named by its axis.
+pub fn validate_plane(p: &Params, g: &Grid, s: &Stepping) -> Result<()> {
+    let axis_of = |e: Error| -> Error {
+        let var = match (g.x.var.is_state(), g.y.var.is_state()) {
+            (false, _) => g.x.var,
+            (_, false) => g.y.var,
+            _ => return e,
+        };
+        let field = if var == g.x.var { "x" } else { "y" };
+        Error::invalid(field, format!("{} over this plane: {e}", var.name()))
+    };
+    for (q, start) in g.lattice(p) {
+        validate_params(&q).map_err(axis_of)?;
+        let at = |e: Error| match g.varies_params() || !g.is_angle_plane() {
+            true => with_context(e, &format!("at {}", point_words(g, &q, &start))),
+            false => e,
+        };
+        validate_stability(&q, s).map_err(at)?;
+        validate_speeds(&q, s, start.omega1, start.omega2).map_err(at)?;
     }
     Ok(())
+}
+
+/// `x = .., y = ..` of a point of the plane, in words.
+fn point_words(g: &Grid, p: &Params, s: &State) -> String {
+    format!(
+        "{} = {}, {} = {}",
+        g.x.var.name(),
+        g.x.var.get(p, s),
+        g.y.var.name(),
+        g.y.var.get(p, s)
+    )
+}
+
+/// The same error with `context` after its message.
+fn with_context(e: Error, context: &str) -> Error {
+    match e {
+        Error::InvalidSpec { field, reason } => {
+            Error::invalid(field, format!("{reason} ({context})"))
+        }
+        e => e,
+    }
 }
 
 #[cfg(test)]
@@ -311,8 +248,8 @@ mod tests {
     fn pixel_centres() {
         let g = Grid::square(4);
         let h = std::f64::consts::PI / 4.0;
-        assert!((g.theta1_at(0) - (-3.0 * h)).abs() < 1e-15);
-        assert!((g.theta2_at(0) - 3.0 * h).abs() < 1e-15);
-        assert!((g.theta2_at(3) + 3.0 * h).abs() < 1e-15);
+        assert!((g.x_at(0) - (-3.0 * h)).abs() < 1e-15);
+        assert!((g.y_at(0) - 3.0 * h).abs() < 1e-15);
+        assert!((g.y_at(3) + 3.0 * h).abs() < 1e-15);
     }
 }

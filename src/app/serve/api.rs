@@ -66,14 +66,7 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
             min: x - 0.5 * pixel,
             max: x + 0.5 * pixel,
         };
-        let grid = Grid {
-            width: 1,
-            height: 1,
-            theta1: around(start.theta1),
-            theta2: around(start.theta2),
-            omega1: 0.0,
-            omega2: 0.0,
-        };
+        let grid = Grid::angles(1, 1, around(start.theta1), around(start.theta2), 0.0, 0.0);
         Ok((view, grid))
     })();
     let (view, grid) = match parsed {
@@ -100,8 +93,8 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
                 }
             };
             json(serde_json::json!({
-                "theta1": grid.theta1_at(0),
-                "theta2": grid.theta2_at(0),
+                "theta1": grid.x_at(0),
+                "theta2": grid.y_at(0),
                 "flip_time": time,
                 "resolved": resolved,
                 "precision": precision,
@@ -166,11 +159,7 @@ pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
     }
     let world = shared.world;
     let result = on_engine(&shared, move |engine, monitor| {
-        let spec = view.lyapunov_spec(Grid {
-            theta1: world.theta1,
-            theta2: world.theta2,
-            ..Grid::square(128)
-        });
+        let spec = view.lyapunov_spec(Grid::angles(128, 128, world.theta1, world.theta2, 0.0, 0.0));
         spec.validate()?;
         Ok(render::default_range(&spec, &engine.map(&spec, monitor)?))
     })

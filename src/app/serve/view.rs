@@ -368,8 +368,8 @@ impl World {
     pub fn of_grid(grid: &Grid) -> World {
         let side = grid.width.max(grid.height).max(1) as f64;
         World {
-            theta1: grid.theta1,
-            theta2: grid.theta2,
+            theta1: grid.x.range,
+            theta2: grid.y.range,
             width: grid.width,
             height: grid.height,
             native: (side / 256.0).log2().ceil().max(0.0) as u32,
@@ -421,20 +421,20 @@ impl World {
         // span * k is exact (a power of two times k), so the whole turn's tiles get
         // -pi + x * 2 pi / 2^z, the same numbers at every level.
         let (step1, step2) = (span * k1, span * k2);
-        Ok(Grid {
-            width: size,
-            height: size,
-            theta1: Range {
+        Ok(Grid::angles(
+            size,
+            size,
+            Range {
                 min: self.theta1.min + x as f64 * step1,
                 max: self.theta1.min + (x + 1) as f64 * step1,
             },
-            theta2: Range {
+            Range {
                 min: self.theta2.max - (y + 1) as f64 * step2,
                 max: self.theta2.max - y as f64 * step2,
             },
-            omega1: 0.0,
-            omega2: 0.0,
-        })
+            0.0,
+            0.0,
+        ))
     }
 
     /// The region's pixel under pixel `k` of `size` along tile `t` of level `z` (<= native),
@@ -467,14 +467,7 @@ pub fn region_grid(q: &mut Query) -> Result<Grid> {
             format!("{width} x {height} exceeds {MAX_SAVE_PIXELS} pixels"),
         ));
     }
-    Ok(Grid {
-        width,
-        height,
-        theta1,
-        theta2,
-        omega1: 0.0,
-        omega2: 0.0,
-    })
+    Ok(Grid::angles(width, height, theta1, theta2, 0.0, 0.0))
 }
 
 /// One start, `theta1`, `theta2` (rad), from rest.
@@ -500,11 +493,11 @@ mod tests {
         let turn = World::TURN;
         let a = turn.tile_grid(3, 2, 5, 256).unwrap();
         let b = turn.tile_grid(3, 3, 5, 256).unwrap();
-        assert_eq!(a.theta1.max, b.theta1.min);
-        assert_eq!(a.theta1.min, -PI + 2.0 * (2.0 * PI / 8.0));
+        assert_eq!(a.x.range.max, b.x.range.min);
+        assert_eq!(a.x.range.min, -PI + 2.0 * (2.0 * PI / 8.0));
         let top = turn.tile_grid(0, 0, 0, 256).unwrap();
         assert_eq!(
-            (top.theta1, top.theta2),
+            (top.x.range, top.y.range),
             (Range::FULL_TURN, Range::FULL_TURN)
         );
         assert!(turn.tile_grid(3, 8, 0, 256).is_err());
@@ -530,8 +523,8 @@ mod tests {
         );
         // The native level's tile grid has the stored map's pixel centres.
         let g = world.tile_grid(2, 1, 0, 256).unwrap();
-        assert!((g.theta1_at(0) - grid.theta1_at(256)).abs() < 1e-12);
-        assert!((g.theta2_at(5) - grid.theta2_at(5)).abs() < 1e-12);
+        assert!((g.x_at(0) - grid.x_at(256)).abs() < 1e-12);
+        assert!((g.y_at(5) - grid.y_at(5)).abs() < 1e-12);
     }
 
     #[test]

@@ -122,7 +122,10 @@ pub(super) fn shown(v: &serde_json::Value) -> String {
 pub(super) fn setting(at: &[String]) -> &'static str {
     let leaf = at.last().map(String::as_str).unwrap_or("");
     let parent = at.len().checked_sub(2).map_or("", |k| at[k].as_str());
+    let axis = at.len().checked_sub(3).map_or("", |k| at[k].as_str());
     match (parent, leaf) {
+        ("range", _) | (_, "var") if axis == "x" || parent == "x" => "x",
+        ("range", _) | (_, "var") => "y",
         ("", "map") | (_, "Flip") | (_, "Lyapunov") | ("map", _) => "data",
         (_, "width" | "height") => "size",
         ("theta1", "min" | "max") => "theta1",
@@ -149,6 +152,8 @@ pub(super) fn setting(at: &[String]) -> &'static str {
         (_, "dt") => "dt",
         (_, "omega1") => "omega1",
         (_, "omega2") => "omega2",
+        ("fixed", "theta1") => "theta1",
+        ("fixed", "theta2") => "theta2",
         (_, "renorm") => "renorm",
         (_, "precision") => "precision",
         (_, "backend") => "backend",

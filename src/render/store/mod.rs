@@ -231,12 +231,12 @@ impl MapStore {
         let err = |e: &dyn std::fmt::Display| store_error(path, e);
         let (w, h) = (grid.width as u64, grid.height as u64);
         let rows = chunk_rows(grid.width, grid.height) as u64;
-        write_angles(&store, path, grid)?;
+        write_axes(&store, path, grid)?;
         let mut attributes = serde_json::Map::new();
         attributes.insert("units".into(), units.into());
         attributes.insert("long_name".into(), name.into());
         let map = ArrayBuilder::new(vec![h, w], vec![rows, w], data_type::float32(), f32::NAN)
-            .dimension_names(["theta2", "theta1"].into())
+            .dimension_names(dims(grid).into())
             .attributes(attributes)
             .bytes_to_bytes_codecs(checksummed())
             .build(store.clone(), "/map")
@@ -250,7 +250,7 @@ impl MapStore {
             );
             let mask =
                 ArrayBuilder::new(vec![h, w], vec![rows, w], data_type::uint8(), NOT_COMPUTED)
-                    .dimension_names(["theta2", "theta1"].into())
+                    .dimension_names(dims(grid).into())
                     .attributes(attributes)
                     .bytes_to_bytes_codecs(checksummed())
                     .build(store.clone(), "/resolved")
@@ -478,27 +478,29 @@ fn write_coordinate(
     array.store_chunk(&[0], values).map_err(|e| err(&e))
 }
 
-/// The angle coordinates of `grid`'s pixel centres, `theta1` and `theta2`.
-fn write_angles(store: &Arc<AtomicStore>, path: &Path, grid: &Grid) -> Result<()> {
+/// A map's dimension names, (y, x): its axes' names as arrays ([`crate::spec::Var::key`]).
+pub(crate) fn dims(grid: &Grid) -> [&'static str; 2] {
+    [grid.y.var.key(), grid.x.var.key()]
+}
+
+/// The coordinates of `grid`'s pixel centres along its axes, named by what they vary
+/// (`theta1` and `theta2` for today's plane), with their units.
+fn write_axes(store: &Arc<AtomicStore>, path: &Path, grid: &Grid) -> Result<()> {
     for (axis, values) in [
         (
-            "theta1",
-            (0..grid.width)
-                .map(|c| grid.theta1_at(c))
-                .collect::<Vec<f64>>(),
+            grid.x,
+            (0..grid.width).map(|c| grid.x_at(c)).collect::<Vec<f64>>(),
         ),
-        (
-            "theta2",
-            (0..grid.height).map(|r| grid.theta2_at(r)).collect(),
-        ),
+        (grid.y, (0..grid.height).map(|r| grid.y_at(r)).collect()),
     ] {
         let mut attributes = serde_json::Map::new();
-        attributes.insert("units".into(), "rad".into());
+        attributes.insert("units".into(), axis.var.unit().into());
         attributes.insert(
             "long_name".into(),
-            format!("{axis} at the pixel centres").into(),
+            format!("{} at the pixel centres", axis.var.name()).into(),
         );
-        write_coordinate(store, path, (axis, axis), &values, attributes)?;
+        let key = axis.var.key();
+        write_coordinate(store, path, (key, key), &values, attributes)?;
     }
     Ok(())
 }

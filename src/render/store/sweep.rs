@@ -45,7 +45,7 @@ impl SweepStore {
         let (param_name, param_units, values) = param;
         // An array name may not hold a slash: m2/m1 is stored as m2_over_m1.
         let param_array = param_name.replace('/', "_over_");
-        write_angles(&store, path, grid)?;
+        write_axes(&store, path, grid)?;
         let mut attributes = serde_json::Map::new();
         attributes.insert("units".into(), param_units.into());
         write_coordinate(&store, path, (&param_array, "frame"), values, attributes)?;
@@ -60,7 +60,10 @@ impl SweepStore {
             data_type::float32(),
             f32::NAN,
         )
-        .dimension_names(["frame", "theta2", "theta1"].into())
+        .dimension_names({
+            let [y, x] = super::dims(grid);
+            ["frame", y, x].into()
+        })
         .attributes(attributes)
         .bytes_to_bytes_codecs(checksummed())
         .build(store.clone(), "/map")

@@ -1,0 +1,547 @@
+//! The plane a map spans: any two of the start's angles and angular velocities and the
+//! physical parameters along x and y ([`Var`]), everything else fixed. Pixel centres, row 0
+//! at the top (y at its maximum).
+
+use super::Range;
+use crate::error::{Error, Result};
+use crate::model::{Params, State};
+
+/// What an axis of a map varies: a component of the start or a physical parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Var {
+    Theta1,
+    Omega1,
+    Theta2,
+    Omega2,
+    M1,
+    M2,
+    /// m2 / m1, m1 held.
+    MassRatio,
+    L1,
+    L2,
+    /// l2 / l1, l1 held.
+    LengthRatio,
+    G,
+    /// Both joints' damping at once (N m s).
+    Damping,
+    Joint1,
+    Joint2,
+    Rod1,
+    Rod2,
+}
+
+impl Var {
+    pub const ALL: [Var; 16] = [
+        Var::Theta1,
+        Var::Omega1,
+        Var::Theta2,
+        Var::Omega2,
+        Var::M1,
+        Var::M2,
+        Var::MassRatio,
+        Var::L1,
+        Var::L2,
+        Var::LengthRatio,
+        Var::G,
+        Var::Damping,
+        Var::Joint1,
+        Var::Joint2,
+        Var::Rod1,
+        Var::Rod2,
+    ];
+
+    /// How the command line and the explorer spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Var::Theta1 => "theta1",
+            Var::Omega1 => "omega1",
+            Var::Theta2 => "theta2",
+            Var::Omega2 => "omega2",
+            Var::M1 => "m1",
+            Var::M2 => "m2",
+            Var::MassRatio => "m2/m1",
+            Var::L1 => "l1",
+            Var::L2 => "l2",
+            Var::LengthRatio => "l2/l1",
+            Var::G => "g",
+            Var::Damping => "damping",
+            Var::Joint1 => "joint1",
+            Var::Joint2 => "joint2",
+            Var::Rod1 => "rod1",
+            Var::Rod2 => "rod2",
+        }
+    }
+
+    /// Its name as an array's name (a Zarr store's coordinate, which may not hold `/`).
+    pub fn key(self) -> &'static str {
+        match self {
+            Var::MassRatio => "mass_ratio",
+            Var::LengthRatio => "length_ratio",
+            v => v.name(),
+        }
+    }
+
+    /// Its label on a picture's axis.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Var::Theta1 => "θ1",
+            Var::Omega1 => "ω1",
+            Var::Theta2 => "θ2",
+            Var::Omega2 => "ω2",
+            Var::Damping => "joint damping",
+            Var::Joint1 => "pivot damping",
+            Var::Joint2 => "joint damping c2",
+            Var::Rod1 => "rod mass 1",
+            Var::Rod2 => "rod mass 2",
+            v => v.name(),
+        }
+    }
+
+    pub fn unit(self) -> &'static str {
+        match self {
+            Var::Theta1 | Var::Theta2 => "rad",
+            Var::Omega1 | Var::Omega2 => "rad/s",
+            Var::M1 | Var::M2 | Var::Rod1 | Var::Rod2 => "kg",
+            Var::MassRatio | Var::LengthRatio => "1",
+            Var::L1 | Var::L2 => "m",
+            Var::G => "m/s^2",
+            Var::Damping | Var::Joint1 | Var::Joint2 => "N m s",
+        }
+    }
+
+    pub fn is_angle(self) -> bool {
+        matches!(self, Var::Theta1 | Var::Theta2)
+    }
+
+    /// A component of the start (not a parameter).
+    pub fn is_state(self) -> bool {
+        (self.code() as usize) < 4
+    }
+
+    /// Its code in the shaders' `Params.x_var`/`y_var` (shaders/common.wgsl `VAR_*`): the
+    /// state's components first, in the order of the state vector.
+    pub fn code(self) -> u32 {
+        Var::ALL.iter().position(|&v| v == self).expect("listed") as u32
+    }
+
+    /// Measured in mass, so the GPU's mass scale applies to it (src/gpu/layout.rs).
+    pub fn is_mass(self) -> bool {
+        matches!(
+            self,
+            Var::M1 | Var::M2 | Var::Rod1 | Var::Rod2 | Var::Damping | Var::Joint1 | Var::Joint2
+        )
+    }
+
+    /// A ratio, set after the value it multiplies (so m1 and m2/m1 compose either way).
+    pub fn is_ratio(self) -> bool {
+        matches!(self, Var::MassRatio | Var::LengthRatio)
+    }
+
+    /// Which value it writes (a parameter's name, `joint` for the damping): two axes may
+    /// not write the same.
+    pub fn writes(self) -> &'static str {
+        match self {
+            Var::MassRatio => "m2",
+            Var::LengthRatio => "l2",
+            Var::Damping => "joint",
+            Var::Joint1 | Var::Joint2 => "joint",
+            v => v.name(),
+        }
+    }
+
+    /// Sets it to `v` in a start and its parameters.
+    pub fn set(self, v: f64, p: &mut Params, s: &mut State) {
+        match self {
+            Var::Theta1 => s.theta1 = v,
+            Var::Omega1 => s.omega1 = v,
+            Var::Theta2 => s.theta2 = v,
+            Var::Omega2 => s.omega2 = v,
+            Var::M1 => p.m1 = v,
+            Var::M2 => p.m2 = v,
+            Var::MassRatio => p.m2 = v * p.m1,
+            Var::L1 => p.l1 = v,
+            Var::L2 => p.l2 = v,
+            Var::LengthRatio => p.l2 = v * p.l1,
+            Var::G => p.g = v,
+            Var::Damping => (p.losses.joint1, p.losses.joint2) = (v, v),
+            Var::Joint1 => p.losses.joint1 = v,
+            Var::Joint2 => p.losses.joint2 = v,
+            Var::Rod1 => p.rod1 = v,
+            Var::Rod2 => p.rod2 = v,
+        }
+    }
+
+    /// Its value in a start and its parameters.
+    pub fn get(self, p: &Params, s: &State) -> f64 {
+        match self {
+            Var::Theta1 => s.theta1,
+            Var::Omega1 => s.omega1,
+            Var::Theta2 => s.theta2,
+            Var::Omega2 => s.omega2,
+            Var::M1 => p.m1,
+            Var::M2 => p.m2,
+            Var::MassRatio => p.m2 / p.m1,
+            Var::L1 => p.l1,
+            Var::L2 => p.l2,
+            Var::LengthRatio => p.l2 / p.l1,
+            Var::G => p.g,
+            Var::Damping | Var::Joint1 => p.losses.joint1,
+            Var::Joint2 => p.losses.joint2,
+            Var::Rod1 => p.rod1,
+            Var::Rod2 => p.rod2,
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Var> {
+        let name = name.trim().to_ascii_lowercase();
+        Var::ALL
+            .into_iter()
+            .find(|v| v.name() == name || v.key() == name)
+    }
+}
+
+/// One axis: what it varies, over which range (pixel edges at the range's ends).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Axis {
+    pub var: Var,
+    pub range: Range,
+}
+
+impl Axis {
+    pub fn new(var: Var, min: f64, max: f64) -> Self {
+        Axis {
+            var,
+            range: Range { min, max },
+        }
+    }
+
+    /// Width of one of `n` pixels.
+    pub fn step(&self, n: u32) -> f64 {
+        (self.range.max - self.range.min) / n as f64
+    }
+
+    /// The centre of pixel `k` of `n`, counted from the range's minimum: the middle plus an
+    /// odd whole number of half steps, so pixels mirrored about the middle get exactly
+    /// opposite values (the map's point symmetry then holds bit for bit).
+    pub fn at(&self, k: u32, n: u32) -> f64 {
+        self.range.mid() + Axis::half_steps(k, n) * (0.5 * self.step(n))
+    }
+
+    /// The centre of pixel `k` of `n`, counted from the range's maximum.
+    pub fn at_from_max(&self, k: u32, n: u32) -> f64 {
+        self.range.mid() - Axis::half_steps(k, n) * (0.5 * self.step(n))
+    }
+
+    fn half_steps(k: u32, n: u32) -> f64 {
+        2.0 * k as f64 + 1.0 - n as f64
+    }
+
+    /// The smallest step between pixels that a float of relative precision `epsilon` still
+    /// resolves over this axis: 16 ulp of its largest value (angles: of pi at least, where
+    /// they flip).
+    pub fn finest_step(&self, epsilon: f64) -> f64 {
+        let floor = if self.var.is_angle() {
+            std::f64::consts::PI
+        } else {
+            f64::MIN_POSITIVE
+        };
+        let largest = self.range.min.abs().max(self.range.max.abs()).max(floor);
+        // ulp(x) = epsilon 2^floor(log2 x): pi's is 2 epsilon.
+        16.0 * epsilon * largest.log2().floor().exp2()
+    }
+}
+
+/// The initial-condition grid: `x` left to right, `y` bottom to top (row 0 at the top), the
+/// start's other components from `fixed`, the parameters from the map's. Pixel centres.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(from = "GridRecord")]
+pub struct Grid {
+    pub width: u32,
+    pub height: u32,
+    pub x: Axis,
+    pub y: Axis,
+    /// The start's angles (rad) and angular velocities (rad/s) where no axis sets them.
+    pub fixed: State,
+}
+
+/// A grid as stores record it: as now, or as written before axes were data (theta1 along x,
+/// theta2 along y).
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum GridRecord {
+    Plane {
+        width: u32,
+        height: u32,
+        x: Axis,
+        y: Axis,
+        fixed: State,
+    },
+    Angles {
+        width: u32,
+        height: u32,
+        theta1: Range,
+        theta2: Range,
+        omega1: f64,
+        omega2: f64,
+    },
+}
+
+impl From<GridRecord> for Grid {
+    fn from(r: GridRecord) -> Grid {
+        match r {
+            GridRecord::Plane {
+                width,
+                height,
+                x,
+                y,
+                fixed,
+            } => Grid {
+                width,
+                height,
+                x,
+                y,
+                fixed,
+            },
+            GridRecord::Angles {
+                width,
+                height,
+                theta1,
+                theta2,
+                omega1,
+                omega2,
+            } => Grid::angles(width, height, theta1, theta2, omega1, omega2),
+        }
+    }
+}
+
+impl Grid {
+    /// The (theta1, theta2) plane released with angular velocities (`omega1`, `omega2`).
+    pub fn angles(
+        width: u32,
+        height: u32,
+        theta1: Range,
+        theta2: Range,
+        omega1: f64,
+        omega2: f64,
+    ) -> Self {
+        Grid {
+            width,
+            height,
+            x: Axis {
+                var: Var::Theta1,
+                range: theta1,
+            },
+            y: Axis {
+                var: Var::Theta2,
+                range: theta2,
+            },
+            fixed: State {
+                omega1,
+                omega2,
+                ..State::default()
+            },
+        }
+    }
+
+    /// The whole (theta1, theta2) plane released from rest.
+    pub fn square(n: u32) -> Self {
+        Grid::angles(n, n, Range::FULL_TURN, Range::FULL_TURN, 0.0, 0.0)
+    }
+
+    /// Whether it is the (theta1, theta2) plane, the map of today's flags.
+    pub fn is_angle_plane(&self) -> bool {
+        self.x.var == Var::Theta1 && self.y.var == Var::Theta2
+    }
+
+    pub fn x_step(&self) -> f64 {
+        self.x.step(self.width)
+    }
+
+    pub fn y_step(&self) -> f64 {
+        self.y.step(self.height)
+    }
+
+    /// x at the centre of column `col`.
+    pub fn x_at(&self, col: u32) -> f64 {
+        self.x.at(col, self.width)
+    }
+
+    /// y at the centre of row `row` (row 0 is the top, y near its maximum).
+    pub fn y_at(&self, row: u32) -> f64 {
+        self.y.at_from_max(row, self.height)
+    }
+
+    /// Whether a parameter lies on an axis (each pixel then has its own).
+    pub fn varies_params(&self) -> bool {
+        !(self.x.var.is_state() && self.y.var.is_state())
+    }
+
+    /// The parameters and the start of pixel (`col`, `row`) of a map with parameters `p`.
+    /// Ratios are set after the values they multiply.
+    pub fn pixel(&self, p: &Params, col: u32, row: u32) -> (Params, State) {
+        let (mut p, mut s) = (*p, self.fixed);
+        let mut axes = [(self.x.var, self.x_at(col)), (self.y.var, self.y_at(row))];
+        axes.sort_by_key(|(v, _)| v.is_ratio());
+        for (var, value) in axes {
+            var.set(value, &mut p, &mut s);
+        }
+        (p, s)
+    }
+
+    /// The start of pixel (`col`, `row`) (its parameters: [`Grid::pixel`]).
+    pub fn start(&self, col: u32, row: u32) -> State {
+        self.pixel(&Params::default(), col, row).1
+    }
+
+    /// Whether the starts come in opposite pairs, pixel (col, row) <-> (width-1-col,
+    /// height-1-row) starting from s and -s: both axes components of the start with ranges
+    /// centred on 0 and every other component 0. The equations of motion are odd under
+    /// y -> -y (losses included), so mirrored starts follow mirrored trajectories and flip at
+    /// the same time: half the map is enough. A parameter axis breaks it.
+    pub fn point_symmetric(&self) -> bool {
+        if self.varies_params() || self.x.range.mid() != 0.0 || self.y.range.mid() != 0.0 {
+            return false;
+        }
+        let s = self.fixed;
+        [
+            (Var::Theta1, s.theta1),
+            (Var::Omega1, s.omega1),
+            (Var::Theta2, s.theta2),
+            (Var::Omega2, s.omega2),
+        ]
+        .iter()
+        .all(|&(v, value)| value == 0.0 || v == self.x.var || v == self.y.var)
+    }
+
+    pub fn pixels(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    /// Whether neighbouring pixels are closer than f32 resolves (16 ulp of the axis's
+    /// largest value, of pi for angles): such a grid must be integrated in f64.
+    pub fn needs_f64(&self) -> bool {
+        self.x_step() < self.x.finest_step(f32::EPSILON as f64)
+            || self.y_step() < self.y.finest_step(f32::EPSILON as f64)
+    }
+
+    /// Whether neighbouring pixels are closer than even f64 resolves: the map is computed,
+    /// but no pixel of it is resolved.
+    pub fn beyond_f64(&self) -> bool {
+        self.x_step() < self.x.finest_step(f64::EPSILON)
+            || self.y_step() < self.y.finest_step(f64::EPSILON)
+    }
+
+    /// The plane's corners and a lattice between them (9 x 9 points): where the parameters
+    /// and speeds are checked against their ranges and the step's stability.
+    pub fn lattice(&self, p: &Params) -> Vec<(Params, State)> {
+        let mut out = Vec::with_capacity(81);
+        for i in 0..9 {
+            for j in 0..9 {
+                let at =
+                    |a: &Axis, k: u32| a.range.min + (a.range.max - a.range.min) * k as f64 / 8.0;
+                let (mut q, mut s) = (*p, self.fixed);
+                let mut axes = [(self.x.var, at(&self.x, i)), (self.y.var, at(&self.y, j))];
+                axes.sort_by_key(|(v, _)| v.is_ratio());
+                for (var, value) in axes {
+                    var.set(value, &mut q, &mut s);
+                }
+                out.push((q, s));
+            }
+        }
+        out
+    }
+
+    /// The two axes vary different things, each range MIN < MAX, angles within -pi:pi,
+    /// every value finite.
+    pub fn validate_axes(&self) -> Result<()> {
+        use std::f64::consts::PI;
+        for (field, a) in [("x", &self.x), ("y", &self.y)] {
+            let r = a.range;
+            // The angle flags keep their names in errors (`--theta1 -4:4`).
+            let field = match a.var {
+                Var::Theta1 | Var::Theta2 if self.is_angle_plane() => a.var.name(),
+                _ => field,
+            };
+            if !(r.min.is_finite() && r.max.is_finite()) || r.min >= r.max {
+                return Err(Error::invalid(
+                    field,
+                    format!("{}:{} must be MIN:MAX with MIN < MAX", r.min, r.max),
+                ));
+            }
+            // Allow the user's "-pi:pi" written with a rounded pi.
+            let limit = PI + 1e-9;
+            if a.var.is_angle() && (r.min < -limit || r.max > limit) {
+                return Err(Error::invalid(
+                    field,
+                    format!(
+                        "{}:{} must lie within -pi:pi (a start outside has already flipped)",
+                        r.min, r.max
+                    ),
+                ));
+            }
+        }
+        if self.x.var.writes() == self.y.var.writes() {
+            return Err(Error::invalid(
+                "y",
+                format!(
+                    "{} and {} set the same value: take two different axes",
+                    self.x.var.name(),
+                    self.y.var.name()
+                ),
+            ));
+        }
+        let s = self.fixed;
+        super::validate_start(&s)?;
+        for (field, v) in [("theta1", s.theta1), ("theta2", s.theta2)] {
+            if v.abs() > PI + 1e-9 {
+                return Err(Error::invalid(
+                    field,
+                    format!("{v} must lie within -pi..pi (a start outside has already flipped)"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_put_the_state_first() {
+        let state: Vec<_> = Var::ALL.iter().filter(|v| v.is_state()).collect();
+        assert_eq!(
+            state,
+            [&Var::Theta1, &Var::Omega1, &Var::Theta2, &Var::Omega2]
+        );
+        for v in Var::ALL {
+            assert_eq!(Var::parse(v.name()), Some(v));
+            assert_eq!(Var::parse(v.key()), Some(v));
+        }
+    }
+
+    #[test]
+    fn old_records_read_as_the_angle_plane() {
+        let old = r#"{"width":4,"height":2,"theta1":{"min":-1.0,"max":1.0},
+            "theta2":{"min":-2.0,"max":2.0},"omega1":0.5,"omega2":0.0}"#;
+        let g: Grid = serde_json::from_str(old).unwrap();
+        let r = |min, max| Range { min, max };
+        assert_eq!(g, Grid::angles(4, 2, r(-1.0, 1.0), r(-2.0, 2.0), 0.5, 0.0));
+        let again: Grid = serde_json::from_str(&serde_json::to_string(&g).unwrap()).unwrap();
+        assert_eq!(again, g);
+    }
+
+    #[test]
+    fn ratios_compose_with_the_values_they_multiply() {
+        let g = Grid {
+            x: Axis::new(Var::MassRatio, 1.0, 3.0),
+            y: Axis::new(Var::M1, 1.0, 3.0),
+            ..Grid::square(2)
+        };
+        // Pixel (1, 0): m2/m1 = 2.5, m1 = 2.5 (top row): m2 = 6.25 whichever axis comes first.
+        let (p, _) = g.pixel(&Params::default(), 1, 0);
+        assert_eq!((p.m1, p.m2), (2.5, 6.25));
+    }
+}
