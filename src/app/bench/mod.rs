@@ -91,7 +91,9 @@ struct Sample {
 /// The GPU rows: the peers' two modes, early exit and every step, as the peers define them
 /// (`early-all`, `full`: every pixel integrated, the raw throughput) and with the mirrored
 /// half of the symmetric grid (`early`: the map as users get it, `full-half`).
-const MODES: [&str; 4] = ["early", "early-all", "full", "full-half"];
+/// `full-plane`: the (m2/m1, l2/l1) parameter plane at a fixed start, every pixel every
+/// step: against `full`, what per-pixel parameters cost the kernel (issue 22).
+const MODES: [&str; 5] = ["early", "early-all", "full", "full-half", "full-plane"];
 
 /// The f64 kernel's rows: the map as users get it, and every pixel every step.
 const MODES_F64: [&str; 2] = ["early", "full"];
@@ -116,12 +118,21 @@ fn problem_steps(field: &Field, spec: &FlipSpec) -> f64 {
 
 /// The FLIP-512 problem; `mode` is one of `MODES`.
 fn spec(size: u32, args: &BenchJob, mode: &str) -> FlipSpec {
+    let grid = match mode {
+        "full-plane" => Grid {
+            x: crate::spec::Axis::new(crate::spec::Var::MassRatio, 0.5, 2.0),
+            y: crate::spec::Axis::new(crate::spec::Var::LengthRatio, 0.5, 2.0),
+            fixed: crate::model::State::at_rest(2.0, 2.0),
+            ..Grid::square(size)
+        },
+        _ => Grid::square(size),
+    };
     FlipSpec {
         early_exit: mode.starts_with("early"),
         use_symmetry: mode == "early" || mode == "full-half",
         ..FlipSpec::new(
             Params::default(),
-            Grid::square(size),
+            grid,
             Stepping {
                 dt: args.dt,
                 t_max: args.t_max,
@@ -393,6 +404,12 @@ fn ratios(rows: &[Row]) -> Vec<String> {
         out.push(format!(
             "f64: the GPU's f64 kernel runs {:.2}x the f32 kernel's pendulum-steps/s (every step)",
             f64_full / full
+        ));
+    }
+    if let (Some(full), Some(plane)) = (gpu_rate("full"), gpu_rate("full-plane")) {
+        out.push(format!(
+            "plane: a parameter plane (m2/m1, l2/l1) costs {:.2}x the (theta1, theta2) map of the same size and time on the GPU (every pixel every step)",
+            full / plane
         ));
     }
     if let (Some(full), Some(ftle)) = (gpu_rate("full"), gpu_rate("ftle")) {
