@@ -22,7 +22,8 @@ struct Params {
     l1: real,
     l2: real,
     dt: real,
-    // The plane: the middle and half a pixel of each axis (shaders: VAR_* say what it varies).
+    // The plane: the middle and half a pixel of each axis (x_var, y_var say what it varies);
+    // for pairs (eps > 0), each range's minimum and width.
     x_mid: real,
     x_half_step: real,
     y_mid: real,
@@ -52,6 +53,9 @@ struct Params {
     m2: real,
     rod1: real,
     rod2: real,
+    // Above 0: the pixels are pairs of starts, the second moved by eps of the plane (src/spec/
+    // grid.rs `Sampling::Pairs`), drawn from `seed`.
+    eps: real,
     // Grid size, and the tile: `rows` rows of `width` pixels from grid row `row0`.
     width: u32,
     height: u32,
@@ -75,7 +79,7 @@ struct Params {
     // What the axes vary (src/spec/grid.rs `Var::code`).
     x_var: u32,
     y_var: u32,
-    _pad1: u32,
+    seed: u32,
 }
 
 // Set per pipeline (src/gpu/pipeline.rs, src/model.rs `Losses::kinds`): each kind of loss is
@@ -282,10 +286,52 @@ fn hermite_crossing(ta: real, wa: real, tb: real, wb: real, h: real) -> real {
 fn pixel_xy(p: Params, i: u32) -> vec2<real> {
     let col = i % p.width;
     let row = p.row0 + i / p.width;
+    if p.eps > 0.0 {
+        return pair_xy(p, col, row);
+    }
     return vec2<real>(
         p.x_mid + real(i32(2u * col + 1u) - i32(p.width)) * p.x_half_step,
         p.y_mid - real(i32(2u * row + 1u) - i32(p.height)) * p.y_half_step,
     );
+}
+
+// PCG's output hash (src/spec/grid.rs `pcg`, the same u32 arithmetic).
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// A number in [0, 1) of 48 random bits (src/spec/grid.rs `unit`; f32 keeps 24 of them).
+fn unit(a: u32, b: u32) -> real {
+    return real(a >> 8u) * (1.0 / 16777216.0) + real(b >> 8u) * (1.0 / 281474976710656.0);
+}
+
+// Pixel (col, row) of a grid of pairs side by side (src/spec/grid.rs `Grid::xy`): a start drawn over the plane, or
+// it moved by eps of the plane's width or height, either way, back inside if it would leave.
+fn pair_xy(p: Params, col: u32, row: u32) -> vec2<real> {
+    let h = pcg(p.seed ^ pcg(row * (p.width / 2u) + col / 2u));
+    var xy = vec2<real>(p.x_mid + unit(pcg(h ^ 1u), pcg(h ^ 2u)) * p.x_half_step,
+        p.y_mid + unit(pcg(h ^ 3u), pcg(h ^ 4u)) * p.y_half_step);
+    if col % 2u == 1u {
+        let d = pcg(h ^ 5u) & 3u;
+        let along_y = d >= 2u;
+        let lo = select(p.x_mid, p.y_mid, along_y);
+        let width = select(p.x_half_step, p.y_half_step, along_y);
+        let step = p.eps * width;
+        let v = select(xy.x, xy.y, along_y);
+        let down = (d & 1u) == 1u;
+        var moved = select(v + step, v - step, down);
+        if moved < lo || moved > lo + width {
+            moved = select(v - step, v + step, down);
+        }
+        if along_y {
+            xy.y = moved;
+        } else {
+            xy.x = moved;
+        }
+    }
+    return xy;
 }
 
 // Start (theta1, omega1, theta2, omega2) of pixel i: the fixed start with the components the

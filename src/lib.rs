@@ -18,6 +18,7 @@
 //! ```
 
 pub mod app;
+pub mod boundary;
 pub mod cli;
 pub mod cpu;
 pub mod engine;

@@ -45,6 +45,7 @@ fn ratio_plane(n: u32) -> Grid {
         x: Axis::new(Var::MassRatio, 0.5, 2.0),
         y: Axis::new(Var::LengthRatio, 0.5, 2.0),
         fixed: chaoscope::model::State::at_rest(2.0, 2.5),
+        sampling: Default::default(),
     }
 }
 
@@ -182,6 +183,7 @@ fn flip_times_depend_on_the_mass_ratio_only() {
         x: Axis::new(Var::M1, 0.5, 1.5),
         y: Axis::new(Var::M2, 1.0, 3.0),
         fixed: chaoscope::model::State::at_rest(2.0, 2.5),
+        sampling: Default::default(),
     };
     let mut engines = vec![("cpu", Engine::new(Backend::Cpu).unwrap(), Precision::F64)];
     if let Some(ctx) = common::gpu() {

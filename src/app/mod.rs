@@ -4,6 +4,7 @@
 //! goes into each file's metadata.
 
 pub mod bench;
+pub mod boundary;
 mod checks;
 pub mod fit;
 pub mod flip;

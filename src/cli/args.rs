@@ -248,6 +248,7 @@ impl PlaneArgs {
             x,
             y,
             fixed,
+            sampling: Default::default(),
         })
     }
 }

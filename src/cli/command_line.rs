@@ -3,6 +3,7 @@
 //! Flags at their defaults are left out unless they always were (so that pictures made
 //! before keep their bytes).
 
+use crate::app::boundary::BoundaryJob;
 use crate::app::fit::FitJob;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::{LyapunovMapJob, LyapunovPointJob};
@@ -100,12 +101,15 @@ fn picture(p: &PictureSpec) -> String {
 /// The (theta1, theta2) plane as its own flags have always written it; any other plane by
 /// --x and --y and the start's values that lie along no axis.
 fn grid(g: &Grid) -> String {
+    format!("--size {}x{} {}", g.width, g.height, plane(g))
+}
+
+/// The plane's flags, without the size.
+fn plane(g: &Grid) -> String {
     let s = g.fixed;
     if g.is_angle_plane() {
         return format!(
-            "--size {}x{} --theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {}",
-            g.width,
-            g.height,
+            "--theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {}",
             g.x.range.min,
             g.x.range.max,
             g.y.range.min,
@@ -114,16 +118,16 @@ fn grid(g: &Grid) -> String {
             s.omega2
         );
     }
-    let mut out = format!("--size {}x{}", g.width, g.height);
+    let mut out = String::new();
     for (flag, a) in [("x", g.x), ("y", g.y)] {
-        out += &format!(" --{flag} {}={}:{}", a.var.name(), a.range.min, a.range.max);
+        out += &format!("--{flag} {}={}:{} ", a.var.name(), a.range.min, a.range.max);
     }
     for var in [Var::Theta1, Var::Theta2, Var::Omega1, Var::Omega2] {
         if var != g.x.var && var != g.y.var {
-            out += &format!(" --{} {}", var.name(), var.get(&Default::default(), &s));
+            out += &format!("--{} {} ", var.name(), var.get(&Default::default(), &s));
         }
     }
-    out
+    out.trim_end().to_string()
 }
 
 fn start(s: &State) -> String {
@@ -355,6 +359,24 @@ pub fn sweep(job: &SweepJob) -> String {
         job.backend.name()
     );
     out + &picture(&job.picture)
+}
+
+pub fn boundary(job: &BoundaryJob) -> String {
+    let s = &job.spec;
+    format!(
+        "chaoscope boundary {} {} {} --class {} --pairs {} --eps {}:{} --levels {} --seed {} --backend {} --precision {}",
+        plane(&s.grid),
+        steps(&s.stepping),
+        params(&s.params),
+        job.class.name(),
+        job.pairs,
+        job.eps.0,
+        job.eps.1,
+        job.levels,
+        job.seed,
+        job.backend.name(),
+        s.precision.name()
+    )
 }
 
 pub fn fit(job: &FitJob) -> String {

@@ -15,6 +15,7 @@ mod phase;
 mod serve;
 mod store;
 mod sweep;
+mod boundary;
 mod traces;
 mod trajectory;
 
@@ -52,6 +53,10 @@ pub enum Command {
     /// One trajectory as CSV: t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,dissipated
     /// (after a `#` line with the command that reproduces it).
     Trajectory(trajectory::TrajectoryArgs),
+    /// How fractal a flip map's class boundary is: the uncertainty exponent alpha of seeded
+    /// pairs of starts eps apart, fitted over several eps, and the boundary's dimension
+    /// D = 2 - alpha, with a log-log plot.
+    Boundary(boundary::BoundaryArgs),
     /// Frames of a map while a parameter changes (--vary) or zooming into a point (--zoom-to),
     /// as numbered PNGs and an animated PNG; an interrupted sweep resumes where it stopped.
     Sweep(sweep::SweepArgs),
@@ -119,6 +124,7 @@ pub enum Job {
     Lyapunov(LyapunovJob),
     Trajectory(crate::app::trajectory::TrajectoryJob),
     Sweep(crate::app::sweep::SweepJob),
+    Boundary(crate::app::boundary::BoundaryJob),
     Traces(crate::app::traces::TracesJob),
     Phase(crate::app::phase::PhaseJob),
     Fit(crate::app::fit::FitJob),
@@ -132,6 +138,7 @@ impl Command {
             Command::Lyapunov(_) => "lyapunov",
             Command::Trajectory(_) => "trajectory",
             Command::Sweep(_) => "sweep",
+            Command::Boundary(_) => "boundary",
             Command::Traces(_) => "traces",
             Command::Phase(_) => "phase",
             Command::Fit(_) => "fit",
@@ -151,6 +158,7 @@ impl Command {
             Command::Lyapunov(a) => Job::Lyapunov(a.job()?),
             Command::Trajectory(a) => Job::Trajectory(a.job()?),
             Command::Sweep(a) => Job::Sweep(a.job()?),
+            Command::Boundary(a) => Job::Boundary(a.job()?),
             Command::Traces(a) => Job::Traces(a.job()?),
             Command::Phase(a) => Job::Phase(a.job()?),
             Command::Fit(a) => Job::Fit(a.job()),
@@ -259,6 +267,7 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         Command::Lyapunov(args) => lyapunov::run(args, monitor),
         Command::Trajectory(args) => trajectory::run(args, monitor),
         Command::Sweep(args) => sweep::run(args, monitor),
+        Command::Boundary(args) => boundary::run(args, monitor),
         Command::Traces(args) => traces::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
         Command::Fit(args) => fit::run(args, monitor),

@@ -140,6 +140,9 @@ mirrors! {
         m2: real,
         rod1: real,
         rod2: real,
+        /// Above 0: the pixels are pairs of starts (`Sampling::Pairs`), the plane's fields
+        /// each range's minimum and width.
+        eps: real,
         width: u32,
         height: u32,
         rows: u32,
@@ -164,14 +167,14 @@ mirrors! {
         /// What the axes vary (`Var::code`).
         x_var: u32,
         y_var: u32,
-        _pad1: u32,
+        seed: u32,
     }
 }
 
 // A uniform buffer's size must be a multiple of 16 bytes; f64's is WGSL's size of the struct
 // (its alignment, 8), the buffer rounded up to 16 bytes.
-const _: () = assert!(std::mem::size_of::<GpuParams>() == 192);
-const _: () = assert!(std::mem::size_of::<GpuParams64>() == 336);
+const _: () = assert!(std::mem::size_of::<GpuParams>() == 196);
+const _: () = assert!(std::mem::size_of::<GpuParams64>() == 344);
 
 /// `new` (physics and step) and `with_grid` (the grid) of a params mirror whose floats are
 /// `$float`, `$eps` its machine epsilon (the margin of the no-flip energy).
@@ -222,10 +225,23 @@ macro_rules! params_constructors {
                 false => 1.0,
             };
             let (sx, sy) = (scale(&g.x), scale(&g.y));
-            self.x_mid = (g.x.range.mid() * sx) as $float;
-            self.x_half_step = (0.5 * g.x_step() * sx) as $float;
-            self.y_mid = (g.y.range.mid() * sy) as $float;
-            self.y_half_step = (0.5 * g.y_step() * sy) as $float;
+            match g.sampling {
+                crate::spec::Sampling::Centres => {
+                    self.x_mid = (g.x.range.mid() * sx) as $float;
+                    self.x_half_step = (0.5 * g.x_step() * sx) as $float;
+                    self.y_mid = (g.y.range.mid() * sy) as $float;
+                    self.y_half_step = (0.5 * g.y_step() * sy) as $float;
+                }
+                crate::spec::Sampling::Pairs { seed, eps } => {
+                    let (x, y) = (g.x.range, g.y.range);
+                    self.x_mid = (x.min * sx) as $float;
+                    self.x_half_step = ((x.max - x.min) * sx) as $float;
+                    self.y_mid = (y.min * sy) as $float;
+                    self.y_half_step = ((y.max - y.min) * sy) as $float;
+                    self.eps = eps as $float;
+                    self.seed = seed;
+                }
+            }
             self.x_var = g.x.var.code();
             self.y_var = g.y.var.code();
             self.theta1 = g.fixed.theta1 as $float;

@@ -252,6 +252,34 @@ impl Axis {
     }
 }
 
+/// How a grid's pixels sample its plane.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Sampling {
+    /// The centres of a regular grid of pixels: every map.
+    #[default]
+    Centres,
+    /// Pairs of starts, side by side (pair `row * width / 2 + col / 2`): the even column's
+    /// drawn uniformly over the plane, the odd column's the same start moved by `eps` of the plane's width (along x) or height
+    /// (along y), either way, drawn too (back inside when it would leave). The draws are a
+    /// hash of (`seed`, pair) that the shaders compute alike: the uncertainty exponent's
+    /// samples (`chaoscope boundary`).
+    Pairs { seed: u32, eps: f64 },
+}
+
+/// PCG's output hash of `v` (O'Neill; the "pcg_hash" of Jarzynski and Olano 2020): the
+/// same u32 arithmetic as shaders/common.wgsl `pcg`.
+pub fn pcg(v: u32) -> u32 {
+    let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+/// A number in [0, 1) of 48 random bits from two hashes (exact in f64; shaders/common.wgsl
+/// `unit` forms it alike).
+fn unit(a: u32, b: u32) -> f64 {
+    (a >> 8) as f64 * (1.0 / 16777216.0) + (b >> 8) as f64 * (1.0 / 281474976710656.0)
+}
+
 /// The initial-condition grid: `x` left to right, `y` bottom to top (row 0 at the top), the
 /// start's other components from `fixed`, the parameters from the map's. Pixel centres.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -263,6 +291,8 @@ pub struct Grid {
     pub y: Axis,
     /// The start's angles (rad) and angular velocities (rad/s) where no axis sets them.
     pub fixed: State,
+    /// Pixel centres, or seeded pairs of starts (see [`Sampling`]).
+    pub sampling: Sampling,
 }
 
 /// A grid as stores record it: as now, or as written before axes were data (theta1 along x,
@@ -276,6 +306,8 @@ enum GridRecord {
         x: Axis,
         y: Axis,
         fixed: State,
+        #[serde(default)]
+        sampling: Sampling,
     },
     Angles {
         width: u32,
@@ -296,12 +328,14 @@ impl From<GridRecord> for Grid {
                 x,
                 y,
                 fixed,
+                sampling,
             } => Grid {
                 width,
                 height,
                 x,
                 y,
                 fixed,
+                sampling,
             },
             GridRecord::Angles {
                 width,
@@ -341,6 +375,7 @@ impl Grid {
                 omega2,
                 ..State::default()
             },
+            sampling: Sampling::Centres,
         }
     }
 
@@ -354,12 +389,49 @@ impl Grid {
         self.x.var == Var::Theta1 && self.y.var == Var::Theta2
     }
 
+    /// The distance between neighbouring starts along x: a pixel's width, or a pair's
+    /// perturbation along x.
     pub fn x_step(&self) -> f64 {
-        self.x.step(self.width)
+        match self.sampling {
+            Sampling::Centres => self.x.step(self.width),
+            Sampling::Pairs { eps, .. } => eps * (self.x.range.max - self.x.range.min),
+        }
     }
 
     pub fn y_step(&self) -> f64 {
-        self.y.step(self.height)
+        match self.sampling {
+            Sampling::Centres => self.y.step(self.height),
+            Sampling::Pairs { eps, .. } => eps * (self.y.range.max - self.y.range.min),
+        }
+    }
+
+    /// (x, y) of pixel (`col`, `row`): its centre, or its member of a pair.
+    pub fn xy(&self, col: u32, row: u32) -> (f64, f64) {
+        let Sampling::Pairs { seed, eps } = self.sampling else {
+            return (self.x_at(col), self.y_at(row));
+        };
+        let h = pcg(seed ^ pcg(row * (self.width / 2) + col / 2));
+        let (xr, yr) = (self.x.range, self.y.range);
+        let (wx, wy) = (xr.max - xr.min, yr.max - yr.min);
+        let mut xy = [
+            xr.min + unit(pcg(h ^ 1), pcg(h ^ 2)) * wx,
+            yr.min + unit(pcg(h ^ 3), pcg(h ^ 4)) * wy,
+        ];
+        if col % 2 == 1 {
+            let d = pcg(h ^ 5) & 3;
+            let (k, lo, width) = match d >= 2 {
+                false => (0, xr.min, wx),
+                true => (1, yr.min, wy),
+            };
+            let step = eps * width;
+            let (v, down) = (xy[k], d & 1 == 1);
+            let mut moved = if down { v - step } else { v + step };
+            if moved < lo || moved > lo + width {
+                moved = if down { v + step } else { v - step };
+            }
+            xy[k] = moved;
+        }
+        (xy[0], xy[1])
     }
 
     /// x at the centre of column `col`.
@@ -381,7 +453,8 @@ impl Grid {
     /// Ratios are set after the values they multiply.
     pub fn pixel(&self, p: &Params, col: u32, row: u32) -> (Params, State) {
         let (mut p, mut s) = (*p, self.fixed);
-        let mut axes = [(self.x.var, self.x_at(col)), (self.y.var, self.y_at(row))];
+        let (x, y) = self.xy(col, row);
+        let mut axes = [(self.x.var, x), (self.y.var, y)];
         axes.sort_by_key(|(v, _)| v.is_ratio());
         for (var, value) in axes {
             var.set(value, &mut p, &mut s);
@@ -400,7 +473,11 @@ impl Grid {
     /// y -> -y (losses included), so mirrored starts follow mirrored trajectories and flip at
     /// the same time: half the map is enough. A parameter axis breaks it.
     pub fn point_symmetric(&self) -> bool {
-        if self.varies_params() || self.x.range.mid() != 0.0 || self.y.range.mid() != 0.0 {
+        if self.varies_params()
+            || self.sampling != Sampling::Centres
+            || self.x.range.mid() != 0.0
+            || self.y.range.mid() != 0.0
+        {
             return false;
         }
         let s = self.fixed;

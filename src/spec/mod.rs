@@ -13,7 +13,7 @@ mod memory;
 mod method;
 mod stability;
 
-pub use grid::{Axis, Grid, Var};
+pub use grid::{Axis, Grid, Sampling, Var, pcg};
 pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};
 pub use kind::{MapKind, MapKindEntry};
 pub(crate) use map::on_any;

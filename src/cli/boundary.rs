@@ -1,0 +1,123 @@
+//! `chaoscope boundary`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::args::{PhysicalArgs, PlaneArgs, StepArgs, backend_parser};
+use super::parse::{one_of, parse_range, parse_u32};
+use super::{command_line, json, say};
+use crate::app::boundary::{self, BoundaryClass, BoundaryJob};
+use crate::engine::Backend;
+use crate::error::Result;
+use crate::monitor::Monitor;
+use crate::spec::{FlipSpec, Precision};
+
+#[derive(Args, Debug, Clone)]
+#[command(mut_arg("t_max", |a| a.default_value("20")))]
+pub struct BoundaryArgs {
+    /// The outcome whose boundary is measured: flip-kind (which arm flips first and which
+    /// way, or never) or flipped (within --t-max or not).
+    #[arg(long, default_value = "flip-kind", value_parser = one_of(&BoundaryClass::ALL, BoundaryClass::name))]
+    pub class: BoundaryClass,
+    /// Pairs of starts drawn at each eps (rounded up to whole rows of 256); each pair costs
+    /// two pendulums and the verdict's finer runs (six maps' work for flip-kind).
+    #[arg(long, default_value = "20000", value_parser = parse_u32, allow_hyphen_values = true)]
+    pub pairs: u32,
+    /// Smallest and largest perturbation, MIN:MAX as fractions of the plane's width or height
+    /// (0 < MIN < MAX <= 0.25).
+    #[arg(long, default_value = "1e-5:1e-1", value_parser = parse_range, allow_hyphen_values = true)]
+    pub eps: crate::spec::Range,
+    /// Perturbation sizes, evenly spaced in log between the two (3 to 40).
+    #[arg(long, default_value = "9", value_parser = parse_u32, allow_hyphen_values = true)]
+    pub levels: u32,
+    /// Seed of the starts (the same seed draws the same starts on every machine and path).
+    #[arg(long, default_value = "1", value_parser = parse_u32, allow_hyphen_values = true)]
+    pub seed: u32,
+    #[command(flatten)]
+    pub plane: PlaneArgs,
+    #[command(flatten)]
+    pub step: StepArgs,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// f32 or f64 (the default: perturbations down to 1e-5 of the plane need it).
+    #[arg(long, default_value = "f64", value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Precision,
+    /// auto, gpu or cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+    /// The log-log plot of f(eps) with the fit (PNG).
+    #[arg(long, default_value = "out/boundary.png")]
+    pub output: PathBuf,
+    /// The counts at each eps as CSV: eps,pairs,resolved,uncertain,fraction.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+}
+
+impl BoundaryArgs {
+    pub fn job(&self) -> Result<BoundaryJob> {
+        Ok(BoundaryJob {
+            spec: FlipSpec {
+                precision: self.precision,
+                ..FlipSpec::new(
+                    self.physical.sources().resolve()?,
+                    self.plane.grid((1, 1))?,
+                    self.step.stepping(),
+                )
+            },
+            class: self.class,
+            pairs: self.pairs,
+            eps: (self.eps.min, self.eps.max),
+            levels: self.levels,
+            seed: self.seed,
+            backend: self.backend,
+            output: self.output.clone(),
+            data: self.data.clone(),
+        })
+    }
+}
+
+pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    let job = args.job()?;
+    let s = boundary::run(&job, command_line::boundary(&job), monitor)?;
+    say(&s.notices);
+    for l in &s.levels {
+        eprintln!(
+            "eps {:.2e}: {} of {} resolved pairs differ (f = {:.3e})",
+            l.eps,
+            l.uncertain,
+            l.resolved,
+            l.fraction()
+        );
+    }
+    match &s.fit {
+        Some(f) => eprintln!(
+            "{}",
+            format!(
+            "{} boundary over {} s on {} in {:.1} s: alpha = {:.3} +- {:.3}, D = 2 - alpha = {:.3} (fitted over eps {:.1e}..{:.1e}, {} levels, reduced chi2 {:.2}); {} pairs left out unresolved -> {}",
+            s.class,
+            s.t_max,
+            s.place,
+            s.seconds,
+            f.alpha,
+            f.alpha_se,
+            f.dimension(),
+            f.eps_range.0,
+            f.eps_range.1,
+            f.levels,
+            f.reduced_chi2,
+            s.unresolved,
+            job.output.display()
+            )
+        ),
+        None => eprintln!(
+            "{}",
+            format!(
+            "too few uncertain pairs to fit alpha (at least {} at three eps): widen --eps or draw more --pairs -> {}",
+            crate::boundary::MIN_UNCERTAIN,
+            job.output.display()
+            )
+        ),
+    }
+    json(&s)
+}
