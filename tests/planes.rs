@@ -331,18 +331,73 @@ fn bad_axes_are_refused_naming_the_flag() {
             "--dt",
         ),
     ];
+    common::refuses(
+        &["flip", "--size", "8", "--t-max", "1", "--backend", "cpu"],
+        cases,
+    );
+}
+
+#[test]
+fn supersampling_reduces_the_finer_map_and_one_sample_is_the_plain_map() {
     let dir = tempfile::tempdir().unwrap();
-    for (args, flag) in cases {
-        let out = common::chaoscope()
-            .args(["flip", "--size", "8", "--t-max", "1", "--backend", "cpu"])
-            .args(*args)
+    let run = |name: &str, args: &[&str]| {
+        let data = dir.path().join(format!("{name}.npy"));
+        let resolved = dir.path().join(format!("{name}-resolved.npy"));
+        common::chaoscope()
+            .args([
+                "flip",
+                "--t-max",
+                "6",
+                "--backend",
+                "cpu",
+                "--theta1",
+                "1:3",
+            ])
+            .args(args)
+            .arg("--data")
+            .arg(&data)
+            .arg("--resolved")
+            .arg(&resolved)
             .arg("--output")
-            .arg(dir.path().join("never.png"))
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
-        assert!(err.contains(flag), "{args:?} should name {flag}: {err}");
+            .arg(dir.path().join(format!("{name}.png")))
+            .assert()
+            .success();
+        (common::read_npy(&data), common::read_mask(&resolved).1)
+    };
+    let plain = run("plain", &["--size", "12x10"]);
+    let one = run("one", &["--size", "12x10", "--samples", "1"]);
+    assert_eq!(plain, one);
+    let three = run("three", &["--size", "12x10", "--samples", "3"]);
+    let fine = run("fine", &["--size", "36x30"]);
+    assert_eq!(three.0.0, vec![10, 12]);
+    // Each pixel: the geometric mean of its 3 x 3 sub-pixels' flip times over those that
+    // flip (never where none does), resolved where all nine are.
+    let ((_, f), mask) = (&fine.0, &fine.1);
+    for row in 0..10usize {
+        for col in 0..12usize {
+            let subs: Vec<usize> = (0..9)
+                .map(|k| (3 * row + k / 3) * 36 + 3 * col + k % 3)
+                .collect();
+            let logs: Vec<f64> = subs
+                .iter()
+                .map(|&i| f[i])
+                .filter(|t| t.is_finite())
+                .map(|t| (t as f64).ln())
+                .collect();
+            let want = match logs.len() {
+                0 => f32::INFINITY,
+                n => (logs.iter().sum::<f64>() / n as f64).exp() as f32,
+            };
+            let i = row * 12 + col;
+            assert_eq!(
+                three.0.1[i].to_bits(),
+                want.to_bits(),
+                "pixel ({col}, {row})"
+            );
+            let all = subs.iter().all(|&k| mask[k] == 1) as u8;
+            assert_eq!(three.1[i], all, "pixel ({col}, {row})'s verdict");
+        }
     }
-    assert!(!dir.path().join("never.png").exists());
+    // Reproducible: the same flags, the same bits.
+    assert_eq!(run("again", &["--size", "12x10", "--samples", "3"]), three);
 }

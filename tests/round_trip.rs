@@ -30,6 +30,7 @@ fn job(args: &[String]) -> Job {
         Job::Traces(j) => (j.output, j.gif, j.data) = (none(), None, None),
         Job::Phase(j) => j.output = none(),
         Job::Fit(j) => j.output = none(),
+        Job::Boundary(j) => (j.output, j.data) = (none(), None),
     }
     job
 }
@@ -117,6 +118,7 @@ fn flip_maps_round_trip() {
         ],
         vec!["--size", "10", "--t-max", "2", "--precision", "f64"],
         vec!["--size", "10", "--t-max", "3", "--accurate"],
+        vec!["--size", "6", "--t-max", "2", "--samples", "2"],
         vec![
             "--size",
             "12x8",

@@ -30,6 +30,8 @@ pub struct MapJob<S> {
     /// The colours' range (low, high, the quantity's unit) where its colours span one; None:
     /// the quantity's default for the map.
     pub colour_range: Option<(f32, f32)>,
+    /// Sub-samples a side of every pixel ([`super::supersample`]); 1: the pixel's centre.
+    pub samples: u32,
 }
 
 /// What a map run did, whatever it measured.
@@ -94,6 +96,7 @@ pub fn run<S: MapKernels + MapPicture>(
 ) -> Result<MapSummary> {
     job.spec.check_picture(&job.picture, job.colour_range)?;
     validate(&job.spec, &job.files, job.tile)?;
+    validate_samples(job)?;
     let started = Instant::now();
     let verdict = job.files.wants_verdict();
     let summary = |info: &RunInfo, counted: usize, nan: usize, pixels: usize| MapSummary {
@@ -134,7 +137,25 @@ pub fn run<S: MapKernels + MapPicture>(
             ..summary(&made.info, filled.counted, filled.nan, filled.pixels)
         });
     }
-    let made = make(&job.spec, job.backend, verdict, monitor)?;
+    let made = match job.samples {
+        1 => make(&job.spec, job.backend, verdict, monitor)?,
+        n => {
+            let g = job.spec.grid();
+            let fine = job.spec.on_grid(Grid {
+                width: g.width * n,
+                height: g.height * n,
+                ..*g
+            });
+            let made = make(&fine, job.backend, verdict, monitor)?;
+            let (field, mask) = &made.made;
+            let reduced =
+                super::supersample::reduce_map(job.spec.quantity(), field, mask.as_deref(), n);
+            Made {
+                made: reduced,
+                ..made
+            }
+        }
+    };
     let (field, mask) = &made.made;
     let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let drawn = job
@@ -165,6 +186,47 @@ pub fn run<S: MapKernels + MapPicture>(
 }
 
 /// Everything checked before any work: the spec, the files, the verdict's finer map, the tile.
+/// `--samples`: within range, and for maps drawn whole (a store is filled band by band).
+fn validate_samples<S: MapSpec>(job: &MapJob<S>) -> Result<()> {
+    let max = super::supersample::MAX_SAMPLES;
+    if !(1..=max).contains(&job.samples) {
+        return Err(Error::invalid(
+            "samples",
+            format!("{} must be between 1 and {max}", job.samples),
+        ));
+    }
+    if job.samples > 1 {
+        if job.files.store().is_some() {
+            return Err(Error::invalid(
+                "samples",
+                "is for maps drawn whole (PNG, .npy); a .zarr store is filled band by band at one start a pixel",
+            ));
+        }
+        let g = job.spec.grid();
+        job.spec
+            .on_grid(Grid {
+                width: g.width.saturating_mul(job.samples),
+                height: g.height.saturating_mul(job.samples),
+                ..*g
+            })
+            .validate()
+            .map_err(|e| match e {
+                Error::InvalidSpec {
+                    field: "size",
+                    reason,
+                } => Error::invalid(
+                    "samples",
+                    format!(
+                        "{} x {} sub-samples a pixel: {reason}",
+                        job.samples, job.samples
+                    ),
+                ),
+                e => e,
+            })?;
+    }
+    Ok(())
+}
+
 pub fn validate(spec: &impl MapSpec, files: &MapOutputs, tile: Option<(u32, u32)>) -> Result<()> {
     verdict::check_step(spec, files.wants_verdict())?;
     match files.store() {

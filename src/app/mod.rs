@@ -13,6 +13,7 @@ pub mod map;
 pub mod phase;
 pub mod serve;
 pub mod store;
+pub mod supersample;
 pub mod sweep;
 pub mod traces;
 pub mod trajectory;

@@ -51,6 +51,24 @@ impl Param {
         (Param::Damping, "damping"),
     ];
 
+    /// The plane's variable it is (all but `mass`, which scales both masses).
+    pub fn var(self) -> Option<crate::spec::Var> {
+        use crate::spec::Var;
+        Some(match self {
+            Param::M1 => Var::M1,
+            Param::M2 => Var::M2,
+            Param::L1 => Var::L1,
+            Param::L2 => Var::L2,
+            Param::G => Var::G,
+            Param::MassRatio => Var::MassRatio,
+            Param::LengthRatio => Var::LengthRatio,
+            Param::Omega1 => Var::Omega1,
+            Param::Omega2 => Var::Omega2,
+            Param::Damping => Var::Damping,
+            Param::Mass => return None,
+        })
+    }
+
     /// The parameter's unit, for a store's coordinate.
     pub fn unit(self) -> &'static str {
         match self {
@@ -147,6 +165,20 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
             format!("{} must be in [0.02, 100]", args.fps),
         ));
     }
+    // A parameter along an axis is the pixel's own: a sweep of it would change nothing.
+    if let Some(var) = args.vary.and_then(|v| v.param.var())
+        && [args.grid.x.var, args.grid.y.var]
+            .iter()
+            .any(|a| a.writes() == var.writes())
+    {
+        return Err(Error::invalid(
+            "vary",
+            format!(
+                "{} lies along an axis of the map: sweep another parameter",
+                var.name()
+            ),
+        ));
+    }
     if args.vary.is_none() && args.zoom.is_none() {
         return Err(Error::invalid(
             "vary",
@@ -164,23 +196,11 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
         let mut g = base_grid;
         if let Some(v) = args.vary {
             let x = v.at(s);
-            match v.param {
-                Param::M1 => p.m1 = x,
-                Param::M2 => p.m2 = x,
-                Param::L1 => p.l1 = x,
-                Param::L2 => p.l2 = x,
-                Param::G => p.g = x,
-                Param::MassRatio => p.m2 = x * p.m1,
-                Param::LengthRatio => p.l2 = x * p.l1,
-                Param::Mass => {
+            match v.param.var() {
+                Some(var) => var.set(x, &mut p, &mut g.fixed),
+                None => {
                     p.m1 *= x;
                     p.m2 *= x;
-                }
-                Param::Omega1 => g.fixed.omega1 = x,
-                Param::Omega2 => g.fixed.omega2 = x,
-                Param::Damping => {
-                    p.losses.joint1 = x;
-                    p.losses.joint2 = x;
                 }
             }
             spec::validate_params(&p)

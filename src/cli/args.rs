@@ -337,6 +337,17 @@ pub struct VerdictArgs {
     pub show_unresolved: bool,
 }
 
+/// Supersampling: several starts a pixel.
+#[derive(Args, Debug, Clone)]
+pub struct SampleArgs {
+    /// N x N starts a pixel (the centres of its N x N sub-pixels, 1 to 16): flip times by
+    /// the mean of their logs over those that flip, the flip kind by the majority, exponents
+    /// and indicators by the mean; resolved (--resolved) where every sub-sample is. Costs N^2
+    /// times the map (and its memory).
+    #[arg(long, default_value = "1", value_parser = super::parse::parse_u32, allow_hyphen_values = true)]
+    pub samples: u32,
+}
+
 /// A map into a .zarr store writes no PNG (`chaoscope render` makes it from the store):
 /// `--output` with one is an error naming it.
 pub fn no_picture_with_a_store(

@@ -92,8 +92,6 @@ pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> 
     }
     match &s.fit {
         Some(f) => eprintln!(
-            "{}",
-            format!(
             "{} boundary over {} s on {} in {:.1} s: alpha = {:.3} +- {:.3}, D = 2 - alpha = {:.3} (fitted over eps {:.1e}..{:.1e}, {} levels, reduced chi2 {:.2}); {} pairs left out unresolved -> {}",
             s.class,
             s.t_max,
@@ -108,15 +106,11 @@ pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             f.reduced_chi2,
             s.unresolved,
             job.output.display()
-            )
         ),
         None => eprintln!(
-            "{}",
-            format!(
             "too few uncertain pairs to fit alpha (at least {} at three eps): widen --eps or draw more --pairs -> {}",
             crate::boundary::MIN_UNCERTAIN,
             job.output.display()
-            )
         ),
     }
     json(&s)

@@ -110,12 +110,7 @@ fn plane(g: &Grid) -> String {
     if g.is_angle_plane() {
         return format!(
             "--theta1 {}:{} --theta2 {}:{} --omega1 {} --omega2 {}",
-            g.x.range.min,
-            g.x.range.max,
-            g.y.range.min,
-            g.y.range.max,
-            s.omega1,
-            s.omega2
+            g.x.range.min, g.x.range.max, g.y.range.min, g.y.range.max, s.omega1, s.omega2
         );
     }
     let mut out = String::new();
@@ -172,7 +167,17 @@ fn integrator(i: &Integrator) -> String {
 }
 
 pub fn flip(job: &FlipJob) -> String {
-    flip_map(&job.spec, job.backend, &job.picture) + show_unresolved(job.files.show_unresolved)
+    flip_map(&job.spec, job.backend, &job.picture)
+        + show_unresolved(job.files.show_unresolved)
+        + &samples(job.samples)
+}
+
+/// ` --samples N` when not 1.
+fn samples(n: u32) -> String {
+    match n {
+        1 => String::new(),
+        n => format!(" --samples {n}"),
+    }
 }
 
 fn show_unresolved(on: bool) -> &'static str {
@@ -234,6 +239,7 @@ pub fn lyapunov_map(job: &LyapunovMapJob) -> String {
     lyapunov_map_of(&job.spec, job.backend, &job.picture)
         + &range
         + show_unresolved(job.files.show_unresolved)
+        + &samples(job.samples)
 }
 
 pub fn lyapunov_point(job: &LyapunovPointJob) -> String {

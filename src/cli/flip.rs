@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, VerdictArgs, backend_parser};
+use super::args::{
+    GridArgs, PhysicalArgs, PictureArgs, SampleArgs, StepArgs, VerdictArgs, backend_parser,
+};
 use super::parse::{one_of, parse_number, parse_tile};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
@@ -47,6 +49,8 @@ pub struct FlipArgs {
     pub tile: Option<(u32, u32)>,
     #[command(flatten)]
     pub verdict: VerdictArgs,
+    #[command(flatten)]
+    pub sampling: SampleArgs,
     /// Benchmarking: integrate every pixel for every step (no early exit, no skipped starts,
     /// no mirrored half).
     #[arg(long)]
@@ -120,6 +124,7 @@ impl FlipArgs {
             },
             tile: self.tile,
             colour_range: None,
+            samples: self.sampling.samples,
         })
     }
 }

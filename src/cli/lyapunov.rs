@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use super::args::{PhysicalArgs, PictureArgs, PlaneArgs, VerdictArgs, backend_parser};
+use super::args::{PhysicalArgs, PictureArgs, PlaneArgs, SampleArgs, VerdictArgs, backend_parser};
 use super::parse::{Angles, one_of, parse_number, parse_range, parse_size, parse_tile};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
@@ -76,6 +76,8 @@ pub struct LyapunovArgs {
     pub tile: Option<(u32, u32)>,
     #[command(flatten)]
     pub verdict: VerdictArgs,
+    #[command(flatten)]
+    pub sampling: SampleArgs,
     #[command(flatten)]
     pub picture: PictureArgs,
     /// How the state and the tangent vector are stepped: rk4 (fixed --dt) or dp54 (every
@@ -299,9 +301,16 @@ impl LyapunovArgs {
                     },
                     tile: self.tile,
                     colour_range: self.colour_range.map(|r| (r.min as f32, r.max as f32)),
+                    samples: self.sampling.samples,
                 }))
             }
             Some((theta1, theta2)) => {
+                if self.sampling.samples != 1 {
+                    return Err(Error::invalid(
+                        "samples",
+                        "is for maps; a single-point run follows its one start",
+                    ));
+                }
                 if self.spectrum.is_some() {
                     return Err(Error::invalid(
                         "spectrum",

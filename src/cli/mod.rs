@@ -4,6 +4,7 @@
 
 mod args;
 mod bench;
+mod boundary;
 pub mod command_line;
 mod fit;
 mod flip;
@@ -15,7 +16,6 @@ mod phase;
 mod serve;
 mod store;
 mod sweep;
-mod boundary;
 mod traces;
 mod trajectory;
 

@@ -390,6 +390,9 @@ impl MapSpec for AnyMap {
     fn with_band(&self, band: (u32, u32)) -> Self {
         on_any!(self, s => s.with_band(band).any())
     }
+    fn on_grid(&self, grid: Grid) -> Self {
+        AnyMap::on_grid(self, grid)
+    }
     fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self {
         on_any!(self, s => s.restepped(stepping, integrator, precision).any())
     }
@@ -432,6 +435,8 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     }
     /// The same map over rows `first..first + count` only.
     fn with_band(&self, band: (u32, u32)) -> Self;
+    /// The same map over another grid.
+    fn on_grid(&self, grid: Grid) -> Self;
     /// The same map stepped otherwise.
     fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self;
     /// The map of the event this quantity is read off, when it has one (the flip kind: the
@@ -474,6 +479,9 @@ macro_rules! map_spec_fields {
                 band: Some(band),
                 ..*self
             }
+        }
+        fn on_grid(&self, grid: Grid) -> Self {
+            $t { grid, ..*self }
         }
         fn restepped(
             &self,

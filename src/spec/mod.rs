@@ -12,6 +12,7 @@ mod map;
 mod memory;
 mod method;
 mod stability;
+mod var;
 
 pub use grid::{Axis, Grid, Sampling, Var, pcg};
 pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};

@@ -205,3 +205,21 @@ pub fn walk(dir: &Path) -> Vec<String> {
     }
     out
 }
+
+/// Each case's flags after `prefix` exit 2 naming its flag, and write nothing.
+pub fn refuses(prefix: &[&str], cases: &[(&[&str], &str)]) {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, flag) in cases {
+        let out = chaoscope()
+            .args(prefix)
+            .args(*args)
+            .arg("--output")
+            .arg(dir.path().join("never.png"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(flag), "{args:?} should name {flag}: {err}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}

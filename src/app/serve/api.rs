@@ -211,6 +211,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     files: files.clone(),
                     tile: None,
                     colour_range: None,
+                    samples: 1,
                 };
                 crate::app::flip::run(&job, (commands.flip)(&job), monitor)?;
                 "chaoscope-flip.png"
@@ -223,6 +224,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     files: files.clone(),
                     tile: None,
                     colour_range: Some(view.range),
+                    samples: 1,
                 };
                 crate::app::lyapunov::run_map(&job, (commands.lyapunov)(&job), monitor)?;
                 "chaoscope-lyapunov.png"
