@@ -88,6 +88,16 @@ fn base(command: &str, data: &str) -> Vec<String> {
             "--vary", "g=5:10", "--frames", "2", "--size", "6", "--t-max", "0.5",
         ],
         "fit" => &["--candidates", "64", "--window", "0.5"],
+        "boundary" => &[
+            "--pairs",
+            "256",
+            "--levels",
+            "3",
+            "--eps",
+            "1e-2:1e-1",
+            "--t-max",
+            "1",
+        ],
         _ => &[],
     };
     let mut out = vec![command.to_string()];
