@@ -370,6 +370,48 @@ print("ok")
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // Any other plane: dimensions and coordinates named by its axes, with their units.
+    let (store, npy) = (dir.path().join("p.zarr"), dir.path().join("p.npy"));
+    let map = [
+        "--size",
+        "24x16",
+        "--t-max",
+        "2",
+        "--x",
+        "m2/m1=0.5:2",
+        "--y",
+        "omega1=-3:3",
+        "--theta1",
+        "1",
+        "--theta2",
+        "1",
+    ];
+    flip(&map, &["--data", store.to_str().unwrap()]).success();
+    write_npy(&map, &npy);
+    let script = format!(
+        r#"
+import numpy as np, xarray as xr
+ds = xr.open_zarr({store:?}, consolidated=False)
+m = ds["map"]
+assert m.dims == ("omega1", "mass_ratio"), m.dims
+assert ds["mass_ratio"].attrs["units"] == "1" and ds["omega1"].attrs["units"] == "rad/s"
+r, w = ds["mass_ratio"].values, ds["omega1"].values
+assert abs(r[0] - (0.5 + 1.5 / 48)) < 1e-15 and w[0] > w[-1] and len(w) == 16
+assert "--x m2/m1=0.5:2 --y omega1=-3:3" in ds.attrs["chaoscope:command"]
+n = np.load({npy:?})
+assert np.array_equal(m.values.view(np.uint32), n.view(np.uint32))
+print("ok")
+"#
+    );
+    let out = std::process::Command::new(&python)
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success() && String::from_utf8_lossy(&out.stdout).contains("ok"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// The verdict goes into the store as the array `resolved`, equal to the .npy mask; a store
