@@ -186,6 +186,21 @@ pub fn run(
         Some(s) => Some((Arc::new(MapStore::open(&s.path)?), s.clone())),
         None => None,
     };
+    // The page's axes, clicks and saved views are (theta1, theta2) ones.
+    if let Some(s) = &job.store
+        && !s.grid().is_angle_plane()
+    {
+        let g = s.grid();
+        return Err(Error::invalid(
+            "store",
+            format!(
+                "{} is a map of the ({}, {}) plane; the explorer shows (theta1, theta2) maps only (chaoscope render makes its picture)",
+                s.path.display(),
+                g.x.var.name(),
+                g.y.var.name()
+            ),
+        ));
+    }
     let world = job
         .store
         .as_ref()
