@@ -174,6 +174,32 @@ fn gpu_pairs_are_the_cpus() {
 }
 
 #[test]
+fn the_chaotic_class_by_an_indicator_reproduces_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("c.png");
+    let base = "boundary --t-max 2 --pairs 256 --levels 3 --eps 1e-2:1e-1 --class chaotic --indicator ftle --renorm 0.05";
+    common::chaoscope()
+        .args(base.split_whitespace())
+        .arg("--output")
+        .arg(&png)
+        .assert()
+        .success();
+    let command = common::png_text(&png, "chaoscope:command");
+    for flags in ["--class chaotic", "--indicator ftle --renorm 0.05"] {
+        assert!(command.contains(flags), "{command}");
+    }
+    let job = |line: &str| {
+        let words: Vec<String> = line.split_whitespace().map(String::from).collect();
+        chaoscope::cli::Cli::parse_args(words)
+            .unwrap()
+            .command
+            .job()
+            .unwrap()
+    };
+    assert_eq!(job(&command), job(&format!("chaoscope {base}")));
+}
+
+#[test]
 fn boundary_runs_end_to_end_and_its_command_reproduces_it() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("b.png");
@@ -245,6 +271,9 @@ fn bad_boundary_input_is_refused_naming_the_flag() {
         (&["--levels", "2"], "--levels"),
         (&["--class", "chaos"], "--class"),
         (&["--x", "m2=0:1"], "--x"),
+        (&["--indicator", "ftle"], "--indicator"),
+        (&["--renorm", "0.1"], "--renorm"),
+        (&["--class", "chaotic", "--renorm", "0.015"], "--renorm"),
     ];
     common::refuses(&["boundary", "--t-max", "1", "--backend", "cpu"], cases);
 }

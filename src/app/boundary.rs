@@ -9,10 +9,11 @@ use plotters::prelude::*;
 use super::map::{map_and_verdict, map_engine};
 use crate::boundary::{Fit, Level, count, eps_levels, fit, level_seed};
 use crate::engine::Backend;
+use crate::engine::MapKernels;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::render::{self, Outputs};
-use crate::spec::{FlipMeasure, FlipSpec, Grid, Sampling};
+use crate::spec::{FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Sampling};
 
 /// What decides a start's outcome.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,24 +22,23 @@ pub enum BoundaryClass {
     FlipKind,
     /// Whether it flips within t-max.
     Flipped,
+    /// Chaotic or regular by a chaos indicator's rule ([`BoundaryJob::divergence`]: the
+    /// FTLE above 0.5 /s, MEGNO above 4, the FLI above 5).
+    Chaotic,
 }
 
 impl BoundaryClass {
-    pub const ALL: [BoundaryClass; 2] = [BoundaryClass::FlipKind, BoundaryClass::Flipped];
+    pub const ALL: [BoundaryClass; 3] = [
+        BoundaryClass::FlipKind,
+        BoundaryClass::Flipped,
+        BoundaryClass::Chaotic,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             BoundaryClass::FlipKind => "flip-kind",
             BoundaryClass::Flipped => "flipped",
-        }
-    }
-
-    /// The class of a map's value, None where it left the numbers.
-    fn of(self, v: f32) -> Option<u32> {
-        match (self, v.is_nan()) {
-            (_, true) => None,
-            (BoundaryClass::FlipKind, false) => Some(v as u32),
-            (BoundaryClass::Flipped, false) => Some(v.is_finite() as u32),
+            BoundaryClass::Chaotic => "chaotic",
         }
     }
 }
@@ -55,6 +55,9 @@ pub struct BoundaryJob {
     /// the pairs').
     pub spec: FlipSpec,
     pub class: BoundaryClass,
+    /// The chaotic class's map (its indicator, renormalisation; the plane, physics and steps
+    /// are `spec`'s).
+    pub divergence: LyapunovSpec,
     /// Pairs drawn at each eps (rounded up to whole rows of 256).
     pub pairs: u32,
     /// The smallest and largest eps, fractions of the plane's width or height.
@@ -101,10 +104,22 @@ impl BoundaryJob {
             grid,
             measure: match self.class {
                 BoundaryClass::FlipKind => FlipMeasure::Kind,
-                BoundaryClass::Flipped => FlipMeasure::Time,
+                BoundaryClass::Flipped | BoundaryClass::Chaotic => FlipMeasure::Time,
             },
             use_symmetry: false,
             ..self.spec
+        }
+    }
+
+    /// The chaotic class's map of level `k`'s pairs.
+    pub fn divergence_spec(&self, k: u32, eps: f64) -> LyapunovSpec {
+        LyapunovSpec {
+            params: self.spec.params,
+            grid: self.level_spec(k, eps).grid,
+            stepping: self.spec.stepping,
+            precision: self.spec.precision,
+            use_symmetry: false,
+            ..self.divergence
         }
     }
 
@@ -136,7 +151,10 @@ impl BoundaryJob {
             render::check_writable("data", d)?;
         }
         for (k, eps) in eps_levels(lo, hi, self.levels).into_iter().enumerate() {
-            self.level_spec(k as u32, eps).validate()?;
+            match self.class {
+                BoundaryClass::Chaotic => self.divergence_spec(k as u32, eps).validate()?,
+                _ => self.level_spec(k as u32, eps).validate()?,
+            }
         }
         Ok(())
     }
@@ -146,26 +164,20 @@ pub fn run(job: &BoundaryJob, command: String, monitor: &Monitor) -> Result<Boun
     job.validate()?;
     let started = std::time::Instant::now();
     let all = eps_levels(job.eps.0, job.eps.1, job.levels);
-    // The engine and its notices for the finest level (the one most likely to need f64).
-    let finest = job.level_spec(0, all[0]);
-    let (engine, info, notices) = map_engine(job.backend, &finest, true)?;
-    let mut levels = Vec::new();
-    for (k, &eps) in all.iter().enumerate() {
-        monitor.check()?;
-        let spec = job.level_spec(k as u32, eps);
-        let (field, mask) = map_and_verdict(&engine, &spec, true, monitor)?;
-        let mask = mask.expect("asked for");
-        let classes: Vec<[Option<u32>; 2]> = field
-            .data
-            .chunks_exact(2)
-            .zip(mask.chunks_exact(2))
-            .map(|(v, m)| {
-                let class = |i: usize| job.class.of(v[i]).filter(|_| m[i] == 1);
-                [class(0), class(1)]
-            })
-            .collect();
-        levels.push(count(eps, &classes));
-    }
+    let (levels, info, notices) = match job.class {
+        BoundaryClass::Chaotic => {
+            let spec = |k, eps| job.divergence_spec(k, eps);
+            measure(job, &all, spec, |s, v| s.counted(v) as u32, monitor)?
+        }
+        BoundaryClass::FlipKind => {
+            let spec = |k, eps| job.level_spec(k, eps);
+            measure(job, &all, spec, |_, v| v as u32, monitor)?
+        }
+        BoundaryClass::Flipped => {
+            let spec = |k, eps| job.level_spec(k, eps);
+            measure(job, &all, spec, |_, v| v.is_finite() as u32, monitor)?
+        }
+    };
     let fitted = fit(&levels);
     let mut out = Outputs::new();
     plot(&mut out, job, &levels, fitted.as_ref(), &command)?;
@@ -201,6 +213,37 @@ pub fn run(job: &BoundaryJob, command: String, monitor: &Monitor) -> Result<Boun
             .collect(),
         notices,
     })
+}
+
+/// Each level's counts: its pairs' map and verdict (`spec(k, eps)`), each start's class by
+/// `class` (NaN: none), pairs counted where both classes are resolved. The engine and its
+/// notices are the finest level's (the one most likely to need f64).
+fn measure<S: MapKernels>(
+    job: &BoundaryJob,
+    all: &[f64],
+    spec: impl Fn(u32, f64) -> S,
+    class: impl Fn(&S, f32) -> u32,
+    monitor: &Monitor,
+) -> Result<(Vec<Level>, crate::engine::RunInfo, Vec<String>)> {
+    let (engine, info, notices) = map_engine(job.backend, &spec(0, all[0]), true)?;
+    let mut levels = Vec::new();
+    for (k, &eps) in all.iter().enumerate() {
+        monitor.check()?;
+        let s = spec(k as u32, eps);
+        let (field, mask) = map_and_verdict(&engine, &s, true, monitor)?;
+        let mask = mask.expect("asked for");
+        let classes: Vec<[Option<u32>; 2]> = field
+            .data
+            .chunks_exact(2)
+            .zip(mask.chunks_exact(2))
+            .map(|(v, m)| {
+                let of = |i: usize| (!v[i].is_nan() && m[i] == 1).then(|| class(&s, v[i]));
+                [of(0), of(1)]
+            })
+            .collect();
+        levels.push(count(eps, &classes));
+    }
+    Ok((levels, info, notices))
 }
 
 fn plot_err<E: std::fmt::Debug>(e: E) -> Error {
@@ -252,8 +295,9 @@ fn plot(
             .y_desc(format!(
                 "f(ε): share of resolved pairs of differing {}",
                 match job.class {
-                    BoundaryClass::FlipKind => "flip kind",
-                    BoundaryClass::Flipped => "flip within t-max",
+                    BoundaryClass::FlipKind => "flip kind".to_string(),
+                    BoundaryClass::Flipped => "flip within t-max".to_string(),
+                    BoundaryClass::Chaotic => format!("chaos ({})", job.divergence.counted_rule()),
                 }
             ))
             .x_label_formatter(&|x| format!("{x:.0e}"))

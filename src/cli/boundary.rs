@@ -9,15 +9,15 @@ use super::parse::{one_of, parse_range, parse_u32};
 use super::{command_line, json, say};
 use crate::app::boundary::{self, BoundaryClass, BoundaryJob};
 use crate::engine::Backend;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Precision};
+use crate::spec::{FlipSpec, Indicator, Integrator, LyapunovSpec, Method, Precision};
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("20")))]
 pub struct BoundaryArgs {
     /// The outcome whose boundary is measured: flip-kind (which arm flips first and which
-    /// way, or never) or flipped (within --t-max or not).
+    /// way, or never), flipped (within --t-max or not) or chaotic (by --indicator's rule).
     #[arg(long, default_value = "flip-kind", value_parser = one_of(&BoundaryClass::ALL, BoundaryClass::name))]
     pub class: BoundaryClass,
     /// Pairs of starts drawn at each eps (rounded up to whole rows of 256); each pair costs
@@ -31,6 +31,12 @@ pub struct BoundaryArgs {
     /// Perturbation sizes, evenly spaced in log between the two (3 to 40).
     #[arg(long, default_value = "9", value_parser = parse_u32, allow_hyphen_values = true)]
     pub levels: u32,
+    /// The chaotic class's indicator: ftle (above 0.5 /s), megno (above 4) or fli (above 5).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(["ftle", "megno", "fli"]))]
+    pub indicator: Option<String>,
+    /// The chaotic class's renormalisation interval (s).
+    #[arg(long, value_parser = super::parse::parse_number, allow_hyphen_values = true)]
+    pub renorm: Option<f64>,
     /// Seed of the starts (the same seed draws the same starts on every machine and path).
     #[arg(long, default_value = "1", value_parser = parse_u32, allow_hyphen_values = true)]
     pub seed: u32,
@@ -56,14 +62,40 @@ pub struct BoundaryArgs {
 
 impl BoundaryArgs {
     pub fn job(&self) -> Result<BoundaryJob> {
+        let chaotic = self.class == BoundaryClass::Chaotic;
+        for (flag, given) in [
+            ("indicator", self.indicator.is_some()),
+            ("renorm", self.renorm.is_some()),
+        ] {
+            if given && !chaotic {
+                return Err(Error::invalid(flag, "is for --class chaotic"));
+            }
+        }
+        let spec = FlipSpec {
+            precision: self.precision,
+            ..FlipSpec::new(
+                self.physical.sources().resolve()?,
+                self.plane.grid((1, 1))?,
+                self.step.stepping(),
+            )
+        };
         Ok(BoundaryJob {
-            spec: FlipSpec {
+            spec,
+            divergence: LyapunovSpec {
+                params: spec.params,
+                grid: spec.grid,
+                stepping: spec.stepping,
+                method: Method::Tangent,
+                renorm: self.renorm.unwrap_or(0.1),
+                use_symmetry: false,
                 precision: self.precision,
-                ..FlipSpec::new(
-                    self.physical.sources().resolve()?,
-                    self.plane.grid((1, 1))?,
-                    self.step.stepping(),
-                )
+                band: None,
+                integrator: Integrator::Rk4,
+                indicator: match self.indicator.as_deref().unwrap_or("megno") {
+                    "ftle" => Indicator::Ftle,
+                    "fli" => Indicator::Fli,
+                    _ => Indicator::Megno,
+                },
             },
             class: self.class,
             pairs: self.pairs,

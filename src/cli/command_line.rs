@@ -382,7 +382,18 @@ pub fn boundary(job: &BoundaryJob) -> String {
         job.seed,
         job.backend.name(),
         s.precision.name()
-    )
+    ) + &match job.class {
+        crate::app::boundary::BoundaryClass::Chaotic => format!(
+            " --indicator {} --renorm {}",
+            match job.divergence.indicator {
+                Indicator::Ftle => "ftle",
+                Indicator::Fli => "fli",
+                _ => "megno",
+            },
+            job.divergence.renorm
+        ),
+        _ => String::new(),
+    }
 }
 
 pub fn fit(job: &FitJob) -> String {
