@@ -173,6 +173,16 @@ fn gpu_pairs_are_the_cpus() {
     assert_eq!(spec(Precision::F64).grid().pixels(), 512);
 }
 
+/// The job a command line describes.
+fn job(line: &str) -> Option<chaoscope::cli::Job> {
+    let words: Vec<String> = line.split_whitespace().map(String::from).collect();
+    chaoscope::cli::Cli::parse_args(words)
+        .unwrap()
+        .command
+        .job()
+        .unwrap()
+}
+
 #[test]
 fn the_chaotic_class_by_an_indicator_reproduces_too() {
     let dir = tempfile::tempdir().unwrap();
@@ -188,14 +198,6 @@ fn the_chaotic_class_by_an_indicator_reproduces_too() {
     for flags in ["--class chaotic", "--indicator ftle --renorm 0.05"] {
         assert!(command.contains(flags), "{command}");
     }
-    let job = |line: &str| {
-        let words: Vec<String> = line.split_whitespace().map(String::from).collect();
-        chaoscope::cli::Cli::parse_args(words)
-            .unwrap()
-            .command
-            .job()
-            .unwrap()
-    };
     assert_eq!(job(&command), job(&format!("chaoscope {base}")));
 }
 
@@ -240,20 +242,12 @@ fn boundary_runs_end_to_end_and_its_command_reproduces_it() {
     let rows = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(rows.lines().count(), 2 + 4, "{rows}");
     let command = common::png_text(&png, "chaoscope:command");
-    let parse = |line: &str| {
-        let words: Vec<String> = line.split_whitespace().map(String::from).collect();
-        chaoscope::cli::Cli::parse_args(words)
-            .unwrap()
-            .command
-            .job()
-            .unwrap()
-    };
-    let again = parse(&format!(
+    let again = job(&format!(
         "{command} --output {} --data {}",
         png.display(),
         csv.display()
     ));
-    let original = parse(&format!(
+    let original = job(&format!(
         "chaoscope boundary --t-max 3 --pairs 512 --levels 4 --eps 1e-3:1e-1 --class flipped --output {} --data {}",
         png.display(),
         csv.display()
