@@ -258,8 +258,13 @@ impl Grid {
     /// The parameters and the start of pixel (`col`, `row`) of a map with parameters `p`.
     /// Ratios are set after the values they multiply.
     pub fn pixel(&self, p: &Params, col: u32, row: u32) -> (Params, State) {
-        let (mut p, mut s) = (*p, self.fixed);
         let (x, y) = self.xy(col, row);
+        self.at(p, x, y)
+    }
+
+    /// The parameters and start at (`x`, `y`) of the plane.
+    pub fn at(&self, p: &Params, x: f64, y: f64) -> (Params, State) {
+        let (mut p, mut s) = (*p, self.fixed);
         let mut axes = [(self.x.var, x), (self.y.var, y)];
         axes.sort_by_key(|(v, _)| v.is_ratio());
         for (var, value) in axes {
@@ -318,21 +323,11 @@ impl Grid {
     /// The plane's corners and a lattice between them (9 x 9 points): where the parameters
     /// and speeds are checked against their ranges and the step's stability.
     pub fn lattice(&self, p: &Params) -> Vec<(Params, State)> {
-        let mut out = Vec::with_capacity(81);
-        for i in 0..9 {
-            for j in 0..9 {
-                let at =
-                    |a: &Axis, k: u32| a.range.min + (a.range.max - a.range.min) * k as f64 / 8.0;
-                let (mut q, mut s) = (*p, self.fixed);
-                let mut axes = [(self.x.var, at(&self.x, i)), (self.y.var, at(&self.y, j))];
-                axes.sort_by_key(|(v, _)| v.is_ratio());
-                for (var, value) in axes {
-                    var.set(value, &mut q, &mut s);
-                }
-                out.push((q, s));
-            }
-        }
-        out
+        let at = |a: &Axis, k: u32| a.range.min + (a.range.max - a.range.min) * k as f64 / 8.0;
+        (0..9)
+            .flat_map(|i| (0..9).map(move |j| (i, j)))
+            .map(|(i, j)| self.at(p, at(&self.x, i), at(&self.y, j)))
+            .collect()
     }
 
     /// The two axes vary different things, each range MIN < MAX, angles within -pi:pi,
