@@ -227,12 +227,7 @@ fn boundary_runs_end_to_end_and_its_command_reproduces_it() {
         .arg(&csv)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let summary = common::summary(out);
     let levels = summary["levels"].as_array().unwrap();
     assert_eq!(levels.len(), 4);
     for l in levels {

@@ -560,12 +560,7 @@ fn an_indicator_map_writes_its_values_and_a_single_start_its_running_columns() {
         .arg(&npy)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let summary = common::summary(out);
     assert_eq!(summary["quantity"], "MEGNO", "{summary}");
     let (shape, values) = common::read_npy(&npy);
     assert_eq!(shape, vec![12, 12]);

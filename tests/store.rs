@@ -313,6 +313,19 @@ fn a_full_disk_leaves_no_corrupt_chunk() {
     let _ = files;
 }
 
+/// Runs `script` in `python`; it must print "ok".
+fn python_says_ok(python: &str, script: &str) {
+    let out = std::process::Command::new(python)
+        .args(["-c", script])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success() && String::from_utf8_lossy(&out.stdout).contains("ok"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// zarr-python and xarray read the store: named dimensions, coordinates at the pixel
 /// centres, the values of the .npy bit for bit. The Python is scripts/test's venv (or
 /// CHAOSCOPE_PYTHON); without zarr and xarray the test says so, and fails under CI=true.
@@ -361,15 +374,7 @@ assert "crc32c" in codecs, codecs
 print("ok")
 "#
     );
-    let out = std::process::Command::new(&python)
-        .args(["-c", &script])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success() && String::from_utf8_lossy(&out.stdout).contains("ok"),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    python_says_ok(&python, &script);
     // Any other plane: dimensions and coordinates named by its axes, with their units.
     let (store, npy) = (dir.path().join("p.zarr"), dir.path().join("p.npy"));
     let map = [
@@ -403,15 +408,7 @@ assert np.array_equal(m.values.view(np.uint32), n.view(np.uint32))
 print("ok")
 "#
     );
-    let out = std::process::Command::new(&python)
-        .args(["-c", &script])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success() && String::from_utf8_lossy(&out.stdout).contains("ok"),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    python_says_ok(&python, &script);
 }
 
 /// The verdict goes into the store as the array `resolved`, equal to the .npy mask; a store

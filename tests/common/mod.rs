@@ -223,3 +223,13 @@ pub fn refuses(prefix: &[&str], cases: &[(&[&str], &str)]) {
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// The JSON summary of a finished run that must have succeeded.
+pub fn summary(out: std::process::Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
