@@ -307,8 +307,9 @@ fn unit(a: u32, b: u32) -> real {
     return real(a >> 8u) * (1.0 / 16777216.0) + real(b >> 8u) * (1.0 / 281474976710656.0);
 }
 
-// Pixel (col, row) of a grid of pairs side by side (src/spec/grid.rs `Grid::xy`): a start drawn over the plane, or
-// it moved by eps of the plane's width or height, either way, back inside if it would leave.
+// Pixel (col, row) of a grid of pairs side by side (src/spec/grid.rs `Grid::xy`): a start
+// drawn over the plane, or it moved by eps of the plane's width or height, either way, back
+// inside if it would leave.
 fn pair_xy(p: Params, col: u32, row: u32) -> vec2<real> {
     let h = pcg(p.seed ^ pcg(row * (p.width / 2u) + col / 2u));
     var xy = vec2<real>(p.x_mid + unit(pcg(h ^ 1u), pcg(h ^ 2u)) * p.x_half_step,
