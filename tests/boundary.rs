@@ -7,9 +7,7 @@ use chaoscope::boundary::{Level, count, eps_levels, fit, level_seed};
 use chaoscope::engine::{Backend, Engine};
 use chaoscope::model::Params;
 use chaoscope::monitor::Monitor;
-use chaoscope::spec::{
-    Axis, FlipMeasure, FlipSpec, Grid, MapSpec, Precision, Sampling, Stepping, Var,
-};
+use chaoscope::spec::{Axis, FlipMeasure, FlipSpec, Grid, Precision, Sampling, Stepping, Var};
 
 /// Pairs over the unit square (x, y as two parameters' axes: only the geometry is used).
 fn unit_pairs(pairs: u32, seed: u32, eps: f64) -> Grid {
@@ -170,7 +168,6 @@ fn gpu_pairs_are_the_cpus() {
         .filter(|(a, b)| a == b || (*a - *b).abs() <= 0.011)
         .count();
     assert!(agree >= 480, "{agree} of 512 within a step");
-    assert_eq!(spec(Precision::F64).grid().pixels(), 512);
 }
 
 /// The job a command line describes.

@@ -15,7 +15,7 @@ fn reduce(quantity: &Quantity, values: &[f32]) -> f32 {
     if values.iter().any(|v| v.is_nan()) {
         return f32::NAN;
     }
-    if std::ptr::eq(quantity, &FLIP_TIME) || quantity.name == FLIP_TIME.name {
+    if quantity.name == FLIP_TIME.name {
         let flipped: Vec<f64> = values
             .iter()
             .filter(|v| v.is_finite())

@@ -220,10 +220,8 @@ macro_rules! params_constructors {
 
         /// The plane of `g`; an axis measured in mass in the mass scale of `new`.
         pub fn with_grid(mut self, g: &Grid, p: &Params) -> Self {
-            let scale = |a: &crate::spec::Axis| match a.var.is_mass() {
-                true => mass_scale(p),
-                false => 1.0,
-            };
+            let s = mass_scale(p);
+            let scale = |a: &crate::spec::Axis| if a.var.is_mass() { s } else { 1.0 };
             let (sx, sy) = (scale(&g.x), scale(&g.y));
             match g.sampling {
                 crate::spec::Sampling::Centres => {

@@ -343,16 +343,6 @@ macro_rules! on_any {
 }
 pub(crate) use on_any;
 
-impl AnyMap {
-    /// The same map over `grid` (a store's picture at another size).
-    pub fn on_grid(&self, grid: Grid) -> AnyMap {
-        match *self {
-            AnyMap::Flip(s) => AnyMap::Flip(FlipSpec { grid, ..s }),
-            AnyMap::Lyapunov(s) => AnyMap::Lyapunov(LyapunovSpec { grid, ..s }),
-        }
-    }
-}
-
 impl MapSpec for AnyMap {
     fn quantity(&self) -> &'static crate::quantity::Quantity {
         on_any!(self, s => s.quantity())
@@ -391,7 +381,7 @@ impl MapSpec for AnyMap {
         on_any!(self, s => s.with_band(band).any())
     }
     fn on_grid(&self, grid: Grid) -> Self {
-        AnyMap::on_grid(self, grid)
+        on_any!(self, s => s.on_grid(grid).any())
     }
     fn restepped(&self, stepping: Stepping, integrator: Integrator, precision: Precision) -> Self {
         on_any!(self, s => s.restepped(stepping, integrator, precision).any())

@@ -194,13 +194,18 @@ pub fn validate_plane(p: &Params, g: &Grid, s: &Stepping) -> Result<()> {
         let field = if var == g.x.var { "x" } else { "y" };
         Error::invalid(field, format!("{} over this plane: {e}", var.name()))
     };
+    // A plane of the start alone has one set of parameters: its stability is checked once.
+    let mut checked: Option<Params> = None;
     for (q, start) in g.lattice(p) {
-        validate_params(&q).map_err(axis_of)?;
         let at = |e: Error| match g.varies_params() || !g.is_angle_plane() {
             true => with_context(e, &format!("at {}", point_words(g, &q, &start))),
             false => e,
         };
-        validate_stability(&q, s).map_err(at)?;
+        if checked != Some(q) {
+            validate_params(&q).map_err(axis_of)?;
+            validate_stability(&q, s).map_err(at)?;
+            checked = Some(q);
+        }
         validate_speeds(&q, s, start.omega1, start.omega2).map_err(at)?;
     }
     Ok(())

@@ -140,8 +140,7 @@ impl Var {
         match self {
             Var::MassRatio => "m2",
             Var::LengthRatio => "l2",
-            Var::Damping => "joint",
-            Var::Joint1 | Var::Joint2 => "joint",
+            Var::Damping | Var::Joint1 | Var::Joint2 => "joint",
             v => v.name(),
         }
     }
