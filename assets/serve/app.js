@@ -1,15 +1,19 @@
-// chaoscope explorer: the map is Leaflet in CRS.Simple. The region of starts (the whole
-// turn [-pi, pi]^2 as tile 0/0/0, or a store's map) spans lng 0..units[0], lat -units[1]..0,
-// as the server's /api/info says; every tile, point and trajectory is computed (or read) by
-// the server from its URL. The page's state lives in the URL's hash.
+// chaoscope explorer: the map is Leaflet in CRS.Simple. The region of the plane shown (any
+// two axes, the whole turn [-pi, pi]^2 of theta1 and theta2 by default, as tile 0/0/0; or a
+// store's map) spans lng 0..units[0], lat -units[1]..0; every tile, point and trajectory is
+// computed (or read) by the server from its URL. The page's state lives in the URL's hash.
 "use strict";
 
 const TURN = 2 * Math.PI;
 const COLOURS = ["#f9a03f", "#4fc3f7", "#aed581", "#f06292", "#ba68c8", "#fff176"];
 const KEYS = ["kind", "t_max", "cmap", "m1", "m2", "l1", "l2", "damping", "accurate",
-  "unresolved", "lo", "hi"];
+  "unresolved", "lo", "hi", "x", "x_min", "x_max", "y", "y_min", "y_max",
+  "theta1", "omega1", "theta2", "omega2"];
 // What a store's command fixes.
 const PHYSICS = ["t_max", "m1", "m2", "l1", "l2", "damping", "accurate"];
+const PLANE = ["x", "x_min", "x_max", "y", "y_min", "y_max", "theta1", "omega1", "theta2",
+  "omega2"];
+const START = ["theta1", "omega1", "theta2", "omega2"];
 
 const state = {};          // the view's settings, as query keys
 const page = { starts: [], info: null, firstView: null, loads: 0, lastLoad: null };
@@ -18,17 +22,30 @@ window.chaoscope = page;   // for tests and the curious
 const form = document.getElementById("controls");
 const statusLine = document.getElementById("status");
 
-// Radians per level-0 unit along theta1 and theta2, and the region's corners.
+// The plane shown: its axes (name, range), the region's size in level-0 units, and the
+// axes' units per level-0 unit.
 function world() {
-  const w = page.info.world;
-  return { t1: w.theta1, t2: w.theta2, units: w.units,
-    k1: (w.theta1[1] - w.theta1[0]) / w.units[0], k2: (w.theta2[1] - w.theta2[0]) / w.units[1] };
+  const s = page.info.store;
+  const x = s ? s.x : { name: state.x, range: [Number(state.x_min), Number(state.x_max)] };
+  const y = s ? s.y : { name: state.y, range: [Number(state.y_min), Number(state.y_max)] };
+  // A plane not a store's is tile 0/0/0: 256 level-0 units a side.
+  const units = s ? s.units : [256, 256];
+  return { x, y, units, kx: (x.range[1] - x.range[0]) / units[0],
+    ky: (y.range[1] - y.range[0]) / units[1] };
 }
-function theta1Of(lng) { const w = world(); return w.t1[0] + lng * w.k1; }
-function theta2Of(lat) { const w = world(); return w.t2[1] + lat * w.k2; }
-function lngOf(theta1) { const w = world(); return (theta1 - w.t1[0]) / w.k1; }
-function latOf(theta2) { const w = world(); return (theta2 - w.t2[1]) / w.k2; }
+function xOf(lng) { const w = world(); return w.x.range[0] + lng * w.kx; }
+function yOf(lat) { const w = world(); return w.y.range[1] + lat * w.ky; }
+function lngOf(x) { const w = world(); return (x - w.x.range[0]) / w.kx; }
+function latOf(y) { const w = world(); return (y - w.y.range[1]) / w.ky; }
 function bounds() { const u = world().units; return [[-u[1], 0], [0, u[0]]]; }
+function varInfo(name) { return page.info.vars.find((v) => v.name === name); }
+
+// Whether a query key's value is set by an axis instead (a start component along it, or the
+// parameter an axis writes).
+function alongAxis(k) {
+  const axes = [world().x.name, world().y.name].map(varInfo);
+  return axes.some((v) => v.name === k || v.writes === k);
+}
 
 // The query string of the view's settings (only those that differ from the server's).
 function query(extra) {
@@ -37,7 +54,9 @@ function query(extra) {
     const v = state[k];
     if (v === undefined || v === "" || v === false) continue;
     if ((k === "lo" || k === "hi") && !kindInfo().ranged) continue;
-    if (page.info.store && PHYSICS.includes(k)) continue;
+    if (page.info.store && (PHYSICS.includes(k) || PLANE.includes(k))) continue;
+    if (alongAxis(k) && !PLANE.slice(0, 6).includes(k)) continue;
+    if (START.includes(k) && Number(v) === 0) continue;
     q.set(k, v === true ? "1" : String(v));
   }
   for (const [k, v] of Object.entries(extra || {})) q.set(k, String(v));
@@ -49,19 +68,19 @@ function readHash() {
   for (const k of KEYS) if (h.has(k)) state[k] = h.get(k);
   state.accurate = state.accurate === "1" || state.accurate === true;
   state.unresolved = state.unresolved === "1" || state.unresolved === true;
-  return {
-    z: h.has("z") ? Number(h.get("z")) : null,
-    theta1: h.has("theta1") ? Number(h.get("theta1")) : 0,
-    theta2: h.has("theta2") ? Number(h.get("theta2")) : 0,
-  };
+  // An axis named without its range gets its default one.
+  for (const a of ["x", "y"]) if (h.has(a) && !h.has(`${a}_min`)) axisRange(a, state[a]);
+  // The centre, along x and y.
+  return { z: h.has("z") ? Number(h.get("z")) : null,
+    cx: h.has("cx") ? Number(h.get("cx")) : null, cy: h.has("cy") ? Number(h.get("cy")) : null };
 }
 
 function writeHash() {
   const c = map.getCenter();
   const h = new URLSearchParams(query());
   h.set("z", map.getZoom());
-  h.set("theta1", theta1Of(c.lng).toPrecision(17));
-  h.set("theta2", theta2Of(c.lat).toPrecision(17));
+  h.set("cx", xOf(c.lng).toPrecision(17));
+  h.set("cy", yOf(c.lat).toPrecision(17));
   history.replaceState(null, "", "#" + h.toString());
 }
 
@@ -70,7 +89,15 @@ function fillForm() {
     const el = form.elements[k];
     if (!el) continue;
     if (el.type === "checkbox") el.checked = !!state[k]; else el.value = state[k] ?? "";
-    if (page.info.store && PHYSICS.includes(k)) el.disabled = true;
+    const fixed = page.info.store && (PHYSICS.includes(k) || PLANE.includes(k));
+    // A value an axis varies is not the form's: its input is off, and says so.
+    const along = !PLANE.slice(0, 6).includes(k) && alongAxis(k);
+    el.disabled = fixed || along;
+    if (along) { el.value = ""; el.placeholder = "along an axis"; } else el.placeholder = "";
+  }
+  for (const a of ["x", "y"]) {
+    const v = varInfo(world()[a].name);
+    document.getElementById(`${a}-unit`).textContent = v.unit === "1" ? "" : `(${v.unit})`;
   }
   document.getElementById("ftle-range").hidden = !kindInfo().ranged;
   document.getElementById("range-unit").textContent = kindInfo().unit ? `(${kindInfo().unit})` : "";
@@ -80,17 +107,38 @@ function fillForm() {
   form.elements.accurate.disabled = !kindInfo().accurate;
 }
 
-// The pixel step (rad) at zoom z, and what precision that needs.
+// How many steps of the finest an axis' pixels are at zoom z (below 1: the precision's
+// pixels are no longer distinct): the finest is 16 ulp of the axis' largest value (of pi for
+// angles), as the server decides (spec::Axis::finest_step).
+function resolves(axis, step, piStep) {
+  const v = varInfo(axis.name);
+  const largest = Math.max(Math.abs(axis.range[0]), Math.abs(axis.range[1]),
+    v.angle ? Math.PI : 1e-300);
+  return step / (piStep * 2 ** (Math.floor(Math.log2(largest)) - 1));
+}
+
+// The pixel's steps along x and y at zoom z, and what precision they need.
 function precisionAt(z) {
   const w = world();
-  const step = Math.min(Math.abs(w.k1), Math.abs(w.k2)) / 2 ** z;
+  const steps = [Math.abs(w.kx) / 2 ** z, Math.abs(w.ky) / 2 ** z];
+  const below = (piStep) => Math.min(resolves(w.x, steps[0], piStep),
+    resolves(w.y, steps[1], piStep)) < 1;
   const info = page.info;
-  if (info.store && z <= info.world.native) return [step, `read from ${info.store.name}`];
-  if (step < info.f64_min_pixel_step) return [step, "beyond f64: no pixel is resolved"];
+  if (info.store && z <= info.store.native) return [steps, `read from ${info.store.name}`];
+  if (below(info.f64_min_pixel_step)) return [steps, "beyond f64: no pixel is resolved"];
   const where = info.place === "the CPU" ? "CPU" : "GPU";
-  if (state.accurate) return [step, `f64 DP54 on the ${info.has_f64 ? where : "CPU"}`];
-  if (step < info.f32_min_pixel_step) return [step, `f64 on the ${info.has_f64 ? where : "CPU"}`];
-  return [step, `f32 on the ${where}`];
+  if (state.accurate) return [steps, `f64 DP54 on the ${info.has_f64 ? where : "CPU"}`];
+  if (below(info.f32_min_pixel_step)) return [steps, `f64 on the ${info.has_f64 ? where : "CPU"}`];
+  return [steps, `f32 on the ${where}`];
+}
+
+// A pixel's size in words: "1.23e-2 rad", or one step per axis when they differ.
+function pixelWords(steps) {
+  const w = world();
+  const [ux, uy] = [varInfo(w.x.name).unit, varInfo(w.y.name).unit];
+  const f = (v, u) => `${v.toExponential(2)}${u === "1" ? "" : " " + u}`;
+  if (ux === uy && Math.abs(steps[0] - steps[1]) <= 1e-12 * steps[0]) return f(steps[0], ux);
+  return `${f(steps[0], ux)} × ${f(steps[1], uy)}`;
 }
 
 // The zoom of the tiles in view: the view's zoom may be fractional (the first view fills the
@@ -101,9 +149,9 @@ function tileZoom() {
 
 function showStatus(extra, isError) {
   const z = tileZoom();
-  const [step, precision] = precisionAt(z);
+  const [steps, precision] = precisionAt(z);
   statusLine.className = isError ? "error" : "";
-  statusLine.textContent = `zoom ${z} · pixel ${step.toExponential(2)} rad · ${precision}` +
+  statusLine.textContent = `zoom ${z} · pixel ${pixelWords(steps)} · ${precision}` +
     ` · tiles by ${page.info.place}` + (extra ? ` · ${extra}` : "");
 }
 
@@ -151,7 +199,14 @@ async function start() {
   const d = page.info.defaults;
   Object.assign(state, { kind: "flip", t_max: d.t_max, cmap: "", m1: d.m1, m2: d.m2,
     l1: d.l1, l2: d.l2, damping: d.damping, accurate: false, unresolved: false,
-    lo: "", hi: "" });
+    lo: "", hi: "", x: "theta1", y: "theta2", theta1: 0, omega1: 0, theta2: 0, omega2: 0 });
+  for (const a of ["x", "y"]) {
+    const menu = form.elements[a];
+    for (const v of page.info.vars) {
+      menu.add(new Option(`${v.symbol}${v.unit === "1" ? "" : ` (${v.unit})`}`, v.name));
+    }
+    axisRange(a, state[a]);
+  }
   // The menu of maps is the server's table: a new quantity appears here by itself.
   for (const k of page.info.kinds) form.elements.kind.add(new Option(k.label, k.name));
   if (page.info.store) {
@@ -160,6 +215,8 @@ async function start() {
     for (const o of [...form.elements.kind.options]) {
       if (o.value !== s.kind && o.value !== "resolved") o.remove();
     }
+    Object.assign(state, { x: s.x.name, y: s.y.name, ...s.start, x_min: s.x.range[0],
+      x_max: s.x.range[1], y_min: s.y.range[0], y_max: s.y.range[1] });
     document.getElementById("hint").textContent =
       `Showing the store ${s.name} (${s.width} x ${s.height}), made by: ${s.command}. ` +
       "Zoomed past its pixels, tiles are computed with its settings.";
@@ -177,7 +234,7 @@ async function start() {
     maxBounds: L.latLngBounds(bounds()).pad(0.5) });
   page.map = map;
   if (view.z === null) map.fitBounds(bounds());
-  else map.setView([latOf(view.theta2), lngOf(view.theta1)], view.z);
+  else map.setView([latOf(view.cy ?? 0), lngOf(view.cx ?? 0)], view.z);
   await setLayer();
   map.on("moveend", () => { writeHash(); showStatus(); });
   map.on("click", (e) => pick(e.latlng, e.originalEvent.shiftKey));
@@ -226,28 +283,53 @@ async function setLayer() {
   showStatus("computing…");
 }
 
+// An axis' range: its default for what it varies (the server's table).
+function axisRange(a, name) {
+  const r = varInfo(name).range;
+  state[`${a}_min`] = r[0];
+  state[`${a}_max`] = r[1];
+}
+
 function onChange(e) {
   const el = e.target;
   if (!(el.name in state)) return;
+  const before = state[el.name];
   state[el.name] = el.type === "checkbox" ? el.checked : el.value;
-  if (el.name !== "lo" && el.name !== "hi" && kindInfo().ranged &&
-    ["kind", "t_max", "m1", "m2", "l1", "l2", "damping"].includes(el.name)) {
+  const plane = PLANE.includes(el.name);
+  if (el.name === "x" || el.name === "y") {
+    // Both axes on one thing: they trade places.
+    const other = el.name === "x" ? "y" : "x";
+    if (state[other] === state[el.name]) {
+      state[other] = before;
+      axisRange(other, before);
+    }
+    axisRange(el.name, state[el.name]);
+  }
+  if (el.name !== "lo" && el.name !== "hi" && kindInfo().ranged && (plane ||
+    ["kind", "t_max", "m1", "m2", "l1", "l2", "damping"].includes(el.name))) {
     state.lo = ""; state.hi = "";   // a new physics, a new colour range
   }
   fillForm();
+  if (plane) {
+    // Another plane: the old view and clicks mean nothing on it.
+    page.starts = [];
+    for (const m of page.markers || []) m.remove();
+    document.getElementById("pendulum").hidden = true;
+    map.fitBounds(bounds());
+  }
   setLayer().then(legend);
   if (page.starts.length) refreshStarts();
 }
 
-// The centre of the pixel under `latlng` at the current zoom, in rad.
+// The centre of the pixel under `latlng` at the current zoom, along x and y, and its size.
 function pixelAt(latlng) {
   const w = world();
   const scale = 2 ** tileZoom();
   const col = Math.floor(latlng.lng * scale);
   const row = Math.floor(-latlng.lat * scale);
-  return { theta1: w.t1[0] + (col + 0.5) * w.k1 / scale,
-    theta2: w.t2[1] - (row + 0.5) * w.k2 / scale,
-    step: Math.min(Math.abs(w.k1), Math.abs(w.k2)) / scale };
+  return { x: w.x.range[0] + (col + 0.5) * w.kx / scale,
+    y: w.y.range[1] - (row + 0.5) * w.ky / scale,
+    dx: Math.abs(w.kx) / scale, dy: Math.abs(w.ky) / scale };
 }
 
 async function pick(latlng, add) {
@@ -261,9 +343,9 @@ async function pick(latlng, add) {
 }
 
 async function load(p) {
-  const where = { theta1: p.theta1, theta2: p.theta2 };
+  const where = { px: p.x, py: p.y };
   const [point, csv] = await Promise.all([
-    fetch("/api/point?" + query({ ...where, pixel: p.step, kind: "flip" })),
+    fetch("/api/point?" + query({ ...where, pixel: p.dx, pixel_y: p.dy, kind: "flip" })),
     fetch("/api/trajectory?" + query({ ...where, kind: "flip" })),
   ]);
   if (!point.ok) throw new Error(await point.text());
@@ -289,7 +371,7 @@ async function refreshStarts() {
   // Each start marked on the map in its colour.
   for (const m of page.markers || []) m.remove();
   page.markers = page.loaded.map((s, i) => L.circleMarker(
-    [latOf(s.point.theta2), lngOf(s.point.theta1)],
+    [latOf(s.point.y), lngOf(s.point.x)],
     { radius: 6, color: COLOURS[i], weight: 2, fill: false, interactive: false }).addTo(map));
   page.loaded.forEach((s, i) => {
     const li = document.createElement("li");
@@ -297,7 +379,8 @@ async function refreshStarts() {
     const t = s.point.flip_time;
     const flip = typeof t === "number" ? `flips at ${t.toFixed(3)} s` :
       t === "never" ? `no flip within ${s.point.t_max} s` : "NaN (blew up)";
-    li.textContent = `θ1 ${s.point.theta1.toFixed(6)}, θ2 ${s.point.theta2.toFixed(6)}: ${flip}` +
+    const [vx, vy] = [varInfo(world().x.name), varInfo(world().y.name)];
+    li.textContent = `${vx.symbol} ${s.point.x.toPrecision(7)}, ${vy.symbol} ${s.point.y.toPrecision(7)}: ${flip}` +
       ` (${s.point.precision}, ${s.point.resolved ? "resolved" : "NOT resolved"})`;
     list.appendChild(li);
   });
@@ -315,7 +398,8 @@ function swing(now) {
   g.clearRect(0, 0, c.width, c.height);
   const starts = page.loaded || [];
   if (starts.length) {
-    const l = Number(state.l1) + Number(state.l2);
+    // Each pendulum's arms as its pixel has them (an axis may vary them).
+    const l = Math.max(...starts.map((s) => s.point.params.l1 + s.point.params.l2));
     const scale = (c.width / 2 - 12) / l;
     const [cx, cy] = [c.width / 2, c.height / 2];
     const rows = starts[0].rows;
@@ -380,13 +464,14 @@ function saveView() {
   const b = map.getBounds();
   const clamp = (v, a, z) => Math.min(z, Math.max(a, v));
   const u = world().units;
-  const t1 = [theta1Of(clamp(b.getWest(), 0, u[0])), theta1Of(clamp(b.getEast(), 0, u[0]))];
-  const t2 = [theta2Of(clamp(b.getSouth(), -u[1], 0)), theta2Of(clamp(b.getNorth(), -u[1], 0))];
+  const [west, east] = [clamp(b.getWest(), 0, u[0]), clamp(b.getEast(), 0, u[0])];
+  const [south, north] = [clamp(b.getSouth(), -u[1], 0), clamp(b.getNorth(), -u[1], 0)];
   const width = Number(document.querySelector("#save select[name=width]").value);
-  const height = Math.max(16, Math.round(width * (t2[1] - t2[0]) / (t1[1] - t1[0])));
+  // Square pixels on the screen stay square in the file.
+  const height = Math.max(16, Math.round(width * (north - south) / (east - west)));
   const annotate = document.querySelector("#save input[name=annotate]").checked;
-  const url = "/api/save?" + query({ theta1_min: t1[0], theta1_max: t1[1], theta2_min: t2[0],
-    theta2_max: t2[1], width, height: Math.min(height, 4096), annotate: annotate ? 1 : 0 });
+  const url = "/api/save?" + query({ x_min: xOf(west), x_max: xOf(east), y_min: yOf(south),
+    y_max: yOf(north), width, height: Math.min(height, 4096), annotate: annotate ? 1 : 0 });
   const link = document.createElement("a");
   link.href = url;
   link.download = `chaoscope-${state.kind}.png`;

@@ -106,6 +106,21 @@ impl Var {
         }
     }
 
+    /// The range the explorer first shows along an axis (the command line asks for one):
+    /// a turn for angles, and around the default pendulum (1 kg, 1 m, g = 9.81) otherwise.
+    pub fn default_range(self) -> super::Range {
+        let (min, max) = match self {
+            Var::Theta1 | Var::Theta2 => (-std::f64::consts::PI, std::f64::consts::PI),
+            Var::Omega1 | Var::Omega2 => (-8.0, 8.0),
+            Var::M1 | Var::M2 | Var::L1 | Var::L2 => (0.1, 2.0),
+            Var::MassRatio | Var::LengthRatio => (0.1, 3.0),
+            Var::G => (1.0, 25.0),
+            Var::Damping | Var::Joint1 | Var::Joint2 => (0.0, 0.05),
+            Var::Rod1 | Var::Rod2 => (0.0, 1.0),
+        };
+        super::Range { min, max }
+    }
+
     pub fn is_angle(self) -> bool {
         matches!(self, Var::Theta1 | Var::Theta2)
     }

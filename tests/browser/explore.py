@@ -1,6 +1,7 @@
 """Drives the explorer in a real headless Chromium through WebDriver (selenium with Debian's
 chromedriver): loads the page, waits for the first tiles, zooms in once, clicks a pixel and
-shift-clicks another, and prints what it saw as JSON (timings in seconds from page load).
+shift-clicks another, then picks the (theta1, omega1) plane with the axis menus and clicks a
+pixel of it, and prints what it saw as JSON (timings in seconds from page load).
 
 Usage: explore.py URL OUTDIR   (screenshots map.png and pendulum.png go to OUTDIR)
 """
@@ -13,7 +14,7 @@ from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.common.action_chains import ActionChains
 from selenium.webdriver.common.by import By
 from selenium.webdriver.common.keys import Keys
-from selenium.webdriver.support.ui import WebDriverWait
+from selenium.webdriver.support.ui import Select, WebDriverWait
 
 url, out = sys.argv[1], sys.argv[2]
 options = webdriver.ChromeOptions()
@@ -46,7 +47,7 @@ try:
     driver.get("about:blank")
 
     viewport(872, 512)
-    driver.get(url + "#z=0&theta1=0&theta2=0&t_max=20")
+    driver.get(url + "#z=0&cx=0&cy=0&t_max=20")
     wait.until(lambda d: d.execute_script(
         "return window.chaoscope && window.chaoscope.firstView !== null"))
     report["first_view_s"] = driver.execute_script(
@@ -103,6 +104,32 @@ try:
         let n = 0; for (let k = 3; k < d.length; k += 4) if (d[k] > 0) n += 1; return n;""")
     report["hash"] = driver.execute_script("return location.hash")
     driver.save_screenshot(out + "/pendulum.png")
+
+    # Another plane through the axis menus: y becomes omega1 (its default range), theta2
+    # fixed at 0.4; then a click at (theta1, omega1) = (2.0, 3.0).
+    Select(driver.find_element(By.NAME, "y")).select_by_value("omega1")
+    wait.until(lambda d: d.execute_script("return document.body.dataset.tiles === 'loaded'"))
+    theta2 = driver.find_element(By.NAME, "theta2")
+    theta2.clear()
+    theta2.send_keys("0.4" + Keys.TAB)
+    wait.until(lambda d: "theta2=0.4" in d.execute_script("return window.chaoscope.layer._url")
+               and d.execute_script("return document.body.dataset.tiles === 'loaded'"))
+    time.sleep(0.5)
+    report["plane_tiles"] = driver.execute_script("return window.chaoscope.layer._url")
+    report["plane_status"] = driver.find_element(By.ID, "status").text
+    report["plane_inputs"] = driver.execute_script("""return ['omega1', 'theta2', 'm2']
+        .map(k => [k, document.querySelector(`input[name=${k}]`).disabled])""")
+    driver.save_screenshot(out + "/plane.png")
+    x, y = driver.execute_script("""
+        const p = window.chaoscope.map.latLngToContainerPoint([latOf(3.0), lngOf(2.0)]);
+        return [p.x, p.y];""")
+    element = driver.find_element(By.ID, "map")
+    ActionChains(driver).move_to_element_with_offset(
+        element, x - element.rect["width"] / 2, y - element.rect["height"] / 2).click().perform()
+    wait.until(lambda d: len(d.find_elements(By.CSS_SELECTOR, "#starts li")) == 1
+               and d.execute_script("return document.body.dataset.pendulum === 'shown'"))
+    report["plane_starts"] = [li.text for li in driver.find_elements(By.CSS_SELECTOR, "#starts li")]
+    report["plane_command"] = driver.find_element(By.ID, "command").text
     report["console_errors"] = [e["message"] for e in driver.get_log("browser")
                                 if e["level"] == "SEVERE"]
 finally:

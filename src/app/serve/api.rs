@@ -10,17 +10,35 @@ pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {
         Err(e) => return reply(e),
     };
     let colormaps: Vec<&str> = render::Colormap::ALL.iter().map(|c| c.name()).collect();
-    let w = shared.world;
-    let (units_across, units_down) = w.units();
+    let axis = |a: &crate::spec::Axis| serde_json::json!({"name": a.var.name(), "range": [a.range.min, a.range.max]});
     let store = shared.store.as_ref().map(|(_, s)| {
+        let w = World::of_grid(&s.grid());
+        let f = w.plane.fixed;
         serde_json::json!({
             "name": s.path.file_name().map(|n| n.to_string_lossy().into_owned()),
             "command": s.command,
             "kind": s.kind(),
-            "width": w.width,
-            "height": w.height,
+            "width": w.plane.width,
+            "height": w.plane.height,
+            "x": axis(&w.plane.x),
+            "y": axis(&w.plane.y),
+            "start": {"theta1": f.theta1, "omega1": f.omega1, "theta2": f.theta2, "omega2": f.omega2},
+            "units": w.units(),
+            "native": w.native,
         })
     });
+    // What an axis may vary: the page's axis menus.
+    let vars: Vec<_> = crate::spec::Var::ALL
+        .iter()
+        .map(|v| {
+            let r = v.default_range();
+            serde_json::json!({
+                "name": v.name(), "symbol": v.symbol(), "unit": v.unit(),
+                "range": [r.min, r.max], "angle": v.is_angle(), "state": v.is_state(),
+                "writes": v.writes(),
+            })
+        })
+        .collect();
     let stepping = shared.stored().map(|m| m.stepping());
     let p = shared.stored().map_or(p, |m| m.params());
     json(serde_json::json!({
@@ -39,37 +57,24 @@ pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {
             "t_max": stepping.map_or(20.0, |s| s.t_max),
             "dt": stepping.map_or(0.01, |s| s.dt),
         },
-        "world": {
-            "theta1": [w.theta1.min, w.theta1.max],
-            "theta2": [w.theta2.min, w.theta2.max],
-            "units": [units_across, units_down],
-            "native": w.native,
-        },
+        "vars": vars,
         "store": store,
     }))
 }
 
-/// A clicked pixel: its flip time as the map computes it (a one-pixel map `pixel` rad wide
-/// around the start, so it runs in the tile's precision) and whether it is resolved.
+/// A clicked pixel (`px`, `py` along the view's axes): its flip time as the map computes it
+/// (a one-pixel map `pixel` x `pixel_y` wide around it, so it runs in the tile's precision),
+/// whether it is resolved, and its pendulum.
 pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
-    let parsed = (|| -> Result<(View, Grid)> {
+    let parsed = (|| -> Result<(View, Grid, Pendulum)> {
         let mut q = Query::new(q)?;
         let mut view = shared.view(&mut q)?;
         view.kind = Kind::FLIP;
-        let start = view::start(&mut q)?;
-        // At least 16 ulp of pi: a narrower pixel has no distinct edges in f64.
-        let pixel = q
-            .within("pixel", crate::spec::F64_MIN_PIXEL_STEP, 1.0)?
-            .unwrap_or(1e-3);
+        let (grid, pendulum) = view::point(&mut q, &view)?;
         q.finish()?;
-        let around = |x: f64| Range {
-            min: x - 0.5 * pixel,
-            max: x + 0.5 * pixel,
-        };
-        let grid = Grid::angles(1, 1, around(start.theta1), around(start.theta2), 0.0, 0.0);
-        Ok((view, grid))
+        Ok((view, grid, pendulum))
     })();
-    let (view, grid) = match parsed {
+    let (view, grid, (p, s)) = match parsed {
         Ok(p) => p,
         Err(e) => return reply(e),
     };
@@ -93,8 +98,10 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
                 }
             };
             json(serde_json::json!({
-                "theta1": grid.x_at(0),
-                "theta2": grid.y_at(0),
+                "x": grid.x.var.get(&p, &s),
+                "y": grid.y.var.get(&p, &s),
+                "start": {"theta1": s.theta1, "omega1": s.omega1, "theta2": s.theta2, "omega2": s.omega2},
+                "params": {"m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g},
                 "flip_time": time,
                 "resolved": resolved,
                 "precision": precision,
@@ -105,18 +112,20 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
     }
 }
 
+type Pendulum = (crate::model::Params, crate::model::State);
+
 /// One start's trajectory: exactly the CSV `chaoscope trajectory` writes (CPU f64, a row
 /// every ~0.02 s), its reproducing command on the first line.
 pub(super) async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let parsed = (|| -> Result<TrajectoryJob> {
         let mut q = Query::new(q)?;
         let view = shared.view(&mut q)?;
-        let start = view::start(&mut q)?;
+        let (_, (params, start)) = view::point(&mut q, &view)?;
         q.finish()?;
         let dt = view.stepping.dt;
         let stride = (0.02 / dt).round().max(1.0);
         Ok(TrajectoryJob {
-            params: view.params,
+            params,
             start,
             stepping: view.stepping,
             every: Some(stride * dt),
@@ -143,23 +152,28 @@ pub(super) async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Pa
 }
 
 /// A divergence-family map's colour range for the page's physics and kind: its default
-/// (render::default_range) over the whole turn (a 128^2 overview), as `chaoscope lyapunov`
+/// (render::default_range) over the view's region (a 128^2 overview), as `chaoscope lyapunov`
 /// picks it.
 pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
     let view = match shared.view_only(q) {
         Ok(v) => v,
         Err(e) => return reply(e),
     };
+    let world = shared.world(&view);
     let key = format!(
-        "range {:?} {:?} {:?} {:?}",
-        view.kind, view.params, view.stepping, view.accurate
+        "range {:?} {:?} {:?} {:?} {:?}",
+        view.kind, view.params, view.stepping, view.accurate, world.plane
     );
     if let Some(bytes) = cached(&shared, &key) {
         return json(serde_json::from_slice(&bytes).unwrap_or_default());
     }
-    let world = shared.world;
     let result = on_engine(&shared, move |engine, monitor| {
-        let spec = view.lyapunov_spec(Grid::angles(128, 128, world.theta1, world.theta2, 0.0, 0.0));
+        let overview = Grid {
+            width: 128,
+            height: 128,
+            ..world.plane
+        };
+        let spec = view.lyapunov_spec(overview);
         spec.validate()?;
         Ok(render::default_range(&spec, &engine.map(&spec, monitor)?))
     })
@@ -180,7 +194,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
     let parsed = (|| -> Result<(View, Grid, bool)> {
         let mut q = Query::new(q)?;
         let view = shared.view(&mut q)?;
-        let grid = view::region_grid(&mut q)?;
+        let grid = view::region_grid(&mut q, &view)?;
         let annotate = q.flag("annotate")?;
         q.finish()?;
         Ok((view, grid, annotate))

@@ -10,6 +10,7 @@ mod assets;
 mod kind;
 mod tiles;
 pub mod view;
+pub mod world;
 
 use self::answers::*;
 use self::api::*;
@@ -31,7 +32,8 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use lru::LruCache;
 
-use self::view::{Kind, Query, View, World};
+use self::view::{Kind, Query, View};
+use self::world::World;
 use crate::app::MapOutputs;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::LyapunovMapJob;
@@ -44,7 +46,7 @@ use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::store::MapStore;
 use crate::render::{self, PictureSpec};
-use crate::spec::{Grid, MapSpec, Precision, Range};
+use crate::spec::{Grid, MapSpec, Precision};
 
 /// Requests waiting for (or holding) the engine at most; more get 503 at once, so a burst
 /// of requests holds a bounded amount of memory.
@@ -147,8 +149,8 @@ struct Shared {
     base: ParamSources,
     backend: Backend,
     commands: Commands,
-    /// What the tiles cover: the whole turn, or the store's region.
-    world: World,
+    /// What a store's tiles cover (a view's plane otherwise).
+    store_world: Option<World>,
     store: Option<(Arc<MapStore>, StoredMap)>,
 }
 
@@ -160,6 +162,12 @@ impl Shared {
     /// The view a query asks for (the store's, when serving one).
     fn view(&self, q: &mut Query) -> Result<View> {
         q.view(&self.base, self.stored())
+    }
+
+    /// What a view's tiles cover: the store's region, or the view's plane.
+    fn world(&self, view: &View) -> World {
+        self.store_world
+            .unwrap_or_else(|| World::of_plane(&view.plane))
     }
 
     /// The view of a query that holds nothing else.
@@ -186,25 +194,7 @@ pub fn run(
         Some(s) => Some((Arc::new(MapStore::open(&s.path)?), s.clone())),
         None => None,
     };
-    // The page's axes, clicks and saved views are (theta1, theta2) ones.
-    if let Some(s) = &job.store
-        && !s.grid().is_angle_plane()
-    {
-        let g = s.grid();
-        return Err(Error::invalid(
-            "store",
-            format!(
-                "{} is a map of the ({}, {}) plane; the explorer shows (theta1, theta2) maps only (chaoscope render makes its picture)",
-                s.path.display(),
-                g.x.var.name(),
-                g.y.var.name()
-            ),
-        ));
-    }
-    let world = job
-        .store
-        .as_ref()
-        .map_or(World::TURN, |s| World::of_grid(&s.grid()));
+    let store_world = job.store.as_ref().map(|s| World::of_grid(&s.grid()));
     let engine = Engine::new(job.backend)?;
     warm_up(&engine, &job.base.resolve()?, monitor)?;
     let info = engine.info();
@@ -220,7 +210,7 @@ pub fn run(
         base: job.base.clone(),
         backend: job.backend,
         commands,
-        world,
+        store_world,
         store,
     });
     let notices = shared

@@ -15,7 +15,7 @@ pub(super) async fn tile(
     Path((z, x, y)): Path<(String, String, String)>,
     AxumQuery(q): Params,
 ) -> Response {
-    type Tile = (View, Grid, String, (u32, u64, u64));
+    type Tile = (View, World, Grid, String, (u32, u64, u64));
     let parsed = (|| -> Result<Tile> {
         let int = |key: &'static str, s: &str| {
             s.parse::<u64>()
@@ -38,19 +38,26 @@ pub(super) async fn tile(
                 format!("the store holds a {:?} map", stored.kind()).to_lowercase(),
             ));
         }
+        if shared.store.is_some() && view.region_given {
+            return Err(Error::invalid(
+                "x_min",
+                "the store's map fixes the region its tiles cover",
+            ));
+        }
         let z = u32::try_from(z).unwrap_or(u32::MAX);
-        let grid = shared.world.tile_grid(z, x, y, size)?;
+        let world = shared.world(&view);
+        let grid = world.tile_grid(z, x, y, size)?;
         let key = format!("tile {z}/{x}/{y}/{size} {view:?}");
-        Ok((view, grid, key, (z, x, y)))
+        Ok((view, world, grid, key, (z, x, y)))
     })();
-    let (view, grid, key, (z, x, y)) = match parsed {
+    let (view, world, grid, key, (z, x, y)) = match parsed {
         Ok(p) => p,
         Err(e) => return reply(e),
     };
     if let Some(bytes) = cached(&shared, &key) {
         return png(bytes, "cached");
     }
-    let (world, store) = (shared.world, shared.store.clone());
+    let store = shared.store.clone();
     let result = on_engine(&shared, move |engine, monitor| {
         let (rgb, precision) = match store {
             Some((store, _)) if z <= world.native => {
@@ -142,7 +149,7 @@ pub(super) fn stored_rgb(
     grid: Grid,
 ) -> Result<Vec<u8>> {
     let size = at.size as usize;
-    let (width, height) = (at.world.width as u64, at.world.height as u64);
+    let (width, height) = (at.world.plane.width as u64, at.world.plane.height as u64);
     let cols: Vec<u64> = (0..at.size)
         .map(|i| at.world.stored_pixel(at.z, at.x, i, at.size))
         .collect();

@@ -11,7 +11,8 @@ use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
 use crate::spec::{
-    FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method, Precision, Range, Stepping,
+    Axis, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method, Precision, Range, Sampling,
+    Stepping, Var,
 };
 
 pub use super::kind::Kind;
@@ -50,6 +51,11 @@ pub struct View {
     pub range: (f32, f32),
     /// A store's map, whose command fixed the physics, stepping and integrator.
     pub stored: Option<FrameMap>,
+    /// The plane and its region (256 x 256 pixels; tiles, points and saved views take their
+    /// own sizes).
+    pub plane: Grid,
+    /// Whether the query gave the region (`x_min`...).
+    pub region_given: bool,
 }
 
 /// A query string's values by key, each key read at most once; keys nobody read are
@@ -143,6 +149,7 @@ impl Query {
             (None, Some(map)) => Kind::of(&map),
             (None, None) => Kind::FLIP,
         };
+        let (plane, region_given) = self.plane(stored.map(|m| *m.grid()))?;
         if let Some(map) = stored {
             for key in PHYSICS_KEYS {
                 if self.values.contains_key(key) {
@@ -162,7 +169,22 @@ impl Query {
                 unresolved: self.flag("unresolved")?,
                 range: self.range()?,
                 stored,
+                plane,
+                region_given,
             });
+        }
+        for key in ["m1", "m2", "l1", "l2", "g", "damping"] {
+            let along = [("x", plane.x.var), ("y", plane.y.var)]
+                .into_iter()
+                .find(|(_, v)| v.writes() == key || (key == "damping" && *v == Var::Damping));
+            if let Some((axis, var)) = along
+                && self.values.contains_key(key)
+            {
+                return Err(Error::invalid(
+                    key,
+                    format!("{key} varies along {axis} ({}); leave it out", var.name()),
+                ));
+            }
         }
         let sources = ParamSources {
             m1: self.number("m1")?.or(base.m1),
@@ -216,7 +238,107 @@ impl Query {
             unresolved: self.flag("unresolved")?,
             range: self.range()?,
             stored: None,
+            plane,
+            region_given,
         })
+    }
+
+    /// The plane a view spans: its axes (`x`, `y`, named as `--x`/`--y` name them; theta1
+    /// and theta2 by default), their region (`x_min`:`x_max`, `y_min`:`y_max`; each axis'
+    /// default range otherwise), and the start's components along neither axis (`theta1`,
+    /// `omega1`, `theta2`, `omega2`; 0 otherwise). A store's map fixes all but the region.
+    /// Also whether the region was given.
+    fn plane(&mut self, stored: Option<Grid>) -> Result<(Grid, bool)> {
+        let mut plane = match stored {
+            Some(grid) => {
+                if let Some(key) = PLANE_KEYS.iter().find(|k| self.values.contains_key(**k)) {
+                    return Err(Error::invalid(
+                        key,
+                        "is fixed by the store's command (serve --store)",
+                    ));
+                }
+                grid
+            }
+            None => self.axes()?,
+        };
+        let mut given = false;
+        for (axis, lo, hi) in [
+            (&mut plane.x, "x_min", "x_max"),
+            (&mut plane.y, "y_min", "y_max"),
+        ] {
+            // Angles within a turn (a start outside has already flipped).
+            let limit = if axis.var.is_angle() { PI + 1e-9 } else { 1e6 };
+            match (
+                self.within(lo, -limit, limit)?,
+                self.within(hi, -limit, limit)?,
+            ) {
+                (None, None) => {}
+                (Some(min), Some(max)) if min < max => {
+                    axis.range = Range { min, max };
+                    // Level 0's tile must have distinct pixels in f64.
+                    let finest = 256.0 * axis.finest_step(f64::EPSILON);
+                    if max - min < finest {
+                        return Err(Error::invalid(
+                            hi,
+                            format!("must exceed {lo} by {finest:e} at least"),
+                        ));
+                    }
+                    given = true;
+                }
+                (Some(_), Some(_)) => return Err(Error::invalid(hi, format!("must exceed {lo}"))),
+                (Some(_), None) => return Err(Error::invalid(lo, format!("needs {hi}"))),
+                (None, Some(_)) => return Err(Error::invalid(hi, format!("needs {lo}"))),
+            }
+        }
+        Ok((plane, given))
+    }
+
+    /// The axes and the fixed start of a view that is not a store's.
+    fn axes(&mut self) -> Result<Grid> {
+        let mut var = |key: &'static str, default: Var| match self.take(key) {
+            None => Ok(default),
+            Some(name) => Var::parse(&name).ok_or_else(|| {
+                let names: Vec<&str> = Var::ALL.iter().map(|v| v.name()).collect();
+                Error::invalid(key, format!("{name:?}: one of {}", names.join(" ")))
+            }),
+        };
+        let (x, y) = (var("x", Var::Theta1)?, var("y", Var::Theta2)?);
+        let mut fixed = State::default();
+        for v in [Var::Theta1, Var::Omega1, Var::Theta2, Var::Omega2] {
+            let key = v.name();
+            let axis = [("x", x), ("y", y)].into_iter().find(|(_, a)| *a == v);
+            match axis {
+                Some((axis, _)) if self.values.contains_key(key) => {
+                    return Err(Error::invalid(
+                        key,
+                        format!("{key} lies along {axis}: its range is {axis}_min:{axis}_max"),
+                    ));
+                }
+                Some(_) => {}
+                None => {
+                    let limit = if v.is_angle() { PI } else { 1e3 };
+                    if let Some(value) = self.within(key, -limit, limit)? {
+                        v.set(value, &mut Params::default(), &mut fixed);
+                    }
+                }
+            }
+        }
+        let plane = Grid {
+            width: 256,
+            height: 256,
+            x: Axis {
+                var: x,
+                range: x.default_range(),
+            },
+            y: Axis {
+                var: y,
+                range: y.default_range(),
+            },
+            fixed,
+            sampling: Sampling::Centres,
+        };
+        plane.validate_axes()?;
+        Ok(plane)
     }
 
     fn colormap(&mut self) -> Result<Option<Colormap>> {
@@ -246,7 +368,7 @@ impl Query {
 
 /// The query's keys for the physics and the stepping, which a store's command fixes.
 /// Every key a query may hold (a repeated one is named from here).
-const KNOWN_KEYS: [&str; 25] = [
+const KNOWN_KEYS: [&str; 32] = [
     "kind",
     "t_max",
     "dt",
@@ -262,17 +384,27 @@ const KNOWN_KEYS: [&str; 25] = [
     "lo",
     "hi",
     "size",
-    "pixel",
-    "theta1",
-    "theta2",
     "width",
+    "height",
     "annotate",
-    "theta1_min",
-    "theta1_max",
-    "theta2_min",
-    "theta2_max",
+    "x",
+    "y",
+    "x_min",
+    "x_max",
+    "y_min",
+    "y_max",
+    "theta1",
     "omega1",
+    "theta2",
+    "omega2",
+    "px",
+    "py",
+    "pixel",
+    "pixel_y",
 ];
+
+/// The keys of the plane's axes and fixed start, which a store's map fixes.
+pub const PLANE_KEYS: [&str; 6] = ["x", "y", "theta1", "omega1", "theta2", "omega2"];
 
 pub const PHYSICS_KEYS: [&str; 9] = [
     "m1", "m2", "l1", "l2", "g", "damping", "t_max", "dt", "accurate",
@@ -341,124 +473,8 @@ fn renorm_of(dt: f64) -> f64 {
     (0.1 / dt).round().max(1.0) * dt
 }
 
-/// What the map's tiles cover: a region of starts that is `width` x `height` pixels at zoom
-/// level `native` (tile pixels there are the region's pixels). Level 0's pixel units are
-/// Leaflet's coordinates: the region spans `width / 2^native` of them across.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct World {
-    pub theta1: Range,
-    pub theta2: Range,
-    pub width: u32,
-    pub height: u32,
-    pub native: u32,
-}
-
-impl World {
-    /// The whole turn [-pi, pi]^2 as tile (0, 0, 0), computed at every level.
-    pub const TURN: World = World {
-        theta1: Range::FULL_TURN,
-        theta2: Range::FULL_TURN,
-        width: 256,
-        height: 256,
-        native: 0,
-    };
-
-    /// A stored map's grid: its own pixels at the first level where 256-pixel tiles hold
-    /// them one to one.
-    pub fn of_grid(grid: &Grid) -> World {
-        let side = grid.width.max(grid.height).max(1) as f64;
-        World {
-            theta1: grid.x.range,
-            theta2: grid.y.range,
-            width: grid.width,
-            height: grid.height,
-            native: (side / 256.0).log2().ceil().max(0.0) as u32,
-        }
-    }
-
-    /// The region's size in level-0 pixel units (across, down).
-    pub fn units(&self) -> (f64, f64) {
-        let scale = (1u64 << self.native) as f64;
-        (self.width as f64 / scale, self.height as f64 / scale)
-    }
-
-    /// Radians per level-0 unit (theta1, theta2).
-    pub fn rad_per_unit(&self) -> (f64, f64) {
-        let (w, h) = self.units();
-        (
-            (self.theta1.max - self.theta1.min) / w,
-            (self.theta2.max - self.theta2.min) / h,
-        )
-    }
-
-    /// Checks tile (z, x, y) lies on the region.
-    pub fn check_tile(&self, z: u32, x: u64, y: u64) -> Result<()> {
-        if z > MAX_ZOOM {
-            return Err(Error::invalid(
-                "z",
-                format!("{z} must be at most {MAX_ZOOM}"),
-            ));
-        }
-        let (w, h) = self.units();
-        let tiles = |units: f64| (units * (1u64 << z) as f64 / 256.0).ceil() as u64;
-        for (key, v, n) in [("x", x, tiles(w)), ("y", y, tiles(h))] {
-            if v >= n {
-                return Err(Error::invalid(
-                    key,
-                    format!("{v} lies outside level {z}'s tiles 0..{n}"),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// The grid of tile (z, x, y) with `size` pixels a side; y counts down from the top
-    /// (theta2's maximum).
-    pub fn tile_grid(&self, z: u32, x: u64, y: u64, size: u32) -> Result<Grid> {
-        self.check_tile(z, x, y)?;
-        let span = 256.0 / (1u64 << z) as f64;
-        let (k1, k2) = self.rad_per_unit();
-        // span * k is exact (a power of two times k), so the whole turn's tiles get
-        // -pi + x * 2 pi / 2^z, the same numbers at every level.
-        let (step1, step2) = (span * k1, span * k2);
-        Ok(Grid::angles(
-            size,
-            size,
-            Range {
-                min: self.theta1.min + x as f64 * step1,
-                max: self.theta1.min + (x + 1) as f64 * step1,
-            },
-            Range {
-                min: self.theta2.max - (y + 1) as f64 * step2,
-                max: self.theta2.max - y as f64 * step2,
-            },
-            0.0,
-            0.0,
-        ))
-    }
-
-    /// The region's pixel under pixel `k` of `size` along tile `t` of level `z` (<= native),
-    /// sampled at the tile pixel's centre: column (or row) of the stored map.
-    pub fn stored_pixel(&self, z: u32, t: u64, k: u32, size: u32) -> u64 {
-        let scale = (1u64 << (self.native - z)) as f64;
-        let unit = (t * 256) as f64 + (k as f64 + 0.5) * 256.0 / size as f64;
-        (unit * scale).floor() as u64
-    }
-}
-
-/// A region `theta1`, `theta2` (MIN:MAX, rad) of `width` x `height` pixels: a saved view.
-pub fn region_grid(q: &mut Query) -> Result<Grid> {
-    let range = |q: &mut Query, lo: &'static str, hi: &'static str| -> Result<Range> {
-        let min = q.within(lo, -4.0 * PI, 4.0 * PI)?;
-        let max = q.within(hi, -4.0 * PI, 4.0 * PI)?;
-        match (min, max) {
-            (Some(min), Some(max)) if min < max => Ok(Range { min, max }),
-            (Some(_), Some(_)) => Err(Error::invalid(hi, "must exceed its minimum")),
-            _ => Err(Error::invalid(lo, format!("{lo} and {hi} are both needed"))),
-        }
-    };
-    let theta1 = range(q, "theta1_min", "theta1_max")?;
-    let theta2 = range(q, "theta2_min", "theta2_max")?;
+/// A region of the view's plane: its `width` x `height` pixels (a saved view).
+pub fn region_grid(q: &mut Query, view: &View) -> Result<Grid> {
     let width = q.count("width", 16, MAX_SAVE_SIDE)?.unwrap_or(1024);
     let height = q.count("height", 16, MAX_SAVE_SIDE)?.unwrap_or(width);
     if width as u64 * height as u64 > MAX_SAVE_PIXELS {
@@ -467,65 +483,70 @@ pub fn region_grid(q: &mut Query) -> Result<Grid> {
             format!("{width} x {height} exceeds {MAX_SAVE_PIXELS} pixels"),
         ));
     }
-    Ok(Grid::angles(width, height, theta1, theta2, 0.0, 0.0))
+    Ok(Grid {
+        width,
+        height,
+        ..view.plane
+    })
 }
 
-/// One start, `theta1`, `theta2` (rad), from rest.
-pub fn start(q: &mut Query) -> Result<State> {
-    let mut angle = |key| {
-        q.within(key, -4.0 * PI, 4.0 * PI)?
-            .ok_or_else(|| Error::invalid(key, "is needed (rad)"))
+/// A point of the view's plane, `px` along x and `py` along y: the one-pixel grid around it,
+/// `pixel` wide along x and `pixel_y` (default `pixel`) along y, so it runs in the precision
+/// of the tile it was clicked on; and its pendulum (parameters and start).
+pub fn point(q: &mut Query, view: &View) -> Result<(Grid, (Params, State))> {
+    let mut value = |key| {
+        q.within(key, -1e6, 1e6)?
+            .ok_or_else(|| Error::invalid(key, "is needed (a value along the axis)"))
     };
-    Ok(State {
-        theta1: angle("theta1")?,
-        omega1: 0.0,
-        theta2: angle("theta2")?,
-        omega2: 0.0,
-    })
+    let (px, py) = (value("px")?, value("py")?);
+    let dx = q.within("pixel", 1e-300, 1e6)?.unwrap_or(1e-3);
+    let dy = q.within("pixel_y", 1e-300, 1e6)?.unwrap_or(dx);
+    let around = |a: Axis, v: f64, d: f64| Axis::new(a.var, v - 0.5 * d, v + 0.5 * d);
+    let grid = Grid {
+        width: 1,
+        height: 1,
+        x: around(view.plane.x, px, dx),
+        y: around(view.plane.y, py, dy),
+        ..view.plane
+    };
+    for (key, a, d) in [("pixel", grid.x, dx), ("pixel_y", grid.y, dy)] {
+        // A narrower pixel has no distinct edges in f64.
+        let finest = a.finest_step(f64::EPSILON);
+        if d < finest {
+            return Err(Error::invalid(
+                key,
+                format!(
+                    "{d:e} is finer than f64 resolves along {} ({finest:e})",
+                    a.var.name()
+                ),
+            ));
+        }
+    }
+    // Errors name the point's keys, not the axes' (`x`, or `theta1` on the angle plane).
+    let name = |e| match e {
+        Error::InvalidSpec { field, reason } => {
+            let key = match field {
+                f if f == "x" || f == grid.x.var.name() => "px",
+                f if f == "y" || f == grid.y.var.name() => "py",
+                _ => return Error::InvalidSpec { field, reason },
+            };
+            Error::invalid(key, reason)
+        }
+        e => e,
+    };
+    grid.validate_axes().map_err(name)?;
+    let (p, s) = view.plane.at(&view.params, px, py);
+    // The point's own parameters (an axis may set them): an error names the axis' key.
+    crate::spec::validate_params(&p).map_err(|e| {
+        let key = if grid.x.var.is_state() { "py" } else { "px" };
+        Error::invalid(key, e.to_string())
+    })?;
+    Ok((grid, (p, s)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn tiles_cover_the_turn_without_gaps() {
-        let turn = World::TURN;
-        let a = turn.tile_grid(3, 2, 5, 256).unwrap();
-        let b = turn.tile_grid(3, 3, 5, 256).unwrap();
-        assert_eq!(a.x.range.max, b.x.range.min);
-        assert_eq!(a.x.range.min, -PI + 2.0 * (2.0 * PI / 8.0));
-        let top = turn.tile_grid(0, 0, 0, 256).unwrap();
-        assert_eq!(
-            (top.x.range, top.y.range),
-            (Range::FULL_TURN, Range::FULL_TURN)
-        );
-        assert!(turn.tile_grid(3, 8, 0, 256).is_err());
-        assert!(turn.tile_grid(MAX_ZOOM + 1, 0, 0, 256).is_err());
-    }
-
-    #[test]
-    fn a_stored_maps_tiles_hold_its_pixels_at_the_native_level() {
-        let grid = Grid {
-            width: 1000,
-            height: 600,
-            ..Grid::square(1)
-        };
-        let world = World::of_grid(&grid);
-        assert_eq!(world.native, 2);
-        // Level 2: tile pixel k of tile t is stored pixel 256 t + k; level 0 every 4th.
-        assert_eq!(world.stored_pixel(2, 3, 7, 256), 3 * 256 + 7);
-        assert_eq!(world.stored_pixel(0, 0, 10, 256), 42);
-        assert!(world.check_tile(2, 3, 2).is_ok());
-        assert!(
-            world.check_tile(2, 3, 3).is_err(),
-            "600 rows are 3 tiles down"
-        );
-        // The native level's tile grid has the stored map's pixel centres.
-        let g = world.tile_grid(2, 1, 0, 256).unwrap();
-        assert!((g.x_at(0) - grid.x_at(256)).abs() < 1e-12);
-        assert!((g.y_at(5) - grid.y_at(5)).abs() < 1e-12);
-    }
 
     #[test]
     fn unknown_and_bad_keys_name_themselves() {
