@@ -140,6 +140,12 @@ impl Monitor {
         self.estimate.lock().ok().and_then(|e| *e)
     }
 
+    /// The current phase's name, work done and whole work (if known): for a caller that
+    /// shows progress its own way (Python's tqdm).
+    pub fn progress(&self) -> (String, u64, Option<u64>) {
+        (self.bar.message(), self.bar.position(), self.bar.length())
+    }
+
     /// Work done so far in this phase.
     pub fn position(&self) -> u64 {
         self.bar.position()

@@ -96,7 +96,7 @@ pub fn run<S: MapKernels + MapPicture>(
 ) -> Result<MapSummary> {
     job.spec.check_picture(&job.picture, job.colour_range)?;
     validate(&job.spec, &job.files, job.tile)?;
-    validate_samples(job)?;
+    validate_samples(&job.spec, job.samples, job.files.store().is_some())?;
     let started = Instant::now();
     let verdict = job.files.wants_verdict();
     let summary = |info: &RunInfo, counted: usize, nan: usize, pixels: usize| MapSummary {
@@ -137,25 +137,7 @@ pub fn run<S: MapKernels + MapPicture>(
             ..summary(&made.info, filled.counted, filled.nan, filled.pixels)
         });
     }
-    let made = match job.samples {
-        1 => make(&job.spec, job.backend, verdict, monitor)?,
-        n => {
-            let g = job.spec.grid();
-            let fine = job.spec.on_grid(Grid {
-                width: g.width * n,
-                height: g.height * n,
-                ..*g
-            });
-            let made = make(&fine, job.backend, verdict, monitor)?;
-            let (field, mask) = &made.made;
-            let reduced =
-                super::supersample::reduce_map(job.spec.quantity(), field, mask.as_deref(), n);
-            Made {
-                made: reduced,
-                ..made
-            }
-        }
-    };
+    let made = compute(&job.spec, job.backend, verdict, job.samples, monitor)?;
     let (field, mask) = &made.made;
     let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let drawn = job
@@ -185,44 +167,79 @@ pub fn run<S: MapKernels + MapPicture>(
     })
 }
 
+/// `spec`'s map (with `verdict`, its mask) in memory, as `run` makes it for a PNG or .npy:
+/// `samples` x `samples` sub-samples a pixel when more than 1 ([`super::supersample`]).
+/// Unchecked: [`run`] checks the job first, a library caller [`check_in_memory`].
+pub fn compute<S: MapKernels>(
+    spec: &S,
+    backend: Backend,
+    verdict: bool,
+    samples: u32,
+    monitor: &Monitor,
+) -> Result<Made<(Field, Option<Vec<u8>>)>> {
+    if samples == 1 {
+        return make(spec, backend, verdict, monitor);
+    }
+    let g = spec.grid();
+    let fine = spec.on_grid(Grid {
+        width: g.width * samples,
+        height: g.height * samples,
+        ..*g
+    });
+    let made = make(&fine, backend, verdict, monitor)?;
+    let (field, mask) = &made.made;
+    let reduced = super::supersample::reduce_map(spec.quantity(), field, mask.as_deref(), samples);
+    Ok(Made {
+        made: reduced,
+        ..made
+    })
+}
+
+/// What [`run`] checks of a map made in memory (no files): the spec, the verdict's step and
+/// finer map, the sub-samples.
+pub fn check_in_memory<S: MapSpec>(spec: &S, verdict: bool, samples: u32) -> Result<()> {
+    verdict::check_step(spec, verdict)?;
+    spec.validate()?;
+    if verdict {
+        check_finer(verdict::finer(spec, true).validate())?;
+    }
+    validate_samples(spec, samples, false)
+}
+
 /// Everything checked before any work: the spec, the files, the verdict's finer map, the tile.
 /// `--samples`: within range, and for maps drawn whole (a store is filled band by band).
-fn validate_samples<S: MapSpec>(job: &MapJob<S>) -> Result<()> {
+fn validate_samples<S: MapSpec>(spec: &S, samples: u32, store: bool) -> Result<()> {
     let max = super::supersample::MAX_SAMPLES;
-    if !(1..=max).contains(&job.samples) {
+    if !(1..=max).contains(&samples) {
         return Err(Error::invalid(
             "samples",
-            format!("{} must be between 1 and {max}", job.samples),
+            format!("{} must be between 1 and {max}", samples),
         ));
     }
-    if job.samples > 1 {
-        if job.files.store().is_some() {
+    if samples > 1 {
+        if store {
             return Err(Error::invalid(
                 "samples",
                 "is for maps drawn whole (PNG, .npy); a .zarr store is filled band by band at one start a pixel",
             ));
         }
-        let g = job.spec.grid();
-        job.spec
-            .on_grid(Grid {
-                width: g.width.saturating_mul(job.samples),
-                height: g.height.saturating_mul(job.samples),
-                ..*g
-            })
-            .validate()
-            .map_err(|e| match e {
-                Error::InvalidSpec {
-                    field: "size",
-                    reason,
-                } => Error::invalid(
-                    "samples",
-                    format!(
-                        "{} x {} sub-samples a pixel: {reason}",
-                        job.samples, job.samples
-                    ),
-                ),
-                e => e,
-            })?;
+        let g = spec.grid();
+        spec.on_grid(Grid {
+            width: g.width.saturating_mul(samples),
+            height: g.height.saturating_mul(samples),
+            ..*g
+        })
+        .validate()
+        .map_err(|e| match e {
+            Error::InvalidSpec {
+                field: "size",
+                reason,
+            } => Error::invalid(
+                "samples",
+                format!("{} x {} sub-samples a pixel: {reason}", samples, samples),
+            ),
+            e => e,
+        })?;
     }
     Ok(())
 }

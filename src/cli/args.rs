@@ -12,7 +12,7 @@ use crate::engine::Backend;
 use crate::model::State;
 use crate::params::{ParamSources, Preset};
 use crate::render::{Colormap, PictureSpec};
-use crate::spec::{Axis, Grid, Range, Stepping, Var};
+use crate::spec::{Grid, PlaneAsked, Stepping};
 
 /// `--backend auto|gpu|cpu`.
 /// `--precision f32` given for a run on the CPU, which computes in f64 only: said once, not
@@ -162,94 +162,17 @@ pub struct PlaneArgs {
 }
 
 impl PlaneArgs {
-    /// The grid of `size` pixels these flags describe: an angle flag gives its range when
-    /// the angle lies along an axis (unless --x/--y give it) and its start otherwise; a
-    /// parameter or angular velocity along an axis takes its range from --x/--y.
-    pub fn grid(&self, (width, height): (u32, u32)) -> crate::Result<Grid> {
-        use crate::Error;
-        let x = self.x.unwrap_or(AxisArg {
-            var: Var::Theta1,
-            range: None,
-        });
-        let y = self.y.unwrap_or(AxisArg {
-            var: Var::Theta2,
-            range: None,
-        });
-        let given = |var: Var| -> Option<Angles> {
-            match var {
-                Var::Theta1 => self.theta1,
-                Var::Theta2 => self.theta2,
-                Var::Omega1 => self.omega1.map(Angles::Point),
-                Var::Omega2 => self.omega2.map(Angles::Point),
-                _ => None,
-            }
-        };
-        let axis = |field: &'static str, a: AxisArg| -> crate::Result<Axis> {
-            let range = match (a.range, given(a.var)) {
-                (Some(_), Some(_)) => {
-                    return Err(Error::invalid(
-                        a.var.name(),
-                        format!(
-                            "{} lies along {field}, whose range --{field} gives",
-                            a.var.name()
-                        ),
-                    ));
-                }
-                (Some(r), None) | (None, Some(Angles::Range(r))) => r,
-                (None, None) if a.var.is_angle() => Range::FULL_TURN,
-                (None, Some(Angles::Point(_))) if a.var.is_angle() => {
-                    return Err(Error::invalid(
-                        a.var.name(),
-                        format!(
-                            "{} lies along {field}: give its range MIN:MAX",
-                            a.var.name()
-                        ),
-                    ));
-                }
-                _ => {
-                    return Err(Error::invalid(
-                        field,
-                        format!(
-                            "{} needs a range: --{field} {}=MIN:MAX",
-                            a.var.name(),
-                            a.var.name()
-                        ),
-                    ));
-                }
-            };
-            Ok(Axis { var: a.var, range })
-        };
-        let (x, y) = (axis("x", x)?, axis("y", y)?);
-        let mut fixed = crate::model::State::default();
-        let mut params = crate::model::Params::default();
-        for var in [Var::Theta1, Var::Omega1, Var::Theta2, Var::Omega2] {
-            if var == x.var || var == y.var {
-                continue;
-            }
-            match given(var) {
-                Some(Angles::Point(v)) => var.set(v, &mut params, &mut fixed),
-                Some(Angles::Range(_)) => {
-                    return Err(Error::invalid(
-                        var.name(),
-                        format!(
-                            "{} lies along no axis (x is {}, y is {}): give its start, one angle",
-                            var.name(),
-                            x.var.name(),
-                            y.var.name()
-                        ),
-                    ));
-                }
-                None => {}
-            }
+    /// The grid of `size` pixels these flags describe ([`PlaneAsked::grid`]).
+    pub fn grid(&self, size: (u32, u32)) -> crate::Result<Grid> {
+        PlaneAsked {
+            x: self.x,
+            y: self.y,
+            theta1: self.theta1,
+            theta2: self.theta2,
+            omega1: self.omega1,
+            omega2: self.omega2,
         }
-        Ok(Grid {
-            width,
-            height,
-            x,
-            y,
-            fixed,
-            sampling: Default::default(),
-        })
+        .grid(size)
     }
 }
 

@@ -12,9 +12,9 @@ use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::flip::{self, FlipJob};
 use crate::engine::Backend;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::monitor::Monitor;
-use crate::spec::{FlipMeasure, FlipSpec, Integrator, MIN_TOLERANCE_F32, MapSpec, Precision};
+use crate::spec::{FlipMeasure, FlipSpec, Integrator, MapSpec, Precision};
 
 #[derive(Args, Debug, Clone)]
 pub struct FlipArgs {
@@ -129,32 +129,7 @@ impl FlipArgs {
     }
 }
 
-/// The integrator `name` with its tolerances (default: f32's least on an f32 GPU, else
-/// 1e-9; atol as rtol); tolerances given without an adaptive integrator are an error.
-pub fn integrator_of(
-    name: &str,
-    rtol: Option<f64>,
-    atol: Option<f64>,
-    f32_gpu: bool,
-) -> Result<Integrator> {
-    if name == "rk4" {
-        for (field, given) in [("rtol", rtol), ("atol", atol)] {
-            if given.is_some() {
-                return Err(Error::invalid(
-                    field,
-                    "applies only to an adaptive integrator (--integrator dp54 or dop853)",
-                ));
-            }
-        }
-        return Ok(Integrator::Rk4);
-    }
-    let rtol = rtol.unwrap_or(if f32_gpu { MIN_TOLERANCE_F32 } else { 1e-9 });
-    let atol = atol.unwrap_or(rtol);
-    Ok(match name {
-        "dp54" => Integrator::Dp54 { rtol, atol },
-        _ => Integrator::Dop853 { rtol, atol },
-    })
-}
+pub use crate::spec::integrator_of;
 
 /// ", X % resolved (rule)" when the verdict was asked for.
 pub fn resolved_note(resolved: Option<f64>, rule: &str) -> String {

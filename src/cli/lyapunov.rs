@@ -15,8 +15,7 @@ use crate::model::State;
 use crate::monitor::Monitor;
 use crate::spec::MapSpec;
 use crate::spec::{
-    ALIGNED, ALIGNED_F32_FLOOR, Alignment, Grid, Indicator, Integrator, LyapunovSpec, Method,
-    Precision, Range, Stepping,
+    Grid, Indicator, IndicatorAsked, Integrator, LyapunovSpec, Method, Precision, Range, Stepping,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -137,18 +136,7 @@ fn short_unit(unit: &str) -> &str {
 }
 
 /// The names `--indicator` takes.
-pub const INDICATORS: [&str; 10] = [
-    "ftle",
-    "exponent",
-    "exponent-sum",
-    "sali",
-    "sali-time",
-    "gali",
-    "gali-time",
-    "megno",
-    "fli",
-    "descriptor",
-];
+pub use crate::spec::INDICATORS;
 
 /// What the flags ask for: a map or a convergence run.
 #[derive(Clone, Debug, PartialEq)]
@@ -165,68 +153,19 @@ impl LyapunovArgs {
         super::flip::integrator_of(&self.integrator, self.rtol, self.atol, gpu_f32)
     }
 
-    /// The indicator the flags ask for; a flag of another indicator is refused.
+    /// The indicator the flags ask for ([`IndicatorAsked::indicator`]).
     fn indicator(&self) -> Result<Indicator> {
-        let name = self.indicator.as_str();
-        let alignment = match name {
-            "sali" | "sali-time" => Some(Alignment::Sali),
-            "gali" | "gali-time" => Some(Alignment::Gali(self.gali.unwrap_or(4))),
-            _ => None,
-        };
-        let misplaced = [
-            (
-                "exponent",
-                self.exponent.is_some() && name != "exponent",
-                "exponent",
-            ),
-            (
-                "gali",
-                self.gali.is_some() && !name.starts_with("gali"),
-                "gali or gali-time",
-            ),
-            (
-                "threshold",
-                self.threshold.is_some() && alignment.is_none(),
-                "sali, gali, sali-time or gali-time",
-            ),
-            (
-                "ld_p",
-                self.ld_p.is_some() && name != "descriptor",
-                "descriptor",
-            ),
-        ];
-        if let Some((flag, _, of)) = misplaced.into_iter().find(|m| m.1) {
-            return Err(Error::invalid(flag, format!("is for --indicator {of}")));
+        IndicatorAsked {
+            name: &self.indicator,
+            exponent: self.exponent,
+            gali: self.gali,
+            threshold: self.threshold,
+            ld_p: self.ld_p,
+            accurate: self.accurate,
+            gpu_f32: self.precision.unwrap_or_default() == Precision::F32
+                && self.backend != Some(Backend::Cpu),
         }
-        if self.accurate && name != "ftle" {
-            return Err(Error::invalid(
-                "accurate",
-                format!(
-                    "is for the largest exponent; --indicator {name} steps with rk4 (set --dt and --precision)"
-                ),
-            ));
-        }
-        // f32 on the GPU resolves an alignment index to about 1e-5: its default there.
-        let gpu_f32 = self.precision.unwrap_or_default() == Precision::F32
-            && self.backend != Some(Backend::Cpu);
-        let threshold = self.threshold.unwrap_or(match gpu_f32 {
-            true => ALIGNED_F32_FLOOR,
-            false => ALIGNED,
-        });
-        Ok(match (name, alignment) {
-            ("exponent", _) => Indicator::Exponent(self.exponent.unwrap_or(1)),
-            ("exponent-sum", _) => Indicator::ExponentSum,
-            (n, Some(index)) if n.ends_with("-time") => {
-                Indicator::AlignmentTime { index, threshold }
-            }
-            (_, Some(index)) => Indicator::Alignment { index, threshold },
-            ("megno", _) => Indicator::Megno,
-            ("fli", _) => Indicator::Fli,
-            ("descriptor", _) => Indicator::Descriptor {
-                p: self.ld_p.unwrap_or(0.5),
-            },
-            _ => Indicator::Ftle,
-        })
+        .indicator()
     }
 
     /// The map the flags ask for over `grid` (`--accurate` expanded by the spec).

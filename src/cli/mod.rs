@@ -252,6 +252,35 @@ fn say(notices: &[String]) {
 /// Runs a parsed command. Invalid values exit 2 (like clap's own errors) naming the flag,
 /// an interruption 130, other failures 1.
 pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
+    ExitCode::from(run_code(cli, monitor))
+}
+
+/// The command line of a process: `args` parsed (clap's errors and --help exit here), run
+/// with Ctrl-C feeding the monitor's cancel flag; the exit status. The binary's `main`, and
+/// the Python wheel's `chaoscope` command.
+pub fn main<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let cli = Cli::parse_args(args).unwrap_or_else(|e| e.exit());
+    let cancel = Arc::new(AtomicBool::new(false));
+    let flag = cancel.clone();
+    // First Ctrl-C (or SIGTERM, SIGHUP): stop at the next dispatch, row or chunk and leave no
+    // partial file; second: now, removing the temporary files being written.
+    let _ = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::Relaxed) {
+            crate::render::remove_pending();
+            std::process::exit(130);
+        }
+    });
+    run_code(cli, &Monitor::terminal(cancel))
+}
+
+/// [`run`]'s exit status as a number.
+pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
     let command = cli.command.name();
     let started = std::time::Instant::now();
     let result = match &cli.command {
@@ -307,13 +336,13 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
         }
     });
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => 0,
         Err(Error::InvalidSpec { field, reason }) => {
             eprintln!(
                 "error: invalid value for {}: {reason}",
                 names::flag(command, field)
             );
-            ExitCode::from(2)
+            2
         }
         Err(Error::StoreDiffers {
             field,
@@ -334,13 +363,13 @@ pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
                 path.display(),
                 what.join(", ")
             );
-            ExitCode::from(2)
+            2
         }
         Err(e) => {
             eprintln!("error: {e}");
             match e {
-                Error::Interrupted => ExitCode::from(130),
-                _ => ExitCode::FAILURE,
+                Error::Interrupted => 130,
+                _ => 1,
             }
         }
     }

@@ -127,19 +127,10 @@ pub fn parse_point(s: &str) -> Result<(f64, f64), String> {
     Ok((parse_number(a)?, parse_number(b)?))
 }
 
-/// An angle flag of `lyapunov`: a range of the map, or the single start of a convergence run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Angles {
-    Range(Range),
-    Point(f64),
-}
-
+/// An angle flag: a range of the map, or a single start.
+pub use crate::spec::Angles;
 /// `--x`/`--y`: what an axis varies, `NAME` or `NAME=MIN:MAX`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AxisArg {
-    pub var: crate::spec::Var,
-    pub range: Option<Range>,
-}
+pub use crate::spec::AxisAsked as AxisArg;
 
 pub fn parse_axis(s: &str) -> Result<AxisArg, String> {
     not_a_flag(s)?;

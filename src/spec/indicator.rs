@@ -200,3 +200,105 @@ mod tests {
         );
     }
 }
+
+/// Every indicator's name, as `--indicator` and Python's `indicator=` take it.
+pub const INDICATORS: [&str; 10] = [
+    "ftle",
+    "exponent",
+    "exponent-sum",
+    "sali",
+    "sali-time",
+    "gali",
+    "gali-time",
+    "megno",
+    "fli",
+    "descriptor",
+];
+
+/// An indicator as a user asks for it: its name and the options of some indicators.
+#[derive(Clone, Copy, Debug)]
+pub struct IndicatorAsked<'a> {
+    pub name: &'a str,
+    /// Which exponent (`exponent`), 1..4.
+    pub exponent: Option<u8>,
+    /// GALI's order (`gali`, `gali-time`).
+    pub gali: Option<u8>,
+    /// The alignment index's threshold (`sali`, `gali` and their times).
+    pub threshold: Option<f64>,
+    /// The Lagrangian descriptor's p (`descriptor`).
+    pub ld_p: Option<f64>,
+    /// The accurate settings asked (ftle only).
+    pub accurate: bool,
+    /// Whether it runs in f32 on a GPU (the alignment threshold's default).
+    pub gpu_f32: bool,
+}
+
+impl IndicatorAsked<'_> {
+    /// The indicator asked for; an option of another indicator is refused naming it.
+    pub fn indicator(&self) -> Result<Indicator> {
+        let name = self.name;
+        if !INDICATORS.contains(&name) {
+            return Err(Error::invalid(
+                "indicator",
+                format!("{name:?}: one of {}", INDICATORS.join(", ")),
+            ));
+        }
+        let alignment = match name {
+            "sali" | "sali-time" => Some(Alignment::Sali),
+            "gali" | "gali-time" => Some(Alignment::Gali(self.gali.unwrap_or(4))),
+            _ => None,
+        };
+        let misplaced = [
+            (
+                "exponent",
+                self.exponent.is_some() && name != "exponent",
+                "exponent",
+            ),
+            (
+                "gali",
+                self.gali.is_some() && !name.starts_with("gali"),
+                "gali or gali-time",
+            ),
+            (
+                "threshold",
+                self.threshold.is_some() && alignment.is_none(),
+                "sali, gali, sali-time or gali-time",
+            ),
+            (
+                "ld_p",
+                self.ld_p.is_some() && name != "descriptor",
+                "descriptor",
+            ),
+        ];
+        if let Some((flag, _, of)) = misplaced.into_iter().find(|m| m.1) {
+            return Err(Error::invalid(flag, format!("is for the indicator {of}")));
+        }
+        if self.accurate && name != "ftle" {
+            return Err(Error::invalid(
+                "accurate",
+                format!(
+                    "is for the largest exponent (ftle); {name} steps with rk4 (set dt and precision)"
+                ),
+            ));
+        }
+        // f32 on the GPU resolves an alignment index to about 1e-5: its default there.
+        let threshold = self.threshold.unwrap_or(match self.gpu_f32 {
+            true => ALIGNED_F32_FLOOR,
+            false => ALIGNED,
+        });
+        Ok(match (name, alignment) {
+            ("exponent", _) => Indicator::Exponent(self.exponent.unwrap_or(1)),
+            ("exponent-sum", _) => Indicator::ExponentSum,
+            (n, Some(index)) if n.ends_with("-time") => {
+                Indicator::AlignmentTime { index, threshold }
+            }
+            (_, Some(index)) => Indicator::Alignment { index, threshold },
+            ("megno", _) => Indicator::Megno,
+            ("fli", _) => Indicator::Fli,
+            ("descriptor", _) => Indicator::Descriptor {
+                p: self.ld_p.unwrap_or(0.5),
+            },
+            _ => Indicator::Ftle,
+        })
+    }
+}

@@ -146,3 +146,36 @@ pub const ACCURATE_FTLE: (Precision, Integrator, f64) = (
 /// error estimate is not round-off.
 pub const MIN_TOLERANCE_F32: f64 = 1e-5;
 pub const MIN_TOLERANCE_F64: f64 = 1e-13;
+
+/// The integrator `name` with its tolerances (default: f32's least on an f32 GPU, else
+/// 1e-9; atol as rtol); tolerances given without an adaptive integrator are an error.
+pub fn integrator_of(
+    name: &str,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    f32_gpu: bool,
+) -> Result<Integrator> {
+    if name == "rk4" {
+        for (field, given) in [("rtol", rtol), ("atol", atol)] {
+            if given.is_some() {
+                return Err(Error::invalid(
+                    field,
+                    "applies only to an adaptive integrator (dp54 or dop853)",
+                ));
+            }
+        }
+        return Ok(Integrator::Rk4);
+    }
+    let rtol = rtol.unwrap_or(if f32_gpu { MIN_TOLERANCE_F32 } else { 1e-9 });
+    let atol = atol.unwrap_or(rtol);
+    Ok(match name {
+        "dp54" => Integrator::Dp54 { rtol, atol },
+        "dop853" => Integrator::Dop853 { rtol, atol },
+        _ => {
+            return Err(Error::invalid(
+                "integrator",
+                format!("{name:?}: one of {}", Integrator::NAMES.join(", ")),
+            ));
+        }
+    })
+}

@@ -11,18 +11,21 @@ mod kind;
 mod map;
 mod memory;
 mod method;
+mod plane;
 mod stability;
 mod var;
 
 pub use grid::{Axis, Grid, Sampling, Var, pcg};
-pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};
+pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, INDICATORS, Indicator, IndicatorAsked};
 pub use kind::{MapKind, MapKindEntry};
 pub(crate) use map::on_any;
 pub use map::{AnyMap, FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};
 pub use memory::{available_memory, check_memory};
 pub use method::{
     ACCURATE, ACCURATE_FTLE, Integrator, MIN_TOLERANCE_F32, MIN_TOLERANCE_F64, Precision,
+    integrator_of,
 };
+pub use plane::{Angles, AxisAsked, PlaneAsked};
 pub use stability::{largest_stable_dt, speed_bound, validate_speeds, validate_stability};
 
 /// A closed interval `min:max` of angles (rad).

@@ -1,0 +1,660 @@
+//! `chaoscope._chaoscope`: the engine's jobs for the Python package (python/chaoscope/), a
+//! second front door beside the command line. Each function takes the keywords of its Python
+//! wrapper as one dict (the wrapper's signature refuses unknown keywords), builds the same
+//! validated job the command line builds, runs it with the GIL released and Ctrl-C feeding
+//! the engine's cancel flag, and hands the arrays to numpy without a copy.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use chaoscope::Error;
+use chaoscope::app::MapOutputs;
+use chaoscope::app::map::MapJob;
+use chaoscope::app::trajectory::TrajectoryJob;
+use chaoscope::cli::command_line;
+use chaoscope::engine::{Backend, MapKernels};
+use chaoscope::field::Field;
+use chaoscope::model::State;
+use chaoscope::monitor::Monitor;
+use chaoscope::params::{ParamSources, Preset};
+use chaoscope::render::{MapPicture, PictureSpec};
+use chaoscope::spec::{
+    Angles, AnyMap, AxisAsked, FlipMeasure, FlipSpec, Grid, IndicatorAsked, Integrator,
+    LyapunovSpec, MapSpec, Method, PlaneAsked, Precision, Range, Stepping, Var, integrator_of,
+};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+/// The library's error as Python's: a bad value is a ValueError naming its keyword (the
+/// spec's field), Ctrl-C a KeyboardInterrupt.
+fn py_err(e: Error) -> PyErr {
+    match e {
+        Error::InvalidSpec { field, reason } => PyValueError::new_err(format!("{field}: {reason}")),
+        Error::Interrupted => PyKeyboardInterrupt::new_err("interrupted"),
+        e => PyRuntimeError::new_err(e.to_string()),
+    }
+}
+
+/// The keywords of one call.
+struct Keywords<'py> {
+    dict: Bound<'py, PyDict>,
+}
+
+impl<'py> Keywords<'py> {
+    /// `key`'s value, None when absent or None; a value of the wrong type is a TypeError
+    /// naming the keyword.
+    fn get<T: for<'a> FromPyObject<'a, 'py>>(&self, key: &str) -> PyResult<Option<T>> {
+        match self.dict.get_item(key)? {
+            None => Ok(None),
+            Some(v) if v.is_none() => Ok(None),
+            Some(v) => v.extract::<T>().map(Some).map_err(|e| {
+                let e: PyErr = e.into();
+                PyTypeError::new_err(format!("{key}: {}", e.value(self.dict.py())))
+            }),
+        }
+    }
+
+    fn or<T: for<'a> FromPyObject<'a, 'py>>(&self, key: &str, default: T) -> PyResult<T> {
+        Ok(self.get(key)?.unwrap_or(default))
+    }
+
+    /// One of `names` (a string), None when absent.
+    fn choice(&self, key: &'static str, names: &[&str]) -> PyResult<Option<String>> {
+        let Some(v) = self.get::<String>(key)? else {
+            return Ok(None);
+        };
+        if !names.contains(&v.as_str()) {
+            return Err(PyValueError::new_err(format!(
+                "{key}: {v:?} is not one of {}",
+                names.join(", ")
+            )));
+        }
+        Ok(Some(v))
+    }
+
+    /// A (low, high) pair as a range.
+    fn range(&self, key: &str) -> PyResult<Option<Range>> {
+        Ok(self
+            .get::<(f64, f64)>(key)?
+            .map(|(min, max)| Range { min, max }))
+    }
+
+    /// An angle: one number (a start) or a (low, high) pair (a range along an axis).
+    fn angles(&self, key: &str) -> PyResult<Option<Angles>> {
+        match self.dict.get_item(key)? {
+            None => Ok(None),
+            Some(v) if v.is_none() => Ok(None),
+            Some(v) => match (v.extract::<f64>(), v.extract::<(f64, f64)>()) {
+                (Ok(x), _) => Ok(Some(Angles::Point(x))),
+                (_, Ok((min, max))) => Ok(Some(Angles::Range(Range { min, max }))),
+                _ => Err(PyTypeError::new_err(format!(
+                    "{key}: a number (the start's, rad) or a pair (low, high) (a range along an axis), not {}",
+                    v.get_type().name()?
+                ))),
+            },
+        }
+    }
+
+    /// A value for two things at once: one number for both, or a pair.
+    fn pair(&self, key: &str) -> PyResult<Option<(f64, f64)>> {
+        match self.dict.get_item(key)? {
+            None => Ok(None),
+            Some(v) if v.is_none() => Ok(None),
+            Some(v) => match v.extract::<f64>() {
+                Ok(x) => Ok(Some((x, x))),
+                Err(_) => self.get::<(f64, f64)>(key),
+            },
+        }
+    }
+
+    fn size(&self) -> PyResult<(u32, u32)> {
+        match self.dict.get_item("size")? {
+            Some(v) if !v.is_none() => match v.extract::<u32>() {
+                Ok(n) => Ok((n, n)),
+                Err(_) => self.get::<(u32, u32)>("size").map(|s| s.expect("not None")),
+            },
+            _ => Ok((512, 512)),
+        }
+    }
+
+    fn backend(&self) -> PyResult<Backend> {
+        let names: Vec<&str> = Backend::ALL.iter().map(|b| b.name()).collect();
+        Ok(match self.choice("backend", &names)? {
+            None => Backend::Auto,
+            Some(n) => *Backend::ALL.iter().find(|b| b.name() == n).expect("listed"),
+        })
+    }
+
+    fn precision(&self) -> PyResult<Precision> {
+        let names: Vec<&str> = Precision::ALL.iter().map(|p| p.name()).collect();
+        Ok(match self.choice("precision", &names)? {
+            None => Precision::default(),
+            Some(n) => *Precision::ALL
+                .iter()
+                .find(|p| p.name() == n)
+                .expect("listed"),
+        })
+    }
+
+    /// The physics: a preset or file and the values given (the command line's sources).
+    fn sources(&self) -> PyResult<ParamSources> {
+        let names: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
+        let preset = self
+            .choice("preset", &names)?
+            .map(|n| *Preset::ALL.iter().find(|p| p.name() == n).expect("listed"));
+        Ok(ParamSources {
+            m1: self.get("m1")?,
+            m2: self.get("m2")?,
+            l1: self.get("l1")?,
+            l2: self.get("l2")?,
+            g: self.get("g")?,
+            rod_mass: self.pair("rod_mass")?,
+            joint_damping: self.pair("joint_damping")?,
+            air_drag: self.or("air_drag", false)?,
+            rho: self.get("rho")?,
+            cw: self.get("cw")?,
+            drag_area: self.pair("drag_area")?,
+            rod_drag_area: self.pair("rod_drag_area")?,
+            bearing_friction: self.get("bearing_friction")?,
+            bearing_radius: self.get("bearing_radius")?,
+            preset,
+            params: self.get::<std::path::PathBuf>("params_file")?,
+        })
+    }
+
+    /// The plane: `x`, `y` (names as `--x`/`--y` take them) with `x_range`, `y_range`, and
+    /// the start's angles (a range along an axis, else a value) and angular velocities.
+    fn grid(&self) -> PyResult<Grid> {
+        let names: Vec<&str> = Var::ALL.iter().map(|v| v.name()).collect();
+        let axis = |key: &'static str, range: &str| -> PyResult<Option<AxisAsked>> {
+            let var = self.choice(key, &names)?;
+            let range = self.range(range)?;
+            Ok(match (var, range) {
+                (None, None) => None,
+                (var, range) => Some(AxisAsked {
+                    var: Var::parse(var.as_deref().unwrap_or(if key == "x" {
+                        "theta1"
+                    } else {
+                        "theta2"
+                    }))
+                    .expect("listed"),
+                    range,
+                }),
+            })
+        };
+        PlaneAsked {
+            x: axis("x", "x_range")?,
+            y: axis("y", "y_range")?,
+            theta1: self.angles("theta1")?,
+            theta2: self.angles("theta2")?,
+            omega1: self.get("omega1")?,
+            omega2: self.get("omega2")?,
+        }
+        .grid(self.size()?)
+        .map_err(py_err)
+    }
+
+    /// `integrator` with `rtol`, `atol` (RK4 with the accurate settings, which set their own).
+    fn integrator(&self, accurate: bool, gpu_f32: bool) -> PyResult<Integrator> {
+        if accurate {
+            return Ok(Integrator::Rk4);
+        }
+        let name = self.or("integrator", "rk4".to_string())?;
+        integrator_of(&name, self.get("rtol")?, self.get("atol")?, gpu_f32).map_err(py_err)
+    }
+
+    fn stepping(&self, t_max: f64) -> PyResult<Stepping> {
+        Ok(Stepping {
+            dt: self.or("dt", 0.01)?,
+            t_max: self.or("t_max", t_max)?,
+        })
+    }
+}
+
+/// Runs `work` on a thread of its own while this one, the GIL released between looks, checks
+/// Python's signals every 0.1 s (Ctrl-C sets the work's cancel flag; the work stops at its
+/// next dispatch and KeyboardInterrupt is raised) and reports progress to `progress(phase,
+/// done, total)` when given.
+fn watched<T: Send + 'static>(
+    py: Python<'_>,
+    progress: Option<Bound<'_, PyAny>>,
+    work: impl FnOnce(&Monitor) -> chaoscope::Result<T> + Send + 'static,
+) -> PyResult<T> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    let monitor = Monitor::cancelled_by(cancel.clone());
+    let (tx, rx) = std::sync::mpsc::channel();
+    // Waited on with the GIL released, from this thread only.
+    let rx = std::sync::Mutex::new(rx);
+    let watched = monitor.clone();
+    std::thread::spawn(move || {
+        let _ = tx.send(work(&watched));
+    });
+    let mut stop: Option<PyErr> = None;
+    loop {
+        let next = py.detach(|| match rx.lock() {
+            Ok(rx) => rx.recv_timeout(Duration::from_millis(100)),
+            Err(_) => Err(std::sync::mpsc::RecvTimeoutError::Disconnected),
+        });
+        match next {
+            Ok(result) => {
+                return match (stop, result) {
+                    (Some(e), _) => Err(e),
+                    (None, r) => r.map_err(py_err),
+                };
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(PyRuntimeError::new_err("the work's thread panicked"));
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+        }
+        if stop.is_some() {
+            continue;
+        }
+        let looked = py.check_signals().and_then(|()| match &progress {
+            Some(report) => {
+                let (phase, done, total) = monitor.progress();
+                report.call1((phase, done, total)).map(|_| ())
+            }
+            None => Ok(()),
+        });
+        if let Err(e) = looked {
+            cancel.store(true, Ordering::Relaxed);
+            stop = Some(e);
+        }
+    }
+}
+
+/// A map's arrays and what describes them: its values (float32, (height, width), row 0 at the
+/// top), its verdict (uint8, 1 resolved) when asked, its axes' names, units and pixel centres,
+/// the quantity, the reproducing command, the spec (JSON) and where it ran.
+fn map_answer<'py, S: MapSpec>(
+    py: Python<'py>,
+    spec: &S,
+    field: Field,
+    mask: Option<Vec<u8>>,
+    command: String,
+    place: String,
+    notices: Vec<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let g = *spec.grid();
+    let (h, w) = (g.height as usize, g.width as usize);
+    let out = PyDict::new(py);
+    out.set_item(
+        "values",
+        PyArray1::from_vec(py, field.data).reshape([h, w])?,
+    )?;
+    if let Some(mask) = mask {
+        out.set_item("resolved", PyArray1::from_vec(py, mask).reshape([h, w])?)?;
+    }
+    for (key, axis, values) in [
+        (
+            "x",
+            g.x,
+            (0..g.width).map(|c| g.x_at(c)).collect::<Vec<_>>(),
+        ),
+        ("y", g.y, (0..g.height).map(|r| g.y_at(r)).collect()),
+    ] {
+        let a = PyDict::new(py);
+        a.set_item("name", axis.var.key())?;
+        a.set_item("label", axis.var.name())?;
+        a.set_item("symbol", axis.var.symbol())?;
+        a.set_item("unit", axis.var.unit())?;
+        a.set_item("values", PyArray1::from_vec(py, values))?;
+        out.set_item(key, a)?;
+    }
+    let s = g.fixed;
+    out.set_item(
+        "start",
+        [
+            ("theta1", s.theta1),
+            ("omega1", s.omega1),
+            ("theta2", s.theta2),
+            ("omega2", s.omega2),
+        ]
+        .into_py_dict(py)?,
+    )?;
+    let q = spec.quantity();
+    out.set_item("quantity", q.name)?;
+    out.set_item("unit", q.unit)?;
+    out.set_item("command", command)?;
+    out.set_item("place", place)?;
+    out.set_item("notices", notices)?;
+    let any =
+        serde_json::to_string(&spec.any()).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    out.set_item("spec", any)?;
+    Ok(out)
+}
+
+use pyo3::types::IntoPyDict;
+
+/// A map job run in memory (`samples`, `resolved` from the keywords): checked as the command
+/// line checks it, computed as it computes it; `command_of` writes its command line.
+fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
+    py: Python<'py>,
+    k: &Keywords<'py>,
+    spec: S,
+    backend: Backend,
+    command_of: fn(&MapJob<S>) -> String,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let samples: u32 = k.or("samples", 1)?;
+    let resolved: bool = k.or("resolved", false)?;
+    let command = command_of(&MapJob {
+        spec,
+        backend,
+        picture: PictureSpec::default(),
+        files: no_files(),
+        tile: None,
+        colour_range: None,
+        samples,
+    });
+    if let Some(path) = k.get::<std::path::PathBuf>("store")? {
+        return fill_store(
+            py, k, spec, backend, path, resolved, samples, command, progress,
+        );
+    }
+    chaoscope::app::map::check_in_memory(&spec, resolved, samples).map_err(py_err)?;
+    let s = spec;
+    let made = watched(py, progress, move |monitor| {
+        chaoscope::app::map::compute(&s, backend, resolved, samples, monitor)
+    })?;
+    let (field, mask) = made.made;
+    map_answer(
+        py,
+        &spec,
+        field,
+        mask,
+        command,
+        made.info.place().to_string(),
+        made.notices,
+    )
+}
+
+/// A map into a Zarr store, as `--data MAP.zarr` fills it: band by band (memory holds one),
+/// resumable, only part `tile` = (index, count) of it when given (tasks of one map on many
+/// workers). Returns what was filled; the store is opened lazily by the wrapper.
+#[allow(clippy::too_many_arguments)]
+fn fill_store<'py, S: MapKernels + Copy + Send + Sync + 'static>(
+    py: Python<'py>,
+    k: &Keywords<'py>,
+    spec: S,
+    backend: Backend,
+    path: std::path::PathBuf,
+    resolved: bool,
+    samples: u32,
+    command: String,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if samples != 1 {
+        return Err(PyValueError::new_err(
+            "samples: is for maps made in memory; a store is filled band by band at one start a pixel",
+        ));
+    }
+    let tile: Option<(u32, u32)> = k.get("tile")?;
+    let files = MapOutputs {
+        output: std::path::PathBuf::from("out.png"),
+        data: Some(path.clone()),
+        resolved: resolved.then(|| path.clone()),
+        show_unresolved: false,
+    };
+    chaoscope::app::map::validate(&spec, &files, tile).map_err(py_err)?;
+    let made = watched(py, progress, move |monitor| {
+        chaoscope::app::map::make_store(&spec, backend, &path, command, tile, resolved, monitor)
+    })?;
+    let f = made.made;
+    let out = PyDict::new(py);
+    for (key, v) in [
+        ("pixels", f.pixels),
+        ("counted", f.counted),
+        ("nan", f.nan),
+        ("resolved", f.resolved),
+        ("missing", f.missing),
+    ] {
+        out.set_item(key, v)?;
+    }
+    out.set_item("place", made.info.place().to_string())?;
+    out.set_item("notices", made.notices)?;
+    Ok(out)
+}
+
+#[pyfunction]
+#[pyo3(signature = (keywords, progress=None))]
+fn flip_map<'py>(
+    py: Python<'py>,
+    keywords: Bound<'py, PyDict>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let k = Keywords { dict: keywords };
+    let backend = k.backend()?;
+    let precision = k.precision()?;
+    let accurate: bool = k.or("accurate", false)?;
+    let measures: Vec<&str> = FlipMeasure::ALL.iter().map(|m| m.name()).collect();
+    let measure = match k.choice("measure", &measures)? {
+        None => FlipMeasure::Time,
+        Some(n) => *FlipMeasure::ALL
+            .iter()
+            .find(|m| m.name() == n)
+            .expect("listed"),
+    };
+    let integrator = k.integrator(
+        accurate,
+        precision == Precision::F32 && backend != Backend::Cpu,
+    )?;
+    let params = k.sources()?.resolve().map_err(py_err)?;
+    let spec = FlipSpec {
+        measure,
+        early_exit: k.or("early_exit", true)?,
+        use_symmetry: k.or("use_symmetry", true)?,
+        precision,
+        integrator,
+        ..FlipSpec::new(params, k.grid()?, k.stepping(30.0)?)
+    };
+    let spec = if accurate { spec.accurate() } else { spec };
+    run_map(py, &k, spec, backend, command_line::flip, progress)
+}
+
+#[pyfunction]
+#[pyo3(signature = (keywords, progress=None))]
+fn lyapunov_map<'py>(
+    py: Python<'py>,
+    keywords: Bound<'py, PyDict>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let k = Keywords { dict: keywords };
+    let backend = k.backend()?;
+    let precision = k.precision()?;
+    let accurate: bool = k.or("accurate", false)?;
+    let gpu_f32 = precision == Precision::F32 && backend != Backend::Cpu;
+    let indicator = IndicatorAsked {
+        name: &k.or("indicator", "ftle".to_string())?,
+        exponent: k.get("exponent")?,
+        gali: k.get("gali")?,
+        threshold: k.get("threshold")?,
+        ld_p: k.get("ld_p")?,
+        accurate,
+        gpu_f32,
+    }
+    .indicator()
+    .map_err(py_err)?;
+    let method = match k.choice("method", &["tangent", "twin"])?.as_deref() {
+        Some("twin") => Method::Twin {
+            eps: k.or("eps", 1e-8)?,
+        },
+        _ => Method::Tangent,
+    };
+    let integrator = k.integrator(accurate, gpu_f32)?;
+    let spec = LyapunovSpec {
+        params: k.sources()?.resolve().map_err(py_err)?,
+        grid: k.grid()?,
+        stepping: k.stepping(20.0)?,
+        method,
+        renorm: k.or("renorm", 0.1)?,
+        use_symmetry: k.or("use_symmetry", true)?,
+        precision,
+        band: None,
+        integrator,
+        indicator,
+    };
+    let spec = if accurate { spec.accurate() } else { spec };
+    run_map(py, &k, spec, backend, command_line::lyapunov_map, progress)
+}
+
+/// A job made in memory writes no file: the command names none.
+fn no_files() -> MapOutputs {
+    MapOutputs {
+        output: std::path::PathBuf::from("out.png"),
+        data: None,
+        resolved: None,
+        show_unresolved: false,
+    }
+}
+
+/// One start's trajectory as `chaoscope trajectory` writes it: the CSV's text (its first line
+/// the reproducing command).
+#[pyfunction]
+#[pyo3(signature = (keywords, progress=None))]
+fn trajectory<'py>(
+    py: Python<'py>,
+    keywords: Bound<'py, PyDict>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<String> {
+    let k = Keywords { dict: keywords };
+    let stepping = k.stepping(20.0)?;
+    let job = TrajectoryJob {
+        params: k.sources()?.resolve().map_err(py_err)?,
+        start: State {
+            theta1: k.or("theta1", 0.0)?,
+            omega1: k.or("omega1", 0.0)?,
+            theta2: k.or("theta2", 0.0)?,
+            omega2: k.or("omega2", 0.0)?,
+        },
+        stepping,
+        every: k.get("every")?,
+        backend: k.backend()?,
+        precision: k.precision()?,
+        output: None,
+    };
+    let command = command_line::trajectory(&job);
+    let csv = watched(py, progress, move |monitor| {
+        let mut csv = Vec::new();
+        chaoscope::app::trajectory::run(&job, command, monitor, &mut csv)?;
+        Ok(csv)
+    })?;
+    String::from_utf8(csv).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
+/// A map's picture as the command line draws it (PNG bytes): `spec` (the map's JSON),
+/// its values and verdict, the colour map, the annotation, the colour range.
+#[pyfunction]
+#[pyo3(signature = (spec, values, resolved, command, colormap=None, annotate=false, colour_range=None, show_unresolved=false))]
+#[allow(clippy::too_many_arguments)]
+fn picture<'py>(
+    py: Python<'py>,
+    spec: &str,
+    values: PyReadonlyArray2<'py, f32>,
+    resolved: Option<PyReadonlyArray2<'py, u8>>,
+    command: String,
+    colormap: Option<String>,
+    annotate: bool,
+    colour_range: Option<(f32, f32)>,
+    show_unresolved: bool,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let map: AnyMap =
+        serde_json::from_str(spec).map_err(|e| PyValueError::new_err(format!("spec: {e}")))?;
+    let colormap = match colormap {
+        None => None,
+        Some(name) => Some(
+            chaoscope::render::Colormap::ALL
+                .into_iter()
+                .find(|c| c.name() == name)
+                .ok_or_else(|| PyValueError::new_err(format!("colormap: {name:?} is unknown")))?,
+        ),
+    };
+    let pic = PictureSpec { annotate, colormap };
+    let g = *map.grid();
+    let shape = [g.height as usize, g.width as usize];
+    if values.shape() != shape {
+        return Err(PyValueError::new_err(format!(
+            "values: shape {:?} for a {} x {} map",
+            values.shape(),
+            g.width,
+            g.height
+        )));
+    }
+    let field = Field {
+        width: g.width,
+        height: g.height,
+        data: values.as_array().iter().copied().collect(),
+    };
+    let resolved: Option<Vec<u8>> = resolved
+        .filter(|r| r.shape() == shape)
+        .map(|r| r.as_array().iter().copied().collect());
+    let shown = resolved.as_deref().filter(|_| show_unresolved);
+    let drawn = match &map {
+        AnyMap::Flip(s) => s.draw(&field, &pic, colour_range, shown),
+        AnyMap::Lyapunov(s) => s.draw(&field, &pic, colour_range, shown),
+    }
+    .map_err(py_err)?;
+    let mut text = drawn.text;
+    text.push(("chaoscope:command".into(), command));
+    let p = drawn.picture;
+    let png = chaoscope::render::png_bytes(p.width, p.height, &p.rgb, &text).map_err(py_err)?;
+    Ok(PyBytes::new(py, &png))
+}
+
+/// The physics the keywords give (a preset or file, then the values given), resolved and
+/// checked: every value by the name the map functions take it under.
+#[pyfunction]
+fn params<'py>(py: Python<'py>, keywords: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyDict>> {
+    let k = Keywords { dict: keywords };
+    let p = k.sources()?.resolve().map_err(py_err)?;
+    chaoscope::spec::validate_params(&p).map_err(py_err)?;
+    let l = p.losses;
+    let out = PyDict::new(py);
+    for (key, v) in [
+        ("m1", p.m1),
+        ("m2", p.m2),
+        ("l1", p.l1),
+        ("l2", p.l2),
+        ("g", p.g),
+    ] {
+        out.set_item(key, v)?;
+    }
+    out.set_item("rod_mass", (p.rod1, p.rod2))?;
+    out.set_item("joint_damping", (l.joint1, l.joint2))?;
+    out.set_item("air_drag", l.has_drag())?;
+    if l.has_drag() {
+        out.set_item("rho", l.rho)?;
+        out.set_item("cw", l.cw)?;
+        out.set_item("drag_area", (l.bob_area1, l.bob_area2))?;
+        out.set_item("rod_drag_area", (l.rod_area1, l.rod_area2))?;
+    }
+    if l.has_bearings() {
+        out.set_item("bearing_friction", l.bearing)?;
+        out.set_item("bearing_radius", l.bearing_radius)?;
+    }
+    Ok(out)
+}
+
+/// The command line, as the `chaoscope` program runs it (the wheel's console script): its
+/// exit status.
+#[pyfunction]
+fn main(py: Python<'_>, args: Vec<String>) -> u8 {
+    py.detach(|| chaoscope::cli::main(args))
+}
+
+#[pymodule]
+fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("INDICATORS", chaoscope::spec::INDICATORS.to_vec())?;
+    m.add_function(wrap_pyfunction!(flip_map, m)?)?;
+    m.add_function(wrap_pyfunction!(lyapunov_map, m)?)?;
+    m.add_function(wrap_pyfunction!(trajectory, m)?)?;
+    m.add_function(wrap_pyfunction!(picture, m)?)?;
+    m.add_function(wrap_pyfunction!(params, m)?)?;
+    m.add_function(wrap_pyfunction!(main, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,253 @@
+"""The Python package against the command line it wraps: every map bit for bit equal to the
+.npy its reproducing command writes, errors that name their keyword, Ctrl-C, the wheel's
+command line. Run by scripts/test after `pip install .` into target/pyenv."""
+
+import inspect
+import os
+import shutil
+import signal
+import struct
+import subprocess
+import sys
+import threading
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import chaoscope
+
+BIN = Path(sys.executable).parent / "chaoscope"
+
+
+def cli(*args, check=True):
+    """The wheel's `chaoscope` command (the venv's console script)."""
+    return subprocess.run([str(BIN), *args], capture_output=True, text=True, check=check)
+
+
+def run_command(command, *extra):
+    """A map's reproducing command (attrs["command"]), with `extra` flags."""
+    words = command.split()
+    assert words[0] == "chaoscope"
+    return cli(*words[1:], *extra)
+
+
+def same_bits(a, b):
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+def test_flip_map_equals_its_command_bit_for_bit(tmp_path):
+    flips = chaoscope.flip_map(size=(48, 40), t_max=4, m2=1.5, progress=False)
+    assert isinstance(flips, xr.DataArray)
+    assert flips.dims == ("theta2", "theta1")
+    assert flips.attrs["units"] == "s" and flips.theta1.attrs["units"] == "rad"
+    # Row 0 at the top: theta2 falls down the rows.
+    assert flips.theta2[0] > flips.theta2[-1] and flips.theta1[0] < flips.theta1[-1]
+    if os.environ.get("CI") == "true":
+        # CI has lavapipe: the map ran on it, not on the CPU fallback.
+        assert flips.attrs["place"] != "the CPU", flips.attrs
+    npy = tmp_path / "flips.npy"
+    run_command(flips.attrs["command"], "--data", str(npy), "--output", str(tmp_path / "f.png"))
+    assert same_bits(np.load(npy), flips.values)
+
+
+def test_a_parameter_plane_with_its_verdict_equals_its_command(tmp_path):
+    made = chaoscope.flip_map(
+        size=(40, 24), t_max=3, x="m2/m1", x_range=(0.5, 2.0), y="omega1",
+        y_range=(-4.0, 4.0), theta1=2.0, theta2=1.0, resolved=True, progress=False,
+    )
+    assert isinstance(made, xr.Dataset)
+    assert made["map"].dims == ("omega1", "mass_ratio")
+    assert made.mass_ratio.attrs["units"] == "1" and made.omega1.attrs["units"] == "rad/s"
+    assert made["map"].attrs["start"]["theta2"] == 1.0
+    npy, mask = tmp_path / "plane.npy", tmp_path / "plane_mask.npy"
+    run_command(made.attrs["command"], "--data", str(npy), "--resolved", str(mask),
+                "--output", str(tmp_path / "p.png"))
+    assert same_bits(np.load(npy), made["map"].values)
+    assert same_bits(np.load(mask), made["resolved"].values)
+    assert set(np.unique(made["resolved"].values)) <= {0, 1}
+
+
+@pytest.mark.parametrize("indicator", ["ftle", "megno"])
+def test_lyapunov_maps_equal_their_commands(tmp_path, indicator):
+    made = chaoscope.lyapunov_map(size=32, t_max=2, indicator=indicator, progress=False)
+    npy = tmp_path / "l.npy"
+    run_command(made.attrs["command"], "--data", str(npy), "--output", str(tmp_path / "l.png"))
+    assert same_bits(np.load(npy), made.values)
+    assert f"--indicator {indicator}" in made.attrs["command"] or indicator == "ftle"
+
+
+def test_trajectory_equals_its_command():
+    run = chaoscope.trajectory(theta1=2.1, theta2=-0.7, t_max=2, every=0.05, joint_damping=0.01)
+    assert run.time.attrs["units"] == "s" and run.theta1.attrs["units"] == "rad"
+    csv = run_command(run.attrs["command"]).stdout.splitlines()
+    table = np.loadtxt(csv[2:], delimiter=",")
+    names = csv[1].split(",")
+    assert np.array_equal(table[:, 0], run.time.values)
+    for k, name in enumerate(names[1:], start=1):
+        assert np.array_equal(table[:, k], run[name].values), name
+
+
+def png_pixels(png):
+    """A PNG's size and its decompressed scanlines (the encoder's filtered rows)."""
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    at, idat, size = 8, b"", None
+    while at < len(png):
+        (length,), kind = struct.unpack(">I", png[at:at + 4]), png[at + 4:at + 8]
+        data = png[at + 8:at + 8 + length]
+        if kind == b"IHDR":
+            size = struct.unpack(">II", data[:8])
+        elif kind == b"IDAT":
+            idat += data
+        at += 12 + length
+    return size, zlib.decompress(idat)
+
+
+def test_picture_is_the_commands_png(tmp_path):
+    flips = chaoscope.flip_map(size=64, t_max=3, progress=False)
+    pic = chaoscope.picture(flips, colormap="turbo", annotate=True)
+    assert pic._repr_png_() == pic.png
+    png = tmp_path / "cli.png"
+    run_command(flips.attrs["command"], "--colormap", "turbo", "--annotate", "--output", str(png))
+    assert png_pixels(pic.png) == png_pixels(png.read_bytes())
+    bare = chaoscope.picture(flips)
+    run_command(flips.attrs["command"], "--output", str(png))
+    assert png_pixels(bare.png) == png_pixels(png.read_bytes())
+    assert png_pixels(bare.png)[0] == (64, 64)
+
+
+@pytest.mark.parametrize(
+    "keywords, name",
+    [
+        ({"t_max": -1}, "t_max"),
+        ({"dt": 0}, "dt"),
+        ({"size": 0}, "size"),
+        ({"m1": -2}, "m1"),
+        ({"x": "speed"}, "x"),
+        ({"backend": "tpu"}, "backend"),
+        ({"measure": "colour"}, "measure"),
+        ({"samples": 0}, "samples"),
+        ({"x": "omega1"}, "x"),
+        ({"theta1": (-9.0, 9.0)}, "theta1"),
+        ({"integrator": "euler"}, "integrator"),
+    ],
+)
+def test_bad_values_raise_value_error_naming_the_keyword(keywords, name):
+    with pytest.raises(ValueError, match=f"^{name}: "):
+        chaoscope.flip_map(**{"size": 16, "t_max": 1, "progress": False, **keywords})
+
+
+def test_bad_keywords_and_types_raise_type_error():
+    with pytest.raises(TypeError, match="tmax"):
+        chaoscope.flip_map(tmax=3)
+    with pytest.raises(TypeError, match="^t_max: "):
+        chaoscope.flip_map(size=16, t_max="long")
+    with pytest.raises(TypeError, match="^theta1: "):
+        chaoscope.flip_map(size=16, theta1="all")
+    with pytest.raises(ValueError, match="^indicator: "):
+        chaoscope.lyapunov_map(size=16, t_max=1, indicator="entropy")
+    with pytest.raises(TypeError, match="colour"):
+        chaoscope.params(colour=3)
+
+
+def test_ctrl_c_stops_a_long_map_and_the_next_call_works():
+    # 512^2 pendulums for 100 s: minutes on lavapipe, so the signal comes mid-map.
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    started = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        chaoscope.flip_map(size=512, t_max=100, use_symmetry=False, early_exit=False,
+                           progress=False)
+    stopped = time.monotonic() - started - 1.0
+    timer.join()
+    # The engine stops at its next dispatch: well within 2 s of the signal.
+    assert stopped < 2.0, stopped
+    again = chaoscope.flip_map(size=16, t_max=1, progress=False)
+    assert again.shape == (16, 16)
+
+
+def test_progress_is_reported_to_a_callable():
+    seen = []
+    chaoscope.flip_map(size=128, t_max=20, progress=lambda *p: seen.append(p))
+    # Reported every 0.1 s while it runs; a fast map may finish before the first look.
+    assert all(isinstance(phase, str) and done >= 0 for phase, done, _ in seen)
+
+
+def test_the_wheels_command_line_runs_from_the_venv():
+    assert shutil.which("chaoscope", path=str(BIN.parent)) == str(BIN)
+    assert cli("--version").stdout.startswith("chaoscope ")
+    bad = cli("flip", "--size", "0", check=False)
+    assert bad.returncode == 2 and "--size" in bad.stderr
+
+
+def test_a_store_opens_lazily_with_its_command(tmp_path):
+    store = tmp_path / "map.zarr"
+    flips = chaoscope.flip_map(size=32, t_max=2, progress=False)
+    run_command(flips.attrs["command"], "--data", str(store))
+    opened = chaoscope.open_store(str(store))
+    assert opened.attrs["command"].startswith("chaoscope flip")
+    assert same_bits(opened["map"].values, flips.values)
+    assert list(opened["map"].dims) == ["theta2", "theta1"]
+
+
+def test_python_manners():
+    sig = inspect.signature(chaoscope.flip_map)
+    assert all(p.kind is p.KEYWORD_ONLY for p in sig.parameters.values())
+    assert sig.parameters["t_max"].default == 30.0
+    assert "flip" in chaoscope.flip_map.__doc__
+    lab = chaoscope.params("lab")
+    assert lab["m1"] == pytest.approx(0.301) and lab["air_drag"]
+    # The physics round-trips into the map functions.
+    assert chaoscope.flip_map(size=8, t_max=1, progress=False, **lab).shape == (8, 8)
+    package = Path(chaoscope.__file__).parent
+    assert (package / "py.typed").exists() and (package / "_chaoscope.pyi").exists()
+
+
+def test_the_readmes_python_runs(tmp_path, monkeypatch, capsys):
+    readme = (Path(__file__).parents[2] / "README.md").read_text()
+    code = readme.split("```python\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "out").mkdir()
+    exec(compile(code, "README.md", "exec"), {})
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0].endswith(" s") and printed[1].startswith("chaoscope flip ")
+    assert (tmp_path / "out" / "flip_python.png").read_bytes()[:4] == b"\x89PNG"
+
+
+EXAMPLES = Path(__file__).parents[2] / "examples"
+
+
+def test_the_notebook_executes_and_draws_its_figures(tmp_path):
+    import base64
+
+    import nbformat
+    from nbclient import NotebookClient
+
+    notebook = nbformat.read(EXAMPLES / "explore.ipynb", as_version=4)
+    client = NotebookClient(notebook, timeout=600, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}})
+    client.execute()
+    images = [
+        base64.b64decode(output["data"]["image/png"])
+        for cell in notebook.cells if cell.cell_type == "code"
+        for output in cell.get("outputs", [])
+        if "image/png" in output.get("data", {})
+    ]
+    # The flip map, the zoom, the trajectory, the two maps side by side, the command line's
+    # picture, the store's part: each a PNG of some substance (an empty axes is ~5 kB).
+    assert len(images) == 6, len(images)
+    assert all(len(png) > 10_000 for png in images), [len(png) for png in images]
+
+
+def test_the_dask_example_fills_one_store_equal_to_the_single_process_map(tmp_path):
+    ran = subprocess.run(
+        [sys.executable, str(EXAMPLES / "dask_map.py"), str(tmp_path / "dask.zarr"),
+         "--size", "256", "--t-max", "3", "--tiles", "4", "--workers", "2"],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert ran.returncode == 0, ran.stdout + ran.stderr
+    assert "4 tasks on 2 workers filled 65536 pixels" in ran.stdout, ran.stdout
+    assert "equal to the single-process map, bit for bit" in ran.stdout, ran.stdout

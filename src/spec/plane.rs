@@ -1,0 +1,118 @@
+//! A plane as a user asks for it (the command line's `--x`, `--y` and angle flags, Python's
+//! keywords): what each axis varies, perhaps with its range, and the start's values; checked
+//! and completed into a [`Grid`].
+
+use super::{Axis, Grid, Range, Var};
+use crate::error::{Error, Result};
+use crate::model::{Params, State};
+
+/// An angle as asked: a range (along an axis) or one value (the start's).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Angles {
+    Range(Range),
+    Point(f64),
+}
+
+/// What an axis varies, perhaps with its range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisAsked {
+    pub var: Var,
+    pub range: Option<Range>,
+}
+
+/// A plane as asked; an error names the field (`x`, `theta1`...) it is about.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PlaneAsked {
+    /// theta1 when None.
+    pub x: Option<AxisAsked>,
+    /// theta2 when None.
+    pub y: Option<AxisAsked>,
+    pub theta1: Option<Angles>,
+    pub theta2: Option<Angles>,
+    pub omega1: Option<f64>,
+    pub omega2: Option<f64>,
+}
+
+impl PlaneAsked {
+    /// The grid of `size` pixels asked for: an angle gives its range when it lies along an
+    /// axis (unless the axis gives it) and its start otherwise; a parameter or angular
+    /// velocity along an axis takes its range from the axis.
+    pub fn grid(&self, (width, height): (u32, u32)) -> Result<Grid> {
+        let x = self.x.unwrap_or(AxisAsked {
+            var: Var::Theta1,
+            range: None,
+        });
+        let y = self.y.unwrap_or(AxisAsked {
+            var: Var::Theta2,
+            range: None,
+        });
+        let given = |var: Var| -> Option<Angles> {
+            match var {
+                Var::Theta1 => self.theta1,
+                Var::Theta2 => self.theta2,
+                Var::Omega1 => self.omega1.map(Angles::Point),
+                Var::Omega2 => self.omega2.map(Angles::Point),
+                _ => None,
+            }
+        };
+        let axis = |field: &'static str, a: AxisAsked| -> Result<Axis> {
+            let range = match (a.range, given(a.var)) {
+                (Some(_), Some(_)) => {
+                    return Err(Error::invalid(
+                        a.var.name(),
+                        format!("{} lies along {field}, which gives its range", a.var.name()),
+                    ));
+                }
+                (Some(r), None) | (None, Some(Angles::Range(r))) => r,
+                (None, None) if a.var.is_angle() => Range::FULL_TURN,
+                (None, Some(Angles::Point(_))) if a.var.is_angle() => {
+                    return Err(Error::invalid(
+                        a.var.name(),
+                        format!(
+                            "{} lies along {field}: give its range MIN:MAX",
+                            a.var.name()
+                        ),
+                    ));
+                }
+                _ => {
+                    return Err(Error::invalid(
+                        field,
+                        format!("{} along {field} needs a range MIN:MAX", a.var.name()),
+                    ));
+                }
+            };
+            Ok(Axis { var: a.var, range })
+        };
+        let (x, y) = (axis("x", x)?, axis("y", y)?);
+        let mut fixed = State::default();
+        let mut params = Params::default();
+        for var in [Var::Theta1, Var::Omega1, Var::Theta2, Var::Omega2] {
+            if var == x.var || var == y.var {
+                continue;
+            }
+            match given(var) {
+                Some(Angles::Point(v)) => var.set(v, &mut params, &mut fixed),
+                Some(Angles::Range(_)) => {
+                    return Err(Error::invalid(
+                        var.name(),
+                        format!(
+                            "{} lies along no axis (x is {}, y is {}): give its start, one angle",
+                            var.name(),
+                            x.var.name(),
+                            y.var.name()
+                        ),
+                    ));
+                }
+                None => {}
+            }
+        }
+        Ok(Grid {
+            width,
+            height,
+            x,
+            y,
+            fixed,
+            sampling: Default::default(),
+        })
+    }
+}
