@@ -110,11 +110,32 @@ impl<'py> Keywords<'py> {
         }
     }
 
+    /// A whole number that fits `T`; a negative or huge one is a ValueError naming the
+    /// keyword (the library checks the allowed range after).
+    fn whole<T: TryFrom<i64>>(&self, key: &str) -> PyResult<Option<T>> {
+        let Some(n) = self.get::<i64>(key)? else {
+            return Ok(None);
+        };
+        T::try_from(n).map(Some).map_err(|_| {
+            PyValueError::new_err(format!("{key}: {n} is out of range (a whole number >= 0)"))
+        })
+    }
+
+    /// N (square) or (width, height) pixels.
     fn size(&self) -> PyResult<(u32, u32)> {
+        let whole = |n: i64| {
+            u32::try_from(n).map_err(|_| {
+                PyValueError::new_err(format!("size: {n} is out of range (pixels, >= 1)"))
+            })
+        };
         match self.dict.get_item("size")? {
-            Some(v) if !v.is_none() => match v.extract::<u32>() {
-                Ok(n) => Ok((n, n)),
-                Err(_) => self.get::<(u32, u32)>("size").map(|s| s.expect("not None")),
+            Some(v) if !v.is_none() => match (v.extract::<i64>(), v.extract::<(i64, i64)>()) {
+                (Ok(n), _) => Ok((whole(n)?, whole(n)?)),
+                (_, Ok((w, h))) => Ok((whole(w)?, whole(h)?)),
+                _ => Err(PyTypeError::new_err(format!(
+                    "size: N or (width, height), not {}",
+                    v.get_type().name()?
+                ))),
             },
             _ => Ok((512, 512)),
         }
@@ -340,7 +361,7 @@ fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
     command_of: fn(&MapJob<S>) -> String,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let samples: u32 = k.or("samples", 1)?;
+    let samples: u32 = k.whole("samples")?.unwrap_or(1);
     let resolved: bool = k.or("resolved", false)?;
     let command = command_of(&MapJob {
         spec,
@@ -393,7 +414,17 @@ fn fill_store<'py, S: MapKernels + Copy + Send + Sync + 'static>(
             "samples: is for maps made in memory; a store is filled band by band at one start a pixel",
         ));
     }
-    let tile: Option<(u32, u32)> = k.get("tile")?;
+    let tile = match k.get::<(i64, i64)>("tile")? {
+        None => None,
+        Some((i, n)) => match (u32::try_from(i), u32::try_from(n)) {
+            (Ok(i), Ok(n)) => Some((i, n)),
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "tile: ({i}, {n}) must be (index, count), whole numbers >= 0"
+                )));
+            }
+        },
+    };
     let files = MapOutputs {
         output: std::path::PathBuf::from("out.png"),
         data: Some(path.clone()),
@@ -470,8 +501,8 @@ fn lyapunov_map<'py>(
     let gpu_f32 = precision == Precision::F32 && backend != Backend::Cpu;
     let indicator = IndicatorAsked {
         name: &k.or("indicator", "ftle".to_string())?,
-        exponent: k.get("exponent")?,
-        gali: k.get("gali")?,
+        exponent: k.whole("exponent")?,
+        gali: k.whole("gali")?,
         threshold: k.get("threshold")?,
         ld_p: k.get("ld_p")?,
         accurate,

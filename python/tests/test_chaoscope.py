@@ -130,6 +130,10 @@ def test_picture_is_the_commands_png(tmp_path):
         ({"backend": "tpu"}, "backend"),
         ({"measure": "colour"}, "measure"),
         ({"samples": 0}, "samples"),
+        ({"samples": -3}, "samples"),
+        ({"size": -1}, "size"),
+        ({"size": (16, 2**40)}, "size"),
+        ({"store": "x.zarr", "tile": (5, 2)}, "tile"),
         ({"x": "omega1"}, "x"),
         ({"theta1": (-9.0, 9.0)}, "theta1"),
         ({"integrator": "euler"}, "integrator"),
@@ -251,3 +255,30 @@ def test_the_dask_example_fills_one_store_equal_to_the_single_process_map(tmp_pa
     assert ran.returncode == 0, ran.stdout + ran.stderr
     assert "4 tasks on 2 workers filled 65536 pixels" in ran.stdout, ran.stdout
     assert "equal to the single-process map, bit for bit" in ran.stdout, ran.stdout
+
+
+def test_progress_goes_to_tqdm_when_it_is_installed(monkeypatch):
+    import types
+
+    bars = []
+
+    class FakeBar:
+        def __init__(self, total=None, desc="", leave=True):
+            self.total, self.desc, self.n, self.closed = total, desc, 0, False
+            bars.append(self)
+
+        def update(self, k):
+            self.n += k
+
+        def close(self):
+            self.closed = True
+
+    fake = types.ModuleType("tqdm.auto")
+    fake.tqdm = FakeBar
+    monkeypatch.setitem(sys.modules, "tqdm", types.ModuleType("tqdm"))
+    monkeypatch.setitem(sys.modules, "tqdm.auto", fake)
+    # Long enough (~1 s on lavapipe) for the 0.1 s looks to see it run.
+    chaoscope.flip_map(size=256, t_max=30, use_symmetry=False, early_exit=False)
+    assert bars, "no bar was made"
+    assert all(b.closed for b in bars)
+    assert any(b.n > 0 for b in bars), [(b.desc, b.n, b.total) for b in bars]
