@@ -17,6 +17,7 @@ about a second (KeyboardInterrupt). Progress shows through tqdm when it is insta
 from __future__ import annotations
 
 import io
+import json
 import warnings
 from typing import Any, Callable, Optional, Tuple, Union
 
@@ -30,6 +31,7 @@ __all__ = [
     "flip_map",
     "lyapunov_map",
     "trajectory",
+    "fit",
     "params",
     "picture",
     "open_store",
@@ -346,6 +348,47 @@ def trajectory(
         coords={"time": ("time", table[:, 0], {"units": "s"})},
         attrs={"command": command},
     )
+
+
+def fit(
+    file: str,
+    *,
+    output: str = "out/fit",
+    start: float = 0.8,
+    window: float = 1.5,
+    tolerance: float = 0.03,
+    candidates: int = 65536,
+    velocity_error: float = 0.1,
+    m1: Optional[float] = None,
+    m2: Optional[float] = None,
+    l1: Optional[float] = None,
+    l2: Optional[float] = None,
+    g: Optional[float] = None,
+    rod_mass: Union[None, float, Pair] = None,
+    joint_damping: Union[None, float, Pair] = None,
+    air_drag: bool = False,
+    rho: Optional[float] = None,
+    cw: Optional[float] = None,
+    drag_area: Union[None, float, Pair] = None,
+    rod_drag_area: Union[None, float, Pair] = None,
+    bearing_friction: Optional[float] = None,
+    bearing_radius: Optional[float] = None,
+    preset: Optional[str] = None,
+    params_file: Optional[str] = None,
+    backend: str = "auto",
+    precision: Optional[str] = None,
+    progress: Progress = None,
+) -> dict:
+    """The model fitted to a camera-tracked run (``chaoscope fit``): ``file`` is a CSV of
+    t, x1, y1, x2, y2 (s, m; y up). Returns the summary: the pivot and arm lengths (m, with
+    errors), the energy's exponential and inverse-square decay fits, and how long the model
+    released at ``start`` (s) agrees with the data within ``tolerance`` (m), its ``candidates``
+    fitted over ``window`` s; plots, derived.csv and summary.json go to ``output``. The physics
+    (``preset="lab"``...) as :func:`params`.
+    """
+    keywords = dict(locals())
+    keywords.pop("progress")
+    return json.loads(_call(_native.fit, keywords, progress))
 
 
 class Picture:

@@ -636,6 +636,38 @@ fn picture<'py>(
     Ok(PyBytes::new(py, &png))
 }
 
+/// The model fitted to a camera-tracked run (`chaoscope fit`'s job): its summary as JSON (the
+/// pivot, the arm lengths with errors, the energy's decay fits, how long the model from `start`
+/// agrees with the data), its plots, derived.csv and summary.json written to `output`.
+#[pyfunction]
+#[pyo3(signature = (keywords, progress=None))]
+fn fit<'py>(
+    py: Python<'py>,
+    keywords: Bound<'py, PyDict>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<String> {
+    let k = Keywords { dict: keywords };
+    let job = chaoscope::app::fit::FitJob {
+        file: k
+            .get("file")?
+            .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
+        output: k.or("output", std::path::PathBuf::from("out/fit"))?,
+        start: k.or("start", 0.8)?,
+        window: k.or("window", 1.5)?,
+        tolerance: k.or("tolerance", 0.03)?,
+        candidates: k.whole("candidates")?.unwrap_or(65536),
+        velocity_error: k.or("velocity_error", 0.1)?,
+        params: k.sources()?,
+        backend: k.backend()?,
+        precision: k.precision()?,
+    };
+    let command = command_line::fit(&job);
+    let summary = watched(py, progress, move |monitor| {
+        chaoscope::app::fit::run(&job, command, monitor)
+    })?;
+    serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
 /// The physics the keywords give (a preset or file, then the values given), resolved and
 /// checked: every value by the name the map functions take it under.
 #[pyfunction]
@@ -686,6 +718,7 @@ fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(picture, m)?)?;
     m.add_function(wrap_pyfunction!(params, m)?)?;
+    m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(main, m)?)?;
     Ok(())
 }

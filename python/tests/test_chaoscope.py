@@ -3,6 +3,7 @@
 command line. Run by scripts/test after `pip install .` into target/pyenv."""
 
 import inspect
+import json
 import os
 import shutil
 import signal
@@ -282,3 +283,20 @@ def test_progress_goes_to_tqdm_when_it_is_installed(monkeypatch):
     assert bars, "no bar was made"
     assert all(b.closed for b in bars)
     assert any(b.n > 0 for b in bars), [(b.desc, b.n, b.total) for b in bars]
+
+
+def test_fit_equals_its_command(tmp_path):
+    data = Path(__file__).parents[2] / "data" / "lab_table1.csv"
+    made = chaoscope.fit(str(data), output=str(tmp_path / "py"), candidates=4096,
+                         preset="lab", progress=False)
+    cli("fit", str(data), "--output", str(tmp_path / "cli"), "--candidates", "4096",
+        "--preset", "lab")
+    written = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    ours = json.loads((tmp_path / "py" / "summary.json").read_text())
+    # The same fit: the model, its search and agreement, and the command that makes it.
+    assert ours["model"] == written["model"]
+    assert made["agrees_until"] == written["model"]["agrees_until"]
+    assert ours.get("command", "").replace(str(tmp_path / "py"), "") == written.get(
+        "command", "").replace(str(tmp_path / "cli"), "")
+    with pytest.raises(ValueError, match="^window: "):
+        chaoscope.fit(str(data), output=str(tmp_path / "bad"), window=100.0, progress=False)
