@@ -32,11 +32,12 @@ def rss_kib():
 base = rss_kib()
 started = time.perf_counter()
 flips = chaoscope.flip_map(size=size, t_max=t_max, progress=False)
+mapped = time.perf_counter() - started
 chaoscope.picture(flips).save(png)
 np.save(npy, flips.values)
 seconds = time.perf_counter() - started
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-print(json.dumps({"seconds": seconds, "base_kib": base, "peak_kib": peak,
+print(json.dumps({"seconds": seconds, "map_seconds": mapped, "base_kib": base, "peak_kib": peak,
                   "map_bytes": flips.values.nbytes, "place": flips.attrs["place"]}))
 """
 
@@ -46,8 +47,10 @@ def main() -> int:
     parser.add_argument("--size", type=int, default=1024)
     parser.add_argument("--t-max", type=float, default=30.0)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--binary", default="target/release/chaoscope",
+                        help="the command line to compare with (cargo's binary)")
     args = parser.parse_args()
-    binary = Path(sys.executable).parent / "chaoscope"
+    binary = Path(args.binary)
     cli_times, py_times, py_runs, cli_peaks = [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
@@ -73,7 +76,9 @@ def main() -> int:
                     run = json.loads(out.stdout.strip().splitlines()[-1])
                     py_runs.append(run)
                     py_times.append(run["seconds"])
-        same = Path(f"{tmp}/cli0.npy").read_bytes() == Path(f"{tmp}/python0.npy").read_bytes()
+        import numpy as np
+
+        same = np.load(f"{tmp}/cli0.npy").tobytes() == np.load(f"{tmp}/python0.npy").tobytes()
     cli, py = statistics.median(cli_times), statistics.median(py_times)
     grown = statistics.median(r["peak_kib"] - r["base_kib"] for r in py_runs) * 1024
     print(json.dumps({
@@ -81,6 +86,7 @@ def main() -> int:
         "place": py_runs[0]["place"],
         "cli_s": cli_times, "python_s": py_times,
         "median_cli_s": cli, "median_python_s": py, "python_over_cli": py / cli,
+        "median_python_map_only_s": statistics.median(r["map_seconds"] for r in py_runs),
         "map_bytes": py_runs[0]["map_bytes"],
         "python_peak_over_baseline_bytes": grown,
         "python_peak_over_baseline_in_maps": grown / py_runs[0]["map_bytes"],
