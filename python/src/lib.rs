@@ -17,16 +17,17 @@ use chaoscope::engine::{Backend, MapKernels};
 use chaoscope::field::Field;
 use chaoscope::model::State;
 use chaoscope::monitor::Monitor;
-use chaoscope::params::{ParamSources, Preset};
 use chaoscope::render::{MapPicture, PictureSpec};
 use chaoscope::spec::{
-    Angles, AnyMap, AxisAsked, FlipMeasure, FlipSpec, Grid, IndicatorAsked, Integrator,
-    LyapunovSpec, MapSpec, Method, PlaneAsked, Precision, Range, Stepping, Var, integrator_of,
+    AnyMap, FlipMeasure, FlipSpec, IndicatorAsked, LyapunovSpec, MapSpec, Method, Precision,
 };
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
+
+mod keywords;
+use keywords::Keywords;
 
 /// The library's error as Python's: a bad value is a ValueError naming its keyword (the
 /// spec's field), Ctrl-C a KeyboardInterrupt.
@@ -35,203 +36,6 @@ fn py_err(e: Error) -> PyErr {
         Error::InvalidSpec { field, reason } => PyValueError::new_err(format!("{field}: {reason}")),
         Error::Interrupted => PyKeyboardInterrupt::new_err("interrupted"),
         e => PyRuntimeError::new_err(e.to_string()),
-    }
-}
-
-/// The keywords of one call.
-struct Keywords<'py> {
-    dict: Bound<'py, PyDict>,
-}
-
-impl<'py> Keywords<'py> {
-    /// `key`'s value, None when absent or None; a value of the wrong type is a TypeError
-    /// naming the keyword.
-    fn get<T: for<'a> FromPyObject<'a, 'py>>(&self, key: &str) -> PyResult<Option<T>> {
-        match self.dict.get_item(key)? {
-            None => Ok(None),
-            Some(v) if v.is_none() => Ok(None),
-            Some(v) => v.extract::<T>().map(Some).map_err(|e| {
-                let e: PyErr = e.into();
-                PyTypeError::new_err(format!("{key}: {}", e.value(self.dict.py())))
-            }),
-        }
-    }
-
-    fn or<T: for<'a> FromPyObject<'a, 'py>>(&self, key: &str, default: T) -> PyResult<T> {
-        Ok(self.get(key)?.unwrap_or(default))
-    }
-
-    /// One of `names` (a string), None when absent.
-    fn choice(&self, key: &'static str, names: &[&str]) -> PyResult<Option<String>> {
-        let Some(v) = self.get::<String>(key)? else {
-            return Ok(None);
-        };
-        if !names.contains(&v.as_str()) {
-            return Err(PyValueError::new_err(format!(
-                "{key}: {v:?} is not one of {}",
-                names.join(", ")
-            )));
-        }
-        Ok(Some(v))
-    }
-
-    /// A (low, high) pair as a range.
-    fn range(&self, key: &str) -> PyResult<Option<Range>> {
-        Ok(self
-            .get::<(f64, f64)>(key)?
-            .map(|(min, max)| Range { min, max }))
-    }
-
-    /// An angle: one number (a start) or a (low, high) pair (a range along an axis).
-    fn angles(&self, key: &str) -> PyResult<Option<Angles>> {
-        match self.dict.get_item(key)? {
-            None => Ok(None),
-            Some(v) if v.is_none() => Ok(None),
-            Some(v) => match (v.extract::<f64>(), v.extract::<(f64, f64)>()) {
-                (Ok(x), _) => Ok(Some(Angles::Point(x))),
-                (_, Ok((min, max))) => Ok(Some(Angles::Range(Range { min, max }))),
-                _ => Err(PyTypeError::new_err(format!(
-                    "{key}: a number (the start's, rad) or a pair (low, high) (a range along an axis), not {}",
-                    v.get_type().name()?
-                ))),
-            },
-        }
-    }
-
-    /// A value for two things at once: one number for both, or a pair.
-    fn pair(&self, key: &str) -> PyResult<Option<(f64, f64)>> {
-        match self.dict.get_item(key)? {
-            None => Ok(None),
-            Some(v) if v.is_none() => Ok(None),
-            Some(v) => match v.extract::<f64>() {
-                Ok(x) => Ok(Some((x, x))),
-                Err(_) => self.get::<(f64, f64)>(key),
-            },
-        }
-    }
-
-    /// A whole number that fits `T`; a negative or huge one is a ValueError naming the
-    /// keyword (the library checks the allowed range after).
-    fn whole<T: TryFrom<i64>>(&self, key: &str) -> PyResult<Option<T>> {
-        let Some(n) = self.get::<i64>(key)? else {
-            return Ok(None);
-        };
-        T::try_from(n).map(Some).map_err(|_| {
-            PyValueError::new_err(format!("{key}: {n} is out of range (a whole number >= 0)"))
-        })
-    }
-
-    /// N (square) or (width, height) pixels.
-    fn size(&self) -> PyResult<(u32, u32)> {
-        let whole = |n: i64| {
-            u32::try_from(n).map_err(|_| {
-                PyValueError::new_err(format!("size: {n} is out of range (pixels, >= 1)"))
-            })
-        };
-        match self.dict.get_item("size")? {
-            Some(v) if !v.is_none() => match (v.extract::<i64>(), v.extract::<(i64, i64)>()) {
-                (Ok(n), _) => Ok((whole(n)?, whole(n)?)),
-                (_, Ok((w, h))) => Ok((whole(w)?, whole(h)?)),
-                _ => Err(PyTypeError::new_err(format!(
-                    "size: N or (width, height), not {}",
-                    v.get_type().name()?
-                ))),
-            },
-            _ => Ok((512, 512)),
-        }
-    }
-
-    fn backend(&self) -> PyResult<Backend> {
-        let names: Vec<&str> = Backend::ALL.iter().map(|b| b.name()).collect();
-        Ok(match self.choice("backend", &names)? {
-            None => Backend::Auto,
-            Some(n) => *Backend::ALL.iter().find(|b| b.name() == n).expect("listed"),
-        })
-    }
-
-    fn precision(&self) -> PyResult<Precision> {
-        let names: Vec<&str> = Precision::ALL.iter().map(|p| p.name()).collect();
-        Ok(match self.choice("precision", &names)? {
-            None => Precision::default(),
-            Some(n) => *Precision::ALL
-                .iter()
-                .find(|p| p.name() == n)
-                .expect("listed"),
-        })
-    }
-
-    /// The physics: a preset or file and the values given (the command line's sources).
-    fn sources(&self) -> PyResult<ParamSources> {
-        let names: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
-        let preset = self
-            .choice("preset", &names)?
-            .map(|n| *Preset::ALL.iter().find(|p| p.name() == n).expect("listed"));
-        Ok(ParamSources {
-            m1: self.get("m1")?,
-            m2: self.get("m2")?,
-            l1: self.get("l1")?,
-            l2: self.get("l2")?,
-            g: self.get("g")?,
-            rod_mass: self.pair("rod_mass")?,
-            joint_damping: self.pair("joint_damping")?,
-            air_drag: self.or("air_drag", false)?,
-            rho: self.get("rho")?,
-            cw: self.get("cw")?,
-            drag_area: self.pair("drag_area")?,
-            rod_drag_area: self.pair("rod_drag_area")?,
-            bearing_friction: self.get("bearing_friction")?,
-            bearing_radius: self.get("bearing_radius")?,
-            preset,
-            params: self.get::<std::path::PathBuf>("params_file")?,
-        })
-    }
-
-    /// The plane: `x`, `y` (names as `--x`/`--y` take them) with `x_range`, `y_range`, and
-    /// the start's angles (a range along an axis, else a value) and angular velocities.
-    fn grid(&self) -> PyResult<Grid> {
-        let names: Vec<&str> = Var::ALL.iter().map(|v| v.name()).collect();
-        let axis = |key: &'static str, range: &str| -> PyResult<Option<AxisAsked>> {
-            let var = self.choice(key, &names)?;
-            let range = self.range(range)?;
-            Ok(match (var, range) {
-                (None, None) => None,
-                (var, range) => Some(AxisAsked {
-                    var: Var::parse(var.as_deref().unwrap_or(if key == "x" {
-                        "theta1"
-                    } else {
-                        "theta2"
-                    }))
-                    .expect("listed"),
-                    range,
-                }),
-            })
-        };
-        PlaneAsked {
-            x: axis("x", "x_range")?,
-            y: axis("y", "y_range")?,
-            theta1: self.angles("theta1")?,
-            theta2: self.angles("theta2")?,
-            omega1: self.get("omega1")?,
-            omega2: self.get("omega2")?,
-        }
-        .grid(self.size()?)
-        .map_err(py_err)
-    }
-
-    /// `integrator` with `rtol`, `atol` (RK4 with the accurate settings, which set their own).
-    fn integrator(&self, accurate: bool, gpu_f32: bool) -> PyResult<Integrator> {
-        if accurate {
-            return Ok(Integrator::Rk4);
-        }
-        let name = self.or("integrator", "rk4".to_string())?;
-        integrator_of(&name, self.get("rtol")?, self.get("atol")?, gpu_f32).map_err(py_err)
-    }
-
-    fn stepping(&self, t_max: f64) -> PyResult<Stepping> {
-        Ok(Stepping {
-            dt: self.or("dt", 0.01)?,
-            t_max: self.or("t_max", t_max)?,
-        })
     }
 }
 
