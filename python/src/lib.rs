@@ -29,11 +29,29 @@ use pyo3::types::{PyBytes, PyDict};
 mod keywords;
 use keywords::Keywords;
 
+/// The Python keyword of a field the library names: the field's own name but where the
+/// wrappers take it under another (the Python column beside src/cli/names.rs's flags).
+fn keyword(field: &str) -> &str {
+    match field {
+        "params" => "params_file",
+        "colour_by" => "measure",
+        "data" => "store",
+        "no_symmetry" => "use_symmetry",
+        "full" => "early_exit",
+        f => f,
+    }
+}
+
 /// The library's error as Python's: a bad value is a ValueError naming its keyword (the
 /// spec's field), Ctrl-C a KeyboardInterrupt.
 fn py_err(e: Error) -> PyErr {
     match e {
-        Error::InvalidSpec { field, reason } => PyValueError::new_err(format!("{field}: {reason}")),
+        Error::InvalidSpec { field, reason } => {
+            PyValueError::new_err(format!("{}: {reason}", keyword(field)))
+        }
+        Error::StoreDiffers { field, .. } => {
+            PyValueError::new_err(format!("{}: {e}", keyword(field)))
+        }
         Error::Interrupted => PyKeyboardInterrupt::new_err("interrupted"),
         e => PyRuntimeError::new_err(e.to_string()),
     }

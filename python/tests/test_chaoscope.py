@@ -138,6 +138,7 @@ def test_picture_is_the_commands_png(tmp_path):
         ({"x": "omega1"}, "x"),
         ({"theta1": (-9.0, 9.0)}, "theta1"),
         ({"integrator": "euler"}, "integrator"),
+        ({"params_file": "/nonexistent/pendulum.toml"}, "params_file"),
     ],
 )
 def test_bad_values_raise_value_error_naming_the_keyword(keywords, name):
@@ -196,6 +197,9 @@ def test_a_store_opens_lazily_with_its_command(tmp_path):
     assert opened.attrs["command"].startswith("chaoscope flip")
     assert same_bits(opened["map"].values, flips.values)
     assert list(opened["map"].dims) == ["theta2", "theta1"]
+    # Another map into the same store is refused naming the keyword, with what differs.
+    with pytest.raises(ValueError, match="^store: .*t_max"):
+        chaoscope.flip_map(size=32, t_max=3, store=str(store), progress=False)
 
 
 def test_python_manners():
