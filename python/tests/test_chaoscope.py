@@ -177,8 +177,10 @@ def test_ctrl_c_stops_a_long_map_and_the_next_call_works():
 
 def test_progress_is_reported_to_a_callable():
     seen = []
-    chaoscope.flip_map(size=128, t_max=20, progress=lambda *p: seen.append(p))
-    # Reported every 0.1 s while it runs; a fast map may finish before the first look.
+    # Every pixel for every step (~1 s on lavapipe): long enough for the 0.1 s looks.
+    chaoscope.flip_map(size=256, t_max=30, use_symmetry=False, early_exit=False,
+                       progress=lambda *p: seen.append(p))
+    assert seen, "the callable was never called"
     assert all(isinstance(phase, str) and done >= 0 for phase, done, _ in seen)
 
 
