@@ -2,10 +2,13 @@
 // `params.interval`-th state: with n = steps / interval + 1 states a run, states[i n] is the
 // start of pendulum i and states[i n + k] its state after k * interval steps.
 // Twin of src/cpu/mod.rs `trajectory`; used to compare the two paths step by step and for
-// ensembles (traces, phase portraits, fitting tracked data).
+// ensembles (traces, phase portraits, fitting tracked data, forecasts).
+// With PER_PIXEL on, a run is a "pixel" with its own joint damping (N m s) at the pivot and
+// the middle joint, damping[i]: a forecast's members drawn from a fit's uncertainty.
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read_write> states: array<vec4<real>>;
+@group(0) @binding(2) var<storage, read> damping: array<vec2<real>>;
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn trajectory(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -15,7 +18,11 @@ fn trajectory(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     }
     let kept = params.steps / params.interval + 1u;
     let base = i * kept;
-    let c = coeffs_from(params);
+    var c = coeffs_from(params);
+    if PER_PIXEL {
+        c.joint1 = damping[i].x;
+        c.joint2 = damping[i].y;
+    }
     var p = pendulum_from(states[base]);
     for (var k = 1u; k <= params.steps; k++) {
         p = rk4_step(c, p, params.dt);

@@ -415,27 +415,51 @@ impl Engine {
         steps: u32,
         stride: u32,
         monitor: &Monitor,
+        each: impl FnMut(usize, Vec<Vec<State>>) -> Result<()>,
+    ) -> Result<()> {
+        self.ensemble_damped_each(p, starts, None, dt, steps, stride, monitor, each)
+    }
+
+    /// As [`Engine::ensemble_each`], run i with joint damping `damping[i]` (N m s at the
+    /// pivot and the middle joint, one pair per start) in place of `p`'s when given.
+    #[allow(clippy::too_many_arguments)]
+    pub fn ensemble_damped_each(
+        &self,
+        p: &Params,
+        starts: &[State],
+        damping: Option<&[(f64, f64)]>,
+        dt: f64,
+        steps: u32,
+        stride: u32,
+        monitor: &Monitor,
         mut each: impl FnMut(usize, Vec<Vec<State>>) -> Result<()>,
     ) -> Result<()> {
         let per_chunk = self.ensemble_chunk(starts.len(), steps, stride);
         monitor.start("runs", starts.len() as u64);
         for (k, chunk) in starts.chunks(per_chunk).enumerate() {
             monitor.check()?;
+            let first = k * per_chunk;
+            let pairs = damping.map(|d| &d[first..first + chunk.len()]);
             let runs = match &self.gpu {
                 Some(g) => g
                     .trajectory(self.precision)
-                    .run(&g.ctx, p, chunk, dt, steps, stride)?,
+                    .run_damped(&g.ctx, p, chunk, pairs, dt, steps, stride)?,
                 None => chunk
                     .par_iter()
-                    .map(|s| {
-                        cpu::trajectory(p, *s, dt, steps)
+                    .enumerate()
+                    .map(|(i, s)| {
+                        let mut q = *p;
+                        if let Some(d) = pairs {
+                            (q.losses.joint1, q.losses.joint2) = d[i];
+                        }
+                        cpu::trajectory(&q, *s, dt, steps)
                             .into_iter()
                             .step_by(stride as usize)
                             .collect::<Vec<_>>()
                     })
                     .collect(),
             };
-            each(k * per_chunk, runs)?;
+            each(first, runs)?;
             monitor.advance(chunk.len() as u64);
         }
         monitor.finish();

@@ -30,6 +30,8 @@ fn job(args: &[String]) -> Job {
         Job::Traces(j) => (j.output, j.gif, j.data) = (none(), None, None),
         Job::Phase(j) => j.output = none(),
         Job::Fit(j) => j.output = none(),
+        Job::Forecast(j) => j.output = none(),
+        Job::Twin(j) => j.output = none(),
         Job::Boundary(j) => (j.output, j.data) = (none(), None),
     }
     job

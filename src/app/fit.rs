@@ -284,7 +284,7 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
 }
 
 /// The model's parameters as JSON, SI units.
-fn params_json(p: &crate::model::Params) -> serde_json::Value {
+pub(crate) fn params_json(p: &crate::model::Params) -> serde_json::Value {
     let l = &p.losses;
     json!({
         "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,

@@ -8,6 +8,7 @@ pub mod boundary;
 mod checks;
 pub mod fit;
 pub mod flip;
+pub mod forecast;
 pub mod lyapunov;
 pub mod map;
 pub mod phase;
@@ -17,6 +18,7 @@ pub mod supersample;
 pub mod sweep;
 pub mod traces;
 pub mod trajectory;
+pub mod twin;
 
 pub use checks::{check_count, check_extension, check_output, check_within, write_text};
 pub use map::{

@@ -6,11 +6,13 @@
 use crate::app::boundary::BoundaryJob;
 use crate::app::fit::FitJob;
 use crate::app::flip::FlipJob;
+use crate::app::forecast::ForecastJob;
 use crate::app::lyapunov::{LyapunovMapJob, LyapunovPointJob};
 use crate::app::phase::PhaseJob;
 use crate::app::sweep::{FrameMap, SweepJob};
 use crate::app::traces::TracesJob;
 use crate::app::trajectory::TrajectoryJob;
+use crate::app::twin::TwinJob;
 use crate::engine::Backend;
 use crate::model::{Params, State};
 use crate::params::ParamSources;
@@ -405,6 +407,52 @@ pub fn fit(job: &FitJob) -> String {
         job.tolerance,
         job.candidates,
         job.velocity_error,
+        sources(&job.params),
+        job.backend.name()
+    ) + &precision(job.precision)
+}
+
+pub fn forecast(job: &ForecastJob) -> String {
+    let noise = job
+        .tracking_error
+        .map_or(String::new(), |e| format!(" --tracking-error {e}"));
+    format!(
+        "chaoscope forecast {} --window {}:{} --members {} --seed {} --tolerance {}{noise} --candidates {}{} --backend {}",
+        job.file.display(),
+        job.window.0,
+        job.window.1,
+        job.members,
+        job.seed,
+        job.tolerance,
+        job.candidates,
+        sources(&job.params),
+        job.backend.name()
+    ) + &precision(job.precision)
+}
+
+pub fn twin(job: &TwinJob) -> String {
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| x.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    format!(
+        "chaoscope twin --sigma {} --rate {} --replicates {} --window {}:{} --duration {} --theta1 {} --omega1 {} --theta2 {} --omega2 {} --members {} --seed {} --tolerance {} --candidates {}{} --backend {}",
+        list(&job.sigmas),
+        list(&job.rates),
+        job.replicates,
+        job.window.0,
+        job.window.1,
+        job.duration,
+        job.start.theta1,
+        job.start.omega1,
+        job.start.theta2,
+        job.start.omega2,
+        job.members,
+        job.seed,
+        job.tolerance,
+        job.candidates,
         sources(&job.params),
         job.backend.name()
     ) + &precision(job.precision)

@@ -8,6 +8,7 @@ mod boundary;
 pub mod command_line;
 mod fit;
 mod flip;
+mod forecast;
 mod info;
 mod lyapunov;
 mod names;
@@ -18,6 +19,7 @@ mod store;
 mod sweep;
 mod traces;
 mod trajectory;
+mod twin;
 
 use std::process::ExitCode;
 
@@ -68,6 +70,14 @@ pub enum Command {
     /// Fit the model to a camera's tracked positions: pivot, arm lengths, energies and their
     /// decay, the state and damping by a GPU ensemble search; plots and summary.json.
     Fit(fit::FitArgs),
+    /// How long the model follows tracked data: fit on --window, then an ensemble drawn from
+    /// the fit's uncertainty to the data's end; bands, horizons, the FTLE along the orbit and
+    /// the horizon in Lyapunov times; forecast.png, bands.csv, summary.json.
+    Forecast(forecast::ForecastArgs),
+    /// Twin experiments of the forecast: tracks made by the model (a chaotic release of the
+    /// lab pendulum) with position noise, fitted and forecast; the truth's coverage by the
+    /// 90 % band and the horizon against the noise, beside -1/lambda.
+    Twin(twin::TwinArgs),
     /// The explorer: a local web page to zoom into flip, divergence and verdict maps computed
     /// on demand, and to watch a clicked pixel's pendulum.
     Serve(serve::ServeArgs),
@@ -128,6 +138,8 @@ pub enum Job {
     Traces(crate::app::traces::TracesJob),
     Phase(crate::app::phase::PhaseJob),
     Fit(crate::app::fit::FitJob),
+    Forecast(crate::app::forecast::ForecastJob),
+    Twin(crate::app::twin::TwinJob),
 }
 
 impl Command {
@@ -142,6 +154,8 @@ impl Command {
             Command::Traces(_) => "traces",
             Command::Phase(_) => "phase",
             Command::Fit(_) => "fit",
+            Command::Forecast(_) => "forecast",
+            Command::Twin(_) => "twin",
             Command::Serve(_) => "serve",
             Command::Status(_) => "status",
             Command::Render(_) => "render",
@@ -162,6 +176,8 @@ impl Command {
             Command::Traces(a) => Job::Traces(a.job()?),
             Command::Phase(a) => Job::Phase(a.job()?),
             Command::Fit(a) => Job::Fit(a.job()),
+            Command::Forecast(a) => Job::Forecast(a.job()),
+            Command::Twin(a) => Job::Twin(a.job()),
             Command::Info
             | Command::Bench(_)
             | Command::Completions { .. }
@@ -300,6 +316,8 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
         Command::Traces(args) => traces::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
         Command::Fit(args) => fit::run(args, monitor),
+        Command::Forecast(args) => forecast::run(args, monitor),
+        Command::Twin(args) => twin::run(args, monitor),
         Command::Serve(args) => serve::run(args, monitor, cli.json),
         Command::Status(args) => store::status(args, cli.json),
         Command::Render(args) => store::render(args, monitor),

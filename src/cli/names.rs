@@ -6,7 +6,7 @@ pub fn flag(command: &str, field: &str) -> String {
     match (command, field) {
         ("traces", "t_max") => "--exposure".into(),
         ("fit", "t_max") => "--window".into(),
-        ("fit", "file") => "FILE".into(),
+        ("fit" | "forecast", "file") => "FILE".into(),
         (_, field) => format!("--{}", field.replace('_', "-")),
     }
 }

@@ -13,6 +13,8 @@ pub struct Fit {
     pub errors: Vec<f64>,
     pub chi2: f64,
     pub dof: usize,
+    /// The parameters' covariance, s^2 (J^T J)^-1 with s^2 = chi^2/dof (None: J^T J singular).
+    pub covariance: Option<DMatrix<f64>>,
 }
 
 impl Fit {
@@ -67,8 +69,9 @@ pub fn least_squares(
     let dof = r.len().saturating_sub(p.len());
     let jtj = j.transpose() * &j;
     let scale = cost / dof.max(1) as f64;
-    let errors = match jtj.try_inverse() {
-        Some(cov) => (0..p.len()).map(|k| (cov[(k, k)] * scale).sqrt()).collect(),
+    let covariance = jtj.try_inverse().map(|c| c * scale);
+    let errors = match &covariance {
+        Some(cov) => (0..p.len()).map(|k| cov[(k, k)].sqrt()).collect(),
         None => vec![f64::NAN; p.len()],
     };
     Fit {
@@ -76,6 +79,7 @@ pub fn least_squares(
         errors,
         chi2: cost,
         dof,
+        covariance,
     }
 }
 

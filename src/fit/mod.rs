@@ -3,9 +3,12 @@
 //! the model's state and damping fitted to the positions. `app::fit` puts it together.
 
 pub mod data;
+pub mod forecast;
+pub mod forecast_plot;
 mod lsq;
 mod model;
 pub mod plots;
+pub mod window;
 
 pub use data::{
     Energies, Frame, angles, arm_lengths, energies, fit_decay, fit_pivot, grid_pivot, read_frames,

@@ -102,7 +102,7 @@ fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
 }
 
 /// Halton point k in [0, 1)^d (bases 2, 3, 5, 7, 11, 13): an even, reproducible spread.
-fn halton(k: usize, d: usize) -> Vec<f64> {
+pub(super) fn halton(k: usize, d: usize) -> Vec<f64> {
     const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
     (0..d)
         .map(|j| {

@@ -1,8 +1,8 @@
 //! Drives `shaders/trajectory.wgsl`: ensembles of pendulums, one invocation each, keeping
-//! every `stride`-th state.
+//! every `stride`-th state, each with the same parameters or its own joint damping.
 
 use super::context::{GpuContext, read_buffer};
-use super::layout::{Real, Run, RunParams, read_reals, with_real};
+use super::layout::{Real, Run, RunParams, mass_scale, read_reals, with_real};
 use super::pipeline::{
     Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer_of,
     storage_buffer,
@@ -27,7 +27,7 @@ impl TrajectoryKernel {
     /// The kernel in `precision` (f64 needs a context with `GpuContext::has_f64`).
     pub fn with_precision(ctx: &GpuContext, precision: Precision) -> Self {
         let module = kernel_module(ctx, Kernel::Trajectory, precision);
-        let (layout, pipeline_layout) = layouts(ctx, "trajectory", &[false]);
+        let (layout, pipeline_layout) = layouts(ctx, "trajectory", &[false, true]);
         TrajectoryKernel {
             precision,
             pipelines: Variants::new(module, pipeline_layout, &["trajectory"], None),
@@ -46,18 +46,39 @@ impl TrajectoryKernel {
         steps: u32,
         stride: u32,
     ) -> Result<Vec<Vec<State>>> {
-        with_real!(self.precision, R => self.run_in::<R>(ctx, p, starts, dt, steps, stride))
+        self.run_damped(ctx, p, starts, None, dt, steps, stride)
     }
 
+    /// As [`TrajectoryKernel::run`], run i with joint damping `damping[i]` (N m s at the
+    /// pivot and the middle joint) in place of `p`'s when given (one pair per start).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_damped(
+        &self,
+        ctx: &GpuContext,
+        p: &Params,
+        starts: &[State],
+        damping: Option<&[(f64, f64)]>,
+        dt: f64,
+        steps: u32,
+        stride: u32,
+    ) -> Result<Vec<Vec<State>>> {
+        with_real!(self.precision, R => self.run_in::<R>(ctx, p, starts, damping, dt, steps, stride))
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn run_in<R: Real>(
         &self,
         ctx: &GpuContext,
         p: &Params,
         starts: &[State],
+        damping: Option<&[(f64, f64)]>,
         dt: f64,
         steps: u32,
         stride: u32,
     ) -> Result<Vec<Vec<State>>> {
+        if let Some(d) = damping {
+            assert_eq!(d.len(), starts.len(), "one damping pair per start");
+        }
         assert!(
             stride >= 1 && steps.is_multiple_of(stride),
             "steps a multiple of the stride"
@@ -75,7 +96,9 @@ impl TrajectoryKernel {
                 ),
             ));
         }
-        let [pipeline] = self.pipelines.get(ctx, p.losses.kinds(), false, false) else {
+        // Per-run damping: the joint-damping loss compiled in whatever `p`'s is.
+        let losses = p.losses.kinds() | damping.is_some() as u32;
+        let [pipeline] = self.pipelines.get(ctx, losses, false, damping.is_some()) else {
             unreachable!("one entry point")
         };
         let count = starts.len() as u32;
@@ -95,7 +118,29 @@ impl TrajectoryKernel {
             ctx.queue
                 .write_buffer(&states, at, bytemuck::cast_slice(&v));
         }
-        let bind = bind_group(ctx, "trajectory", &self.layout, &[&params_buf, &states]);
+        // Two reals a run (a vec2<real>), or one unused pair when the runs share `p`'s;
+        // scaled as the parameters' torques are (`GpuParams::new`).
+        let scale = mass_scale(p);
+        let pairs: Vec<R> = match damping {
+            Some(d) => d
+                .iter()
+                .flat_map(|&(a, b)| [R::from_f64(a * scale), R::from_f64(b * scale)])
+                .collect(),
+            None => vec![R::from_f64(0.0); 2],
+        };
+        let damping_buf = storage_buffer(
+            ctx,
+            "trajectory damping",
+            (pairs.len() * std::mem::size_of::<R>()) as u64,
+        );
+        ctx.queue
+            .write_buffer(&damping_buf, 0, bytemuck::cast_slice(&pairs));
+        let bind = bind_group(
+            ctx,
+            "trajectory",
+            &self.layout,
+            &[&params_buf, &states, &damping_buf],
+        );
         dispatch_and_wait(ctx, pipeline, &bind, count)?;
         let values = read_reals::<R>(&read_buffer(ctx, &states, bytes)?);
         let all: Vec<State> = values

@@ -1,0 +1,385 @@
+//! `forecast`: how long the model can follow tracked data. Fit on a window, then an ensemble
+//! drawn from the fit's uncertainty past it to the end of the data; bands, horizons (data and
+//! spread), the FTLE along the fitted orbit and the horizon in Lyapunov times.
+
+use std::path::PathBuf;
+
+use serde_json::json;
+
+use super::{check_count, check_within};
+use crate::engine::{Backend, Engine};
+use crate::error::{Error, Result};
+use crate::fit::forecast::{self, Forecast, ForecastSpec, QUANTILES, band_times, most_members};
+use crate::fit::forecast_plot::{self, Marks};
+use crate::fit::window::{FITTED, WindowFit, fit_window};
+use crate::fit::{angles, arm_lengths, fit_pivot, read_frames};
+use crate::model::Params;
+use crate::monitor::Monitor;
+use crate::params::{ParamSources, Preset};
+use crate::render::{Outputs, check_writable};
+use crate::spec::Precision;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ForecastJob {
+    /// CSV of tracked positions: header with t, x1, y1, x2, y2 (s, m; y up); # comments.
+    pub file: PathBuf,
+    /// Directory for forecast.png, bands.csv and summary.json.
+    pub output: PathBuf,
+    /// The fit window (s): the model is fitted to the rows from its start to its end.
+    pub window: (f64, f64),
+    /// Number of ensemble members.
+    pub members: usize,
+    /// Seed of the members' draws and of the measurement noise in the bands.
+    pub seed: u64,
+    /// The lower bob's spread (m) that ends the forecast's horizon.
+    pub tolerance: f64,
+    /// A measurement's error (m per coordinate); None: what the fit's residuals imply.
+    pub tracking_error: Option<f64>,
+    /// Candidates of the fit's ensemble search.
+    pub candidates: usize,
+    /// The model: the lab preset unless a preset or file is given, arm lengths from the data
+    /// unless given.
+    pub params: ParamSources,
+    pub backend: Backend,
+    pub precision: Precision,
+}
+
+/// What a fit and forecast of one track found.
+pub struct Outcome {
+    pub fit: WindowFit,
+    pub forecast: Forecast,
+    pub tracking_error: f64,
+    /// The first time measurements leave their band for `run` rows in a row, and how often
+    /// they lie inside it before the spread's horizon.
+    pub data_horizon: Option<f64>,
+    pub run: usize,
+    pub data_coverage: Option<f64>,
+}
+
+impl Outcome {
+    /// A horizon (s) as time after the window's end, and in Lyapunov times.
+    pub fn after_window(&self, horizon: Option<f64>) -> (Option<f64>, Option<f64>) {
+        let after = horizon.map(|t| t - self.forecast.window_end);
+        (after, after.map(|a| a * self.forecast.lyapunov))
+    }
+}
+
+/// The settings of a fit and forecast of one track.
+#[derive(Clone, Copy, Debug)]
+pub struct Settings {
+    pub window: (f64, f64),
+    pub end: f64,
+    pub members: usize,
+    pub seed: u64,
+    pub tolerance: f64,
+    pub tracking_error: Option<f64>,
+    pub candidates: usize,
+}
+
+/// Checks the settings every forecast shares.
+pub fn check_settings(
+    members: usize,
+    tolerance: f64,
+    tracking_error: Option<f64>,
+    candidates: usize,
+) -> Result<()> {
+    if members == 0 {
+        return Err(Error::invalid(
+            "members",
+            "must be at least 1 (10000 draws a smooth band)",
+        ));
+    }
+    check_within("tolerance", tolerance, 1e-4, 1.0)?;
+    if let Some(e) = tracking_error {
+        check_within("tracking_error", e, 0.0, 0.1)?;
+    }
+    check_count("candidates", candidates as u64, 64, 4_000_000)
+}
+
+/// Fits `p` to the track (`t`, `data` relative to the pivot, its `angles`) in the window and
+/// forecasts to `settings.end`.
+#[allow(clippy::too_many_arguments)]
+pub fn fit_and_forecast(
+    t: &[f64],
+    data: &[[f64; 4]],
+    angles: &[(f64, f64)],
+    p: &Params,
+    settings: &Settings,
+    engine: &Engine,
+    monitor: &Monitor,
+) -> Result<Outcome> {
+    let (first, last) = (t[0], t[t.len() - 1]);
+    let (a, b) = settings.window;
+    if !(a.is_finite() && b.is_finite() && a < b && a >= first - 1e-6 && b < last) {
+        return Err(Error::invalid(
+            "window",
+            format!(
+                "{a}:{b} must be START:END with START < END within the data's times {first}..{last} s, END before the last row (the forecast runs past it)"
+            ),
+        ));
+    }
+    let times = band_times(a, settings.end, t).len();
+    let most = most_members(times);
+    if settings.members > most {
+        return Err(Error::invalid(
+            "members",
+            format!(
+                "{} members over {times} band times need {} GiB of positions; at most {most} fit the budget of {} GiB",
+                settings.members,
+                (settings.members as u64 * times as u64 * 16) >> 30,
+                forecast::POSITION_BUDGET >> 30
+            ),
+        ));
+    }
+    let fit = fit_window(
+        t,
+        data,
+        angles,
+        p,
+        settings.window,
+        settings.candidates,
+        engine,
+        monitor,
+    )?;
+    let tracking_error = settings.tracking_error.unwrap_or(fit.tracking_error);
+    let spec = ForecastSpec {
+        members: settings.members,
+        seed: settings.seed,
+        tolerance: settings.tolerance,
+        tracking_error,
+        end: settings.end,
+        data_times: t.to_vec(),
+    };
+    // The window ends at its last row.
+    let window_end = t[fit.row0 + fit.rows - 1];
+    let forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
+    let (data_horizon, run, data_coverage) = forecast::data_horizon(&forecast, t, data);
+    Ok(Outcome {
+        fit,
+        forecast,
+        tracking_error,
+        data_horizon,
+        run,
+        data_coverage,
+    })
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ForecastSummary {
+    pub window: (f64, f64),
+    pub members: usize,
+    pub tracking_error: f64,
+    /// Horizons (s): absolute, after the window's end, and in Lyapunov times.
+    pub spread_horizon: Option<f64>,
+    pub spread_horizon_lyapunov_times: Option<f64>,
+    pub data_horizon: Option<f64>,
+    pub data_horizon_lyapunov_times: Option<f64>,
+    pub lyapunov_exponent: f64,
+    pub data_coverage: Option<f64>,
+    pub output: PathBuf,
+    pub files: Vec<PathBuf>,
+    pub notices: Vec<String>,
+}
+
+/// Runs the forecast; `command` reproduces it and goes into summary.json.
+pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<ForecastSummary> {
+    check_settings(
+        job.members,
+        job.tolerance,
+        job.tracking_error,
+        job.candidates,
+    )?;
+    check_writable("output", &job.output.join("summary.json"))?;
+    let frames = read_frames(&job.file)?;
+    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    // The pivot and arm lengths as `fit` finds them.
+    let pivot = fit_pivot(&frames)?;
+    let (l1, l2) = arm_lengths(&frames, (pivot.x, pivot.y));
+    let angle = angles(&frames, (pivot.x, pivot.y));
+    let sources = ParamSources {
+        preset: job
+            .params
+            .preset
+            .or((job.params.params.is_none()).then_some(Preset::Lab)),
+        l1: job.params.l1.or(Some(l1.value)),
+        l2: job.params.l2.or(Some(l2.value)),
+        ..job.params.clone()
+    };
+    let params = sources.resolve()?;
+    let data: Vec<[f64; 4]> = frames
+        .iter()
+        .map(|f| {
+            [
+                f.x1 - pivot.x,
+                f.y1 - pivot.y,
+                f.x2 - pivot.x,
+                f.y2 - pivot.y,
+            ]
+        })
+        .collect();
+    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
+    let notices = engine.notices();
+    let settings = Settings {
+        window: job.window,
+        end: t[t.len() - 1],
+        members: job.members,
+        seed: job.seed,
+        tolerance: job.tolerance,
+        tracking_error: job.tracking_error,
+        candidates: job.candidates,
+    };
+    let o = fit_and_forecast(&t, &data, &angle, &params, &settings, &engine, monitor)?;
+    let f = &o.forecast;
+    let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
+    let (data_after, data_lt) = o.after_window(o.data_horizon);
+
+    let out = &job.output;
+    let mut files = Outputs::new();
+    // Long enough to see the bands open and the data part, short enough to read.
+    let last_horizon = f
+        .spread_horizon
+        .into_iter()
+        .chain(o.data_horizon)
+        .fold(f.window_end, f64::max);
+    let until = (last_horizon + 3.0)
+        .max(f.window_end + 3.0)
+        .min(settings.end);
+    forecast_plot::forecast(
+        &mut files,
+        &out.join("forecast.png"),
+        f,
+        &Marks {
+            measured: (&t, &data),
+            truth: None,
+            data_horizon: o.data_horizon,
+            tolerance: job.tolerance,
+            until,
+            title: format!(
+                "{}: fit {}..{} s, {} members; horizon {} (spread > {} m), {} (data leave the 90 % band)",
+                job.file
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                job.window.0,
+                job.window.1,
+                job.members,
+                fmt_time(f.spread_horizon),
+                job.tolerance,
+                fmt_time(o.data_horizon),
+            ),
+        },
+    )?;
+    write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
+    let summary = json!({
+        "command": command,
+        "file": job.file.display().to_string(),
+        "pivot": [pivot.x, pivot.y],
+        "parameters": super::fit::params_json(&o.fit.params),
+        "fit": fit_json(&o.fit),
+        "ensemble": {
+            "members": job.members, "seed": job.seed, "clamped_negative_damping": f.clamped,
+            "tracking_error": o.tracking_error,
+            "tracking_error_from": if job.tracking_error.is_some() { "--tracking-error" } else { "the fit's residuals" },
+            "backend": o.fit.backend, "precision": job.precision.name(),
+            "step": f.dt, "end": settings.end,
+        },
+        "horizon": {
+            "tolerance": job.tolerance,
+            "spread": f.spread_horizon, "spread_after_window": spread_after,
+            "spread_lyapunov_times": spread_lt,
+            "data": o.data_horizon, "data_after_window": data_after, "data_lyapunov_times": data_lt,
+            "data_run": o.run,
+            "data_rule": "the first row after the window from which a measured coordinate lies outside its 90 % band (model and tracking error) for `data_run` rows in a row",
+            "data_coverage_before_spread_horizon": o.data_coverage,
+        },
+        "lyapunov": {
+            "exponent": f.lyapunov, "time": 1.0 / f.lyapunov,
+            "over": [f.window_end, settings.end],
+            "along": "the fitted orbit: ln of the tangent propagator's largest singular value over the time",
+        },
+        "report": "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s",
+    });
+    let text = serde_json::to_string_pretty(&summary)
+        .map_err(|e| Error::format(&out.join("summary.json"), e))?;
+    files.write(&out.join("summary.json"), |w| {
+        use std::io::Write;
+        writeln!(w, "{text}")?;
+        Ok(())
+    })?;
+    files.commit(monitor)?;
+    Ok(ForecastSummary {
+        window: job.window,
+        members: job.members,
+        tracking_error: o.tracking_error,
+        spread_horizon: f.spread_horizon,
+        spread_horizon_lyapunov_times: spread_lt,
+        data_horizon: o.data_horizon,
+        data_horizon_lyapunov_times: data_lt,
+        lyapunov_exponent: f.lyapunov,
+        data_coverage: o.data_coverage,
+        output: out.clone(),
+        files: ["forecast.png", "bands.csv", "summary.json"]
+            .iter()
+            .map(|n| out.join(n))
+            .collect(),
+        notices,
+    })
+}
+
+/// "2.31 s", or "beyond the data".
+pub fn fmt_time(t: Option<f64>) -> String {
+    t.map_or("beyond the data".into(), |t| format!("{t:.2} s"))
+}
+
+/// The fit as JSON: values, errors, covariance in [`FITTED`]'s order.
+pub fn fit_json(fit: &WindowFit) -> serde_json::Value {
+    let cov: Vec<Vec<f64>> = (0..6)
+        .map(|i| (0..6).map(|j| fit.covariance[(i, j)]).collect())
+        .collect();
+    json!({
+        "t0": fit.t0, "rows": fit.rows, "first_row": fit.row0,
+        "names": FITTED, "values": fit.values, "errors": fit.errors, "covariance": cov,
+        "chi2": fit.chi2, "dof": fit.dof, "rms_residual": (fit.chi2 / (4 * fit.rows) as f64).sqrt(),
+        "candidates": fit.candidates, "searched_on": fit.backend,
+    })
+}
+
+/// The bands as CSV: per coordinate the model's quantiles and a measurement's, the lower
+/// bob's spread and the FTLE.
+fn write_bands(
+    files: &mut Outputs,
+    path: &std::path::Path,
+    f: &Forecast,
+    command: &str,
+) -> Result<()> {
+    files.write(path, |w| {
+        use std::io::Write;
+        writeln!(w, "# {command}")?;
+        writeln!(
+            w,
+            "# quantiles {QUANTILES:?} of the members' positions (m) and of a measurement's (obs: with the tracking error); spread_lower (m): RMS distance of the lower bob from the members' mean; ftle (1/s) along the fitted orbit from the window's end"
+        )?;
+        let mut header = vec!["t".to_string()];
+        for c in ["x1", "y1", "x2", "y2"] {
+            for kind in ["", "obs_"] {
+                for q in ["p05", "p25", "median", "p75", "p95"] {
+                    header.push(format!("{c}_{kind}{q}"));
+                }
+            }
+        }
+        header.extend(["spread_lower".into(), "ftle".into()]);
+        writeln!(w, "{}", header.join(","))?;
+        for (j, &t) in f.times.iter().enumerate() {
+            let mut row = vec![format!("{t}")];
+            for c in 0..4 {
+                for band in [&f.model[j][c], &f.observed[j][c]] {
+                    row.extend(band.iter().map(|v| format!("{v}")));
+                }
+            }
+            row.push(format!("{}", f.spread[j]));
+            row.push(format!("{}", f.ftle[j]));
+            writeln!(w, "{}", row.join(","))?;
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,439 @@
+//! `twin`: twin experiments that check the forecast against a hidden truth. Tracks made by
+//! the model itself (a chaotic release of the lab pendulum with its losses), sampled like the
+//! report's table or a camera, with Gaussian position noise, are fitted and forecast as real
+//! data are; the truth then says whether the 90 % band holds it 90 % of the time (calibration)
+//! and how the horizon falls with the noise (by ln 2 / lambda per doubling).
+
+use std::path::PathBuf;
+
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use rand_pcg::Pcg64;
+use serde_json::json;
+
+use super::check_count;
+use super::forecast::{Outcome, Settings, check_settings, fit_and_forecast, fit_json};
+use crate::engine::{Backend, Engine};
+use crate::error::{Error, Result};
+use crate::fit::forecast_plot::{self, Marks};
+use crate::fit::window::{STEPS_PER_SECOND, track_with};
+use crate::fit::{Frame, angles};
+use crate::model::{Params, State};
+use crate::monitor::Monitor;
+use crate::params::ParamSources;
+use crate::render::{Outputs, check_writable};
+use crate::spec::Precision;
+
+/// The truth's steps per second: ten times the model's, so that its own error is negligible
+/// beside the model's.
+const TRUTH_STEPS_PER_SECOND: f64 = 10.0 * STEPS_PER_SECOND;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct TwinJob {
+    /// Directory for twin.csv, twin.png, twin_forecast.png and summary.json.
+    pub output: PathBuf,
+    /// Position noise (m per coordinate) of each experiment.
+    pub sigmas: Vec<f64>,
+    /// Sampling rates (Hz): 3 like the report's table, 100 like a camera.
+    pub rates: Vec<f64>,
+    /// Noise realisations per noise and rate.
+    pub replicates: usize,
+    /// The fit window (s) and the track's length (s) from the release.
+    pub window: (f64, f64),
+    pub duration: f64,
+    /// The release.
+    pub start: State,
+    pub members: usize,
+    pub seed: u64,
+    pub tolerance: f64,
+    pub candidates: usize,
+    /// The truth's parameters, joint damping included; the model fits the damping and takes
+    /// the rest from them.
+    pub params: ParamSources,
+    pub backend: Backend,
+    pub precision: Precision,
+}
+
+/// One experiment's figures.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TwinRow {
+    pub sigma: f64,
+    pub rate: f64,
+    pub replicate: usize,
+    /// Horizons (s after the window's end; None: beyond the track).
+    pub spread_horizon: Option<f64>,
+    pub data_horizon: Option<f64>,
+    /// The truth inside the model's 90 % band, over the coordinates and times from the
+    /// window's end to the spread horizon (None: the horizon came at once).
+    pub coverage: Option<f64>,
+    /// The FTLE along the fitted orbit over the forecast, and the stretching (e-foldings)
+    /// from the window's end to the spread horizon.
+    pub lyapunov: f64,
+    pub stretching: Option<f64>,
+    pub tracking_error: f64,
+    pub damping: (f64, f64),
+}
+
+/// Replicate k's release: the given one (k = 0), or within 0.5 rad of it in each angle
+/// (seeded): other orbits of the same character, so that the horizons average over where
+/// along an orbit its stretching happens.
+pub fn release(start: State, k: usize, seed: u64) -> State {
+    if k == 0 {
+        return start;
+    }
+    let mut rng = Pcg64::seed_from_u64(
+        seed.wrapping_add(k as u64)
+            .wrapping_mul(0x2545_f491_4f6c_dd1d),
+    );
+    let mut u = || {
+        rand_distr::Uniform::new(-0.5, 0.5)
+            .expect("a range")
+            .sample(&mut rng)
+    };
+    State {
+        theta1: start.theta1 + u(),
+        theta2: start.theta2 + u(),
+        ..start
+    }
+}
+
+/// A track of the truth: times every 1/`rate` s over `duration`, positions with noise.
+pub struct Track {
+    pub t: Vec<f64>,
+    pub truth: Vec<[f64; 4]>,
+    pub measured: Vec<[f64; 4]>,
+}
+
+pub fn make_track(
+    p: &Params,
+    start: State,
+    rate: f64,
+    duration: f64,
+    sigma: f64,
+    seed: u64,
+) -> Track {
+    let n = (duration * rate).round() as usize;
+    let t: Vec<f64> = (0..=n).map(|i| i as f64 / rate).collect();
+    let truth = track_with(p, start, &t, TRUTH_STEPS_PER_SECOND);
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let measured = truth
+        .iter()
+        .map(|q| {
+            q.map(|x| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                x + sigma * z
+            })
+        })
+        .collect();
+    Track { t, truth, measured }
+}
+
+/// Fits and forecasts a track as `forecast` does real data (the pivot known: the origin),
+/// and the truth at the forecast's times.
+pub fn experiment(
+    truth: &Params,
+    start: State,
+    track: &Track,
+    settings: &Settings,
+    engine: &Engine,
+    monitor: &Monitor,
+) -> Result<(Outcome, Vec<[f64; 4]>)> {
+    let frames: Vec<Frame> = track
+        .t
+        .iter()
+        .zip(&track.measured)
+        .map(|(&t, m)| Frame {
+            t,
+            x1: m[0],
+            y1: m[1],
+            x2: m[2],
+            y2: m[3],
+        })
+        .collect();
+    let angle = angles(&frames, (0.0, 0.0));
+    let o = fit_and_forecast(
+        &track.t,
+        &track.measured,
+        &angle,
+        truth,
+        settings,
+        engine,
+        monitor,
+    )?;
+    // The truth at the bands' times, from the release.
+    let mut times = vec![0.0];
+    times.extend(o.forecast.times.iter().filter(|&&x| x > 0.0));
+    let mut at = track_with(truth, start, &times, TRUTH_STEPS_PER_SECOND);
+    if o.forecast.times[0] > 0.0 {
+        at.remove(0);
+    }
+    Ok((o, at))
+}
+
+/// A least-squares line y = a + b x: (b, its standard error).
+pub fn slope(points: &[(f64, f64)]) -> (f64, f64) {
+    let n = points.len() as f64;
+    let (mx, my) = (
+        points.iter().map(|p| p.0).sum::<f64>() / n,
+        points.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let b = sxy / sxx;
+    let rss: f64 = points
+        .iter()
+        .map(|p| (p.1 - my - b * (p.0 - mx)).powi(2))
+        .sum();
+    (b, (rss / (n - 2.0).max(1.0) / sxx).sqrt())
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    (n > 0).then(|| sum / n as f64)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The FTLE along the orbits over the span where their horizons fall: per replicate, the
+/// stretching between the horizons of its least and greatest noise over the time between
+/// them (the rate that sets how far the horizon moves with the noise), the median over the
+/// replicates.
+pub fn span_lyapunov(rows: &[&TwinRow], replicates: usize) -> f64 {
+    let per_replicate = (0..replicates).filter_map(|k| {
+        let of: Vec<&&TwinRow> = rows
+            .iter()
+            .filter(|r| r.replicate == k && r.spread_horizon.is_some() && r.stretching.is_some())
+            .collect();
+        let low = of.iter().min_by(|a, b| a.sigma.total_cmp(&b.sigma))?;
+        let high = of.iter().max_by(|a, b| a.sigma.total_cmp(&b.sigma))?;
+        let dt = low.spread_horizon? - high.spread_horizon?;
+        let rise = low.stretching? - high.stretching?;
+        (dt > 0.05).then_some(rise / dt)
+    });
+    median(per_replicate.collect())
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TwinSummary {
+    pub rows: Vec<TwinRow>,
+    /// Per rate: (rate, slope of horizon against ln sigma, its error, -1/lambda, their ratio).
+    pub slopes: Vec<(f64, f64, f64, f64, f64)>,
+    pub coverage: f64,
+    pub output: PathBuf,
+    pub files: Vec<PathBuf>,
+    pub notices: Vec<String>,
+}
+
+pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSummary> {
+    check_settings(job.members, job.tolerance, None, job.candidates)?;
+    check_count("replicates", job.replicates as u64, 1, 10_000)?;
+    for &s in &job.sigmas {
+        super::check_within("sigma", s, 0.0, 0.1)?;
+    }
+    for &r in &job.rates {
+        super::check_within("rate", r, 0.5, 10_000.0)?;
+    }
+    super::check_within("duration", job.duration, 0.1, 60.0)?;
+    if job.sigmas.is_empty() || job.rates.is_empty() {
+        return Err(Error::invalid(
+            "sigma",
+            "give at least one noise and one rate",
+        ));
+    }
+    check_writable("output", &job.output.join("summary.json"))?;
+    let truth = job.params.resolve()?;
+    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
+    let notices = engine.notices();
+    let settings = Settings {
+        window: job.window,
+        end: job.duration,
+        members: job.members,
+        seed: job.seed,
+        tolerance: job.tolerance,
+        tracking_error: None,
+        candidates: job.candidates,
+    };
+    let mut rows = Vec::new();
+    let mut shown: Option<(Outcome, Vec<[f64; 4]>, Track, f64, f64)> = None;
+    let (mut inside, mut counted) = (0.0, 0usize);
+    let total = job.sigmas.len() * job.rates.len() * job.replicates;
+    monitor.start("twins", total as u64);
+    // Each experiment's own phases (search, ensemble) run without a bar of their own.
+    let nested = monitor.quiet();
+    for (ri, &rate) in job.rates.iter().enumerate() {
+        for &sigma in &job.sigmas {
+            for k in 0..job.replicates {
+                monitor.check()?;
+                // Replicate k: its own release near the given one (k > 0) and its own noise,
+                // the same for every sigma, so that sigma alone differs between them.
+                let seed =
+                    job.seed ^ ((ri as u64) << 32 | k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                let start = release(job.start, k, job.seed);
+                let track = make_track(&truth, start, rate, job.duration, sigma, seed);
+                let settings = Settings { seed, ..settings };
+                let (o, at) = experiment(&truth, start, &track, &settings, &engine, &nested)?;
+                let f = &o.forecast;
+                let until = f.spread_horizon.unwrap_or(f64::INFINITY);
+                let coverage = f.coverage(&at, until);
+                if let Some(c) = coverage {
+                    inside += c;
+                    counted += 1;
+                }
+                rows.push(TwinRow {
+                    sigma,
+                    rate,
+                    replicate: k,
+                    spread_horizon: o.after_window(f.spread_horizon).0,
+                    data_horizon: o.after_window(o.data_horizon).0,
+                    coverage,
+                    lyapunov: f.lyapunov,
+                    stretching: f.spread_horizon.and_then(|h| f.stretching(h)),
+                    tracking_error: o.tracking_error,
+                    damping: (o.fit.values[4], o.fit.values[5]),
+                });
+                monitor.advance(1);
+                if k == 0
+                    && shown
+                        .as_ref()
+                        .is_none_or(|s| s.4 < rate || (s.4 == rate && s.3 < 2e-3))
+                {
+                    shown = Some((o, at, track, sigma, rate));
+                }
+            }
+        }
+    }
+    monitor.finish();
+    let slopes: Vec<(f64, f64, f64, f64, f64)> = job
+        .rates
+        .iter()
+        .map(|&rate| {
+            let of: Vec<&TwinRow> = rows.iter().filter(|r| r.rate == rate).collect();
+            let points: Vec<(f64, f64)> = of
+                .iter()
+                .filter(|r| r.sigma > 0.0)
+                .filter_map(|r| r.spread_horizon.map(|h| (r.sigma.ln(), h)))
+                .collect();
+            let lambda = span_lyapunov(&of, job.replicates);
+            let (b, e) = if points.len() >= 3 {
+                slope(&points)
+            } else {
+                (f64::NAN, f64::NAN)
+            };
+            (rate, b, e, -1.0 / lambda, b * -lambda)
+        })
+        .collect();
+    let coverage = inside / counted.max(1) as f64;
+
+    let out = &job.output;
+    let mut files = Outputs::new();
+    files.write(&out.join("twin.csv"), |w| {
+        use std::io::Write;
+        writeln!(w, "# {command}")?;
+        writeln!(w, "# horizons in s after the window's end (empty: beyond the track); coverage: the truth inside the model's 90 % band before the spread horizon; lyapunov (1/s) along the fitted orbit")?;
+        writeln!(w, "sigma,rate,replicate,spread_horizon,data_horizon,coverage,lyapunov,stretching,tracking_error,damping1,damping2")?;
+        let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+        for r in &rows {
+            writeln!(
+                w,
+                "{},{},{},{},{},{},{},{},{},{},{}",
+                r.sigma, r.rate, r.replicate, opt(r.spread_horizon), opt(r.data_horizon),
+                opt(r.coverage), r.lyapunov, opt(r.stretching), r.tracking_error, r.damping.0, r.damping.1
+            )?;
+        }
+        Ok(())
+    })?;
+    let series: Vec<(f64, Vec<(f64, f64)>)> = job
+        .rates
+        .iter()
+        .map(|&rate| {
+            let points = rows
+                .iter()
+                .filter(|r| r.rate == rate && r.sigma > 0.0)
+                .filter_map(|r| r.spread_horizon.map(|h| (r.sigma, h)))
+                .collect();
+            (rate, points)
+        })
+        .collect();
+    forecast_plot::twin(&mut files, &out.join("twin.png"), &series, &slopes)?;
+    if let Some((o, at, track, sigma, rate)) = &shown {
+        forecast_plot::forecast(
+            &mut files,
+            &out.join("twin_forecast.png"),
+            &o.forecast,
+            &Marks {
+                measured: (&track.t, &track.measured),
+                truth: Some(at),
+                data_horizon: o.data_horizon,
+                tolerance: job.tolerance,
+                until: job.duration,
+                title: format!(
+                    "twin experiment: {rate} Hz, noise {} mm, fit {}..{} s, {} members; truth green",
+                    sigma * 1e3,
+                    job.window.0,
+                    job.window.1,
+                    job.members
+                ),
+            },
+        )?;
+    }
+    let table: Vec<serde_json::Value> = job
+        .rates
+        .iter()
+        .flat_map(|&rate| job.sigmas.iter().map(move |&sigma| (rate, sigma)))
+        .map(|(rate, sigma)| {
+            let of: Vec<&TwinRow> = rows.iter().filter(|r| r.rate == rate && r.sigma == sigma).collect();
+            let beyond = of.iter().filter(|r| r.spread_horizon.is_none()).count();
+            json!({
+                "sigma": sigma, "rate": rate, "replicates": of.len(),
+                "spread_horizon_median": median(of.iter().filter_map(|r| r.spread_horizon).collect()),
+                "beyond_the_track": beyond,
+                "data_horizon_median": median(of.iter().filter_map(|r| r.data_horizon).collect()),
+                "coverage_mean": mean(of.iter().filter_map(|r| r.coverage)),
+                "coverage_undefined": of.iter().filter(|r| r.coverage.is_none()).count(),
+                "lyapunov_median": median(of.iter().map(|r| r.lyapunov).collect()),
+            })
+        })
+        .collect();
+    let summary = json!({
+        "command": command,
+        "truth": { "parameters": super::fit::params_json(&truth), "start": job.start.to_array() },
+        "window": job.window, "duration": job.duration, "members": job.members,
+        "tolerance": job.tolerance, "table": table,
+        "coverage": coverage,
+        "slopes": slopes.iter().map(|s| json!({
+            "rate": s.0, "slope": s.1, "slope_error": s.2, "minus_one_over_lambda": s.3, "ratio": s.4,
+        })).collect::<Vec<_>>(),
+        "example_fit": shown.as_ref().map(|s| fit_json(&s.0.fit)),
+    });
+    let text = serde_json::to_string_pretty(&summary)
+        .map_err(|e| Error::format(&out.join("summary.json"), e))?;
+    files.write(&out.join("summary.json"), |w| {
+        use std::io::Write;
+        writeln!(w, "{text}")?;
+        Ok(())
+    })?;
+    files.commit(monitor)?;
+    Ok(TwinSummary {
+        rows,
+        slopes,
+        coverage,
+        output: out.clone(),
+        files: ["twin.csv", "twin.png", "twin_forecast.png", "summary.json"]
+            .iter()
+            .map(|n| out.join(n))
+            .collect(),
+        notices,
+    })
+}

@@ -1,0 +1,127 @@
+//! `chaoscope twin`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::args::{PhysicalArgs, backend_parser};
+use super::parse::{one_of, parse_length, parse_number, parse_u64, parse_usize, parse_window};
+use super::{command_line, json, say};
+use crate::app::twin::{self, TwinJob};
+use crate::engine::Backend;
+use crate::error::Result;
+use crate::model::State;
+use crate::monitor::Monitor;
+use crate::params::Preset;
+use crate::spec::Precision;
+
+/// The truth's joint damping (N m s) unless --joint-damping is given: the size `fit` finds
+/// on the lab's data.
+pub const TWIN_DAMPING: f64 = 1e-3;
+
+#[derive(Args, Debug, Clone)]
+#[command(mut_arg("preset", |a| a.help("A named set of parameters [default: lab, unless --params is given]")))]
+#[command(mut_arg("joint_damping", |a| a.help("The truth's joint damping at the pivot and the middle joint, A or A,B (N m s) [default: 0.001]")))]
+pub struct TwinArgs {
+    /// Directory for twin.csv, twin.png, twin_forecast.png and summary.json.
+    #[arg(long, default_value = "out/twin")]
+    pub output: PathBuf,
+    /// Position noise per coordinate, a list (m, or with a unit: 1mm,2mm).
+    #[arg(long, default_value = "1mm,2mm,4mm,8mm", value_delimiter = ',', value_parser = parse_length)]
+    pub sigma: Vec<f64>,
+    /// Sampling rates (Hz), a list: 3 like the report's table, 100 like a camera.
+    #[arg(long, default_value = "3,100", value_delimiter = ',', value_parser = parse_number)]
+    pub rate: Vec<f64>,
+    /// Noise realisations per noise and rate.
+    #[arg(long, default_value = "16", value_parser = parse_usize, allow_hyphen_values = true)]
+    pub replicates: usize,
+    /// The fit window START:END (s from the release).
+    #[arg(long, default_value = "0:1", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: (f64, f64),
+    /// The track's length (s from the release).
+    #[arg(long, default_value = "4", value_parser = parse_number, allow_hyphen_values = true)]
+    pub duration: f64,
+    /// The release's upper angle (rad from hanging; pi understood).
+    #[arg(long, default_value = "2", value_parser = parse_number, allow_hyphen_values = true)]
+    pub theta1: f64,
+    /// The release's lower angle (rad).
+    #[arg(long, default_value = "2.5", value_parser = parse_number, allow_hyphen_values = true)]
+    pub theta2: f64,
+    /// The release's upper angular velocity (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega1: f64,
+    /// The release's lower angular velocity (rad/s).
+    #[arg(long, default_value = "0", value_parser = parse_number, allow_hyphen_values = true)]
+    pub omega2: f64,
+    /// Ensemble members of each forecast.
+    #[arg(long, default_value = "4096", value_parser = parse_usize, allow_hyphen_values = true)]
+    pub members: usize,
+    /// Seed of the noise and the draws.
+    #[arg(long, default_value = "1", value_parser = parse_u64, allow_hyphen_values = true)]
+    pub seed: u64,
+    /// The lower bob's spread that ends the horizon (m, or 3cm).
+    #[arg(long, default_value = "3cm", value_parser = parse_length, allow_hyphen_values = true)]
+    pub tolerance: f64,
+    /// Candidates of each fit's ensemble search.
+    #[arg(long, default_value = "4096", value_parser = parse_usize, allow_hyphen_values = true)]
+    pub candidates: usize,
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+    /// auto, gpu or cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
+    pub precision: Option<Precision>,
+}
+
+impl TwinArgs {
+    pub fn job(&self) -> TwinJob {
+        let mut params = self.physical.sources();
+        params.preset = params
+            .preset
+            .or(params.params.is_none().then_some(Preset::Lab));
+        params.joint_damping = params.joint_damping.or(Some((TWIN_DAMPING, TWIN_DAMPING)));
+        TwinJob {
+            output: self.output.clone(),
+            sigmas: self.sigma.clone(),
+            rates: self.rate.clone(),
+            replicates: self.replicates,
+            window: self.window,
+            duration: self.duration,
+            start: State {
+                theta1: self.theta1,
+                omega1: self.omega1,
+                theta2: self.theta2,
+                omega2: self.omega2,
+            },
+            members: self.members,
+            seed: self.seed,
+            tolerance: self.tolerance,
+            candidates: self.candidates,
+            params,
+            backend: self.backend,
+            precision: self.precision.unwrap_or_default(),
+        }
+    }
+}
+
+pub fn run(args: &TwinArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    super::args::f32_on_the_cpu(args.precision, args.backend);
+    let job = args.job();
+    let s = twin::run(&job, command_line::twin(&job), monitor)?;
+    say(&s.notices);
+    for (rate, b, e, reference, ratio) in &s.slopes {
+        eprintln!(
+            "{rate} Hz: horizon against ln sigma: slope {b:.3} ± {e:.3} s, -1/lambda {reference:.3} s (ratio {ratio:.2})"
+        );
+    }
+    eprintln!(
+        "{} experiments; the truth inside the 90 % band {:.1} % of the time before the horizon -> {}",
+        s.rows.len(),
+        100.0 * s.coverage,
+        s.output.display()
+    );
+    json(&s)
+}
