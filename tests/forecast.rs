@@ -1,0 +1,329 @@
+//! Ensemble forecasts of tracked data (`forecast`, `twin`): members with their own joint
+//! damping on both paths, twin experiments against a hidden truth (zero noise, calibration),
+//! and the commands' refusals.
+
+mod common;
+
+use std::path::Path;
+
+use chaoscope::app::forecast::Settings;
+use chaoscope::app::twin::{self, TwinJob, experiment, make_track};
+use chaoscope::engine::{Backend, Engine};
+use chaoscope::fit::window::{STEPS_PER_SECOND, track, track_with};
+use chaoscope::model::{Params, State};
+use chaoscope::monitor::Monitor;
+use chaoscope::params::{ParamSources, Preset};
+use chaoscope::spec::Precision;
+use common::chaoscope;
+
+fn lab_with_damping() -> Params {
+    let mut p = Preset::Lab.params();
+    (p.losses.joint1, p.losses.joint2) = (1e-3, 1e-3);
+    p
+}
+
+/// A chaotic release of the lab pendulum (the twin command's default).
+const RELEASE: State = State {
+    theta1: 2.0,
+    omega1: 0.0,
+    theta2: 2.5,
+    omega2: 0.0,
+};
+
+/// Members with their own joint damping: the GPU's runs equal the CPU's member by member.
+/// Damping 0 .. 0.01 N m s changes the angular velocities by ~1 rad/s over these 0.5 s,
+/// far beyond the tolerances, so a member run with another's (or a wrongly scaled) damping
+/// fails.
+#[test]
+fn per_member_damping_agrees_on_gpu_and_cpu() {
+    if common::f64_gpu().is_none() {
+        return;
+    }
+    let p = Preset::Lab.params();
+    let starts: Vec<State> = (0..64)
+        .map(|k| State {
+            theta1: 2.0 + 0.01 * k as f64,
+            ..RELEASE
+        })
+        .collect();
+    let damping: Vec<(f64, f64)> = (0..64)
+        .map(|k| (0.01 * (k % 8) as f64 / 7.0, 0.01 * (k / 8) as f64 / 7.0))
+        .collect();
+    let (dt, steps, stride) = (1e-3, 500, 5);
+    let run = |engine: &Engine| {
+        let mut out = Vec::new();
+        engine
+            .ensemble_damped_each(
+                &p,
+                &starts,
+                Some(&damping),
+                dt,
+                steps,
+                stride,
+                &Monitor::hidden(),
+                |_, runs| {
+                    out.extend(runs);
+                    Ok(())
+                },
+            )
+            .unwrap();
+        out
+    };
+    let cpu = run(&Engine::new(Backend::Cpu).unwrap());
+    // The damping matters: the least and most damped members part by far more than the
+    // tolerances.
+    let last = |k: usize| cpu[k].last().unwrap().omega2;
+    assert!((last(0) - last(63)).abs() > 0.1, "damping changes nothing?");
+    let gpu = |precision| {
+        Engine::new(Backend::Gpu)
+            .unwrap()
+            .with_precision(precision, Backend::Gpu)
+            .unwrap()
+    };
+    // f64: the GPU's carried cos and sin are another O(dt^4) discretisation of the same
+    // motion (tests/precision.rs), here ~1e-7 at dt 1e-3 over 0.5 s of this fast release.
+    let (f64_gpu, f32_gpu) = (gpu(Precision::F64), gpu(Precision::F32));
+    // f32: 6e-8 per step over 500 steps, grown by e^(lambda t) < e^2: 1e-4 rad and rad/s.
+    for (engine, tolerance) in [(f64_gpu, 1e-6), (f32_gpu, 1e-4)] {
+        let runs = run(&engine);
+        let worst = runs
+            .iter()
+            .zip(&cpu)
+            .flat_map(|(a, b)| a.iter().zip(b))
+            .flat_map(|(x, y)| (0..4).map(move |i| (x.to_array()[i] - y.to_array()[i]).abs()))
+            .fold(0.0, f64::max);
+        eprintln!("per-member damping, GPU against CPU: {worst:e} (tolerance {tolerance:e})");
+        for (k, (a, b)) in runs.iter().zip(&cpu).enumerate() {
+            for (x, y) in a.iter().zip(b) {
+                let d = x
+                    .to_array()
+                    .iter()
+                    .zip(y.to_array())
+                    .map(|(u, v)| (u - v).abs())
+                    .fold(0.0, f64::max);
+                assert!(d < tolerance, "member {k}: GPU and CPU differ by {d}");
+            }
+        }
+    }
+}
+
+/// The model's step (1/300 s) against a ten times finer one along the release over 1.5 s:
+/// the integration error the zero-noise twin below allows for.
+fn integration_error(p: &Params, t: &[f64]) -> f64 {
+    let coarse = track(p, RELEASE, t);
+    let fine = track_with(p, RELEASE, t, 10.0 * STEPS_PER_SECOND);
+    coarse
+        .iter()
+        .zip(&fine)
+        .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// With zero noise and the true parameters the band holds the truth at every time after the
+/// window (within the integration error), and the spread stays below the tolerance to the
+/// end of a short track: the horizon lies beyond it.
+#[test]
+fn zero_noise_twin_holds_the_truth() {
+    let truth = lab_with_damping();
+    let track_ = make_track(&truth, RELEASE, 100.0, 1.5, 0.0, 1);
+    let error = integration_error(&truth, &track_.t);
+    eprintln!("the model's step against a ten times finer one: {error:e} m");
+    // RK4 at 1/300 s: its error over 1.5 s of this chaotic release is micrometres.
+    assert!(error < 1e-5, "the model's step errs by {error} m");
+    let settings = Settings {
+        window: (0.0, 1.0),
+        end: 1.5,
+        members: 200,
+        seed: 1,
+        tolerance: 0.03,
+        tracking_error: None,
+        candidates: 1024,
+    };
+    let engine = Engine::new(Backend::Cpu).unwrap();
+    let (o, at) = experiment(
+        &truth,
+        RELEASE,
+        &track_,
+        &settings,
+        &engine,
+        &Monitor::hidden(),
+    )
+    .unwrap();
+    let f = &o.forecast;
+    assert_eq!(f.spread_horizon, None, "the spread reached the tolerance");
+    // The fit recovers the damping it was made with: the residuals are the integration
+    // error's, so the damping is known to far better than its value.
+    assert!((o.fit.values[4] - 1e-3).abs() < 1e-5, "{:?}", o.fit.values);
+    // The fit's start (within the integration error) plus the error grown over the
+    // forecast: twice the model's error along the whole track.
+    let slack = 2.0 * error;
+    let mut checked = 0;
+    for (k, &t) in f.times.iter().enumerate() {
+        if t <= f.window_end {
+            continue;
+        }
+        for c in 0..4 {
+            let q = f.model[k][c];
+            assert!(
+                at[k][c] >= q[0] - slack && at[k][c] <= q[4] + slack,
+                "t {t}: truth {} outside the band {:?} (slack {slack})",
+                at[k][c],
+                q
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "only {checked} coordinates after the window");
+}
+
+/// Calibration: in seeded twin experiments (a camera's 100 Hz, 2 mm noise, 24 releases near
+/// the default one) the truth lies inside the model's 90 % band 85-95 % of the time before the
+/// horizon. Tolerance: a replicate's coverage varies with an SD of about 0.12 (measured over
+/// 16 replicates a noise, `chaoscope twin`), so a 24-replicate mean has an SE of 0.025 and
+/// 90 % +- 5 % is two of them: a band too narrow or too wide by a tenth fails.
+#[test]
+fn twin_experiments_are_calibrated() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = TwinJob {
+        output: dir.path().to_path_buf(),
+        sigmas: vec![0.002],
+        rates: vec![100.0],
+        replicates: 24,
+        window: (0.0, 1.0),
+        duration: 2.5,
+        start: RELEASE,
+        members: 1000,
+        seed: 1,
+        tolerance: 0.03,
+        candidates: 1024,
+        params: ParamSources {
+            preset: Some(Preset::Lab),
+            joint_damping: Some((1e-3, 1e-3)),
+            ..ParamSources::default()
+        },
+        backend: Backend::Cpu,
+        precision: Precision::F32,
+    };
+    let s = twin::run(&job, "test".into(), &Monitor::hidden()).unwrap();
+    let defined = s.rows.iter().filter(|r| r.coverage.is_some()).count();
+    eprintln!(
+        "twin calibration: coverage {} over {defined} replicates",
+        s.coverage
+    );
+    assert!(
+        defined >= 20,
+        "only {defined} replicates before their horizon"
+    );
+    assert!(
+        (0.85..=0.95).contains(&s.coverage),
+        "coverage {} over {defined} replicates",
+        s.coverage
+    );
+    for f in ["twin.csv", "twin.png", "twin_forecast.png", "summary.json"] {
+        assert!(dir.path().join(f).exists(), "{f} missing");
+    }
+}
+
+fn lab_csv() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv")
+}
+
+/// Bad input exits 2 naming the flag (or FILE:line), and writes nothing.
+#[test]
+fn forecast_refuses_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let csv = lab_csv();
+    let no_time = dir.path().join("no_time.csv");
+    std::fs::write(&no_time, "x1,y1,x2,y2\n0.1,-0.2,0.1,-0.4\n").unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--window", "25:30"], "--window"),
+        (&["--window", "2:1"], "--window"),
+        (&["--window", "0.6:21.5"], "--window"),
+        // One row (0.667 s): four coordinates for six parameters.
+        (&["--window", "0.6:0.7"], "--window"),
+        (&["--members", "0"], "--members"),
+        (&["--members", "100000000"], "--members"),
+        (&["--tolerance", "0"], "--tolerance"),
+        (&["--tracking-error", "-1mm"], "--tracking-error"),
+        (&["--window", "a:b"], "--window"),
+    ];
+    for (args, flag) in cases {
+        let assert = chaoscope()
+            .arg("forecast")
+            .arg(&csv)
+            .args(*args)
+            .args(["--backend", "cpu", "--candidates", "64", "--output"])
+            .arg(&out)
+            .assert()
+            .code(2);
+        let err = String::from_utf8_lossy(&assert.get_output().stderr).into_owned();
+        assert!(err.contains(flag), "{args:?}: {err}");
+    }
+    let assert = chaoscope()
+        .arg("forecast")
+        .arg(&no_time)
+        .args(["--backend", "cpu", "--output"])
+        .arg(&out)
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&assert.get_output().stderr).into_owned();
+    assert!(
+        err.contains("no_time.csv:1") && err.contains("`t`"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a refused run wrote {}", out.display());
+}
+
+/// The lab run end to end on the CPU: its files, and a summary whose horizons and
+/// exponent are what they claim (the spread exceeds the tolerance at its horizon; the
+/// horizon in Lyapunov times is the time after the window times the exponent).
+#[test]
+fn forecast_of_the_lab_run() {
+    let dir = tempfile::tempdir().unwrap();
+    chaoscope()
+        .arg("forecast")
+        .arg(lab_csv())
+        .args([
+            "--members",
+            "500",
+            "--candidates",
+            "1024",
+            "--backend",
+            "cpu",
+            "--output",
+        ])
+        .arg(dir.path())
+        .assert()
+        .success();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap())
+            .unwrap();
+    let h = &s["horizon"];
+    let lambda = s["lyapunov"]["exponent"].as_f64().unwrap();
+    assert!(lambda.is_finite() && lambda > 0.0, "{lambda}");
+    if let Some(after) = h["spread_after_window"].as_f64() {
+        let lt = h["spread_lyapunov_times"].as_f64().unwrap();
+        assert!((lt - after * lambda).abs() < 1e-9);
+    }
+    // The bands: the spread column passes the tolerance at the spread horizon.
+    let text = std::fs::read_to_string(dir.path().join("bands.csv")).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let spread = header.iter().position(|h| *h == "spread_lower").unwrap();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let window_end = 2.002;
+    if let Some(t) = h["spread"].as_f64() {
+        let before = rows
+            .iter()
+            .filter(|r| r[0] > window_end && r[0] < t - 1e-9)
+            .all(|r| r[spread] <= 0.03);
+        let after = rows.iter().find(|r| r[0] >= t - 1e-9).unwrap();
+        assert!(before && after[spread] >= 0.03 * 0.999, "horizon {t}");
+    }
+    for f in ["forecast.png", "bands.csv", "summary.json"] {
+        assert!(dir.path().join(f).exists(), "{f} missing");
+    }
+}
