@@ -162,13 +162,10 @@ fn zero_noise_twin_holds_the_truth() {
         if t <= f.window_end {
             continue;
         }
-        for c in 0..4 {
-            let q = f.model[k][c];
+        for (q, &x) in f.model[k].iter().zip(&at[k]) {
             assert!(
-                at[k][c] >= q[0] - slack && at[k][c] <= q[4] + slack,
-                "t {t}: truth {} outside the band {:?} (slack {slack})",
-                at[k][c],
-                q
+                x >= q[0] - slack && x <= q[4] + slack,
+                "t {t}: truth {x} outside the band {q:?} (slack {slack})"
             );
             checked += 1;
         }

@@ -266,7 +266,9 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
         candidates: job.candidates,
     };
     let mut rows = Vec::new();
-    let mut shown: Option<(Outcome, Vec<[f64; 4]>, Track, f64, f64)> = None;
+    // The experiment pictured: (outcome, truth at its times, track, sigma, rate).
+    type Shown = (Outcome, Vec<[f64; 4]>, Track, f64, f64);
+    let mut shown: Option<Shown> = None;
     let (mut inside, mut counted) = (0.0, 0usize);
     let total = job.sigmas.len() * job.rates.len() * job.replicates;
     monitor.start("twins", total as u64);

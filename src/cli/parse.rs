@@ -204,6 +204,25 @@ pub fn one_of<T: Copy + Send + Sync + 'static>(
     })
 }
 
+pub fn parse_u64(s: &str) -> Result<u64, String> {
+    parse_whole(s)
+}
+
+/// A length in metres, or with a unit: `3cm`, `2mm`, `0.03m`, `0.03`.
+pub fn parse_length(s: &str) -> Result<f64, String> {
+    match parse_spread(s)? {
+        Spread::Metres(m) => Ok(m),
+        Spread::Radians(v) => Ok(v),
+    }
+}
+
+/// `START:END` (s).
+pub fn parse_window(s: &str) -> Result<(f64, f64), String> {
+    let r =
+        parse_range(s).map_err(|_| format!("`{s}` must be START:END in seconds, e.g. 0.8:2.3"))?;
+    Ok((r.min, r.max))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -225,23 +244,4 @@ mod tests {
         assert_eq!(parse_size("640x480").unwrap(), (640, 480));
         assert!(parse_size("64x").is_err());
     }
-}
-
-pub fn parse_u64(s: &str) -> Result<u64, String> {
-    parse_whole(s)
-}
-
-/// A length in metres, or with a unit: `3cm`, `2mm`, `0.03m`, `0.03`.
-pub fn parse_length(s: &str) -> Result<f64, String> {
-    match parse_spread(s)? {
-        Spread::Metres(m) => Ok(m),
-        Spread::Radians(v) => Ok(v),
-    }
-}
-
-/// `START:END` (s).
-pub fn parse_window(s: &str) -> Result<(f64, f64), String> {
-    let r =
-        parse_range(s).map_err(|_| format!("`{s}` must be START:END in seconds, e.g. 0.8:2.3"))?;
-    Ok((r.min, r.max))
 }

@@ -81,10 +81,9 @@ impl Forecast {
             if t <= self.window_end + 1e-9 || t >= until {
                 continue;
             }
-            for c in 0..4 {
-                let q = self.model[k][c];
+            for (q, x) in self.model[k].iter().zip(&truth[k]) {
                 all += 1;
-                inside += (q[0]..=q[4]).contains(&truth[k][c]) as usize;
+                inside += (q[0]..=q[4]).contains(x) as usize;
             }
         }
         (all > 0).then(|| inside as f64 / all as f64)

@@ -94,6 +94,7 @@ pub fn window_rows(t: &[f64], window: (f64, f64)) -> (usize, usize) {
 /// Fits `p`'s state and joint damping to the measured positions `data` (relative to the
 /// pivot) at times `t` within `window`, from the tracked `angles`; `candidates` states and
 /// dampings are searched on `engine` first.
+#[allow(clippy::too_many_arguments)]
 pub fn fit_window(
     t: &[f64],
     data: &[[f64; 4]],
