@@ -315,12 +315,19 @@ fn bench_reports_every_mode_of_both_paths() {
         .args(["bench", "--size", "32", "--cpu-size", "8", "--t-max", "0.5"])
         .args(["--repeat", "1"])
         .args(["--accurate-size", "16", "--accurate-t-max", "3"])
+        .args(["--forecast-members", "256"])
         .assert()
         .success()
         .get_output()
         .stdout
         .clone();
     let text = String::from_utf8(out).unwrap();
+    // The forecast's row, and its sentence.
+    assert!(
+        text.lines().any(|l| l.starts_with("chaoscope gpu forecast") && l.contains("forecast")),
+        "no forecast row:\n{text}"
+    );
+    assert!(text.contains("forecast: the ensemble"), "{text}");
     for mode in ["early", "early-all", "full", "full-half"] {
         assert!(
             text.lines()

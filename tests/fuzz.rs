@@ -88,6 +88,30 @@ fn base(command: &str, data: &str) -> Vec<String> {
             "--vary", "g=5:10", "--frames", "2", "--size", "6", "--t-max", "0.5",
         ],
         "fit" => &["--candidates", "64", "--window", "0.5"],
+        "forecast" => &[
+            "--candidates",
+            "64",
+            "--members",
+            "50",
+            "--window",
+            "0.6:1.7",
+        ],
+        "twin" => &[
+            "--sigma",
+            "2mm",
+            "--rate",
+            "20",
+            "--replicates",
+            "1",
+            "--window",
+            "0:0.3",
+            "--duration",
+            "0.6",
+            "--members",
+            "20",
+            "--candidates",
+            "64",
+        ],
         "boundary" => &[
             "--pairs",
             "256",
@@ -101,7 +125,7 @@ fn base(command: &str, data: &str) -> Vec<String> {
         _ => &[],
     };
     let mut out = vec![command.to_string()];
-    if command == "fit" {
+    if command == "fit" || command == "forecast" {
         out.push(data.to_string());
     }
     out.extend(args.iter().map(|s| s.to_string()));

@@ -508,3 +508,71 @@ fn fits_round_trip() {
         ],
     );
 }
+
+#[test]
+fn forecasts_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv");
+    let stored = |dir: &Path| {
+        let dir = dir.to_path_buf();
+        move || {
+            let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+            let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+            json["command"].as_str().expect("a command").to_string()
+        }
+    };
+    round_trip(
+        &[
+            "forecast",
+            data.to_str().unwrap(),
+            "--window",
+            "0.6:1.7",
+            "--members",
+            "200",
+            "--candidates",
+            "256",
+            "--seed",
+            "7",
+            "--tracking-error",
+            "1cm",
+            "--backend",
+            "cpu",
+        ],
+        &[Path::new("--output"), &a],
+        stored(&a),
+        &[Path::new("--output"), &b],
+        &[
+            (&a.join("summary.json"), &b.join("summary.json")),
+            (&a.join("bands.csv"), &b.join("bands.csv")),
+            (&a.join("forecast.png"), &b.join("forecast.png")),
+        ],
+    );
+    let (c, d) = (dir.path().join("c"), dir.path().join("d"));
+    round_trip(
+        &[
+            "twin",
+            "--sigma",
+            "2mm",
+            "--rate",
+            "50",
+            "--replicates",
+            "1",
+            "--duration",
+            "1.5",
+            "--members",
+            "100",
+            "--candidates",
+            "256",
+            "--backend",
+            "cpu",
+        ],
+        &[Path::new("--output"), &c],
+        stored(&c),
+        &[Path::new("--output"), &d],
+        &[
+            (&c.join("summary.json"), &d.join("summary.json")),
+            (&c.join("twin.csv"), &d.join("twin.csv")),
+        ],
+    );
+}

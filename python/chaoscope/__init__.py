@@ -19,6 +19,7 @@ from __future__ import annotations
 import io
 import json
 import warnings
+from pathlib import Path
 from typing import Any, Callable, Optional, Tuple, Union
 
 import numpy as np
@@ -32,6 +33,7 @@ __all__ = [
     "lyapunov_map",
     "trajectory",
     "fit",
+    "forecast",
     "params",
     "picture",
     "open_store",
@@ -389,6 +391,108 @@ def fit(
     keywords = dict(locals())
     keywords.pop("progress")
     return json.loads(_call(_native.fit, keywords, progress))
+
+
+def forecast(
+    file: str,
+    *,
+    output: str = "out/forecast",
+    window: Pair = (0.6, 2.1),
+    members: int = 10000,
+    seed: int = 1,
+    tolerance: float = 0.03,
+    tracking_error: Optional[float] = None,
+    candidates: int = 65536,
+    m1: Optional[float] = None,
+    m2: Optional[float] = None,
+    l1: Optional[float] = None,
+    l2: Optional[float] = None,
+    g: Optional[float] = None,
+    rod_mass: Union[None, float, Pair] = None,
+    air_drag: bool = False,
+    rho: Optional[float] = None,
+    cw: Optional[float] = None,
+    drag_area: Union[None, float, Pair] = None,
+    rod_drag_area: Union[None, float, Pair] = None,
+    bearing_friction: Optional[float] = None,
+    bearing_radius: Optional[float] = None,
+    preset: Optional[str] = None,
+    params_file: Optional[str] = None,
+    backend: str = "auto",
+    precision: Optional[str] = None,
+    progress: Progress = None,
+) -> xr.Dataset:
+    """An ensemble forecast of a camera-tracked run (``chaoscope forecast``): the model's state
+    and joint damping fitted on ``window`` = (start, end) in s, then ``members`` drawn from the
+    fit's covariance (``seed``) and integrated to the data's end. Returns an
+    ``xarray.Dataset`` over ``time`` (s): ``model`` and ``measurement`` (the model's band with
+    the tracking error, ``tracking_error`` m or the fit's residuals) quantiles of the
+    positions (m) by ``coordinate`` (x1, y1, x2, y2) and ``quantile`` (0.05 .. 0.95),
+    ``spread_lower`` (m, the lower bob's RMS spread) and ``ftle`` (1/s, along the fitted
+    orbit); ``attrs`` hold the horizons (the spread past ``tolerance`` m; the data leaving
+    the 90 % band), the summary.json and the reproducing command. forecast.png, bands.csv and
+    summary.json go to ``output``. The physics (``preset="lab"``...) as :func:`params`; the
+    joint damping is what the fit finds.
+    """
+    keywords = dict(locals())
+    keywords.pop("progress")
+    short = json.loads(_call(_native.forecast, keywords, progress))
+    return _bands(Path(short["output"]))
+
+
+def _bands(out: Path) -> xr.Dataset:
+    """bands.csv and summary.json of a forecast as a Dataset."""
+    summary = json.loads((out / "summary.json").read_text())
+    table = np.loadtxt(out / "bands.csv", delimiter=",", comments="#", skiprows=3)
+    header = (out / "bands.csv").read_text().splitlines()[2].split(",")
+    coords = ["x1", "y1", "x2", "y2"]
+    quantiles = [0.05, 0.25, 0.5, 0.75, 0.95]
+    names = ["p05", "p25", "median", "p75", "p95"]
+
+    def block(kind: str) -> np.ndarray:
+        cols = [[header.index(f"{c}_{kind}{q}") for q in names] for c in coords]
+        return table[:, cols]
+
+    dims = ("time", "coordinate", "quantile")
+    horizon = summary["horizon"]
+    return xr.Dataset(
+        {
+            "model": (dims, block(""), {"units": "m", "long_name": "members' positions"}),
+            "measurement": (
+                dims,
+                block("obs_"),
+                {"units": "m", "long_name": "a measurement's positions (model and tracking error)"},
+            ),
+            "spread_lower": (
+                "time",
+                table[:, header.index("spread_lower")],
+                {"units": "m", "long_name": "lower bob's RMS distance from the members' mean"},
+            ),
+            "ftle": (
+                "time",
+                table[:, header.index("ftle")],
+                {"units": "1/s", "long_name": "FTLE along the fitted orbit from the window's end"},
+            ),
+        },
+        coords={
+            "time": ("time", table[:, 0], {"units": "s"}),
+            "coordinate": coords,
+            "quantile": quantiles,
+        },
+        attrs={
+            "command": summary["command"],
+            "spread_horizon": _nan(horizon["spread"]),
+            "data_horizon": _nan(horizon["data"]),
+            "lyapunov_exponent": summary["lyapunov"]["exponent"],
+            "tracking_error": summary["ensemble"]["tracking_error"],
+            "summary": json.dumps(summary),
+        },
+    )
+
+
+def _nan(v: Optional[float]) -> float:
+    """A horizon beyond the data (null in JSON) as NaN: netCDF attributes hold no None."""
+    return float("nan") if v is None else float(v)
 
 
 class Picture:

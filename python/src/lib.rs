@@ -490,6 +490,39 @@ fn fit<'py>(
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
+/// An ensemble forecast of a camera-tracked run (`chaoscope forecast`'s job): fitted on
+/// `window`, `members` drawn from the fit's uncertainty to the data's end; forecast.png,
+/// bands.csv and summary.json written to `output`; the short summary as JSON.
+#[pyfunction]
+#[pyo3(signature = (keywords, progress=None))]
+fn forecast<'py>(
+    py: Python<'py>,
+    keywords: Bound<'py, PyDict>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<String> {
+    let k = Keywords { dict: keywords };
+    let job = chaoscope::app::forecast::ForecastJob {
+        file: k
+            .get("file")?
+            .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
+        output: k.or("output", std::path::PathBuf::from("out/forecast"))?,
+        window: k.or("window", (0.6, 2.1))?,
+        members: k.whole("members")?.unwrap_or(10_000),
+        seed: k.whole("seed")?.unwrap_or(1),
+        tolerance: k.or("tolerance", 0.03)?,
+        tracking_error: k.get("tracking_error")?,
+        candidates: k.whole("candidates")?.unwrap_or(65536),
+        params: k.sources()?,
+        backend: k.backend()?,
+        precision: k.precision()?,
+    };
+    let command = command_line::forecast(&job);
+    let summary = watched(py, progress, move |monitor| {
+        chaoscope::app::forecast::run(&job, command, monitor)
+    })?;
+    serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
 /// The physics the keywords give (a preset or file, then the values given), resolved and
 /// checked: every value by the name the map functions take it under.
 #[pyfunction]
@@ -541,6 +574,7 @@ fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(picture, m)?)?;
     m.add_function(wrap_pyfunction!(params, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
+    m.add_function(wrap_pyfunction!(forecast, m)?)?;
     m.add_function(wrap_pyfunction!(main, m)?)?;
     Ok(())
 }

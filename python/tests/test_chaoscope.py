@@ -306,3 +306,32 @@ def test_fit_equals_its_command(tmp_path):
         "command", "").replace(str(tmp_path / "cli"), "")
     with pytest.raises(ValueError, match="^window: "):
         chaoscope.fit(str(data), output=str(tmp_path / "bad"), window=100.0, progress=False)
+
+
+def test_forecast_equals_its_command(tmp_path):
+    data = Path(__file__).parents[2] / "data" / "lab_table1.csv"
+    bands = chaoscope.forecast(str(data), output=str(tmp_path / "py"), window=(0.6, 1.7),
+                               members=300, candidates=512, backend="cpu", progress=False)
+    cli("forecast", str(data), "--output", str(tmp_path / "cli"), "--window", "0.6:1.7",
+        "--members", "300", "--candidates", "512", "--backend", "cpu")
+    # The same job: its bands byte for byte, and the command that makes them.
+    assert (tmp_path / "py" / "bands.csv").read_bytes() == (
+        tmp_path / "cli" / "bands.csv").read_bytes()
+    written = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert bands.attrs["command"] == written["command"]
+    assert bands.model.dims == ("time", "coordinate", "quantile")
+    assert bands.model.attrs["units"] == "m" and bands.time.attrs["units"] == "s"
+    # The Dataset holds the CSV's numbers: the lower bob's median x at the first time.
+    lines = (tmp_path / "cli" / "bands.csv").read_text().splitlines()
+    header, first = lines[2].split(","), lines[3].split(",")
+    assert float(bands.model.sel(coordinate="x2", quantile=0.5)[0]) == float(
+        first[header.index("x2_median")])
+    # Quantiles ordered, the measurement's band at least as wide as the model's.
+    m, o = bands.model.values, bands.measurement.values
+    assert (np.diff(m, axis=2) >= 0).all()
+    assert ((o[..., 4] - o[..., 0]) >= (m[..., 4] - m[..., 0]) - 1e-6).mean() > 0.95
+    with pytest.raises(ValueError, match="^window: "):
+        chaoscope.forecast(str(data), output=str(tmp_path / "bad"), window=(25.0, 30.0),
+                           progress=False)
+    with pytest.raises(ValueError, match="^members: "):
+        chaoscope.forecast(str(data), output=str(tmp_path / "bad"), members=0, progress=False)

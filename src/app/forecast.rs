@@ -57,10 +57,12 @@ pub struct Outcome {
 }
 
 impl Outcome {
-    /// A horizon (s) as time after the window's end, and in Lyapunov times.
+    /// A horizon (s) as time after the window's end, and in Lyapunov times (None where the
+    /// orbit does not stretch: an exponent <= 0 has no Lyapunov time).
     pub fn after_window(&self, horizon: Option<f64>) -> (Option<f64>, Option<f64>) {
         let after = horizon.map(|t| t - self.forecast.window_end);
-        (after, after.map(|a| a * self.forecast.lyapunov))
+        let lambda = self.forecast.lyapunov;
+        (after, after.filter(|_| lambda > 0.0).map(|a| a * lambda))
     }
 }
 
@@ -293,7 +295,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
             "data_coverage_before_spread_horizon": o.data_coverage,
         },
         "lyapunov": {
-            "exponent": f.lyapunov, "time": 1.0 / f.lyapunov,
+            "exponent": f.lyapunov, "time": (f.lyapunov > 0.0).then(|| 1.0 / f.lyapunov),
             "over": [f.window_end, settings.end],
             "along": "the fitted orbit: ln of the tangent propagator's largest singular value over the time",
         },

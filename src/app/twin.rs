@@ -170,21 +170,35 @@ pub fn experiment(
     Ok((o, at))
 }
 
-/// A least-squares line y = a + b x: (b, its standard error).
-pub fn slope(points: &[(f64, f64)]) -> (f64, f64) {
-    let n = points.len() as f64;
-    let (mx, my) = (
-        points.iter().map(|p| p.0).sum::<f64>() / n,
-        points.iter().map(|p| p.1).sum::<f64>() / n,
-    );
-    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let b = sxy / sxx;
-    let rss: f64 = points
+/// The slope of y on x within groups (each group's own means taken out, so that where the
+/// groups lie does not enter: a fixed-effects regression), and its standard error. Groups of
+/// fewer than two points add nothing.
+pub fn within_slope(groups: &[Vec<(f64, f64)>]) -> (f64, f64) {
+    let (mut sxx, mut sxy, mut n, mut used) = (0.0, 0.0, 0usize, 0usize);
+    let centred: Vec<Vec<(f64, f64)>> = groups
         .iter()
-        .map(|p| (p.1 - my - b * (p.0 - mx)).powi(2))
-        .sum();
-    (b, (rss / (n - 2.0).max(1.0) / sxx).sqrt())
+        .filter(|g| g.len() >= 2)
+        .map(|g| {
+            let k = g.len() as f64;
+            let (mx, my) = (
+                g.iter().map(|p| p.0).sum::<f64>() / k,
+                g.iter().map(|p| p.1).sum::<f64>() / k,
+            );
+            g.iter().map(|p| (p.0 - mx, p.1 - my)).collect()
+        })
+        .collect();
+    for g in &centred {
+        used += 1;
+        for &(x, y) in g {
+            sxx += x * x;
+            sxy += x * y;
+            n += 1;
+        }
+    }
+    let b = sxy / sxx;
+    let rss: f64 = centred.iter().flatten().map(|&(x, y)| (y - b * x).powi(2)).sum();
+    let dof = n.saturating_sub(used + 1).max(1) as f64;
+    (b, (rss / dof / sxx).sqrt())
 }
 
 fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
@@ -206,23 +220,20 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// The FTLE along the orbits over the span where their horizons fall: per replicate, the
-/// stretching between the horizons of its least and greatest noise over the time between
-/// them (the rate that sets how far the horizon moves with the noise), the median over the
-/// replicates.
-pub fn span_lyapunov(rows: &[&TwinRow], replicates: usize) -> f64 {
-    let per_replicate = (0..replicates).filter_map(|k| {
-        let of: Vec<&&TwinRow> = rows
-            .iter()
-            .filter(|r| r.replicate == k && r.spread_horizon.is_some() && r.stretching.is_some())
-            .collect();
-        let low = of.iter().min_by(|a, b| a.sigma.total_cmp(&b.sigma))?;
-        let high = of.iter().max_by(|a, b| a.sigma.total_cmp(&b.sigma))?;
-        let dt = low.spread_horizon? - high.spread_horizon?;
-        let rise = low.stretching? - high.stretching?;
-        (dt > 0.05).then_some(rise / dt)
-    });
-    median(per_replicate.collect())
+/// Per replicate (one orbit, every noise), the points `point(row)` of its rows that have one.
+fn by_replicate(
+    rows: &[&TwinRow],
+    replicates: usize,
+    point: impl Fn(&TwinRow) -> Option<(f64, f64)>,
+) -> Vec<Vec<(f64, f64)>> {
+    (0..replicates)
+        .map(|k| {
+            rows.iter()
+                .filter(|r| r.replicate == k && r.sigma > 0.0)
+                .filter_map(|r| point(r))
+                .collect()
+        })
+        .collect()
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -238,7 +249,15 @@ pub struct TwinSummary {
 
 pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSummary> {
     check_settings(job.members, job.tolerance, None, job.candidates)?;
-    check_count("replicates", job.replicates as u64, 1, 10_000)?;
+    check_count("replicates", job.replicates as u64, 1, 100)?;
+    for (field, v, most) in [
+        ("theta1", job.start.theta1, 100.0),
+        ("theta2", job.start.theta2, 100.0),
+        ("omega1", job.start.omega1, 1000.0),
+        ("omega2", job.start.omega2, 1000.0),
+    ] {
+        super::check_within(field, v, -most, most)?;
+    }
     for &s in &job.sigmas {
         super::check_within("sigma", s, 0.0, 0.1)?;
     }
@@ -317,22 +336,21 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
         }
     }
     monitor.finish();
+    // Per rate: the horizon against ln sigma, and the FTLE over the span where the horizons
+    // fall (the stretching at each horizon against its time), both within each orbit.
     let slopes: Vec<(f64, f64, f64, f64, f64)> = job
         .rates
         .iter()
         .map(|&rate| {
             let of: Vec<&TwinRow> = rows.iter().filter(|r| r.rate == rate).collect();
-            let points: Vec<(f64, f64)> = of
-                .iter()
-                .filter(|r| r.sigma > 0.0)
-                .filter_map(|r| r.spread_horizon.map(|h| (r.sigma.ln(), h)))
-                .collect();
-            let lambda = span_lyapunov(&of, job.replicates);
-            let (b, e) = if points.len() >= 3 {
-                slope(&points)
-            } else {
-                (f64::NAN, f64::NAN)
-            };
+            let horizons = by_replicate(&of, job.replicates, |r| {
+                r.spread_horizon.map(|h| (r.sigma.ln(), h))
+            });
+            let stretching = by_replicate(&of, job.replicates, |r| {
+                Some((r.spread_horizon?, r.stretching?))
+            });
+            let (b, e) = within_slope(&horizons);
+            let (lambda, _) = within_slope(&stretching);
             (rate, b, e, -1.0 / lambda, b * -lambda)
         })
         .collect();

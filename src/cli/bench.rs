@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::parse::{parse_number, parse_u32};
+use super::parse::{parse_number, parse_u32, parse_usize};
 use super::say;
 use crate::app::bench::{self, BenchJob};
 use crate::error::Result;
@@ -54,6 +54,11 @@ pub struct BenchArgs {
     /// f64, and beside the Numba indicators peer with --peers; 0 leaves them out).
     #[arg(long, default_value = "256", value_parser = parse_u32, allow_hyphen_values = true)]
     pub indicator_size: u32,
+    /// Members of the forecast row: an ensemble of tracked data (the lab pendulum, its own
+    /// joint damping each) over 6 s past a fit window, bands and FTLE included (0 leaves it
+    /// out).
+    #[arg(long, default_value = "10000", value_parser = parse_usize, allow_hyphen_values = true)]
+    pub forecast_members: usize,
 }
 
 impl BenchArgs {
@@ -79,6 +84,7 @@ impl BenchArgs {
             accurate_size: self.accurate_size,
             accurate_t_max: self.accurate_t_max,
             indicator_size: self.indicator_size,
+            forecast_members: self.forecast_members,
         }
     }
 }

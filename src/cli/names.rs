@@ -111,6 +111,34 @@ mod tests {
                     "output",
                 ],
             ),
+            (
+                "forecast",
+                &[
+                    "file",
+                    "window",
+                    "members",
+                    "seed",
+                    "tolerance",
+                    "tracking_error",
+                    "candidates",
+                    "joint_damping",
+                    "output",
+                ],
+            ),
+            (
+                "twin",
+                &[
+                    "sigma",
+                    "rate",
+                    "replicates",
+                    "duration",
+                    "theta1",
+                    "omega2",
+                    "members",
+                    "tolerance",
+                    "output",
+                ],
+            ),
         ];
         for (command, fields) in fields {
             let sub = cli.find_subcommand(command).expect("subcommand");

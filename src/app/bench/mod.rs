@@ -6,6 +6,7 @@
 //! part is everything else: buffer set-up, all dispatches, and the read-back of the times.
 
 mod accuracy;
+mod forecast;
 mod indicators;
 mod peers;
 
@@ -52,6 +53,8 @@ pub struct BenchJob {
     /// Grid side of the chaos indicators' rows (0: none); with `peers`, the Numba
     /// indicators peer runs them too.
     pub indicator_size: u32,
+    /// Members of the forecast row (an ensemble of tracked data over 6 s; 0: none).
+    pub forecast_members: usize,
 }
 
 /// One row of the report: the median of the repetitions of one path and mode.
@@ -281,6 +284,16 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
             Some(engine)
         }
     };
+    // The forecast's row on the GPU engine, its fit and pipelines made before the clock.
+    let forecast_run = match args.forecast_members {
+        0 => None,
+        members => {
+            let engine = crate::engine::Engine::on_gpu(GpuContext::new()?);
+            let fit = forecast::prepare(&engine, &quiet)?;
+            forecast::sample(&fit, members.min(64), &engine, &quiet)?;
+            Some((engine, fit, members))
+        }
+    };
     let mut samples: Vec<Sample> = Vec::new();
     let mut notices = Vec::new();
     monitor.start("bench", args.repeat as u64);
@@ -343,6 +356,9 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
             if !early && let (Some((engine, _)), Some(reference)) = (&accurate, &ftle_reference) {
                 samples.extend(ftle_accuracy_samples(args, engine, reference, &quiet)?);
             }
+            if !early && let Some((engine, fit, members)) = &forecast_run {
+                samples.push(forecast::sample(fit, *members, engine, &quiet)?);
+            }
             if !early && let Some(engine) = &indicator_engine {
                 samples.extend(indicators::samples(args, engine, &quiet, &mut notices)?);
             }
@@ -391,6 +407,12 @@ pub fn run(args: &BenchJob, monitor: &Monitor) -> Result<BenchReport> {
 /// the fastest peer in the same mode.
 fn ratios(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
+    if let Some(f) = rows.iter().find(|r| r.mode == "forecast") {
+        out.push(format!(
+            "forecast: the ensemble of --forecast-members over 6 s past a fit window (draws, runs with their own damping, bands, FTLE) takes {:.2} s on {} ({:.3e} pendulum-steps/s)",
+            f.wall_s, f.path, f.steps_per_s
+        ));
+    }
     let gpu_rate = |mode: &str| {
         rows.iter()
             .find(|r| r.path.starts_with("chaoscope gpu f32") && r.mode == mode)
