@@ -324,7 +324,8 @@ fn bench_reports_every_mode_of_both_paths() {
     let text = String::from_utf8(out).unwrap();
     // The forecast's row, and its sentence.
     assert!(
-        text.lines().any(|l| l.starts_with("chaoscope gpu forecast") && l.contains("forecast")),
+        text.lines()
+            .any(|l| l.starts_with("chaoscope gpu forecast") && l.contains("forecast")),
         "no forecast row:\n{text}"
     );
     assert!(text.contains("forecast: the ensemble"), "{text}");

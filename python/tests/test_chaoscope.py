@@ -326,10 +326,11 @@ def test_forecast_equals_its_command(tmp_path):
     header, first = lines[2].split(","), lines[3].split(",")
     assert float(bands.model.sel(coordinate="x2", quantile=0.5)[0]) == float(
         first[header.index("x2_median")])
-    # Quantiles ordered, the measurement's band at least as wide as the model's.
+    # Quantiles ordered; the measurement's 90 % band (the model's with the tracking error) is
+    # wider on average (at any one time 300 members' quantiles scatter).
     m, o = bands.model.values, bands.measurement.values
     assert (np.diff(m, axis=2) >= 0).all()
-    assert ((o[..., 4] - o[..., 0]) >= (m[..., 4] - m[..., 0]) - 1e-6).mean() > 0.95
+    assert (o[..., 4] - o[..., 0]).mean() > (m[..., 4] - m[..., 0]).mean()
     with pytest.raises(ValueError, match="^window: "):
         chaoscope.forecast(str(data), output=str(tmp_path / "bad"), window=(25.0, 30.0),
                            progress=False)

@@ -196,7 +196,11 @@ pub fn within_slope(groups: &[Vec<(f64, f64)>]) -> (f64, f64) {
         }
     }
     let b = sxy / sxx;
-    let rss: f64 = centred.iter().flatten().map(|&(x, y)| (y - b * x).powi(2)).sum();
+    let rss: f64 = centred
+        .iter()
+        .flatten()
+        .map(|&(x, y)| (y - b * x).powi(2))
+        .sum();
     let dof = n.saturating_sub(used + 1).max(1) as f64;
     (b, (rss / dof / sxx).sqrt())
 }

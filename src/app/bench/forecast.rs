@@ -34,7 +34,9 @@ pub(super) fn prepare(engine: &Engine, monitor: &Monitor) -> Result<crate::fit::
         tracking_error: None,
         candidates: 4096,
     };
-    Ok(experiment(&p, start, &track, &settings, engine, monitor)?.0.fit)
+    Ok(experiment(&p, start, &track, &settings, engine, monitor)?
+        .0
+        .fit)
 }
 
 /// One timed forecast of `members` from `fit`.
