@@ -85,24 +85,15 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
         ));
     }
 
-    // Pivot: least-squares circle, and the report's grid search beside it.
-    let pivot = fit_pivot(&frames)?;
+    let Tracked {
+        pivot,
+        l1,
+        l2,
+        angles: angle,
+        params,
+    } = tracked_model(&frames, &job.params)?;
     // The report's grid: whole millimetres within 5 cm of the data's origin.
     let grid = grid_pivot(&frames, (0.0, 0.0), 0.05, 0.001);
-    let (l1, l2) = arm_lengths(&frames, (pivot.x, pivot.y));
-    let angle = angles(&frames, (pivot.x, pivot.y));
-
-    // The model: preset lab unless told otherwise, arm lengths from the data unless given.
-    let sources = ParamSources {
-        preset: job
-            .params
-            .preset
-            .or((job.params.params.is_none()).then_some(Preset::Lab)),
-        l1: job.params.l1.or(Some(l1.value)),
-        l2: job.params.l2.or(Some(l2.value)),
-        ..job.params.clone()
-    };
-    let params = sources.resolve()?;
 
     let en = energies(
         &frames,
@@ -250,13 +241,7 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
             "agrees_for": fit.agrees_until - fit.t0,
         },
     });
-    let text = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::format(&out.join("summary.json"), e))?;
-    files.write(&out.join("summary.json"), |w| {
-        use std::io::Write;
-        writeln!(w, "{text}")?;
-        Ok(())
-    })?;
+    write_json(&mut files, &out.join("summary.json"), &summary)?;
     files.commit(monitor)?;
     Ok(FitSummary {
         pivot: (pivot.x, pivot.y),
@@ -280,6 +265,55 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
         .map(|f| out.join(f))
         .collect(),
         notices,
+    })
+}
+
+/// What tracked data say about the apparatus, and the model to fit to them.
+pub(crate) struct Tracked {
+    pub pivot: crate::fit::data::Pivot,
+    pub l1: crate::fit::data::Estimate,
+    pub l2: crate::fit::data::Estimate,
+    /// The arms' angles at every row (rad, unwrapped).
+    pub angles: Vec<(f64, f64)>,
+    /// The lab preset unless a preset or file is given, the arm lengths from the data unless
+    /// given.
+    pub params: crate::model::Params,
+}
+
+/// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
+/// `frames`, and the model of `given`.
+pub(crate) fn tracked_model(frames: &[crate::fit::Frame], given: &ParamSources) -> Result<Tracked> {
+    let pivot = fit_pivot(frames)?;
+    let (l1, l2) = arm_lengths(frames, (pivot.x, pivot.y));
+    let angles = angles(frames, (pivot.x, pivot.y));
+    let sources = ParamSources {
+        preset: given
+            .preset
+            .or((given.params.is_none()).then_some(Preset::Lab)),
+        l1: given.l1.or(Some(l1.value)),
+        l2: given.l2.or(Some(l2.value)),
+        ..given.clone()
+    };
+    Ok(Tracked {
+        params: sources.resolve()?,
+        pivot,
+        l1,
+        l2,
+        angles,
+    })
+}
+
+/// `value` as pretty JSON into `path` (a summary.json) among `files`.
+pub(crate) fn write_json(
+    files: &mut Outputs,
+    path: &std::path::Path,
+    value: &serde_json::Value,
+) -> Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| Error::format(path, e))?;
+    files.write(path, |w| {
+        use std::io::Write;
+        writeln!(w, "{text}")?;
+        Ok(())
     })
 }
 

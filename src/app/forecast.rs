@@ -11,11 +11,11 @@ use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::fit::forecast::{self, Forecast, ForecastSpec, QUANTILES, band_times, most_members};
 use crate::fit::forecast_plot::{self, Marks};
+use crate::fit::read_frames;
 use crate::fit::window::{FITTED, WindowFit, fit_window};
-use crate::fit::{angles, arm_lengths, fit_pivot, read_frames};
 use crate::model::Params;
 use crate::monitor::Monitor;
-use crate::params::{ParamSources, Preset};
+use crate::params::ParamSources;
 use crate::render::{Outputs, check_writable};
 use crate::spec::Precision;
 
@@ -194,20 +194,13 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
     check_writable("output", &job.output.join("summary.json"))?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
-    // The pivot and arm lengths as `fit` finds them.
-    let pivot = fit_pivot(&frames)?;
-    let (l1, l2) = arm_lengths(&frames, (pivot.x, pivot.y));
-    let angle = angles(&frames, (pivot.x, pivot.y));
-    let sources = ParamSources {
-        preset: job
-            .params
-            .preset
-            .or((job.params.params.is_none()).then_some(Preset::Lab)),
-        l1: job.params.l1.or(Some(l1.value)),
-        l2: job.params.l2.or(Some(l2.value)),
-        ..job.params.clone()
-    };
-    let params = sources.resolve()?;
+    // The pivot, arm lengths and model as `fit` finds them.
+    let super::fit::Tracked {
+        pivot,
+        angles: angle,
+        params,
+        ..
+    } = super::fit::tracked_model(&frames, &job.params)?;
     let data: Vec<[f64; 4]> = frames
         .iter()
         .map(|f| {
@@ -257,7 +250,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
             tolerance: job.tolerance,
             until,
             title: format!(
-                "{}: fit {}..{} s, {} members; horizon {} (spread > {} m), {} (data leave the 90 % band)",
+                "{}: fit {}..{} s, {} members; spread > {} m {}; data out of the 90 % band {}",
                 job.file
                     .file_name()
                     .map(|n| n.to_string_lossy().into_owned())
@@ -265,8 +258,8 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
                 job.window.0,
                 job.window.1,
                 job.members,
-                fmt_time(f.spread_horizon),
                 job.tolerance,
+                fmt_time(f.spread_horizon),
                 fmt_time(o.data_horizon),
             ),
         },
@@ -301,13 +294,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         },
         "report": "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s",
     });
-    let text = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::format(&out.join("summary.json"), e))?;
-    files.write(&out.join("summary.json"), |w| {
-        use std::io::Write;
-        writeln!(w, "{text}")?;
-        Ok(())
-    })?;
+    super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
     files.commit(monitor)?;
     Ok(ForecastSummary {
         window: job.window,
@@ -328,9 +315,11 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
     })
 }
 
-/// "2.31 s", or "beyond the data".
+/// "at 2.31 s", or "never (to the data's end)".
 pub fn fmt_time(t: Option<f64>) -> String {
-    t.map_or("beyond the data".into(), |t| format!("{t:.2} s"))
+    t.map_or("never (to the data's end)".into(), |t| {
+        format!("at {t:.2} s")
+    })
 }
 
 /// The fit as JSON: values, errors, covariance in [`FITTED`]'s order.

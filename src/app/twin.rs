@@ -441,13 +441,7 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
         })).collect::<Vec<_>>(),
         "example_fit": shown.as_ref().map(|s| fit_json(&s.0.fit)),
     });
-    let text = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::format(&out.join("summary.json"), e))?;
-    files.write(&out.join("summary.json"), |w| {
-        use std::io::Write;
-        writeln!(w, "{text}")?;
-        Ok(())
-    })?;
+    super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
     files.commit(monitor)?;
     Ok(TwinSummary {
         rows,

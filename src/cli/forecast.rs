@@ -81,7 +81,7 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
     say(&s.notices);
     let lt = |v: Option<f64>| v.map_or(String::new(), |v| format!(" ({v:.1} Lyapunov times)"));
     eprintln!(
-        "fit {}..{} s, {} members, tracking error {:.1} mm; horizon: spread > {} m at {}{}, data leave the band at {}{}; FTLE along the orbit {:.2} 1/s -> {}",
+        "fit {}..{} s, {} members, tracking error {:.1} mm; horizon: spread > {} m {}{}, data out of the 90 % band {}{}; FTLE along the orbit {:.2} 1/s -> {}",
         s.window.0,
         s.window.1,
         s.members,
