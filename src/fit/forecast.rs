@@ -190,7 +190,6 @@ pub fn forecast(
     let (dt, steps, stride) = stepping(fit.t0, spec.end);
     let h = dt * stride as f64;
     // Positions by time, then member: a time's values sit together for its quantiles.
-    let mut by_member = vec![[0f32; 4]; times.len()];
     let mut values = vec![0f32; times.len() * 4 * m];
     engine.ensemble_damped_each(
         &fit.params,
@@ -201,9 +200,17 @@ pub fn forecast(
         stride,
         monitor,
         |first, runs| {
-            for (k, run) in runs.iter().enumerate() {
-                positions_at(&fit.params, run, h, fit.t0, &times, &mut by_member);
-                for (j, q) in by_member.iter().enumerate() {
+            // Each run's positions in parallel, then placed by time.
+            let positions: Vec<Vec<[f32; 4]>> = runs
+                .par_iter()
+                .map(|run| {
+                    let mut out = vec![[0f32; 4]; times.len()];
+                    positions_at(&fit.params, run, h, fit.t0, &times, &mut out);
+                    out
+                })
+                .collect();
+            for (k, by_time) in positions.iter().enumerate() {
+                for (j, q) in by_time.iter().enumerate() {
                     for c in 0..4 {
                         values[(j * 4 + c) * m + first + k] = q[c];
                     }
