@@ -34,6 +34,7 @@ __all__ = [
     "trajectory",
     "fit",
     "forecast",
+    "traces",
     "params",
     "picture",
     "open_store",
@@ -391,6 +392,76 @@ def fit(
     keywords = dict(locals())
     keywords.pop("progress")
     return json.loads(_call(_native.fit, keywords, progress))
+
+
+def traces(
+    *,
+    theta1: float,
+    theta2: float,
+    omega1: float = 0.0,
+    omega2: float = 0.0,
+    runs: int = 3,
+    spread: Union[float, str] = "5mm",
+    exposure: float = 3.2,
+    dt: float = 0.001,
+    size: int = 1024,
+    output: str = "out/traces.png",
+    data: Optional[str] = None,
+    m1: Optional[float] = None,
+    m2: Optional[float] = None,
+    l1: Optional[float] = None,
+    l2: Optional[float] = None,
+    g: Optional[float] = None,
+    rod_mass: Union[None, float, Pair] = None,
+    joint_damping: Union[None, float, Pair] = None,
+    air_drag: bool = False,
+    rho: Optional[float] = None,
+    cw: Optional[float] = None,
+    drag_area: Union[None, float, Pair] = None,
+    rod_drag_area: Union[None, float, Pair] = None,
+    bearing_friction: Optional[float] = None,
+    bearing_radius: Optional[float] = None,
+    preset: Optional[str] = None,
+    params_file: Optional[str] = None,
+    backend: str = "auto",
+    precision: Optional[str] = None,
+    progress: Progress = None,
+) -> xr.DataArray:
+    """An ensemble of releases from "the same" start (``chaoscope traces``): ``runs``
+    pendulums released within ``spread`` (rad, or a length of the lower bob such as
+    ``"5mm"``) of (``theta1``, ``theta2``), integrated for ``exposure`` s in steps of ``dt``
+    on the engine. Returns their positions as an ``xarray.DataArray`` over (``run``, ``time``,
+    ``coordinate``: x1, y1, x2, y2; m, pivot at the origin, y up), the light-trail picture
+    written to ``output`` (``attrs["picture"]``; :class:`Picture` shows it) and the positions
+    to ``data`` (a temporary .npy unless given). ``attrs["command"]`` reproduces both.
+    """
+    import tempfile
+
+    keywords = dict(locals())
+    keywords.pop("progress")
+    keywords.pop("tempfile")
+    with tempfile.TemporaryDirectory() as scratch:
+        npy = data if data is not None else str(Path(scratch) / "traces.npy")
+        keywords["data"] = npy
+        summary = json.loads(_call(_native.traces, keywords, progress))
+        positions = np.load(npy)
+    steps = positions.shape[1]
+    return xr.DataArray(
+        positions,
+        dims=("run", "time", "coordinate"),
+        coords={
+            "run": np.arange(positions.shape[0]),
+            "time": ("time", np.arange(steps) * dt, {"units": "s"}),
+            "coordinate": ["x1", "y1", "x2", "y2"],
+        },
+        name="position",
+        attrs={
+            "units": "m",
+            "long_name": "bob positions (pivot at the origin, y up)",
+            "command": summary["command"],
+            "picture": str(summary["output"]),
+        },
+    )
 
 
 def forecast(

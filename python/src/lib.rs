@@ -490,6 +490,53 @@ fn fit<'py>(
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
+/// Light trails of releases from "the same" start (`chaoscope traces`'s job): the picture
+/// written to `output`, the runs' positions as float32 .npy to `data`; the summary as JSON.
+#[pyfunction]
+#[pyo3(signature = (keywords, progress=None))]
+fn traces<'py>(
+    py: Python<'py>,
+    keywords: Bound<'py, PyDict>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<String> {
+    let k = Keywords { dict: keywords };
+    // A spread in radians (a number) or with a unit ("5mm"), as --spread takes it.
+    let spread = match k.get::<String>("spread") {
+        Ok(Some(text)) => chaoscope::cli::parse::parse_spread(&text)
+            .map_err(|e| PyValueError::new_err(format!("spread: {e}")))?,
+        _ => chaoscope::spec::Spread::Radians(k.or("spread", 0.01)?),
+    };
+    let job = chaoscope::app::traces::TracesJob {
+        params: k.sources()?.resolve().map_err(py_err)?,
+        start: State {
+            theta1: k.or("theta1", 0.0)?,
+            omega1: k.or("omega1", 0.0)?,
+            theta2: k.or("theta2", 0.0)?,
+            omega2: k.or("omega2", 0.0)?,
+        },
+        runs: k.whole("runs")?.unwrap_or(3),
+        spread,
+        stepping: chaoscope::spec::Stepping {
+            dt: k.or("dt", 0.001)?,
+            t_max: k.or("exposure", 3.2)?,
+        },
+        size: k.whole("size")?.unwrap_or(1024),
+        backend: k.backend()?,
+        precision: k.precision()?,
+        output: k.or("output", std::path::PathBuf::from("out/traces.png"))?,
+        gif: None,
+        data: k.get("data")?,
+    };
+    let command = command_line::traces(&job);
+    let summary = watched(py, progress, move |monitor| {
+        chaoscope::app::traces::run(&job, command.clone(), monitor).map(|s| (s, command))
+    })?;
+    let mut value =
+        serde_json::to_value(&summary.0).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    value["command"] = summary.1.into();
+    Ok(value.to_string())
+}
+
 /// An ensemble forecast of a camera-tracked run (`chaoscope forecast`'s job): fitted on
 /// `window`, `members` drawn from the fit's uncertainty to the data's end; forecast.png,
 /// bands.csv and summary.json written to `output`; the short summary as JSON.
@@ -575,6 +622,7 @@ fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(params, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(forecast, m)?)?;
+    m.add_function(wrap_pyfunction!(traces, m)?)?;
     m.add_function(wrap_pyfunction!(main, m)?)?;
     Ok(())
 }

@@ -336,3 +336,22 @@ def test_forecast_equals_its_command(tmp_path):
                            progress=False)
     with pytest.raises(ValueError, match="^members: "):
         chaoscope.forecast(str(data), output=str(tmp_path / "bad"), members=0, progress=False)
+
+
+def test_traces_equal_their_command(tmp_path):
+    runs = chaoscope.traces(theta1=2.0, theta2=2.5, runs=8, spread="5mm", exposure=0.5,
+                            size=64, output=str(tmp_path / "py.png"), backend="cpu",
+                            progress=False)
+    assert runs.dims == ("run", "time", "coordinate") and runs.shape == (8, 501, 4)
+    assert runs.attrs["units"] == "m" and runs.time.attrs["units"] == "s"
+    words = runs.attrs["command"].split()[1:]
+    cli(*words, "--output", str(tmp_path / "cli.png"), "--data", str(tmp_path / "cli.npy"))
+    # The same job: the command line's positions bit for bit, and its picture.
+    assert np.array_equal(np.load(tmp_path / "cli.npy"), runs.values)
+    assert (tmp_path / "py.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
+    with pytest.raises(ValueError, match="^runs: "):
+        chaoscope.traces(theta1=2.0, theta2=2.5, runs=0, output=str(tmp_path / "bad.png"),
+                         progress=False)
+    with pytest.raises(ValueError, match="^spread: "):
+        chaoscope.traces(theta1=2.0, theta2=2.5, spread="5 furlongs",
+                         output=str(tmp_path / "bad.png"), progress=False)
