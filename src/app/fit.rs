@@ -90,6 +90,7 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
         l1,
         l2,
         angles: angle,
+        measured,
         params,
     } = tracked_model(&frames, &job.params)?;
     // The report's grid: whole millimetres within 5 cm of the data's origin.
@@ -125,17 +126,6 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
     // Plots, derived quantities and summary, written as a set.
     let out = &job.output;
     let mut files = Outputs::new();
-    let measured: Vec<[f64; 4]> = frames
-        .iter()
-        .map(|f| {
-            [
-                f.x1 - pivot.x,
-                f.y1 - pivot.y,
-                f.x2 - pivot.x,
-                f.y2 - pivot.y,
-            ]
-        })
-        .collect();
     // Long enough to see the model agree and then part (chaos), short enough to read.
     let t_end = (fit.agrees_until + 4.0).max(fit.t0 + 4.0);
     plots::positions(
@@ -273,8 +263,10 @@ pub(crate) struct Tracked {
     pub pivot: crate::fit::data::Pivot,
     pub l1: crate::fit::data::Estimate,
     pub l2: crate::fit::data::Estimate,
-    /// The arms' angles at every row (rad, unwrapped).
+    /// The arms' angles at every row (rad, unwrapped), and the positions relative to the
+    /// pivot (x1, y1, x2, y2; m).
     pub angles: Vec<(f64, f64)>,
+    pub measured: Vec<[f64; 4]>,
     /// The lab preset unless a preset or file is given, the arm lengths from the data unless
     /// given.
     pub params: crate::model::Params,
@@ -296,6 +288,7 @@ pub(crate) fn tracked_model(frames: &[crate::fit::Frame], given: &ParamSources) 
     };
     Ok(Tracked {
         params: sources.resolve()?,
+        measured: crate::fit::measured(frames, (pivot.x, pivot.y)),
         pivot,
         l1,
         l2,

@@ -198,20 +198,10 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
     let super::fit::Tracked {
         pivot,
         angles: angle,
+        measured: data,
         params,
         ..
     } = super::fit::tracked_model(&frames, &job.params)?;
-    let data: Vec<[f64; 4]> = frames
-        .iter()
-        .map(|f| {
-            [
-                f.x1 - pivot.x,
-                f.y1 - pivot.y,
-                f.x2 - pivot.x,
-                f.y2 - pivot.y,
-            ]
-        })
-        .collect();
     let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices = engine.notices();
     let settings = Settings {

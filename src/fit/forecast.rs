@@ -92,7 +92,7 @@ impl Forecast {
     }
 
     /// ln of the largest singular value of the tangent propagator along the fitted orbit from
-    /// the window's end to band time `k`: the e-foldings of stretching so far.
+    /// the window's end to the first band time at or after `t`: the e-foldings so far.
     pub fn stretching(&self, t: f64) -> Option<f64> {
         let k = self.times.partition_point(|&x| x < t);
         let k = k.min(self.times.len() - 1);

@@ -14,4 +14,4 @@ pub use data::{
     Energies, Frame, angles, arm_lengths, energies, fit_decay, fit_pivot, grid_pivot, read_frames,
 };
 pub use lsq::{Fit, least_squares};
-pub use model::{ModelFit, ModelFitSpec, fit_model};
+pub use model::{ModelFit, ModelFitSpec, fit_model, measured};

@@ -42,7 +42,7 @@ pub struct ModelFitSpec {
 }
 
 /// Measured positions relative to the pivot.
-fn measured(frames: &[Frame], pivot: (f64, f64)) -> Vec<[f64; 4]> {
+pub fn measured(frames: &[Frame], pivot: (f64, f64)) -> Vec<[f64; 4]> {
     frames
         .iter()
         .map(|f| {
