@@ -125,6 +125,17 @@ pub fn list_adapters() -> Vec<wgpu::Adapter> {
 
 /// Reads back `len` bytes of `buffer` (which must allow COPY_SRC) through a staging buffer.
 pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer, len: u64) -> Result<Vec<u8>> {
+    read_buffer_with(ctx, buffer, len, <[u8]>::to_vec)
+}
+
+/// Reads back the first `len` bytes of `buffer` and hands them to `f` where they are mapped
+/// (no copy of the bytes on the host).
+pub fn read_buffer_with<T>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    len: u64,
+    f: impl FnOnce(&[u8]) -> T,
+) -> Result<T> {
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
         size: len,
@@ -138,7 +149,7 @@ pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer, len: u64) -> Result<
         });
     encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, len);
     ctx.queue.submit([encoder.finish()]);
-    map_read(ctx, &staging)
+    map_read_with(ctx, &staging, f)
 }
 
 /// Reads back the first `count` f32 values of `buffer`.
@@ -149,6 +160,15 @@ pub fn read_f32s(ctx: &GpuContext, buffer: &wgpu::Buffer, count: u64) -> Result<
 
 /// Maps a MAP_READ buffer and copies its bytes out.
 pub fn map_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>> {
+    map_read_with(ctx, staging, <[u8]>::to_vec)
+}
+
+/// Maps a MAP_READ buffer and hands its bytes to `f`.
+pub fn map_read_with<T>(
+    ctx: &GpuContext,
+    staging: &wgpu::Buffer,
+    f: impl FnOnce(&[u8]) -> T,
+) -> Result<T> {
     let (tx, rx) = std::sync::mpsc::channel();
     staging.map_async(wgpu::MapMode::Read, .., move |r| {
         let _ = tx.send(r);
@@ -157,10 +177,9 @@ pub fn map_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>> {
     rx.recv()
         .map_err(|e| Error::Gpu(format!("map: {e}")))?
         .map_err(|e| Error::Gpu(format!("map: {e}")))?;
-    let bytes = staging
+    let out = f(&staging
         .get_mapped_range(..)
-        .map_err(|e| Error::Gpu(format!("map range: {e}")))?
-        .to_vec();
+        .map_err(|e| Error::Gpu(format!("map range: {e}")))?);
     staging.unmap();
-    Ok(bytes)
+    Ok(out)
 }

@@ -1,15 +1,15 @@
 //! Drives `shaders/trajectory.wgsl`: ensembles of pendulums, one invocation each, keeping
 //! every `stride`-th state, each with the same parameters or its own joint damping.
 
-use super::context::{GpuContext, read_buffer};
-use super::layout::{Real, Run, RunParams, mass_scale, read_reals, with_real};
+use super::context::{GpuContext, read_buffer_with};
+use super::layout::{Real, Run, RunParams, mass_scale, with_real};
 use super::pipeline::{
     Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer_of,
     storage_buffer,
 };
 use super::shaders::Kernel;
 use crate::error::{Error, Result};
-use crate::model::{Params, State};
+use crate::model::{KeptRuns, Params, State};
 use crate::spec::Precision;
 
 pub struct TrajectoryKernel {
@@ -62,11 +62,15 @@ impl TrajectoryKernel {
         steps: u32,
         stride: u32,
     ) -> Result<Vec<Vec<State>>> {
-        with_real!(self.precision, R => self.run_in::<R>(ctx, p, starts, damping, dt, steps, stride))
+        self.run_damped_with(ctx, p, starts, damping, dt, steps, stride, |kept| {
+            kept.to_runs()
+        })
     }
 
+    /// As [`TrajectoryKernel::run_damped`], handing the kept states to `f` where they are
+    /// read back, in the kernel's precision (no copy or conversion on the host).
     #[allow(clippy::too_many_arguments)]
-    fn run_in<R: Real>(
+    pub fn run_damped_with<T>(
         &self,
         ctx: &GpuContext,
         p: &Params,
@@ -75,7 +79,23 @@ impl TrajectoryKernel {
         dt: f64,
         steps: u32,
         stride: u32,
-    ) -> Result<Vec<Vec<State>>> {
+        f: impl FnOnce(KeptRuns<'_>) -> T,
+    ) -> Result<T> {
+        with_real!(self.precision, R => self.run_in::<R, T>(ctx, p, starts, damping, dt, steps, stride, f))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn run_in<R: Real, T>(
+        &self,
+        ctx: &GpuContext,
+        p: &Params,
+        starts: &[State],
+        damping: Option<&[(f64, f64)]>,
+        dt: f64,
+        steps: u32,
+        stride: u32,
+        f: impl FnOnce(KeptRuns<'_>) -> T,
+    ) -> Result<T> {
         if let Some(d) = damping {
             assert_eq!(d.len(), starts.len(), "one damping pair per start");
         }
@@ -158,14 +178,19 @@ impl TrajectoryKernel {
             &[&params_buf, &states, &damping_buf],
         );
         dispatch_and_wait(ctx, pipeline, &bind, count)?;
-        let values = read_reals::<R>(&read_buffer(ctx, &states, bytes)?);
-        Ok(values
-            .chunks_exact(4 * per_run as usize)
-            .map(|run| {
-                run.chunks_exact(4)
-                    .map(|v| State::from_array(std::array::from_fn(|i| v[i])))
-                    .collect()
-            })
-            .collect())
+        let per_run = per_run as usize;
+        read_buffer_with(ctx, &states, bytes, |b| {
+            match bytemuck::try_cast_slice::<u8, R>(b) {
+                Ok(v) => f(KeptRuns {
+                    reals: R::reals(v),
+                    per_run,
+                }),
+                // A mapping not aligned to the real's size (wgpu promises 8 bytes): one copy.
+                Err(_) => f(KeptRuns {
+                    reals: R::reals(&bytemuck::pod_collect_to_vec::<u8, R>(b)),
+                    per_run,
+                }),
+            }
+        })
     }
 }
