@@ -95,10 +95,11 @@ def test_a_map_is_what_xarrays_constructor_makes_without_importing_dask():
 
 
 def test_a_map_reaches_python_without_a_copy():
-    """On the CPU backend the engine holds nothing beyond the map, so the call's peak RSS over
-    the interpreter's baseline is the map and a fixed overhead: 3.3-3.5 MB measured at
-    1024^2, 1536^2 and 2048^2 (the thread pool, the axes). A copy on the way to numpy or xarray
-    would add the map's 9.4 MB again: the bound, map + 6 MB, lies between the two."""
+    """The issue's memory target, on the CPU backend (whose engine holds nothing beyond the
+    map; lavapipe's GPU buffers are host memory and would count): in a process where a map
+    has been made once (the thread pool, the lazy imports), a map's call peaks at most 10 %
+    above the map's bytes over the baseline (1.003x measured at 1536^2). A copy on the way to
+    numpy or xarray would double it."""
     child = r"""
 import json
 import chaoscope
@@ -106,15 +107,17 @@ def status(key):
     for line in open("/proc/self/status"):
         if line.startswith(key):
             return int(line.split()[1]) * 1024
+chaoscope.flip_map(size=8, t_max=0.02, backend="cpu", progress=False)
 base = status("VmRSS:")
+# Resets this process's peak RSS (VmHWM) to the present.
+open("/proc/self/clear_refs", "w").write("5")
 m = chaoscope.flip_map(size=1536, t_max=0.02, backend="cpu", progress=False)
-# This process's own peak (getrusage's can carry the forking parent's over the exec).
 print(json.dumps({"over": status("VmHWM:") - base, "map": m.values.nbytes}))
 """
     out = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, check=True)
     got = json.loads(out.stdout.strip().splitlines()[-1])
     assert got["map"] == 1536 * 1536 * 4
-    assert got["over"] < got["map"] + 6 * 2**20, got
+    assert got["over"] <= 1.1 * got["map"], got
 
 
 @pytest.mark.parametrize("indicator", ["ftle", "megno"])
