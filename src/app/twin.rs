@@ -15,6 +15,7 @@ use super::check_count;
 use super::forecast::{Outcome, Settings, check_settings, fit_and_forecast, fit_json};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
+use crate::fit::forecast::Slope;
 use crate::fit::forecast_plot::{self, Marks};
 use crate::fit::window::{STEPS_PER_SECOND, track_with};
 use crate::fit::{Frame, angles};
@@ -243,8 +244,7 @@ fn by_replicate(
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct TwinSummary {
     pub rows: Vec<TwinRow>,
-    /// Per rate: (rate, slope of horizon against ln sigma, its error, -1/lambda, their ratio).
-    pub slopes: Vec<(f64, f64, f64, f64, f64)>,
+    pub slopes: Vec<Slope>,
     pub coverage: f64,
     pub output: PathBuf,
     pub files: Vec<PathBuf>,
@@ -342,7 +342,7 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
     monitor.finish();
     // Per rate: the horizon against ln sigma, and the FTLE over the span where the horizons
     // fall (the stretching at each horizon against its time), both within each orbit.
-    let slopes: Vec<(f64, f64, f64, f64, f64)> = job
+    let slopes: Vec<Slope> = job
         .rates
         .iter()
         .map(|&rate| {
@@ -353,9 +353,19 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
             let stretching = by_replicate(&of, job.replicates, |r| {
                 Some((r.spread_horizon?, r.stretching?))
             });
-            let (b, e) = within_slope(&horizons);
-            let (lambda, _) = within_slope(&stretching);
-            (rate, b, e, -1.0 / lambda, b * -lambda)
+            let (slope, slope_error) = within_slope(&horizons);
+            let (lambda, lambda_error) = within_slope(&stretching);
+            let ratio = -slope * lambda;
+            Slope {
+                rate,
+                slope,
+                slope_error,
+                lambda,
+                lambda_error,
+                minus_one_over_lambda: -1.0 / lambda,
+                ratio,
+                ratio_error: ratio.abs() * (slope_error / slope).hypot(lambda_error / lambda),
+            }
         })
         .collect();
     let coverage = inside / counted.max(1) as f64;
@@ -437,7 +447,9 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
         "tolerance": job.tolerance, "table": table,
         "coverage": coverage,
         "slopes": slopes.iter().map(|s| json!({
-            "rate": s.0, "slope": s.1, "slope_error": s.2, "minus_one_over_lambda": s.3, "ratio": s.4,
+            "rate": s.rate, "slope": s.slope, "slope_error": s.slope_error, "lambda": s.lambda,
+            "lambda_error": s.lambda_error, "minus_one_over_lambda": s.minus_one_over_lambda,
+            "ratio": s.ratio, "ratio_error": s.ratio_error,
         })).collect::<Vec<_>>(),
         "example_fit": shown.as_ref().map(|s| fit_json(&s.0.fit)),
     });

@@ -112,9 +112,17 @@ pub fn run(args: &TwinArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
     let s = twin::run(&job, command_line::twin(&job), monitor)?;
     say(&s.notices);
-    for (rate, b, e, reference, ratio) in &s.slopes {
+    for l in &s.slopes {
         eprintln!(
-            "{rate} Hz: horizon against ln sigma: slope {b:.3} ± {e:.3} s, -1/lambda {reference:.3} s (ratio {ratio:.2})"
+            "{} Hz: horizon against ln sigma: slope {:.3} ± {:.3} s, -1/lambda {:.3} s (lambda {:.2} ± {:.2} 1/s; ratio {:.2} ± {:.2})",
+            l.rate,
+            l.slope,
+            l.slope_error,
+            l.minus_one_over_lambda,
+            l.lambda,
+            l.lambda_error,
+            l.ratio,
+            l.ratio_error
         );
     }
     eprintln!(

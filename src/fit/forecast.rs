@@ -102,6 +102,22 @@ impl Forecast {
     }
 }
 
+/// One sampling rate's test of the horizon against the noise: the horizon's slope against
+/// ln sigma and the stretching rate lambda over the span where the horizons fall (both
+/// within each orbit, with their standard errors); linear growth predicts slope = -1/lambda.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Slope {
+    pub rate: f64,
+    pub slope: f64,
+    pub slope_error: f64,
+    pub lambda: f64,
+    pub lambda_error: f64,
+    pub minus_one_over_lambda: f64,
+    /// slope / (-1/lambda), and its error from both (relative errors in quadrature).
+    pub ratio: f64,
+    pub ratio_error: f64,
+}
+
 /// Draws `n` members (state and joint damping) from the fit's normal distribution; a damping
 /// drawn below zero takes zero (no measurement allows a joint that pushes), and the members
 /// that did are counted.

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::forecast::Forecast;
+use super::forecast::{Forecast, Slope};
 use super::plots::{BG, MEASURED, err, range, save};
 use crate::error::Result;
 use crate::render::{self, Outputs};
@@ -200,13 +200,12 @@ fn horizons<Y: Ranged<ValueType = f64>>(
 
 /// The twin experiments' horizons (s after the window) against the noise (log scale), per
 /// sampling rate: each experiment, the fitted line, and the line of slope -1/lambda through
-/// the same centre (dashed). `series`: (rate, [(sigma, horizon)]); `slopes`: (rate, slope,
-/// its error, -1/lambda, ratio).
+/// the same centre (dashed). `series`: (rate, [(sigma, horizon)]).
 pub fn twin(
     out: &mut Outputs,
     path: &Path,
     series: &[(f64, Vec<(f64, f64)>)],
-    slopes: &[(f64, f64, f64, f64, f64)],
+    slopes: &[Slope],
 ) -> Result<()> {
     render::register_font();
     const COLOURS: [RGBColor; 4] = [BAND, SPREAD_HORIZON, TRUTH, DATA_HORIZON];
@@ -247,7 +246,12 @@ pub fn twin(
                 .map_err(err)?
                 .label(format!("{rate} Hz"))
                 .legend(move |(x, y)| Circle::new((x, y), 4, colour.filled()));
-            let Some(&(_, b, _, reference, _)) = slopes.iter().find(|s| s.0 == *rate) else {
+            let Some(&Slope {
+                slope: b,
+                minus_one_over_lambda: reference,
+                ..
+            }) = slopes.iter().find(|s| s.rate == *rate)
+            else {
                 continue;
             };
             if points.len() < 2 || !b.is_finite() {
