@@ -204,3 +204,19 @@ fn bad_tracking_files_name_the_line() {
         "nothing written for a bad file"
     );
 }
+
+/// The fit finds the joint damping itself: a given one would be recorded in the summary and
+/// its command yet change nothing, so it is refused (exit 2, naming the flag).
+#[test]
+fn a_given_joint_damping_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    chaoscope()
+        .arg("fit")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv"))
+        .args(["--joint-damping", "0.05", "--backend", "cpu", "--output"])
+        .arg(dir.path().join("out"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--joint-damping"));
+    assert!(!dir.path().join("out").exists(), "nothing written");
+}

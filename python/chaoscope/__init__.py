@@ -374,7 +374,6 @@ def fit(
     l2: Optional[float] = None,
     g: Optional[float] = None,
     rod_mass: Union[None, float, Pair] = None,
-    joint_damping: Union[None, float, Pair] = None,
     air_drag: bool = False,
     rho: Optional[float] = None,
     cw: Optional[float] = None,
@@ -393,7 +392,7 @@ def fit(
     errors), the energy's exponential and inverse-square decay fits, and how long the model
     released at ``start`` (s) agrees with the data within ``tolerance`` (m), its ``candidates``
     fitted over ``window`` s; plots, derived.csv and summary.json go to ``output``. The physics
-    (``preset="lab"``...) as :func:`params`.
+    (``preset="lab"``...) as :func:`params`; the joint damping is what the fit finds.
     """
     keywords = dict(locals())
     keywords.pop("progress")

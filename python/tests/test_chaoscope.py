@@ -354,6 +354,9 @@ def test_fit_equals_its_command(tmp_path):
         "command", "").replace(str(tmp_path / "cli"), "")
     with pytest.raises(ValueError, match="^window: "):
         chaoscope.fit(str(data), output=str(tmp_path / "bad"), window=100.0, progress=False)
+    # The fit finds the joint damping: no keyword for it.
+    with pytest.raises(TypeError, match="joint_damping"):
+        chaoscope.fit(str(data), joint_damping=0.01, progress=False)
 
 
 def test_forecast_equals_its_command(tmp_path):

@@ -65,3 +65,15 @@ pub fn check_count(field: &'static str, n: u64, lo: u64, hi: u64) -> Result<()> 
         ))
     }
 }
+
+/// `fit` and `forecast` fit both joints' damping to the data: a value given for it would be
+/// written into the summary's parameters and the reproducing command, yet change nothing.
+pub fn check_damping_not_given(params: &crate::params::ParamSources) -> Result<()> {
+    match params.joint_damping {
+        Some(_) => Err(Error::invalid(
+            "joint_damping",
+            "is fitted to the data here; leave it out",
+        )),
+        None => Ok(()),
+    }
+}

@@ -66,6 +66,7 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
     check_within("tolerance", job.tolerance, 1e-4, 1.0)?;
     check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
     check_count("candidates", job.candidates as u64, 64, 4_000_000)?;
+    super::checks::check_damping_not_given(&job.params)?;
     if !job.start.is_finite() {
         return Err(Error::invalid("start", "must be a finite time (s)"));
     }

@@ -191,6 +191,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         job.tracking_error,
         job.candidates,
     )?;
+    super::checks::check_damping_not_given(&job.params)?;
     check_writable("output", &job.output.join("summary.json"))?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();

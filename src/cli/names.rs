@@ -108,6 +108,7 @@ mod tests {
                     "velocity_error",
                     "candidates",
                     "start",
+                    "joint_damping",
                     "output",
                 ],
             ),
