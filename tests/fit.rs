@@ -218,5 +218,20 @@ fn a_given_joint_damping_is_refused() {
         .assert()
         .code(2)
         .stderr(predicate::str::contains("--joint-damping"));
+    // Nor from a parameter file.
+    let file = dir.path().join("damped.toml");
+    std::fs::write(&file, "joint_damping = [0.05, 0.05]\n").unwrap();
+    chaoscope()
+        .arg("fit")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv"))
+        .args(["--backend", "cpu", "--params"])
+        .arg(&file)
+        .arg("--output")
+        .arg(dir.path().join("out"))
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("--params").and(predicate::str::contains("joint_damping")),
+        );
     assert!(!dir.path().join("out").exists(), "nothing written");
 }
