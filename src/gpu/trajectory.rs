@@ -46,29 +46,15 @@ impl TrajectoryKernel {
         steps: u32,
         stride: u32,
     ) -> Result<Vec<Vec<State>>> {
-        self.run_damped(ctx, p, starts, None, dt, steps, stride)
-    }
-
-    /// As [`TrajectoryKernel::run`], run i with joint damping `damping[i]` (N m s at the
-    /// pivot and the middle joint) in place of `p`'s when given (one pair per start).
-    #[allow(clippy::too_many_arguments)]
-    pub fn run_damped(
-        &self,
-        ctx: &GpuContext,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        stride: u32,
-    ) -> Result<Vec<Vec<State>>> {
-        self.run_damped_with(ctx, p, starts, damping, dt, steps, stride, |kept| {
+        self.run_damped_with(ctx, p, starts, None, dt, steps, stride, |kept| {
             kept.to_runs()
         })
     }
 
-    /// As [`TrajectoryKernel::run_damped`], handing the kept states to `f` where they are
-    /// read back, in the kernel's precision (no copy or conversion on the host).
+    /// As [`TrajectoryKernel::run`], run i with joint damping `damping[i]` (N m s at the pivot
+    /// and the middle joint) in place of `p`'s when given (one pair per start), the kept states
+    /// handed to `f` where they are read back, in the kernel's precision (no copy or
+    /// conversion on the host).
     #[allow(clippy::too_many_arguments)]
     pub fn run_damped_with<T>(
         &self,
