@@ -8,7 +8,7 @@ use crate::cpu;
 use crate::error::{Error, Result};
 use crate::field::{Convergence, Field};
 use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
-use crate::model::{KeptRuns, Params, Reals, State};
+use crate::model::{KeptRuns, Params, Positions, Reals, State};
 use crate::monitor::Monitor;
 use crate::spec::{
     FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, MapSpec, Method, Precision,
@@ -393,14 +393,90 @@ impl Engine {
     /// Runs per chunk of an ensemble: at most a dispatch's worth of pendulum-steps (on the
     /// CPU a sixteenth, ~0.1 s) and [`ENSEMBLE_CHUNK_STATES`] kept states, at least one run.
     pub fn ensemble_chunk(&self, runs: usize, steps: u32, stride: u32) -> usize {
+        self.chunk_of(runs, steps, (steps / stride.max(1) + 1) as u64)
+    }
+
+    /// Runs per chunk of runs of `steps` steps that keep `kept` states (or sets of four
+    /// f32 positions, as large as an f32 state) each.
+    fn chunk_of(&self, runs: usize, steps: u32, kept: u64) -> usize {
         let budget = if self.gpu.is_some() {
             STEPS_PER_DISPATCH
         } else {
             STEPS_PER_DISPATCH / 16
         };
         let by_work = budget / steps.max(1) as u64;
-        let by_memory = ENSEMBLE_CHUNK_STATES / (steps / stride.max(1) + 1) as u64;
+        let by_memory = ENSEMBLE_CHUNK_STATES / kept.max(1);
         by_work.min(by_memory).clamp(1, runs.max(1) as u64) as usize
+    }
+
+    /// The bobs' positions (x1, y1, x2, y2) of one run per start at `times` (s from the
+    /// start, ascending, within `steps` steps of `dt`), run i with joint damping `damping[i]`
+    /// (N m s at the pivot and the middle joint) in place of `p`'s when given (GPU: one
+    /// invocation per run, `shaders/positions.wgsl`; CPU: `cpu::positions`, runs in
+    /// parallel). Each chunk of runs is handed to `each` in order, with the index of its
+    /// first run, its positions time-major: time j, coordinate c, run i of the chunk's n at
+    /// (4 j + c) n + i. Progress and Ctrl-C between chunks.
+    #[allow(clippy::too_many_arguments)]
+    pub fn ensemble_positions_each(
+        &self,
+        p: &Params,
+        starts: &[State],
+        damping: Option<&[(f64, f64)]>,
+        dt: f64,
+        steps: u32,
+        times: &[f64],
+        monitor: &Monitor,
+        mut each: impl FnMut(usize, &[f32]) -> Result<()>,
+    ) -> Result<()> {
+        // The GPU kernel splits its dispatches itself and reads back once: chunks by memory.
+        let work = if self.gpu.is_some() { 1 } else { steps };
+        let per_chunk = self.chunk_of(starts.len(), work, times.len() as u64);
+        monitor.start("runs", starts.len() as u64);
+        for (k, chunk) in starts.chunks(per_chunk).enumerate() {
+            monitor.check()?;
+            let first = k * per_chunk;
+            let pairs = damping.map(|d| &d[first..first + chunk.len()]);
+            match &self.gpu {
+                Some(g) => g.positions(self.precision).run_with(
+                    &g.ctx,
+                    p,
+                    chunk,
+                    pairs,
+                    dt,
+                    steps,
+                    times,
+                    monitor,
+                    |v| each(first, v),
+                )??,
+                None => {
+                    let runs: Vec<Vec<Positions>> = chunk
+                        .par_iter()
+                        .enumerate()
+                        .map(|(i, s)| {
+                            let mut q = *p;
+                            if let Some(d) = pairs {
+                                (q.losses.joint1, q.losses.joint2) = d[i];
+                            }
+                            cpu::positions(&q, *s, dt, steps, times)
+                        })
+                        .collect();
+                    let n = chunk.len();
+                    let mut v = vec![0f32; 4 * times.len() * n];
+                    v.par_chunks_mut(4 * n).enumerate().for_each(|(j, v)| {
+                        for (i, run) in runs.iter().enumerate() {
+                            let q = run[j];
+                            for (c, x) in [q.x1, q.y1, q.x2, q.y2].into_iter().enumerate() {
+                                v[c * n + i] = x as f32;
+                            }
+                        }
+                    });
+                    each(first, &v)?
+                }
+            };
+            monitor.advance(chunk.len() as u64);
+        }
+        monitor.finish();
+        Ok(())
     }
 
     /// As [`Engine::ensemble`], handing each chunk of runs (in order, with the index of its

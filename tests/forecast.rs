@@ -32,6 +32,28 @@ const RELEASE: State = State {
     omega2: 0.0,
 };
 
+/// 64 releases near RELEASE, each with its own joint damping (0 .. 0.01 N m s at each joint).
+fn damped_members() -> (Vec<State>, Vec<(f64, f64)>) {
+    let starts = (0..64)
+        .map(|k| State {
+            theta1: 2.0 + 0.01 * k as f64,
+            ..RELEASE
+        })
+        .collect();
+    let damping = (0..64)
+        .map(|k| (0.01 * (k % 8) as f64 / 7.0, 0.01 * (k / 8) as f64 / 7.0))
+        .collect();
+    (starts, damping)
+}
+
+/// The GPU engine in `precision`.
+fn gpu_engine(precision: Precision) -> Engine {
+    Engine::new(Backend::Gpu)
+        .unwrap()
+        .with_precision(precision, Backend::Gpu)
+        .unwrap()
+}
+
 /// Members with their own joint damping: the GPU's runs equal the CPU's member by member.
 /// Damping 0 .. 0.01 N m s changes the angular velocities by ~1 rad/s over these 0.5 s,
 /// far beyond the tolerances, so a member run with another's (or a wrongly scaled) damping
@@ -42,15 +64,7 @@ fn per_member_damping_agrees_on_gpu_and_cpu() {
         return;
     }
     let p = Preset::Lab.params();
-    let starts: Vec<State> = (0..64)
-        .map(|k| State {
-            theta1: 2.0 + 0.01 * k as f64,
-            ..RELEASE
-        })
-        .collect();
-    let damping: Vec<(f64, f64)> = (0..64)
-        .map(|k| (0.01 * (k % 8) as f64 / 7.0, 0.01 * (k / 8) as f64 / 7.0))
-        .collect();
+    let (starts, damping) = damped_members();
     let (dt, steps, stride) = (1e-3, 500, 5);
     let run = |engine: &Engine| {
         let mut out = Vec::new();
@@ -76,15 +90,9 @@ fn per_member_damping_agrees_on_gpu_and_cpu() {
     // tolerances.
     let last = |k: usize| cpu[k].last().unwrap().omega2;
     assert!((last(0) - last(63)).abs() > 0.1, "damping changes nothing?");
-    let gpu = |precision| {
-        Engine::new(Backend::Gpu)
-            .unwrap()
-            .with_precision(precision, Backend::Gpu)
-            .unwrap()
-    };
     // f64: the GPU's carried cos and sin are another O(dt^4) discretisation of the same
     // motion (tests/precision.rs), here ~1e-7 at dt 1e-3 over 0.5 s of this fast release.
-    let (f64_gpu, f32_gpu) = (gpu(Precision::F64), gpu(Precision::F32));
+    let (f64_gpu, f32_gpu) = (gpu_engine(Precision::F64), gpu_engine(Precision::F32));
     // f32: 6e-8 per step over 500 steps, grown by e^(lambda t) < e^2: 1e-4 rad and rad/s.
     for (engine, tolerance) in [(f64_gpu, 1e-6), (f32_gpu, 1e-4)] {
         let runs = run(&engine);
@@ -109,6 +117,91 @@ fn per_member_damping_agrees_on_gpu_and_cpu() {
     }
 }
 
+/// The positions at `times` of the members `starts` with their own damping on `engine`,
+/// gathered time-major (time, coordinate, member) from however many chunks came.
+fn positions_on(
+    engine: &Engine,
+    p: &Params,
+    starts: &[State],
+    damping: &[(f64, f64)],
+    (dt, steps): (f64, u32),
+    times: &[f64],
+) -> Vec<f32> {
+    let m = starts.len();
+    let mut all = vec![f32::NAN; 4 * times.len() * m];
+    engine
+        .ensemble_positions_each(
+            p,
+            starts,
+            Some(damping),
+            dt,
+            steps,
+            times,
+            &Monitor::hidden(),
+            |first, v| {
+                let n = v.len() / (4 * times.len());
+                for (row, chunk) in all.chunks_mut(m).zip(v.chunks(n)) {
+                    row[first..first + n].copy_from_slice(chunk);
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+    all
+}
+
+/// The forecast's positions at given times (`shaders/positions.wgsl`, its dispatches
+/// writing into one buffer, against `cpu::positions`): member by member, at the start, on
+/// steps, between them and at the end. The GPU interpolates the carried cos and sin, the
+/// CPU the angles; both err by O(h^4), 1e-9 m at h = 1e-3 s, far below the tolerances.
+#[test]
+fn ensemble_positions_agree_on_gpu_and_cpu() {
+    if common::f64_gpu().is_none() {
+        return;
+    }
+    let p = Preset::Lab.params();
+    let (starts, damping) = damped_members();
+    let cpu_engine = Engine::new(Backend::Cpu).unwrap();
+    let compare = |engine: &Engine, stepping: (f64, u32), times: &[f64], tolerance: f64| {
+        let (a, b) = (
+            positions_on(engine, &p, &starts, &damping, stepping, times),
+            positions_on(&cpu_engine, &p, &starts, &damping, stepping, times),
+        );
+        // Time 0 is the start itself (to f32's rounding of an arm's length).
+        let start = p.positions(&starts[5]);
+        assert!(
+            (b[5] as f64 - start.x1).abs() < 1e-7 && (b[3 * 64 + 5] as f64 - start.y2).abs() < 1e-7
+        );
+        let mut worst = 0f64;
+        for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+            let d = (x - y).abs() as f64;
+            worst = worst.max(d);
+            let (j, c, i) = (k / 256, k / 64 % 4, k % 64);
+            assert!(
+                d < tolerance,
+                "t {}, coordinate {c}, member {i}: GPU {x} CPU {y}",
+                times[j]
+            );
+        }
+        eprintln!("positions, GPU against CPU: {worst:e} m (tolerance {tolerance:e})");
+    };
+    // 0.5 s in 500 steps: the start, a step's end, within steps, the end. The states agree to
+    // 1e-6 (f64) and 1e-4 (f32) rad and rad/s (per_member_damping_agrees_on_gpu_and_cpu),
+    // times the arms' 0.36 m, plus f32's rounding of the positions (3e-8 m).
+    let times = [0.0, 1e-3, 0.0105, 0.1234, 0.25, 0.3333, 0.4999, 0.5];
+    compare(&gpu_engine(Precision::F64), (1e-3, 500), &times, 1e-6);
+    compare(&gpu_engine(Precision::F32), (1e-3, 500), &times, 4e-5);
+    // 2^18 + 1 steps: a dispatch holds 63 members (STEPS_PER_DISPATCH 2^24), so a second
+    // one writes the last member at its place. f64 only (f32 loses a step's tiny increments).
+    let steps = (1 << 18) + 1;
+    compare(
+        &gpu_engine(Precision::F64),
+        (0.5 / steps as f64, steps),
+        &times,
+        1e-6,
+    );
+}
+
 /// The model's step (1/300 s) against a ten times finer one along the release over 1.5 s:
 /// the integration error the zero-noise twin below allows for.
 fn integration_error(p: &Params, t: &[f64]) -> f64 {
@@ -128,8 +221,9 @@ fn truth_at(p: &Params, t: f64) -> State {
 }
 
 /// The forecast places the members at the band's times by cubic Hermite interpolation
-/// between states kept every `h` s: that interpolation applied to the truth's own states
-/// (here in Bezier form) against the truth at `times`, the largest position error.
+/// between their RK4 steps `h` apart: that interpolation applied to the truth's own states
+/// (here as a sum of Bernstein polynomials) against the truth at `times`, the largest
+/// position error.
 fn interpolation_error(p: &Params, h: f64, times: &[f64]) -> f64 {
     times
         .iter()
@@ -194,20 +288,20 @@ fn zero_noise_twin_holds_the_truth() {
     // error's, so the damping is known to far better than its value.
     assert!((o.fit.values[4] - 1e-3).abs() < 1e-5, "{:?}", o.fit.values);
     // The fit's start (within the integration error) plus the error grown over the
-    // forecast, and the interpolation between kept states (the members' orbits are the
-    // truth's to micrometres, so their interpolation errs as the truth's does): twice both.
-    let (dt, _, stride) = stepping(f.t0, 1.5);
+    // forecast, and the interpolation between steps (the members' orbits are the truth's to
+    // micrometres, so their interpolation errs as the truth's does): twice both.
+    let (dt, _) = stepping(f.t0, 1.5);
     let after: Vec<f64> = f
         .times
         .iter()
         .copied()
         .filter(|&t| t > f.window_end)
         .collect();
-    let interpolation = interpolation_error(&truth, dt * stride as f64, &after);
-    eprintln!("Hermite interpolation of kept states: {interpolation:e} m");
-    // h^4/384 max|d^4 theta/dt^4| l with h = 1/50 s: micrometres at most.
+    let interpolation = interpolation_error(&truth, dt, &after);
+    eprintln!("Hermite interpolation between steps: {interpolation:e} m");
+    // h^4/384 max|d^4 theta/dt^4| l with h = 1/300 s: under a micrometre.
     assert!(
-        interpolation < 1e-5,
+        interpolation < 1e-6,
         "interpolation errs by {interpolation} m"
     );
     let slack = 2.0 * (error + interpolation);

@@ -7,10 +7,10 @@ use std::f64::consts::PI;
 
 use chaoscope::cpu;
 use chaoscope::field::Field;
-use chaoscope::gpu::FlipTimeKernel;
+use chaoscope::gpu::{FlipTimeKernel, TrajectoryKernel};
 use chaoscope::model::{Params, State};
 use chaoscope::monitor::Monitor;
-use chaoscope::spec::{FlipSpec, Grid, Range, Stepping};
+use chaoscope::spec::{FlipSpec, Grid, Precision, Range, Stepping};
 
 fn spec(n: u32, t_max: f64, params: Params, early_exit: bool) -> FlipSpec {
     FlipSpec {
@@ -349,4 +349,59 @@ fn zoomed_grid_uses_pixel_centres() {
         "small angles never flip: {:?}",
         map.data
     );
+}
+
+/// lavapipe ends all of an invocation's loops after 65535 iterations in all and goes on
+/// silently: a trajectory of more steps, and a map whose few pixels take more steps in a
+/// dispatch, came back short (a trajectory's last states zero). f64 on both paths, so the
+/// tolerance is the two discretisations' difference (carried cos and sin on the GPU), far
+/// below what a step cut short would leave.
+#[test]
+fn gpu_runs_go_past_lavapipes_loop_limit() {
+    let Some(ctx) = common::f64_gpu() else { return };
+    let p = Params::default();
+    let (start, dt, steps) = (State::at_rest(0.5, 0.3), 1e-4, 70_000);
+    let want = cpu::trajectory(&p, start, dt, steps);
+    let got = TrajectoryKernel::with_precision(&ctx, Precision::F64)
+        .run(&ctx, &p, &[start], dt, steps, 1)
+        .unwrap()
+        .remove(0);
+    for k in [65_535, 65_536, 70_000] {
+        let d = (0..4)
+            .map(|i| (got[k].to_array()[i] - want[k].to_array()[i]).abs())
+            .fold(0.0, f64::max);
+        assert!(d < 1e-8, "step {k}: gpu {:?} cpu {:?}", got[k], want[k]);
+    }
+    // 16 pixels at 1e-5 s: 65535 steps are 0.66 s, and a dispatch of 16 active pixels asked
+    // for 2^20 steps.
+    let s = FlipSpec::new(
+        p,
+        Grid::square(4),
+        Stepping {
+            dt: 1e-5,
+            t_max: 3.0,
+        },
+    );
+    let cpu_map = cpu::flip_map(&s, &Monitor::hidden()).unwrap();
+    let gpu_map = FlipTimeKernel::with_precision(&ctx, Precision::F64)
+        .run(&ctx, &s, &Monitor::hidden())
+        .unwrap();
+    let late = cpu_map
+        .data
+        .iter()
+        .filter(|&&t| t > 0.66 && t < 3.0)
+        .count();
+    assert!(
+        late > 0,
+        "no pixel flips after 65535 steps: {:?}",
+        cpu_map.data
+    );
+    for (k, (&c, &g)) in cpu_map.data.iter().zip(&gpu_map.data).enumerate() {
+        // Flip times agree to a step's fraction (both locate the flip inside the step).
+        assert!(
+            (c.is_infinite() && g.is_infinite()) || (c - g).abs() < 1e-4,
+            "pixel {k}: cpu {c} gpu {g} (cpu map {:?})",
+            cpu_map.data
+        );
+    }
 }

@@ -2,8 +2,8 @@
 //! their Rust mirrors in size and member offsets.
 
 use chaoscope::gpu::layout::{
-    GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuIndicatorSlot, GpuIndicatorSlot64, GpuLyapunovSlot,
-    GpuParams, GpuParams64, GpuPendulum, GpuPendulum64,
+    GpuAdaptiveSlot, GpuAdaptiveSlot64, GpuBandTime, GpuIndicatorSlot, GpuIndicatorSlot64,
+    GpuLyapunovSlot, GpuParams, GpuParams64, GpuPendulum, GpuPendulum64,
 };
 use chaoscope::gpu::shaders::all_shaders;
 use wgpu::naga;
@@ -126,6 +126,19 @@ fn storage_structs_match_their_rust_mirrors() {
             };
             assert_eq!(span as usize, size, "{name}: AdaptiveSlot");
             assert_eq!(wgsl, rust, "{name}: members and offsets of AdaptiveSlot");
+        }
+        if name.starts_with("positions") {
+            let (wgsl, span) = wgsl_struct(&module, "BandTime");
+            assert_eq!(
+                span as usize,
+                std::mem::size_of::<GpuBandTime>(),
+                "{name}: BandTime"
+            );
+            assert_eq!(
+                wgsl,
+                rust_offsets!(GpuBandTime; step, fraction),
+                "{name}: members and offsets of BandTime"
+            );
         }
         if name.starts_with("indicators") {
             let (wgsl, span) = wgsl_struct(&module, "IndicatorSlot");

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use crate::error::Result;
 use crate::field::Field;
-use crate::model::{Params, State};
+use crate::model::{Params, Positions, State};
 use crate::monitor::Monitor;
 use crate::spec::{Grid, RowSpan};
 
@@ -310,6 +310,43 @@ pub fn trajectory(p: &Params, start: State, dt: f64, steps: u32) -> Vec<State> {
     for _ in 0..steps {
         y = rk4_step(p, &y, dt);
         out.push(y);
+    }
+    out
+}
+
+/// The bobs' positions at `times` (s from the start, ascending, within `steps` steps of `dt`)
+/// along the RK4 run from `start`: between the states around a time, each angle is the
+/// cubic through both states with their rates as slopes, evaluated in Bezier form by de
+/// Casteljau's construction (the shader `positions` interpolates the carried cos and sin
+/// instead, by the Hermite basis; both err by O(dt^4)).
+pub fn positions(p: &Params, start: State, dt: f64, steps: u32, times: &[f64]) -> Vec<Positions> {
+    let mut out = Vec::with_capacity(times.len());
+    let mut pending = times.iter().peekable();
+    let mut y = start;
+    for k in 0..steps {
+        let next = rk4_step(p, &y, dt);
+        let last = k + 1 == steps;
+        while let Some(&&t) = pending.peek() {
+            if t > (k + 1) as f64 * dt && !last {
+                break;
+            }
+            let s = ((t - k as f64 * dt) / dt).clamp(0.0, 1.0);
+            let bezier = |a: f64, wa: f64, b: f64, wb: f64| {
+                let c = [a, a + wa * dt / 3.0, b - wb * dt / 3.0, b];
+                let lerp = |u: f64, v: f64| u + s * (v - u);
+                let d = [lerp(c[0], c[1]), lerp(c[1], c[2]), lerp(c[2], c[3])];
+                let e = [lerp(d[0], d[1]), lerp(d[1], d[2])];
+                lerp(e[0], e[1])
+            };
+            out.push(p.positions(&State {
+                theta1: bezier(y.theta1, y.omega1, next.theta1, next.omega1),
+                omega1: 0.0,
+                theta2: bezier(y.theta2, y.omega2, next.theta2, next.omega2),
+                omega2: 0.0,
+            }));
+            pending.next();
+        }
+        y = next;
     }
     out
 }

@@ -9,25 +9,17 @@ use rand_distr::{Distribution, StandardNormal};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
+pub use super::quantiles::QUANTILES;
+use super::quantiles::quantiles;
 use super::window::{STEPS_PER_SECOND, WindowFit};
 use crate::cpu;
 use crate::engine::Engine;
 use crate::error::Result;
-use crate::model::{KeptRuns, Params, State};
+use crate::model::State;
 use crate::monitor::Monitor;
-
-/// Quantiles of every band: the 90 % band's ends, the 50 % band's ends, the median.
-pub const QUANTILES: [f64; 5] = [0.05, 0.25, 0.5, 0.75, 0.95];
 
 /// Spacing (s) of the bands' times between the data's own: smooth curves in the pictures.
 pub const BAND_STEP: f64 = 0.02;
-
-/// Kept states a member keeps per second (every third RK4 step): cubic Hermite
-/// interpolation between them (angles with their rates) errs by h^4/384 max|d^4 theta/dt^4|
-/// times an arm, at most 11 um midway between states in the default twin release's fastest
-/// swing (79 um at half the rate; tests/forecast.rs measures it on the truth), a hundredth
-/// of the smallest tracking noise a twin adds; half as many cost 8 % less on lavapipe.
-const KEPT_PER_SECOND: f64 = 100.0;
 
 /// Most bytes of the members' positions held at once (f32, four coordinates a time).
 pub const POSITION_BUDGET: u64 = 4 << 30;
@@ -150,101 +142,14 @@ pub fn band_times(t0: f64, end: f64, data: &[f64]) -> Vec<f64> {
     times
 }
 
-/// Runs of `members` and the times each keeps: (dt, steps, stride).
-pub fn stepping(t0: f64, end: f64) -> (f64, u32, u32) {
-    let stride = (STEPS_PER_SECOND / KEPT_PER_SECOND).round() as u32;
-    let kept = ((end - t0) * KEPT_PER_SECOND).ceil().max(1.0) as u32;
-    let steps = kept * stride;
-    ((end - t0) / steps as f64, steps, stride)
-}
-
-/// Where time `t` (s from the runs' start `t0`) falls among kept states `h` apart (`len` of
-/// them): the state before it, and the cubic Hermite weights of the two states' angles
-/// (h00, h01) and rates (h10 h, h11 h).
-fn hermite(t: f64, t0: f64, h: f64, len: usize) -> (usize, [f64; 4]) {
-    let x = ((t - t0) / h).max(0.0);
-    let k = (x.floor() as usize).min(len - 2);
-    let s = x - k as f64;
-    let (h00, h10) = (
-        2.0 * s.powi(3) - 3.0 * s * s + 1.0,
-        s.powi(3) - 2.0 * s * s + s,
-    );
-    let (h01, h11) = (-2.0 * s.powi(3) + 3.0 * s * s, s.powi(3) - s * s);
-    (k, [h00, h10 * h, h01, h11 * h])
-}
-
-/// Band times placed by one task: a run's states for them lie together (16 kept states, a
-/// few cache lines), where a task per time read every run's pair of states from afar.
-const TIMES_PER_TASK: usize = 8;
-
-/// The positions of the runs `kept` (the members from `first` on) at `times`, written into
-/// `values` (time, then coordinate, then member of `m`), a few times per task, run by run.
-fn place(
-    p: &Params,
-    kept: KeptRuns<'_>,
-    first: usize,
-    h: f64,
-    t0: f64,
-    times: &[f64],
-    values: &mut [f32],
-) {
-    let m = values.len() / (4 * times.len());
-    values
-        .par_chunks_mut(4 * m * TIMES_PER_TASK)
-        .zip(times.par_chunks(TIMES_PER_TASK))
-        .for_each(|(v, times)| {
-            let weights: Vec<_> = times
-                .iter()
-                .map(|&t| hermite(t, t0, h, kept.per_run))
-                .collect();
-            for i in 0..kept.len() {
-                for (j, &(k, [h00, h10, h01, h11])) in weights.iter().enumerate() {
-                    let (a, b) = (kept.state(i, k), kept.state(i, k + 1));
-                    let at = |ta: f64, wa: f64, tb: f64, wb: f64| {
-                        h00 * ta + h10 * wa + h01 * tb + h11 * wb
-                    };
-                    let q = p.positions(&State {
-                        theta1: at(a.theta1, a.omega1, b.theta1, b.omega1),
-                        omega1: 0.0,
-                        theta2: at(a.theta2, a.omega2, b.theta2, b.omega2),
-                        omega2: 0.0,
-                    });
-                    for (c, x) in [q.x1, q.y1, q.x2, q.y2].into_iter().enumerate() {
-                        v[(4 * j + c) * m + first + i] = x as f32;
-                    }
-                }
-            }
-        });
-}
-
-/// The quantiles of `v` (its values reordered and rewritten in place), by the nearest rank.
-/// The values become integers of the same total order (`f32::total_cmp`'s map, which is its
-/// own inverse), and each rank is selected only between the ranks already in place, the
-/// median first: about 2.5 n integer comparisons where five selections of f32 took 5 n.
-fn quantiles(v: &mut [f32]) -> [f64; 5] {
-    let n = v.len();
-    let keys: &mut [i32] = bytemuck::cast_slice_mut(v);
-    let order = |k: i32| k ^ (((k >> 31) as u32) >> 1) as i32;
-    keys.iter_mut().for_each(|k| *k = order(*k));
-    let rank = |q: f64| ((q * (n - 1) as f64).round() as usize).min(n - 1);
-    let ranks = QUANTILES.map(rank);
-    let mut placed: Vec<usize> = Vec::with_capacity(5);
-    for i in [2, 1, 0, 3, 4] {
-        let r = ranks[i];
-        if placed.contains(&r) {
-            continue;
-        }
-        let lo = placed.iter().filter(|&&x| x < r).max().map_or(0, |x| x + 1);
-        let hi = placed
-            .iter()
-            .filter(|&&x| x > r)
-            .min()
-            .copied()
-            .unwrap_or(n);
-        keys[lo..hi].select_nth_unstable(r - lo);
-        placed.push(r);
-    }
-    ranks.map(|r| f32::from_bits(order(keys[r]) as u32) as f64)
+/// The members' RK4 steps from `t0` to `end`: (dt, steps), the fit's step or just under. The
+/// positions between two steps come from cubic Hermite interpolation (of the angles on the
+/// CPU, of their carried cos and sin on the GPU), which errs by h^4/384 max|d^4 theta/dt^4|
+/// times an arm: 0.14 um at most in the default twin release's fastest swing (11 um at
+/// thrice the step, measured; tests/forecast.rs measures it on the truth).
+pub fn stepping(t0: f64, end: f64) -> (f64, u32) {
+    let steps = ((end - t0) * STEPS_PER_SECOND).ceil().max(1.0) as u32;
+    ((end - t0) / steps as f64, steps)
 }
 
 /// Members from `fit` integrated to `spec.end` on `engine`, and their bands.
@@ -258,57 +163,38 @@ pub fn forecast(
     let (starts, damping, clamped) = draw_members(fit, spec.members, spec.seed);
     let times = band_times(fit.t0, spec.end, &spec.data_times);
     let m = spec.members;
-    let (dt, steps, stride) = stepping(fit.t0, spec.end);
-    let h = dt * stride as f64;
-    // Positions by time, then member: a time's values sit together for its quantiles.
-    let mut values = vec![0f32; times.len() * 4 * m];
-    engine.ensemble_kept_each(
+    let (dt, steps) = stepping(fit.t0, spec.end);
+    let since_start: Vec<f64> = times.iter().map(|t| t - fit.t0).collect();
+    // Positions by time, then member (a time's values together for its quantiles): the
+    // whole ensemble's bands straight from where they were read back when it came as one
+    // chunk, else from the chunks gathered.
+    let mut stats = Vec::new();
+    let mut gathered: Option<Vec<f32>> = None;
+    engine.ensemble_positions_each(
         &fit.params,
         &starts,
         Some(&damping),
         dt,
         steps,
-        stride,
+        &since_start,
         monitor,
-        |first, kept| {
-            place(&fit.params, kept, first, h, fit.t0, &times, &mut values);
+        |first, v| {
+            let n = v.len() / (4 * times.len());
+            if n == m {
+                stats = bands(v, m, spec);
+                return Ok(());
+            }
+            let values = gathered.get_or_insert_with(|| vec![0f32; times.len() * 4 * m]);
+            for (row, chunk) in values.chunks_mut(m).zip(v.chunks(n)) {
+                row[first..first + n].copy_from_slice(chunk);
+            }
             Ok(())
         },
     )?;
     monitor.check()?;
-    let sigma = spec.tracking_error;
-    let stats: Vec<(Band, Band, f64)> = values
-        .par_chunks_mut(4 * m)
-        .enumerate()
-        .map(|(j, v)| {
-            let spread = {
-                let (x, y) = (&v[2 * m..3 * m], &v[3 * m..]);
-                let var = |a: &[f32]| {
-                    let mean = a.iter().map(|&x| x as f64).sum::<f64>() / m as f64;
-                    a.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / m as f64
-                };
-                (var(x) + var(y)).sqrt()
-            };
-            // A measurement: the model's position and the tracking error, drawn per time
-            // from a stream of its own so that the bands do not depend on the threads.
-            let mut rng = Pcg64::seed_from_u64(
-                spec.seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(j as u64 + 1)),
-            );
-            let mut model = [[0.0; 5]; 4];
-            let mut observed = [[0.0; 5]; 4];
-            let mut noisy = vec![0f32; m];
-            for c in 0..4 {
-                let coord = &mut v[c * m..(c + 1) * m];
-                for (o, &x) in noisy.iter_mut().zip(coord.iter()) {
-                    let z: f64 = StandardNormal.sample(&mut rng);
-                    *o = (x as f64 + sigma * z) as f32;
-                }
-                model[c] = quantiles(coord);
-                observed[c] = quantiles(&mut noisy);
-            }
-            (model, observed, spread)
-        })
-        .collect();
+    if let Some(values) = gathered {
+        stats = bands(&values, m, spec);
+    }
     let model: Vec<Band> = stats.iter().map(|s| s.0).collect();
     let observed: Vec<Band> = stats.iter().map(|s| s.1).collect();
     let spread: Vec<f64> = stats.iter().map(|s| s.2).collect();
@@ -327,6 +213,49 @@ pub fn forecast(
         lyapunov,
         dt,
     })
+}
+
+/// The model's and a measurement's bands and the lower bob's spread at each time of
+/// `values` (positions by time, coordinate, then member of `m`).
+fn bands(values: &[f32], m: usize, spec: &ForecastSpec) -> Vec<(Band, Band, f64)> {
+    // A measurement: the model's position and a tracking error, one a member and coordinate
+    // drawn once for all times (a band at one time needs only the errors' distribution
+    // there, and drawing 4 m errors a time cost more than the quantiles).
+    let mut rng = Pcg64::seed_from_u64(spec.seed ^ 0x9e37_79b9_7f4a_7c15);
+    let errors: Vec<f32> = (0..4 * m)
+        .map(|_| {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            (spec.tracking_error * z) as f32
+        })
+        .collect();
+    values
+        .par_chunks(4 * m)
+        .map_init(
+            || (vec![0f32; m], vec![0f32; m]),
+            |(scratch, noisy), v| {
+                let spread = {
+                    let (x, y) = (&v[2 * m..3 * m], &v[3 * m..]);
+                    let var = |a: &[f32]| {
+                        let mean = a.iter().map(|&x| x as f64).sum::<f64>() / m as f64;
+                        a.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / m as f64
+                    };
+                    (var(x) + var(y)).sqrt()
+                };
+                let mut model = [[0.0; 5]; 4];
+                let mut observed = [[0.0; 5]; 4];
+                for c in 0..4 {
+                    let coord = &v[c * m..(c + 1) * m];
+                    for ((o, &x), &e) in noisy.iter_mut().zip(coord).zip(&errors[c * m..]) {
+                        *o = x + e;
+                    }
+                    scratch.copy_from_slice(coord);
+                    model[c] = quantiles(scratch);
+                    observed[c] = quantiles(noisy);
+                }
+                (model, observed, spread)
+            },
+        )
+        .collect()
 }
 
 /// The first time after `after` that `v` exceeds `limit`, interpolated linearly in ln v

@@ -8,6 +8,7 @@ pub mod forecast_plot;
 mod lsq;
 mod model;
 pub mod plots;
+mod quantiles;
 pub mod window;
 
 pub use data::{

@@ -371,6 +371,28 @@ pub fn read_reals<R: Real>(bytes: &[u8]) -> Vec<f64> {
         .collect()
 }
 
+/// A time of an ensemble's positions (`shaders/positions.wgsl`): the step it falls in (from
+/// the state after `step` steps to the next) and the fraction of that step.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBandTime {
+    pub step: u32,
+    pub fraction: f32,
+}
+
+impl GpuBandTime {
+    /// Time `t` (s from the runs' start) among `steps` (at least one) steps of `dt`, computed
+    /// in f64: the fraction in f32 errs by 6e-8 of a step.
+    pub fn at(t: f64, dt: f64, steps: u32) -> Self {
+        let x = (t / dt).max(0.0);
+        let step = (x.floor() as u32).min(steps - 1);
+        GpuBandTime {
+            step,
+            fraction: (x - step as f64).clamp(0.0, 1.0) as f32,
+        }
+    }
+}
+
 /// What a run sets in its params beyond the physics and the grid (0 where unused).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Run {
@@ -398,6 +420,7 @@ pub trait TileParams: Pod {
     fn set_tile(&mut self, row0: u32, rows: u32, count: u32);
     fn set_steps(&mut self, step0: u32, steps: u32, count: u32);
     fn set_total(&mut self, total_steps: u32);
+    fn set_interval(&mut self, interval: u32);
     fn count(&self) -> u32;
 }
 
@@ -412,6 +435,9 @@ macro_rules! tile_params {
             }
             fn set_total(&mut self, total_steps: u32) {
                 self.total_steps = total_steps;
+            }
+            fn set_interval(&mut self, interval: u32) {
+                self.interval = interval;
             }
             fn count(&self) -> u32 {
                 self.count

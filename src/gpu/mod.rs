@@ -7,6 +7,7 @@ mod indicators;
 pub mod layout;
 mod lyapunov;
 mod pipeline;
+mod positions;
 pub mod shaders;
 mod tiled;
 mod trajectory;
@@ -17,6 +18,7 @@ pub use context::{GpuContext, list_adapters, read_buffer};
 pub use flip_time::FlipTimeKernel;
 pub use indicators::IndicatorKernel;
 pub use lyapunov::{JacobianKernel, LyapunovKernel};
+pub use positions::PositionsKernel;
 pub use tiled::STEPS_PER_DISPATCH;
 pub use trajectory::TrajectoryKernel;
 
@@ -34,6 +36,8 @@ pub struct Kernels {
     indicators: [OnceLock<IndicatorKernel>; 2],
     /// f32 and f64.
     trajectory: [OnceLock<TrajectoryKernel>; 2],
+    /// f32 and f64.
+    positions: [OnceLock<PositionsKernel>; 2],
     jacobian: OnceLock<JacobianKernel>,
 }
 
@@ -45,6 +49,7 @@ impl Kernels {
             lyapunov: Default::default(),
             indicators: Default::default(),
             trajectory: Default::default(),
+            positions: Default::default(),
             jacobian: OnceLock::new(),
         }
     }
@@ -75,6 +80,12 @@ impl Kernels {
     pub fn trajectory(&self, precision: Precision) -> &TrajectoryKernel {
         self.trajectory[precision as usize]
             .get_or_init(|| TrajectoryKernel::with_precision(&self.ctx, precision))
+    }
+
+    /// The ensembles' positions kernel in `precision` (f64: the context must have it).
+    pub fn positions(&self, precision: Precision) -> &PositionsKernel {
+        self.positions[precision as usize]
+            .get_or_init(|| PositionsKernel::with_precision(&self.ctx, precision))
     }
 
     pub fn jacobian(&self) -> &JacobianKernel {

@@ -16,6 +16,7 @@ const FLIP_DOP853: &str = include_str!("../../shaders/flip_dop853.wgsl");
 const LYAPUNOV: &str = include_str!("../../shaders/lyapunov.wgsl");
 const INDICATORS: &str = include_str!("../../shaders/indicators.wgsl");
 const TRAJECTORY: &str = include_str!("../../shaders/trajectory.wgsl");
+const POSITIONS: &str = include_str!("../../shaders/positions.wgsl");
 
 /// The kernels, each one WGSL module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -34,10 +35,12 @@ pub enum Kernel {
     Indicators,
     /// Trajectories and ensembles.
     Trajectory,
+    /// Ensembles' positions at given times.
+    Positions,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 7] = [
+    pub const ALL: [Kernel; 8] = [
         Kernel::FlipTime,
         Kernel::FlipKind,
         Kernel::FlipDp54,
@@ -45,6 +48,7 @@ impl Kernel {
         Kernel::Lyapunov,
         Kernel::Indicators,
         Kernel::Trajectory,
+        Kernel::Positions,
     ];
 
     pub fn name(self) -> &'static str {
@@ -56,6 +60,7 @@ impl Kernel {
             Kernel::Lyapunov => "lyapunov",
             Kernel::Indicators => "indicators",
             Kernel::Trajectory => "trajectory",
+            Kernel::Positions => "positions",
         }
     }
 
@@ -69,6 +74,7 @@ impl Kernel {
             Kernel::Lyapunov => format!("{}\n{LYAPUNOV}", dp54()),
             Kernel::Indicators => format!("{}\n{LYAPUNOV}\n{INDICATORS}", dp54()),
             Kernel::Trajectory => TRAJECTORY.to_string(),
+            Kernel::Positions => POSITIONS.to_string(),
         }
     }
 }

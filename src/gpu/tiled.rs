@@ -12,6 +12,13 @@ use crate::spec::{Grid, RowSpan};
 /// GPU, so no dispatch holds the device long enough to trip a driver watchdog.
 pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
 
+/// Most steps (or step attempts) an invocation takes in one dispatch. lavapipe (llvmpipe)
+/// ends all of an invocation's loops after 65535 iterations in all (its
+/// LP_MAX_TGSI_LOOP_ITERATIONS) and goes on silently, which left the pixels of a dispatch
+/// with few active ones short of the steps counted; half of it leaves room for a step's own
+/// loops (bisections at a flip).
+pub const STEPS_PER_INVOCATION: u32 = 1 << 15;
+
 /// Fewest steps a dispatch takes (its per-pixel bookkeeping, the active list, costs about
 /// a step; spread over a few steps it would rival the steps themselves).
 const MIN_STEPS: u64 = 16;
@@ -99,7 +106,8 @@ pub fn map_tiles(
 /// A tile's time loop: `dispatch(step0, steps, active)` advances the `active` pixels by
 /// `steps` steps from `step0` and returns how many are still active, until `total` steps are
 /// done or none is. Each dispatch holds at most STEPS_PER_DISPATCH / `cost` pendulum-steps
-/// (`cost`: plain steps a step costs), and at most `max_steps` steps when given.
+/// (`cost`: plain steps a step costs), at most `max_steps` steps when given, and at most
+/// [`STEPS_PER_INVOCATION`] / `cost` steps (a step's loop iterations are at most its cost).
 ///
 /// Progress counts pendulum-steps. What is left is estimated from the work itself: the
 /// still-active pixels run until they flip, at the rate at which they flipped over the last
@@ -149,6 +157,7 @@ pub fn time_loop(
         let bounded = (STEPS_PER_DISPATCH / cost / active as u64).max(MIN_STEPS / cost);
         let steps = bounded
             .min(max_steps.unwrap_or(u32::MAX) as u64)
+            .min((STEPS_PER_INVOCATION as u64 / cost).max(1))
             .min((total - step0) as u64) as u32;
         let before = active;
         active = dispatch(step0, steps, active)?;
@@ -202,7 +211,8 @@ pub fn adaptive_loop(
             break;
         }
         monitor.check()?;
-        let attempts = (STEPS_PER_DISPATCH / COST / active as u64).clamp(MIN_STEPS, 1 << 20);
+        let attempts = (STEPS_PER_DISPATCH / COST / active as u64)
+            .clamp(MIN_STEPS, STEPS_PER_INVOCATION as u64);
         let before = active;
         active = dispatch(attempts as u32, active)?;
         taken += attempts;
