@@ -470,10 +470,11 @@ impl Engine {
                             }
                         }
                     });
-                    each(first, &v)?
+                    each(first, &v)?;
+                    // The GPU kernel counts its runs as its dispatches finish.
+                    monitor.advance(chunk.len() as u64);
                 }
             };
-            monitor.advance(chunk.len() as u64);
         }
         monitor.finish();
         Ok(())
@@ -526,7 +527,7 @@ impl Engine {
     /// kept ([`KeptRuns`]: on the GPU the read-back buffer itself, in the kernel's precision),
     /// for callers that read every state once and would pay more for the copies than for it.
     #[allow(clippy::too_many_arguments)]
-    pub fn ensemble_kept_each(
+    fn ensemble_kept_each(
         &self,
         p: &Params,
         starts: &[State],
