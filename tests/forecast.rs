@@ -10,7 +10,7 @@ use chaoscope::app::forecast::Settings;
 use chaoscope::app::twin::{self, TwinJob, experiment, make_track};
 use chaoscope::cpu;
 use chaoscope::engine::{Backend, Engine};
-use chaoscope::fit::forecast::stepping;
+use chaoscope::fit::forecast::{ForecastSpec, forecast, stepping};
 use chaoscope::fit::window::{STEPS_PER_SECOND, track, track_with};
 use chaoscope::model::{Params, State};
 use chaoscope::monitor::Monitor;
@@ -200,6 +200,70 @@ fn ensemble_positions_agree_on_gpu_and_cpu() {
         &times,
         1e-6,
     );
+}
+
+/// One forecast on the CPU in several chunks (gathered before the bands) and on the f64 GPU
+/// in one (its bands computed where the buffer is mapped): the same members, the same
+/// tracking errors, so the bands differ only as the members' positions do. A quantile moves
+/// by at most the largest change of any value (order statistics are 1-Lipschitz), and the
+/// members differ by the two discretisations' O(dt^4) (carried cos and sin on the GPU),
+/// ~1e-5 rad at 1/300 s over 1.5 s of this release (1e-7 at 1e-3 s, times 3.3^4), times
+/// the arms' 0.36 m: 2e-5 m.
+#[test]
+fn forecast_bands_agree_on_gpu_and_cpu_across_chunks() {
+    if common::f64_gpu().is_none() {
+        return;
+    }
+    let truth = lab_with_damping();
+    let track_ = make_track(&truth, RELEASE, 100.0, 1.5, 0.002, 1);
+    let settings = Settings {
+        window: (0.0, 1.0),
+        end: 1.5,
+        members: 16,
+        seed: 1,
+        tolerance: 0.03,
+        tracking_error: None,
+        candidates: 256,
+    };
+    let cpu_engine = Engine::new(Backend::Cpu).unwrap();
+    let fit = experiment(
+        &truth,
+        RELEASE,
+        &track_,
+        &settings,
+        &cpu_engine,
+        &Monitor::hidden(),
+    )
+    .unwrap()
+    .0
+    .fit;
+    let spec = ForecastSpec {
+        members: 5000,
+        seed: 3,
+        tolerance: 0.03,
+        tracking_error: 0.002,
+        end: 1.5,
+        data_times: track_.t.clone(),
+    };
+    let (_, steps) = stepping(fit.t0, spec.end);
+    assert!(
+        cpu_engine.ensemble_chunk(spec.members, steps, steps) < spec.members,
+        "the CPU forecast should come in several chunks"
+    );
+    let on = |engine: &Engine| forecast(&fit, 1.0, &spec, engine, &Monitor::hidden()).unwrap();
+    let (cpu, gpu) = (on(&cpu_engine), on(&gpu_engine(Precision::F64)));
+    assert_eq!(cpu.times, gpu.times);
+    let mut worst = 0f64;
+    for (bands_a, bands_b) in [(&cpu.model, &gpu.model), (&cpu.observed, &gpu.observed)] {
+        for (k, (a, b)) in bands_a.iter().zip(bands_b).enumerate() {
+            for (qa, qb) in a.iter().flatten().zip(b.iter().flatten()) {
+                let d = (qa - qb).abs();
+                worst = worst.max(d);
+                assert!(d < 2e-5, "t {}: cpu {a:?} gpu {b:?}", cpu.times[k]);
+            }
+        }
+    }
+    eprintln!("bands, GPU (one chunk) against CPU (chunks): {worst:e} m");
 }
 
 /// The model's step (1/300 s) against a ten times finer one along the release over 1.5 s:
