@@ -202,6 +202,39 @@ fn ensemble_positions_agree_on_gpu_and_cpu() {
     );
 }
 
+/// A positions dispatch holds at most STEPS_PER_DISPATCH (2^24) pendulum-steps: 8400 members
+/// of 2000 steps come in two (8388 + 12 members), writing into one buffer. The members of the
+/// second (and of the first) run alone give the same positions bit for bit: each reads its own
+/// start and damping and writes its own place.
+#[test]
+fn positions_of_each_dispatch_are_its_members_own() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let p = Params::default();
+    let m = 8400;
+    let starts: Vec<State> = (0..m)
+        .map(|i| State::at_rest(1.0 + 1e-4 * i as f64, 0.5))
+        .collect();
+    let damping: Vec<(f64, f64)> = (0..m).map(|i| (1e-2 * (i % 7) as f64, 0.0)).collect();
+    let (stepping, times) = ((1e-3, 2000), [0.5, 1.0, 2.0]);
+    let engine = gpu_engine(Precision::F32);
+    let all = positions_on(&engine, &p, &starts, &damping, stepping, &times);
+    for range in [0..16, m - 16..m] {
+        let alone = positions_on(
+            &engine,
+            &p,
+            &starts[range.clone()],
+            &damping[range.clone()],
+            stepping,
+            &times,
+        );
+        for (row, own) in all.chunks(m).zip(alone.chunks(16)) {
+            assert_eq!(&row[range.clone()], own, "members {range:?}");
+        }
+    }
+}
+
 /// One forecast on the CPU in several chunks (gathered before the bands) and on the f64 GPU
 /// in one (its bands computed where the buffer is mapped): the same members, the same
 /// tracking errors, so the bands differ only as the members' positions do. A quantile moves
