@@ -8,7 +8,7 @@ use crate::cpu;
 use crate::error::{Error, Result};
 use crate::field::{Convergence, Field};
 use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
-use crate::model::{KeptRuns, Params, Positions, Reals, State};
+use crate::model::{Params, Positions, State};
 use crate::monitor::Monitor;
 use crate::spec::{
     FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, MapSpec, Method, Precision,
@@ -511,76 +511,32 @@ impl Engine {
         monitor: &Monitor,
         mut each: impl FnMut(usize, Vec<Vec<State>>) -> Result<()>,
     ) -> Result<()> {
-        self.ensemble_kept_each(
-            p,
-            starts,
-            damping,
-            dt,
-            steps,
-            stride,
-            monitor,
-            |first, kept| each(first, kept.to_runs()),
-        )
-    }
-
-    /// As [`Engine::ensemble_damped_each`], each chunk's states handed over as they were
-    /// kept ([`KeptRuns`]: on the GPU the read-back buffer itself, in the kernel's precision),
-    /// for callers that read every state once and would pay more for the copies than for it.
-    #[allow(clippy::too_many_arguments)]
-    fn ensemble_kept_each(
-        &self,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        stride: u32,
-        monitor: &Monitor,
-        mut each: impl FnMut(usize, KeptRuns<'_>) -> Result<()>,
-    ) -> Result<()> {
         let per_chunk = self.ensemble_chunk(starts.len(), steps, stride);
-        let per_run = (steps / stride.max(1)) as usize + 1;
         monitor.start("runs", starts.len() as u64);
         for (k, chunk) in starts.chunks(per_chunk).enumerate() {
             monitor.check()?;
             let first = k * per_chunk;
             let pairs = damping.map(|d| &d[first..first + chunk.len()]);
             match &self.gpu {
-                Some(g) => g.trajectory(self.precision).run_damped_with(
-                    &g.ctx,
-                    p,
-                    chunk,
-                    pairs,
-                    dt,
-                    steps,
-                    stride,
-                    |kept| each(first, kept),
-                )??,
+                Some(g) => each(
+                    first,
+                    g.trajectory(self.precision)
+                        .run_damped(&g.ctx, p, chunk, pairs, dt, steps, stride)?,
+                )?,
                 None => {
-                    let mut reals = vec![0.0; chunk.len() * per_run * 4];
-                    reals
-                        .par_chunks_mut(per_run * 4)
-                        .zip(chunk.par_iter().enumerate())
-                        .for_each(|(out, (i, s))| {
+                    let runs = chunk
+                        .par_iter()
+                        .enumerate()
+                        .map(|(i, s)| {
                             let mut q = *p;
                             if let Some(d) = pairs {
                                 (q.losses.joint1, q.losses.joint2) = d[i];
                             }
                             let run = cpu::trajectory(&q, *s, dt, steps);
-                            for (o, s) in out
-                                .chunks_exact_mut(4)
-                                .zip(run.iter().step_by(stride as usize))
-                            {
-                                o.copy_from_slice(&s.to_array());
-                            }
-                        });
-                    each(
-                        first,
-                        KeptRuns {
-                            reals: Reals::F64(&reals),
-                            per_run,
-                        },
-                    )?
+                            run.into_iter().step_by(stride as usize).collect()
+                        })
+                        .collect();
+                    each(first, runs)?
                 }
             };
             monitor.advance(chunk.len() as u64);

@@ -156,54 +156,6 @@ impl State {
     }
 }
 
-/// The reals of kept states, in the precision that computed them.
-#[derive(Clone, Copy, Debug)]
-pub enum Reals<'a> {
-    F32(&'a [f32]),
-    F64(&'a [f64]),
-}
-
-/// A chunk of an ensemble's runs as the engine kept them: run after run, `per_run` states of
-/// four reals (theta1, omega1, theta2, omega2) each, read where they lie (a GPU's mapped
-/// buffer) instead of converted into a `State` apiece.
-#[derive(Clone, Copy, Debug)]
-pub struct KeptRuns<'a> {
-    pub reals: Reals<'a>,
-    pub per_run: usize,
-}
-
-impl KeptRuns<'_> {
-    /// The number of runs.
-    pub fn len(&self) -> usize {
-        let n = match self.reals {
-            Reals::F32(v) => v.len(),
-            Reals::F64(v) => v.len(),
-        };
-        n / (4 * self.per_run)
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// State `k` of run `run`.
-    #[inline]
-    pub fn state(&self, run: usize, k: usize) -> State {
-        let at = 4 * (run * self.per_run + k);
-        State::from_array(match self.reals {
-            Reals::F32(v) => std::array::from_fn(|i| v[at + i] as f64),
-            Reals::F64(v) => std::array::from_fn(|i| v[at + i]),
-        })
-    }
-
-    /// Every run as its own vector of states.
-    pub fn to_runs(&self) -> Vec<Vec<State>> {
-        (0..self.len())
-            .map(|r| (0..self.per_run).map(|k| self.state(r, k)).collect())
-            .collect()
-    }
-}
-
 /// Bob positions `(x1, y1, x2, y2)` in m.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Positions {

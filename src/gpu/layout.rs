@@ -279,12 +279,10 @@ pub trait Real: Pod + Copy + Default + PartialEq + std::fmt::Debug + Send + Sync
     type IndicatorSlot: Pod + Default;
     fn from_f64(x: f64) -> Self;
     fn to_f64(self) -> f64;
-    /// A slice of these as kept reals.
-    fn reals(v: &[Self]) -> crate::model::Reals<'_>;
 }
 
 macro_rules! real {
-    ($r:ident, $variant:ident, $wgsl:literal, $params:ident, $pendulum:ident, $slot:ident, $adaptive:ident, $indicator:ident) => {
+    ($r:ident, $wgsl:literal, $params:ident, $pendulum:ident, $slot:ident, $adaptive:ident, $indicator:ident) => {
         impl Real for $r {
             const WGSL: &'static str = include_str!($wgsl);
             type Params = $params;
@@ -294,9 +292,6 @@ macro_rules! real {
             type IndicatorSlot = $indicator;
             fn from_f64(x: f64) -> Self {
                 x as $r
-            }
-            fn reals(v: &[Self]) -> crate::model::Reals<'_> {
-                crate::model::Reals::$variant(v)
             }
             fn to_f64(self) -> f64 {
                 self as f64
@@ -327,7 +322,6 @@ macro_rules! real {
 }
 real!(
     f32,
-    F32,
     "../../shaders/real_f32.wgsl",
     GpuParams,
     GpuPendulum,
@@ -337,7 +331,6 @@ real!(
 );
 real!(
     f64,
-    F64,
     "../../shaders/real_f64.wgsl",
     GpuParams64,
     GpuPendulum64,

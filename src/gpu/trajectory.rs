@@ -10,7 +10,7 @@ use super::pipeline::{
 use super::shaders::Kernel;
 use super::tiled::STEPS_PER_INVOCATION;
 use crate::error::{Error, Result};
-use crate::model::{KeptRuns, Params, State};
+use crate::model::{Params, State};
 use crate::spec::Precision;
 
 pub struct TrajectoryKernel {
@@ -47,17 +47,14 @@ impl TrajectoryKernel {
         steps: u32,
         stride: u32,
     ) -> Result<Vec<Vec<State>>> {
-        self.run_damped_with(ctx, p, starts, None, dt, steps, stride, |kept| {
-            kept.to_runs()
-        })
+        self.run_damped(ctx, p, starts, None, dt, steps, stride)
     }
 
     /// As [`TrajectoryKernel::run`], run i with joint damping `damping[i]` (N m s at the pivot
     /// and the middle joint) in place of `p`'s when given (one pair per start), the kept states
-    /// handed to `f` where they are read back, in the kernel's precision (no copy or
-    /// conversion on the host).
+    /// converted where they are read back.
     #[allow(clippy::too_many_arguments)]
-    pub fn run_damped_with<T>(
+    pub fn run_damped(
         &self,
         ctx: &GpuContext,
         p: &Params,
@@ -66,13 +63,12 @@ impl TrajectoryKernel {
         dt: f64,
         steps: u32,
         stride: u32,
-        f: impl FnOnce(KeptRuns<'_>) -> T,
-    ) -> Result<T> {
-        with_real!(self.precision, R => self.run_in::<R, T>(ctx, p, starts, damping, dt, steps, stride, f))
+    ) -> Result<Vec<Vec<State>>> {
+        with_real!(self.precision, R => self.run_in::<R>(ctx, p, starts, damping, dt, steps, stride))
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn run_in<R: Real, T>(
+    fn run_in<R: Real>(
         &self,
         ctx: &GpuContext,
         p: &Params,
@@ -81,8 +77,7 @@ impl TrajectoryKernel {
         dt: f64,
         steps: u32,
         stride: u32,
-        f: impl FnOnce(KeptRuns<'_>) -> T,
-    ) -> Result<T> {
+    ) -> Result<Vec<Vec<State>>> {
         if let Some(d) = damping {
             assert_eq!(d.len(), starts.len(), "one damping pair per start");
         }
@@ -130,17 +125,20 @@ impl TrajectoryKernel {
             dispatch_and_wait(ctx, pipeline, &bind, count)?;
         }
         let per_run = per_run as usize;
+        let runs = |v: &[R]| -> Vec<Vec<State>> {
+            v.chunks_exact(4 * per_run)
+                .map(|run| {
+                    run.chunks_exact(4)
+                        .map(|s| State::from_array(std::array::from_fn(|i| s[i].to_f64())))
+                        .collect()
+                })
+                .collect()
+        };
         read_buffer_with(ctx, &states, bytes, |b| {
             match bytemuck::try_cast_slice::<u8, R>(b) {
-                Ok(v) => f(KeptRuns {
-                    reals: R::reals(v),
-                    per_run,
-                }),
+                Ok(v) => runs(v),
                 // A mapping not aligned to the real's size (wgpu promises 8 bytes): one copy.
-                Err(_) => f(KeptRuns {
-                    reals: R::reals(&bytemuck::pod_collect_to_vec::<u8, R>(b)),
-                    per_run,
-                }),
+                Err(_) => runs(&bytemuck::pod_collect_to_vec::<u8, R>(b)),
             }
         })
     }
