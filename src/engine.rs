@@ -168,6 +168,9 @@ pub struct Engine {
     notice: Option<String>,
     /// The precision of trajectories and ensembles on the GPU (maps carry their own).
     precision: Precision,
+    /// The backend it was made for (f64 asked of a GPU without it is an error only when the
+    /// GPU itself was asked for).
+    asked: Backend,
 }
 
 impl Engine {
@@ -190,6 +193,7 @@ impl Engine {
             gpu: gpu.map(Kernels::new),
             notice,
             precision: Precision::F32,
+            asked: backend,
         })
     }
 
@@ -199,6 +203,7 @@ impl Engine {
             gpu: Some(Kernels::new(ctx)),
             notice: None,
             precision: Precision::F32,
+            asked: Backend::Gpu,
         }
     }
 
@@ -229,6 +234,11 @@ impl Engine {
             self.gpu = None;
         }
         Ok(self)
+    }
+
+    /// The backend it was made for.
+    pub fn asked(&self) -> Backend {
+        self.asked
     }
 
     /// What to tell the user once about the choice (auto fell back to the CPU).

@@ -13,6 +13,21 @@ pub enum Error {
     /// (`t_max`, `size`, `joint_damping`...); the command line maps it to its flag.
     #[error("invalid value for {field}: {reason}")]
     InvalidSpec { field: &'static str, reason: String },
+    /// An input file (named by `field`) that does not exist.
+    #[error("invalid value for {field}: {}: no such file", path.display())]
+    Missing {
+        field: &'static str,
+        path: std::path::PathBuf,
+    },
+    /// Two files of one run (named by `field` and `other`) that are one file: the later
+    /// output would replace the earlier one, or the input `other` names.
+    #[error("invalid value for {field}: {} is also the {other} file {}", path.display(), match *input { true => "this run reads: writing it would replace it", false => "of this run: each output needs a file of its own" })]
+    SameFile {
+        field: &'static str,
+        other: &'static str,
+        path: std::path::PathBuf,
+        input: bool,
+    },
     /// A store (named by `field`) made with other settings than this run's: each setting
     /// (a spec field) that differs, with the store's value and this run's.
     #[error("invalid value for {field}: {} was made with other settings: {} (its command: {command})", path.display(), describe(differences))]
@@ -61,6 +76,17 @@ impl Error {
         Error::InvalidSpec {
             field,
             reason: reason.into(),
+        }
+    }
+
+    /// The same error, naming `to` where it named the field `from` (a door whose keyword
+    /// for a field differs: `traces` calls `t_max` its exposure).
+    pub fn renamed(self, from: &str, to: &'static str) -> Self {
+        match self {
+            Error::InvalidSpec { field, reason } if field == from => {
+                Error::InvalidSpec { field: to, reason }
+            }
+            e => e,
         }
     }
 

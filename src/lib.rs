@@ -26,6 +26,7 @@ pub mod error;
 pub mod field;
 pub mod fit;
 pub mod gpu;
+pub mod input;
 pub mod model;
 pub mod monitor;
 pub mod params;

@@ -1050,6 +1050,11 @@ fn heads_and_keys_are_bounded() {
     let server = Server::start(&["--backend", "cpu"]);
     server.refuses("/tile/0/0/0.png?size=16&size=512", "size");
     server.refuses("/api/point?px=1&py=1&pixel=1e-16", "pixel");
+    // A pixel wider than the plane reaches past -pi:pi: the pixel's size is at fault, not
+    // the point (issue 35).
+    server.refuses("/api/point?px=1&py=1&pixel=10", "pixel");
+    server.refuses("/api/point?px=1&py=1&pixel=0.01&pixel_y=10", "pixel_y");
+    server.refuses("/api/point?px=4&py=1&pixel=0.01", "px");
     let address = server.url.trim_start_matches("http://").to_string();
     let mut stream = std::net::TcpStream::connect(&address).unwrap();
     stream

@@ -44,7 +44,8 @@ function varInfo(name) { return page.info.vars.find((v) => v.name === name); }
 // parameter an axis writes).
 function alongAxis(k) {
   const axes = [world().x.name, world().y.name].map(varInfo);
-  return axes.some((v) => v.name === k || v.writes === k);
+  const sets = k === "damping" ? ["joint1", "joint2"] : [k];
+  return axes.some((v) => v.name === k || v.writes.some((w) => sets.includes(w)));
 }
 
 // The query string of the view's settings (only those that differ from the server's).

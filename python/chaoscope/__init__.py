@@ -60,6 +60,10 @@ def _reporter(progress: Progress):
         return None, lambda: None
     if callable(progress):
         return progress, lambda: None
+    if progress is not None and progress is not True:
+        raise TypeError(
+            f"progress: None, True, False or a callable (phase, done, total), not {type(progress).__name__}"
+        )
     try:
         from tqdm.auto import tqdm
     except ImportError:
@@ -288,7 +292,8 @@ def lyapunov_map(
 ) -> Union[xr.DataArray, xr.Dataset]:
     """A divergence-family map (``chaoscope lyapunov``'s): by default the finite-time
     Lyapunov exponent (1/s) of each pixel's start; ``indicator`` one of :data:`INDICATORS`
-    (an exponent of the spectrum with ``exponent=k``, their sum, SALI/GALI and the time they
+    (an exponent of the spectrum with ``exponent=k``, 1 to 4 in Gram-Schmidt order: the first
+    is the largest, the others are not sorted per pixel at a finite time; their sum, SALI/GALI and the time they
     take to fall below ``threshold``, MEGNO, the FLI, the Lagrangian descriptor with ``ld_p``).
     ``method``: "tangent" (the variational equations) or "twin" (a neighbour ``eps`` away);
     tangent vectors renormalised every ``renorm`` s. The plane, physics, stepping and the rest

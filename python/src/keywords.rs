@@ -9,7 +9,7 @@ use chaoscope::spec::{
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict};
 
 use crate::py_err;
 
@@ -25,6 +25,10 @@ impl<'py> Keywords<'py> {
         match self.dict.get_item(key)? {
             None => Ok(None),
             Some(v) if v.is_none() => Ok(None),
+            // Python's bool is an int: size=True would be read as 1.
+            Some(v) if v.is_instance_of::<PyBool>() && std::any::type_name::<T>() != "bool" => Err(
+                PyTypeError::new_err(format!("{key}: True or False where a value is wanted")),
+            ),
             Some(v) => v.extract::<T>().map(Some).map_err(|e| {
                 let e: PyErr = e.into();
                 PyTypeError::new_err(format!("{key}: {}", e.value(self.dict.py())))
@@ -104,6 +108,9 @@ impl<'py> Keywords<'py> {
             })
         };
         match self.dict.get_item("size")? {
+            Some(v) if v.is_instance_of::<PyBool>() => Err(PyTypeError::new_err(
+                "size: True or False where N or (width, height) is wanted",
+            )),
             Some(v) if !v.is_none() => match (v.extract::<i64>(), v.extract::<(i64, i64)>()) {
                 (Ok(n), _) => Ok((whole(n)?, whole(n)?)),
                 (_, Ok((w, h))) => Ok((whole(w)?, whole(h)?)),

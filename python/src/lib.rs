@@ -13,7 +13,7 @@ use chaoscope::app::MapOutputs;
 use chaoscope::app::map::MapJob;
 use chaoscope::app::trajectory::TrajectoryJob;
 use chaoscope::cli::command_line;
-use chaoscope::engine::{Backend, MapKernels};
+use chaoscope::engine::{Backend, Engine, MapKernels};
 use chaoscope::field::Field;
 use chaoscope::model::State;
 use chaoscope::monitor::Monitor;
@@ -22,7 +22,9 @@ use chaoscope::spec::{
     AnyMap, FlipMeasure, FlipSpec, IndicatorAsked, LyapunovSpec, MapSpec, Method, Precision,
 };
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyKeyboardInterrupt, PyRuntimeError, PyTypeError, PyValueError,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
@@ -52,9 +54,46 @@ fn py_err(e: Error) -> PyErr {
         Error::StoreDiffers { field, .. } => {
             PyValueError::new_err(format!("{}: {e}", keyword(field)))
         }
+        Error::SameFile {
+            field,
+            other,
+            ref path,
+            input,
+        } => PyValueError::new_err(format!(
+            "{}: {} is also the {} file {}",
+            keyword(field),
+            path.display(),
+            keyword(other),
+            match input {
+                true => "this call reads",
+                false => "of this call",
+            }
+        )),
+        Error::Missing { field, path } => PyFileNotFoundError::new_err(format!(
+            "{}: {}: no such file",
+            keyword(field),
+            path.display()
+        )),
         Error::Interrupted => PyKeyboardInterrupt::new_err("interrupted"),
         e => PyRuntimeError::new_err(e.to_string()),
     }
+}
+
+/// The engine of `backend`, made on the module's first call that asks for it and lent to
+/// every later one: a GPU device and its compiled kernels are made once per process, not
+/// once per call (200 calls each making a device grew the process by 53 MB).
+fn engine(backend: Backend) -> PyResult<Arc<Engine>> {
+    static ENGINES: std::sync::Mutex<Vec<(Backend, Arc<Engine>)>> =
+        std::sync::Mutex::new(Vec::new());
+    let mut engines = ENGINES
+        .lock()
+        .map_err(|_| PyRuntimeError::new_err("the engines' lock was poisoned"))?;
+    if let Some((_, e)) = engines.iter().find(|(b, _)| *b == backend) {
+        return Ok(e.clone());
+    }
+    let made = Arc::new(Engine::new(backend).map_err(py_err)?);
+    engines.push((backend, made.clone()));
+    Ok(made)
 }
 
 /// Runs `work` on a thread of its own while this one, the GIL released between looks, checks
@@ -199,10 +238,16 @@ fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
             py, k, spec, backend, path, resolved, samples, command, progress,
         );
     }
+    if k.get::<(i64, i64)>("tile")?.is_some() {
+        return Err(PyValueError::new_err(
+            "tile: is a share of a map in a store: give store= too (a map in memory is made whole)",
+        ));
+    }
     chaoscope::app::map::check_in_memory(&spec, resolved, samples).map_err(py_err)?;
     let s = spec;
+    let engine = engine(backend)?;
     let made = watched(py, progress, move |monitor| {
-        chaoscope::app::map::compute(&s, backend, resolved, samples, monitor)
+        chaoscope::app::map::compute(&s, &engine, resolved, samples, monitor)
     })?;
     let (field, mask) = made.made;
     map_answer(
@@ -254,8 +299,9 @@ fn fill_store<'py, S: MapKernels + Copy + Send + Sync + 'static>(
         show_unresolved: false,
     };
     chaoscope::app::map::validate(&spec, &files, tile).map_err(py_err)?;
+    let engine = engine(backend)?;
     let made = watched(py, progress, move |monitor| {
-        chaoscope::app::map::make_store(&spec, backend, &path, command, tile, resolved, monitor)
+        chaoscope::app::map::make_store(&spec, &engine, &path, command, tile, resolved, monitor)
     })?;
     let f = made.made;
     let out = PyDict::new(py);
@@ -296,14 +342,15 @@ fn flip_map<'py>(
         accurate,
         precision == Precision::F32 && backend != Backend::Cpu,
     )?;
-    let params = k.sources()?.resolve().map_err(py_err)?;
+    let grid = k.grid()?;
+    let params = k.sources()?.resolve_on(&grid).map_err(py_err)?;
     let spec = FlipSpec {
         measure,
         early_exit: k.or("early_exit", true)?,
         use_symmetry: k.or("use_symmetry", true)?,
         precision,
         integrator,
-        ..FlipSpec::new(params, k.grid()?, k.stepping(30.0)?)
+        ..FlipSpec::new(params, grid, k.stepping(30.0)?)
     };
     let spec = if accurate { spec.accurate() } else { spec };
     run_map(py, &k, spec, backend, command_line::flip, progress)
@@ -332,16 +379,23 @@ fn lyapunov_map<'py>(
     }
     .indicator()
     .map_err(py_err)?;
+    // eps is the twin's distance; a value no twin could take is refused with either method,
+    // not ignored.
+    let eps: f64 = k.or("eps", 1e-8)?;
+    if !(eps.is_finite() && eps > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "eps: {eps} must be a finite distance > 0"
+        )));
+    }
     let method = match k.choice("method", &["tangent", "twin"])?.as_deref() {
-        Some("twin") => Method::Twin {
-            eps: k.or("eps", 1e-8)?,
-        },
+        Some("twin") => Method::Twin { eps },
         _ => Method::Tangent,
     };
     let integrator = k.integrator(accurate, gpu_f32)?;
+    let grid = k.grid()?;
     let spec = LyapunovSpec {
-        params: k.sources()?.resolve().map_err(py_err)?,
-        grid: k.grid()?,
+        params: k.sources()?.resolve_on(&grid).map_err(py_err)?,
+        grid,
         stepping: k.stepping(20.0)?,
         method,
         renorm: k.or("renorm", 0.1)?,
@@ -447,8 +501,12 @@ fn picture<'py>(
         .map(|r| r.as_array().iter().copied().collect());
     let shown = resolved.as_deref().filter(|_| show_unresolved);
     let drawn = match &map {
-        AnyMap::Flip(s) => s.draw(&field, &pic, colour_range, shown),
-        AnyMap::Lyapunov(s) => s.draw(&field, &pic, colour_range, shown),
+        AnyMap::Flip(s) => s
+            .check_picture(&pic, colour_range)
+            .and_then(|()| s.draw(&field, &pic, colour_range, shown)),
+        AnyMap::Lyapunov(s) => s
+            .check_picture(&pic, colour_range)
+            .and_then(|()| s.draw(&field, &pic, colour_range, shown)),
     }
     .map_err(py_err)?;
     let mut text = drawn.text;
@@ -529,7 +587,9 @@ fn traces<'py>(
     };
     let command = command_line::traces(&job);
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::traces::run(&job, command.clone(), monitor).map(|s| (s, command))
+        chaoscope::app::traces::run(&job, command.clone(), monitor)
+            .map(|s| (s, command))
+            .map_err(|e| e.renamed("t_max", "exposure"))
     })?;
     let mut value =
         serde_json::to_value(&summary.0).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;

@@ -406,3 +406,75 @@ def test_traces_equal_their_command(tmp_path):
     with pytest.raises(ValueError, match="^spread: "):
         chaoscope.traces(theta1=2.0, theta2=2.5, spread="5 furlongs",
                          output=str(tmp_path / "bad.png"), progress=False)
+
+
+def test_python_is_as_strict_as_the_command_line(tmp_path):
+    """Issue 35's audit of the Python door: a bool where a number is wanted, a tile without
+    a store, a progress of another type, a colour range upside down, an eps no twin could
+    take, a file where a store should be, a missing CSV and an axis beside the value it sets
+    are refused naming the keyword."""
+    for keywords in ({"size": True}, {"samples": True}, {"t_max": True}):
+        with pytest.raises(TypeError, match=f"^{next(iter(keywords))}: "):
+            chaoscope.flip_map(**{"size": 8, "t_max": 1, "progress": False, **keywords})
+    with pytest.raises(TypeError, match="^exponent: "):
+        chaoscope.lyapunov_map(size=8, t_max=1, indicator="exponent", exponent=True, progress=False)
+    with pytest.raises(ValueError, match="^tile: "):
+        chaoscope.flip_map(size=8, t_max=1, tile=(0, 2), progress=False)
+    with pytest.raises(TypeError, match="^progress: "):
+        chaoscope.flip_map(size=8, t_max=1, progress="yes")
+    with pytest.raises(ValueError, match="^eps: "):
+        chaoscope.lyapunov_map(size=8, t_max=1, eps=0, progress=False)
+    made = chaoscope.lyapunov_map(size=8, t_max=1, progress=False)
+    with pytest.raises(ValueError, match="^colour_range: "):
+        chaoscope.picture(made, colour_range=(1, 0))
+    a_file = tmp_path / "map.zarr"
+    a_file.write_text("not a store")
+    with pytest.raises(ValueError, match="^store: "):
+        chaoscope.flip_map(size=8, t_max=1, store=str(a_file), progress=False)
+    with pytest.raises(FileNotFoundError, match="^file: "):
+        chaoscope.forecast(str(tmp_path / "nope.csv"))
+    with pytest.raises(ValueError, match="^m1: .*m1 along x"):
+        chaoscope.flip_map(size=8, t_max=1, x="m1", x_range=(1, 2), m1=3, progress=False)
+    with pytest.raises(ValueError, match="^exposure: "):
+        chaoscope.traces(theta1=1, theta2=1, exposure=-1, progress=False)
+
+
+def test_reads_are_bounded_from_python(tmp_path):
+    """`chaoscope.fit('/dev/zero')` read until the kernel killed it: a device, a FIFO and a
+    10 GB sparse file are refused naming the keyword, at once."""
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    sparse = tmp_path / "sparse.toml"
+    with open(sparse, "wb") as f:
+        f.truncate(10 << 30)
+    for path in ("/dev/zero", str(fifo)):
+        with pytest.raises(ValueError, match="^file: .*not a regular file"):
+            chaoscope.fit(path, progress=False)
+        with pytest.raises(ValueError, match="^params_file: .*not a regular file"):
+            chaoscope.params(params_file=path)
+    with pytest.raises(ValueError, match="^params_file: .*larger than"):
+        chaoscope.params(params_file=str(sparse))
+
+
+def test_repeated_maps_do_not_grow_the_process():
+    """200 calls of a MEGNO map each made a GPU device, growing the process by 53 MB; the
+    engine is now made once and lent. After a warm-up, 200 calls may grow RSS by 2 MB (the
+    allocator's slack)."""
+    child = r"""
+import json
+import chaoscope
+def rss():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) * 1024
+for _ in range(20):
+    chaoscope.lyapunov_map(size=64, t_max=1, indicator="megno", progress=False)
+before = rss()
+for _ in range(200):
+    chaoscope.lyapunov_map(size=64, t_max=1, indicator="megno", progress=False)
+print(json.dumps({"grown": rss() - before}))
+"""
+    out = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, check=True)
+    grown = json.loads(out.stdout.strip().splitlines()[-1])["grown"]
+    print(f"RSS grew {grown / 2**20:.2f} MB over 200 calls")
+    assert grown <= 2 << 20, grown

@@ -146,9 +146,10 @@ impl BoundaryJob {
                 ),
             ));
         }
-        render::check_writable("output", &self.output)?;
+        super::check_output("output", &self.output, "png")?;
         if let Some(d) = &self.data {
-            render::check_writable("data", d)?;
+            super::check_output("data", d, "csv")?;
+            super::checks::check_distinct(&[("output", &self.output), ("data", d)], &[])?;
         }
         for (k, eps) in eps_levels(lo, hi, self.levels).into_iter().enumerate() {
             match self.class {
@@ -225,7 +226,8 @@ fn measure<S: MapKernels>(
     class: impl Fn(&S, f32) -> u32,
     monitor: &Monitor,
 ) -> Result<(Vec<Level>, crate::engine::RunInfo, Vec<String>)> {
-    let (engine, info, notices) = map_engine(job.backend, &spec(0, all[0]), true)?;
+    let engine = crate::engine::Engine::new(job.backend)?;
+    let (info, notices) = map_engine(&engine, &spec(0, all[0]), true)?;
     let mut levels = Vec::new();
     for (k, &eps) in all.iter().enumerate() {
         monitor.check()?;

@@ -31,6 +31,70 @@ pub fn check_output(field: &'static str, path: &Path, ext: &str) -> Result<()> {
     check_writable(field, path)
 }
 
+/// The file `path` names, for comparing names: links and `..` resolved where the file or its
+/// folder exists, else the path made absolute.
+fn identity(path: &Path) -> std::path::PathBuf {
+    if let Ok(p) = path.canonicalize() {
+        return p;
+    }
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    match (absolute.parent(), absolute.file_name()) {
+        (Some(dir), Some(name)) => dir
+            .canonicalize()
+            .map_or(absolute.clone(), |d| d.join(name)),
+        _ => absolute,
+    }
+}
+
+/// No two of a run's `outputs`, and no output and one of its `inputs`, are one file (by
+/// name, through links): the later write would replace the earlier, or the input. The error
+/// names the later output's field and the other's.
+pub fn check_distinct(
+    outputs: &[(&'static str, &Path)],
+    inputs: &[(&'static str, &Path)],
+) -> Result<()> {
+    let named: Vec<_> = outputs.iter().map(|(f, p)| (*f, identity(p))).collect();
+    for (k, (field, path)) in named.iter().enumerate() {
+        for (other, seen) in &named[..k] {
+            if path == seen {
+                return Err(Error::SameFile {
+                    field,
+                    other,
+                    path: outputs[k].1.to_path_buf(),
+                    input: false,
+                });
+            }
+        }
+        for (input, read) in inputs {
+            if *path == identity(read) {
+                return Err(Error::SameFile {
+                    field,
+                    other: input,
+                    path: outputs[k].1.to_path_buf(),
+                    input: true,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The files `names` a run writes into the directory `dir` (given as `field`): each one a
+/// place that can be written and none of them one of the run's `inputs`.
+pub fn check_directory(
+    field: &'static str,
+    dir: &Path,
+    names: &[&str],
+    inputs: &[(&'static str, &Path)],
+) -> Result<()> {
+    let paths: Vec<_> = names.iter().map(|n| dir.join(n)).collect();
+    for path in &paths {
+        check_writable(field, path)?;
+    }
+    let named: Vec<_> = paths.iter().map(|p| (field, p.as_path())).collect();
+    check_distinct(&named, inputs)
+}
+
 /// `path` must end in `.ext`, else an error naming `field`.
 pub fn check_extension(field: &'static str, path: &Path, ext: &str) -> Result<()> {
     match path.extension().and_then(|e| e.to_str()) {

@@ -14,7 +14,7 @@ use crate::fit::{
 };
 use crate::monitor::Monitor;
 use crate::params::{ParamSources, Preset};
-use crate::render::{Outputs, check_writable};
+use crate::render::Outputs;
 use crate::spec::Precision;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -70,7 +70,22 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
     if !job.start.is_finite() {
         return Err(Error::invalid("start", "must be a finite time (s)"));
     }
-    check_writable("output", &job.output.join("summary.json"))?;
+    let inputs = [
+        Some(("file", job.file.as_path())),
+        job.params.params.as_deref().map(|p| ("params", p)),
+    ];
+    super::checks::check_directory(
+        "output",
+        &job.output,
+        &[
+            "positions.png",
+            "energy.png",
+            "phase.png",
+            "derived.csv",
+            "summary.json",
+        ],
+        &inputs.into_iter().flatten().collect::<Vec<_>>(),
+    )?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     // The fit starts at a data row with a neighbour on each side (its velocities are central

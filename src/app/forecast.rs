@@ -16,7 +16,7 @@ use crate::fit::window::{FITTED, WindowFit, fit_window};
 use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
-use crate::render::{Outputs, check_writable};
+use crate::render::Outputs;
 use crate::spec::Precision;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -192,7 +192,16 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         job.candidates,
     )?;
     super::checks::check_damping_not_given(&job.params)?;
-    check_writable("output", &job.output.join("summary.json"))?;
+    let inputs = [
+        Some(("file", job.file.as_path())),
+        job.params.params.as_deref().map(|p| ("params", p)),
+    ];
+    super::checks::check_directory(
+        "output",
+        &job.output,
+        &["forecast.png", "bands.csv", "summary.json"],
+        &inputs.into_iter().flatten().collect::<Vec<_>>(),
+    )?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     // The pivot, arm lengths and model as `fit` finds them.

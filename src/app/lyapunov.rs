@@ -118,7 +118,7 @@ pub fn run_point(
 }
 
 /// `job`'s map (an exponent of the spectrum, or their sum) drawn from one run of the four
-/// tangent vectors, with all four exponents (1/s, largest first) written to `spectrum` as
+/// tangent vectors, with all four exponents (1/s, in Gram-Schmidt order) written to `spectrum` as
 /// float32 of shape (4, height, width). No verdict and no store: they hold one quantity.
 pub fn run_spectrum(
     job: &LyapunovMapJob,
@@ -153,7 +153,11 @@ pub fn run_spectrum(
     spec.check_picture(&job.picture, job.colour_range)?;
     super::map::validate(spec, &job.files, job.tile)?;
     check_output("spectrum", spectrum, "npy")?;
-    let (engine, info, notices) = super::map::map_engine(job.backend, spec, false)?;
+    let mut named = job.files.named();
+    named.push(("spectrum", spectrum));
+    super::checks::check_distinct(&named, &[])?;
+    let engine = crate::engine::Engine::new(job.backend)?;
+    let (info, notices) = super::map::map_engine(&engine, spec, false)?;
     let layers = engine.spectrum(spec, monitor)?;
     let field = match spec.indicator {
         Indicator::Exponent(k) => layers[k as usize - 1].clone(),

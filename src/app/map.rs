@@ -116,15 +116,10 @@ pub fn run<S: MapKernels + MapPicture>(
         files: job.files.files(),
         notices: Vec::new(),
     };
+    let engine = Engine::new(job.backend)?;
     if let Some(store) = job.files.store() {
         let made = make_store(
-            &job.spec,
-            job.backend,
-            store,
-            command,
-            job.tile,
-            verdict,
-            monitor,
+            &job.spec, &engine, store, command, job.tile, verdict, monitor,
         )?;
         let filled = &made.made;
         return Ok(MapSummary {
@@ -137,7 +132,7 @@ pub fn run<S: MapKernels + MapPicture>(
             ..summary(&made.info, filled.counted, filled.nan, filled.pixels)
         });
     }
-    let made = compute(&job.spec, job.backend, verdict, job.samples, monitor)?;
+    let made = compute(&job.spec, &engine, verdict, job.samples, monitor)?;
     let (field, mask) = &made.made;
     let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let drawn = job
@@ -172,13 +167,13 @@ pub fn run<S: MapKernels + MapPicture>(
 /// Unchecked: [`run`] checks the job first, a library caller [`check_in_memory`].
 pub fn compute<S: MapKernels>(
     spec: &S,
-    backend: Backend,
+    engine: &Engine,
     verdict: bool,
     samples: u32,
     monitor: &Monitor,
 ) -> Result<Made<(Field, Option<Vec<u8>>)>> {
     if samples == 1 {
-        return make(spec, backend, verdict, monitor);
+        return make(spec, engine, verdict, monitor);
     }
     let g = spec.grid();
     let fine = spec.on_grid(Grid {
@@ -186,7 +181,7 @@ pub fn compute<S: MapKernels>(
         height: g.height * samples,
         ..*g
     });
-    let made = make(&fine, backend, verdict, monitor)?;
+    let made = make(&fine, engine, verdict, monitor)?;
     let (field, mask) = &made.made;
     let reduced = super::supersample::reduce_map(spec.quantity(), field, mask.as_deref(), samples);
     Ok(Made {
@@ -275,13 +270,13 @@ pub struct Made<T> {
 /// `spec`'s map on `backend` and, with `verdict`, its mask.
 pub fn make<S: MapKernels>(
     spec: &S,
-    backend: Backend,
+    engine: &Engine,
     verdict: bool,
     monitor: &Monitor,
 ) -> Result<Made<(Field, Option<Vec<u8>>)>> {
-    let (engine, info, notices) = map_engine(backend, spec, verdict)?;
+    let (info, notices) = map_engine(engine, spec, verdict)?;
     let finer = verdict::finer(spec, engine.has_f64());
-    let made = map_and_verdict(&engine, spec, verdict, monitor)?;
+    let made = map_and_verdict(engine, spec, verdict, monitor)?;
     Ok(Made {
         made,
         info,
@@ -295,16 +290,17 @@ pub fn make<S: MapKernels>(
 /// (`tile`), band by band, with the verdict's mask when asked.
 pub fn make_store<S: MapKernels>(
     spec: &S,
-    backend: Backend,
+    engine: &Engine,
     path: &Path,
     command: String,
     tile: Option<(u32, u32)>,
     verdict: bool,
     monitor: &Monitor,
 ) -> Result<Made<Filled>> {
-    let (engine, info, mut notices) = map_engine(backend, spec, verdict)?;
+    let (info, mut notices) = map_engine(engine, spec, verdict)?;
     let finer = verdict::finer(spec, engine.has_f64());
     let quantity = spec.quantity();
+    let backend = engine.asked();
     let fill = StoreFill {
         path,
         grid: *spec.grid(),
@@ -318,7 +314,7 @@ pub fn make_store<S: MapKernels>(
     let filled = fill_store(
         &fill,
         monitor,
-        |rows, monitor| map_and_verdict(&engine, &spec.with_band(rows), verdict, monitor),
+        |rows, monitor| map_and_verdict(engine, &spec.with_band(rows), verdict, monitor),
         |x| spec.counted(x),
     )?;
     notices.extend(missing_note(&filled, path));
@@ -373,6 +369,16 @@ impl MapOutputs {
                     "a .zarr store has no picture to paint (its verdict is the array `resolved`)",
                 ));
             }
+            // A store is a directory: a file (or device, FIFO) there is not one to open.
+            if store.exists() && !store.is_dir() {
+                return Err(Error::invalid(
+                    "data",
+                    format!(
+                        "{} is not a directory, so not a Zarr store: give a new path or a store",
+                        store.display()
+                    ),
+                ));
+            }
             let parent = store.parent().filter(|p| !p.as_os_str().is_empty());
             return check_writable("data", &parent.unwrap_or(Path::new(".")).join(".probe"));
         }
@@ -383,7 +389,19 @@ impl MapOutputs {
         if let Some(path) = &self.resolved {
             check_output("resolved", path, "npy")?;
         }
-        Ok(())
+        super::checks::check_distinct(&self.named(), &[])
+    }
+
+    /// Each file a run writes, with its field.
+    pub fn named(&self) -> Vec<(&'static str, &Path)> {
+        [
+            Some(("output", self.output.as_path())),
+            self.data.as_deref().map(|p| ("data", p)),
+            self.resolved.as_deref().map(|p| ("resolved", p)),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
     }
 
     /// Whether the map is made a second time for the verdict.
@@ -506,11 +524,11 @@ pub fn map_and_verdict<S: MapKernels>(
 /// verdict's finer map's with `verdict`), and the notices to give about both
 /// ([`precision_notices`]).
 pub fn map_engine(
-    backend: Backend,
+    engine: &Engine,
     spec: &impl MapKernels,
     verdict: bool,
-) -> Result<(Engine, RunInfo, Vec<String>)> {
-    let engine = Engine::new(backend)?;
+) -> Result<(RunInfo, Vec<String>)> {
+    let backend = engine.asked();
     let mut notices = engine.notices();
     let (precision, grid) = (spec.precision(), spec.grid());
     let info = engine.map_info(grid, precision);
@@ -524,7 +542,7 @@ pub fn map_engine(
                 .map(|_| ()),
         )?;
     }
-    Ok((engine, info, notices))
+    Ok((info, notices))
 }
 
 /// What a map's precision means on this engine: f64 asked of a GPU without it is an error

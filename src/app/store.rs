@@ -300,6 +300,22 @@ pub fn render(job: &RenderJob, command: String, monitor: &Monitor) -> Result<Ren
     let largest = grid.width.max(grid.height);
     let step = job.max_size.map_or(1, |m| largest.div_ceil(m));
     let (w, h) = (grid.width.div_ceil(step), grid.height.div_ceil(step));
+    // The picture's values (4 B a pixel), its colours (3 B) and the PNG encoder's copy (3 B),
+    // and a band of the store, against what this process may still take (its address-space
+    // limit and its cgroup's too): refused here, not aborted by a failed allocation.
+    let need = 10 * w as u64 * h as u64 + 4 * grid.width as u64 * s.chunk_rows as u64;
+    let have = crate::spec::available_memory();
+    if need > have {
+        let fits = ((have / 10) as f64).sqrt() as u64;
+        return Err(Error::invalid(
+            "max_size",
+            format!(
+                "a {w}x{h} picture needs about {} MiB but only {} MiB of memory are available to this process: render it at most {fits} pixels on its larger side",
+                need >> 20,
+                have >> 20
+            ),
+        ));
+    }
     // Every step-th pixel from the first, read one chunk band at a time.
     let mut small = Field::new(w, h, f32::NAN);
     monitor.start("rows", s.chunks() as u64);

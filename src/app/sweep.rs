@@ -169,7 +169,7 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
     if let Some(var) = args.vary.and_then(|v| v.param.var())
         && [args.grid.x.var, args.grid.y.var]
             .iter()
-            .any(|a| a.writes() == var.writes())
+            .any(|a| a.overlaps(var))
     {
         return Err(Error::invalid(
             "vary",
@@ -269,6 +269,9 @@ pub fn run(
     frame_command: &dyn Fn(&FrameMap, Backend, &PictureSpec) -> String,
     monitor: &Monitor,
 ) -> Result<SweepSummary> {
+    // The plane as given, before any frame: its own errors name its own fields (--x),
+    // not the varied parameter.
+    spec::validate_grid(&job.grid)?;
     let frames = frames(job)?;
     spec::validate_stepping(&job.stepping)?;
     for (k, f) in frames.iter().enumerate() {
@@ -297,6 +300,12 @@ pub fn run(
         return Err(Error::invalid("ftle_max", "must be > 0"));
     }
     render::check_writable("output", &job.output.join("animation.png"))?;
+    // A frame kept from an interrupted run is read back: each must be a regular file too.
+    for k in 0..frames.len() as u32 {
+        let path = frame_path(&job.output, k);
+        render::files::replaceable(&path)
+            .map_err(|why| Error::invalid("output", format!("{}: {why}", path.display())))?;
+    }
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;
         if job.zoom.is_some() || job.vary.is_none() {

@@ -50,7 +50,12 @@ impl TracesJob {
         if let Some(d) = &self.data {
             check_output("data", d, "npy")?;
         }
-        Ok(())
+        let named = [
+            Some(("output", self.output.as_path())),
+            self.gif.as_deref().map(|p| ("gif", p)),
+            self.data.as_deref().map(|p| ("data", p)),
+        ];
+        super::checks::check_distinct(&named.into_iter().flatten().collect::<Vec<_>>(), &[])
     }
 }
 

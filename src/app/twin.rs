@@ -22,7 +22,7 @@ use crate::fit::{Frame, angles};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
-use crate::render::{Outputs, check_writable};
+use crate::render::Outputs;
 use crate::spec::Precision;
 
 /// The truth's steps per second: ten times the model's, so that its own error is negligible
@@ -263,7 +263,13 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
         super::check_within(field, v, -most, most)?;
     }
     for &s in &job.sigmas {
-        super::check_within("sigma", s, 0.0, 0.1)?;
+        // A noise-free track has nothing for the band to cover and no ln sigma to fit.
+        if !(s.is_finite() && s > 0.0 && s <= 0.1) {
+            return Err(Error::invalid(
+                "sigma",
+                format!("{s} must be in (0, 0.1] m: a twin measures how noise limits the forecast"),
+            ));
+        }
     }
     for &r in &job.rates {
         super::check_within("rate", r, 0.5, 10_000.0)?;
@@ -275,7 +281,19 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
             "give at least one noise and one rate",
         ));
     }
-    check_writable("output", &job.output.join("summary.json"))?;
+    let inputs: Vec<_> = job
+        .params
+        .params
+        .as_deref()
+        .map(|p| ("params", p))
+        .into_iter()
+        .collect();
+    super::checks::check_directory(
+        "output",
+        &job.output,
+        &["twin.csv", "twin.png", "twin_forecast.png", "summary.json"],
+        &inputs,
+    )?;
     let truth = job.params.resolve()?;
     let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices = engine.notices();

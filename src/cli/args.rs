@@ -138,8 +138,10 @@ impl GridArgs {
 pub struct PlaneArgs {
     /// What varies along x: NAME or NAME=MIN:MAX, NAME one of theta1 omega1 theta2 omega2 (rad,
     /// rad/s), m1 m2 (kg), m2/m1 (m1 held), l1 l2 (m), l2/l1 (l1 held), g (m/s^2), damping
-    /// (both joints), joint1 joint2 (N m s), rod1 rod2 (kg). The other parameters come from
-    /// their flags [default theta1].
+    /// (both joints), joint1 joint2 (N m s), rod1 rod2 (kg). Two axes may not set one value
+    /// (m2 and m2/m1, l2 and l2/l1, damping and joint1, damping and joint2), nor an axis and
+    /// a flag (--m2 beside m2/m1; a pair's part along an axis is given as 0). The other
+    /// parameters come from their flags [default theta1].
     #[arg(long, value_parser = parse_axis, allow_hyphen_values = true)]
     pub x: Option<AxisArg>,
     /// What varies along y (top = MAX), as --x [default theta2].

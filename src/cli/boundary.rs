@@ -73,11 +73,14 @@ impl BoundaryArgs {
         }
         let spec = FlipSpec {
             precision: self.precision,
-            ..FlipSpec::new(
-                self.physical.sources().resolve()?,
-                self.plane.grid((1, 1))?,
-                self.step.stepping(),
-            )
+            ..{
+                let grid = self.plane.grid((1, 1))?;
+                FlipSpec::new(
+                    self.physical.sources().resolve_on(&grid)?,
+                    grid,
+                    self.step.stepping(),
+                )
+            }
         };
         Ok(BoundaryJob {
             spec,

@@ -24,16 +24,34 @@ use crate::spec::{
 
 /// The flags that reproduce `p` exactly.
 pub fn params(p: &Params) -> String {
-    let mut out = format!(
-        "--m1 {} --m2 {} --l1 {} --l2 {} --g {}",
-        p.m1, p.m2, p.l1, p.l2, p.g
-    );
-    if p.rod1 != 0.0 || p.rod2 != 0.0 {
-        out += &format!(" --rod-mass {},{}", p.rod1, p.rod2);
-    }
+    params_on(p, &[])
+}
+
+/// The flags that reproduce `p` beside axes (or a sweep) that vary `along`: what they set is
+/// left out (given with them, it would be refused), a pair's part they set given as 0.
+fn params_on(p: &Params, along: &[Var]) -> String {
+    let set = |name: &str| along.iter().any(|v| v.writes().contains(&name));
+    let mut out = [
+        ("m1", p.m1),
+        ("m2", p.m2),
+        ("l1", p.l1),
+        ("l2", p.l2),
+        ("g", p.g),
+    ]
+    .into_iter()
+    .filter(|(name, _)| !set(name))
+    .map(|(name, v)| format!("--{name} {v}"))
+    .collect::<Vec<_>>()
+    .join(" ");
     let l = &p.losses;
-    if l.joint1 != 0.0 || l.joint2 != 0.0 {
-        out += &format!(" --joint-damping {},{}", l.joint1, l.joint2);
+    for (flag, [a, b], [v1, v2]) in [
+        ("rod-mass", ["rod1", "rod2"], [p.rod1, p.rod2]),
+        ("joint-damping", ["joint1", "joint2"], [l.joint1, l.joint2]),
+    ] {
+        let (v1, v2) = (if set(a) { 0.0 } else { v1 }, if set(b) { 0.0 } else { v2 });
+        if v1 != 0.0 || v2 != 0.0 {
+            out += &format!(" --{flag} {v1},{v2}");
+        }
     }
     if l.has_bearings() {
         out += &format!(
@@ -144,7 +162,7 @@ pub fn flip_map(spec: &FlipSpec, backend: Backend, pic: &PictureSpec) -> String 
         "chaoscope flip {} {} {} --backend {}",
         grid(&spec.grid),
         steps(&spec.stepping),
-        params(&spec.params),
+        params_on(&spec.params, &[spec.grid.x.var, spec.grid.y.var]),
         backend.name()
     );
     if spec.measure != FlipMeasure::Time {
@@ -201,7 +219,7 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
         steps(&spec.stepping),
         spec.renorm,
         method(spec.method),
-        params(&spec.params),
+        params_on(&spec.params, &[spec.grid.x.var, spec.grid.y.var]),
         backend.name()
     );
     if !spec.use_symmetry {
@@ -348,6 +366,11 @@ pub fn frame(map: &FrameMap, backend: Backend, pic: &PictureSpec) -> String {
 }
 
 pub fn sweep(job: &SweepJob) -> String {
+    let varied = job.vary.and_then(|v| v.param.var());
+    let along: Vec<Var> = [Some(job.grid.x.var), Some(job.grid.y.var), varied]
+        .into_iter()
+        .flatten()
+        .collect();
     let mut out = format!("chaoscope sweep --map {}", job.map.name());
     if let Some(v) = job.vary {
         out += &format!(" --vary {}={}:{}", v.param.name(), v.from, v.to);
@@ -363,7 +386,7 @@ pub fn sweep(job: &SweepJob) -> String {
         steps(&job.stepping),
         job.renorm,
         job.ftle_max,
-        params(&job.params),
+        params_on(&job.params, &along),
         job.backend.name()
     );
     out + &picture(&job.picture)
@@ -375,7 +398,7 @@ pub fn boundary(job: &BoundaryJob) -> String {
         "chaoscope boundary {} {} {} --class {} --pairs {} --eps {}:{} --levels {} --seed {} --backend {} --precision {}",
         plane(&s.grid),
         steps(&s.stepping),
-        params(&s.params),
+        params_on(&s.params, &[s.grid.x.var, s.grid.y.var]),
         job.class.name(),
         job.pairs,
         job.eps.0,

@@ -97,11 +97,14 @@ impl FlipArgs {
             use_symmetry: !(self.full || self.no_symmetry),
             precision: self.precision.unwrap_or_default(),
             integrator,
-            ..FlipSpec::new(
-                self.physical.sources().resolve()?,
-                self.grid.grid()?,
-                self.step.stepping(),
-            )
+            ..{
+                let grid = self.grid.grid()?;
+                FlipSpec::new(
+                    self.physical.sources().resolve_on(&grid)?,
+                    grid,
+                    self.step.stepping(),
+                )
+            }
         };
         Ok(if self.accurate { spec.accurate() } else { spec })
     }

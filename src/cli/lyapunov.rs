@@ -107,17 +107,19 @@ pub struct LyapunovArgs {
     /// indicator), descriptor (the Lagrangian descriptor M over [-t-max, t-max], --ld-p).
     #[arg(long, default_value = "ftle", value_parser = clap::builder::PossibleValuesParser::new(INDICATORS))]
     pub indicator: String,
-    /// Which exponent --indicator exponent maps, 1..4 (largest first).
-    #[arg(long)]
+    /// Which exponent --indicator exponent maps, 1..4, in Gram-Schmidt order: the k-th
+    /// orthonormalised tangent vector's growth. The first is the largest; at a finite time the
+    /// others are not sorted per pixel (exponents 3 and 4 cross where both are near 0).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=4))]
     pub exponent: Option<u8>,
     /// Tangent vectors of --indicator gali or gali-time, 2..4.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u8).range(2..=4))]
     pub gali: Option<u8>,
     /// The alignment index below which a start is called chaotic and stops [default: 1e-8;
     /// f32 resolves 1e-5 at best, its default there].
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub threshold: Option<f64>,
-    /// All four exponents (1/s, largest first) as float32 .npy of shape (4, height, width),
+    /// All four exponents (1/s, in Gram-Schmidt order, as --exponent) as float32 .npy of shape (4, height, width),
     /// from the same run as the map of --indicator exponent or exponent-sum.
     #[arg(long)]
     pub spectrum: Option<PathBuf>,
@@ -181,7 +183,7 @@ impl LyapunovArgs {
             false => self.integrator()?,
         };
         let spec = LyapunovSpec {
-            params: self.physical.sources().resolve()?,
+            params: self.physical.sources().resolve_on(&grid)?,
             grid,
             stepping: Stepping {
                 dt: self.dt,

@@ -193,7 +193,9 @@ impl Cli {
     /// check of its own: a flag that takes a value followed directly by another flag of the
     /// command. Numbers may start with `-` (`-pi`), so clap would take `--cw` in
     /// `--l1 --cw 2` as the value of `--l1` and then stop at the stray `2` without naming
-    /// `--l1`; this names it.
+    /// `--l1`; this names it. Every flag's value may start with `-`, so that a negative
+    /// value given as its own word (`--exponent -1`) reaches the flag's own check, which
+    /// names the flag and its range, instead of clap's "unexpected argument '-1'".
     pub fn parse_args<I, T>(args: I) -> Result<Cli, clap::Error>
     where
         I: IntoIterator<Item = T>,
@@ -201,7 +203,15 @@ impl Cli {
     {
         use clap::CommandFactory;
         let args: Vec<std::ffi::OsString> = args.into_iter().map(Into::into).collect();
-        let mut command = Cli::command();
+        let mut command = Cli::command().mut_subcommands(|sub| {
+            sub.mut_args(|a| {
+                let one_value = a.get_num_args().is_none_or(|n| n.max_values() == 1);
+                match a.get_long().is_some() && a.get_action().takes_values() && one_value {
+                    true => a.allow_hyphen_values(true),
+                    false => a,
+                }
+            })
+        });
         let words: Vec<String> = args
             .iter()
             .map(|a| a.to_string_lossy().into_owned())
@@ -228,7 +238,9 @@ impl Cli {
                 }
             }
         }
-        Cli::try_parse_from(args)
+        use clap::FromArgMatches;
+        let mut matches = command.try_get_matches_from_mut(args)?;
+        Cli::from_arg_matches_mut(&mut matches).map_err(|e| e.format(&mut command))
     }
 }
 
@@ -359,6 +371,32 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
             eprintln!(
                 "error: invalid value for {}: {reason}",
                 names::flag(command, field)
+            );
+            2
+        }
+        Err(Error::SameFile {
+            field,
+            other,
+            path,
+            input,
+        }) => {
+            let what = match input {
+                true => "this run reads: writing it would replace it",
+                false => "of this run: each output needs a file of its own",
+            };
+            eprintln!(
+                "error: invalid value for {}: {} is also the {} file {what}",
+                names::flag(command, field),
+                path.display(),
+                names::flag(command, other)
+            );
+            2
+        }
+        Err(Error::Missing { field, path }) => {
+            eprintln!(
+                "error: invalid value for {}: {}: no such file",
+                names::flag(command, field),
+                path.display()
             );
             2
         }

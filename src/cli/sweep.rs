@@ -11,6 +11,7 @@ use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
 use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
+use crate::spec::Var;
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("20")))]
@@ -63,6 +64,25 @@ pub struct SweepArgs {
 
 impl SweepArgs {
     pub fn job(&self) -> Result<SweepJob> {
+        let grid = self.grid.grid()?;
+        let sources = self.physical.sources();
+        if let Some(var) = self.vary.and_then(|v| v.param.var()) {
+            sources.check_along(&[("vary", var)])?;
+            let plane = &self.grid.plane;
+            for (given, field, v) in [
+                (plane.omega1.is_some(), "omega1", Var::Omega1),
+                (plane.omega2.is_some(), "omega2", Var::Omega2),
+            ] {
+                if given && var == v {
+                    return Err(crate::Error::invalid(
+                        field,
+                        format!(
+                            "{field} varies in the sweep, which sets it: leave one of them out"
+                        ),
+                    ));
+                }
+            }
+        }
         Ok(SweepJob {
             map: self.map,
             vary: self.vary,
@@ -72,8 +92,8 @@ impl SweepArgs {
                 .map(|(to, factor)| Zoom { to, factor }),
             frames: self.frames,
             fps: self.fps,
-            params: self.physical.sources().resolve()?,
-            grid: self.grid.grid()?,
+            params: sources.resolve_on(&grid)?,
+            grid,
             stepping: self.step.stepping(),
             renorm: self.renorm,
             ftle_max: self.ftle_max,

@@ -330,7 +330,7 @@ fn step_vectors(p: &Params, y: &[f64; 4], v: &mut [[f64; 4]], dt: f64) -> [f64; 
     next
 }
 
-/// All four exponents of `spec`'s grid (1/s, largest first), one run of four vectors a
+/// All four exponents of `spec`'s grid (1/s, in Gram-Schmidt order), one run of four vectors a
 /// pixel, rows in parallel.
 pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]> {
     use rayon::prelude::*;

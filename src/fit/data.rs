@@ -25,6 +25,10 @@ const MIN_TIME_STEP: f64 = 1e-6;
 /// (issue 25's audit: times of 1e300 s were fitted and reported as nonsense).
 const MAX_TIME: f64 = 1e6;
 
+/// Positions beyond this many metres are a unit mistake (arms are at most 1e4 m, as --l1
+/// allows); 1e300 m overflowed the fit's energies into NaN arm lengths.
+const MAX_POSITION: f64 = 1e4;
+
 fn bad(path: &Path, line: usize, what: String) -> Error {
     Error::invalid("file", format!("{}:{line}: {what}", path.display()))
 }
@@ -32,8 +36,7 @@ fn bad(path: &Path, line: usize, what: String) -> Error {
 /// Reads a CSV with a header naming t, x1, y1, x2, y2 (any order, other columns ignored);
 /// lines starting with # are comments. Errors name the line.
 pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::invalid("file", format!("cannot read {}: {e}", path.display())))?;
+    let text = crate::input::read_text("file", path, crate::input::CSV_CAP)?;
     // A byte-order mark (as some spreadsheets write) is not part of the first column's name.
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut lines = text
@@ -80,6 +83,19 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
     let mut frames = Vec::new();
     for (n, line) in lines {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        // A row of more or fewer fields than the header has its values under other columns'
+        // names (a decimal comma, a cell left out).
+        if cells.len() != names.len() {
+            return Err(bad(
+                path,
+                n,
+                format!(
+                    "{} fields where the header has {}",
+                    cells.len(),
+                    names.len()
+                ),
+            ));
+        }
         let mut v = [0.0; 5];
         for (k, &c) in cols.iter().enumerate() {
             let cell = cells
@@ -96,6 +112,16 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
                         format!("`{cell}` in column `{}` is not a number", names[c]),
                     )
                 })?;
+        }
+        if let Some(k) = (1..5).find(|&k| v[k].abs() > MAX_POSITION) {
+            return Err(bad(
+                path,
+                n,
+                format!(
+                    "{:e} m in column `{}` is beyond {MAX_POSITION:e} m from the origin: are the positions in metres?",
+                    v[k], names[cols[k]]
+                ),
+            ));
         }
         if v[0].abs() > MAX_TIME {
             return Err(bad(

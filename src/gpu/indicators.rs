@@ -81,7 +81,7 @@ impl IndicatorKernel {
         with_real!(self.precision, R => self.run_in::<R>(ctx, spec, monitor, None))
     }
 
-    /// All four exponents of `spec`'s grid (1/s, the Gram-Schmidt order: largest first), from
+    /// All four exponents of `spec`'s grid (1/s, in Gram-Schmidt order: the first the largest, the others not sorted per pixel), from
     /// one run of the spectrum kernel; `spec`'s indicator must be an exponent or their sum.
     pub fn spectrum(
         &self,

@@ -50,6 +50,10 @@ impl Staged {
     }
 
     fn persist(self, to: &Path) -> std::io::Result<()> {
+        // Checked again at the last moment: a FIFO or device made since the run's check must
+        // not be renamed over either.
+        replaceable(to)
+            .map_err(|why| std::io::Error::new(std::io::ErrorKind::InvalidInput, why))?;
         // Drop (which forgets the path) runs when `self` goes out of scope; the file is
         // renamed through a borrow of it.
         std::fs::rename(self.tmp.path(), to)
@@ -99,6 +103,12 @@ impl Outputs {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
+        replaceable(path).map_err(|why| {
+            file_error(
+                path,
+                std::io::Error::new(std::io::ErrorKind::InvalidInput, why),
+            )
+        })?;
         std::fs::create_dir_all(dir).map_err(|e| file_error(dir, e))?;
         let staged = Staged::new(dir).map_err(|e| file_error(dir, e))?;
         {
@@ -254,6 +264,24 @@ pub fn write_atomic(
     set.commit_now()
 }
 
+/// Whether an output may take the place of what is at `path`: nothing yet, a regular file,
+/// or a link to one or to nothing (the rename replaces the link itself). A directory, a
+/// device node (/dev/null), a FIFO or a socket, or a link to one, is never replaced: run as
+/// root, a rename over /dev/null would replace the system's device with a PNG.
+pub fn replaceable(path: &Path) -> std::result::Result<(), String> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => Ok(()),
+        Ok(m) if m.is_dir() => Err("is a directory".into()),
+        Ok(_) => Err(
+            "is not a regular file (a device, FIFO or socket): only a regular file is replaced"
+                .into(),
+        ),
+        // Nothing there, or a dangling link.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// That `path` can be written: its nearest existing ancestor is a directory that takes
 /// files (the rest is made when the file is written), and `path` is not a directory.
 /// Checked before any work, creating nothing; the error names `field`.
@@ -268,8 +296,8 @@ pub fn check_writable(field: &'static str, path: &Path) -> Result<()> {
             _ => Path::new("."),
         };
     }
-    let problem = if path.is_dir() {
-        Some("is a directory".to_string())
+    let problem = if let Err(why) = replaceable(path) {
+        Some(why)
     } else if !dir.is_dir() {
         Some(format!("{} is not a directory", dir.display()))
     } else {
@@ -375,9 +403,23 @@ pub struct Png {
     pub text: Vec<(String, String)>,
 }
 
+/// The PNG at `path`, a regular file of at most [`crate::input::PNG_CAP`] bytes.
 pub fn read_png(path: &Path) -> Result<Png> {
+    let cap = crate::input::PNG_CAP;
     let err = |e: png::DecodingError| Error::format(path, e);
-    let file = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| file_error(path, e))?);
+    let (file, len) = crate::input::open_regular(path).map_err(|e| file_error(path, e))?;
+    if len > cap {
+        return Err(Error::format(
+            path,
+            format!(
+                "{} is larger than the {} this PNG may have",
+                crate::input::bytes(len),
+                crate::input::bytes(cap)
+            ),
+        ));
+    }
+    use std::io::Read;
+    let file = std::io::BufReader::new(file.take(cap));
     let mut reader = png::Decoder::new(file).read_info().map_err(err)?;
     let mut rgb = vec![0; reader.output_buffer_size().unwrap_or(0)];
     let frame = reader.next_frame(&mut rgb).map_err(err)?;

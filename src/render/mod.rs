@@ -5,7 +5,7 @@
 mod annotate;
 mod colormap;
 mod exposure;
-mod files;
+pub(crate) mod files;
 mod maps;
 pub mod store;
 
@@ -22,6 +22,6 @@ pub use files::{
     write_npy, write_npy_shaped, write_png,
 };
 pub use maps::{
-    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, default_range, flip_picture,
+    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, default_range, flip_picture, legend,
     lyapunov_bar, lyapunov_picture, provenance,
 };

@@ -359,7 +359,7 @@ impl Grid {
                 ));
             }
         }
-        if self.x.var.writes() == self.y.var.writes() {
+        if self.x.var.overlaps(self.y.var) {
             return Err(Error::invalid(
                 "y",
                 format!(

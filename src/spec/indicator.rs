@@ -50,7 +50,7 @@ pub enum Indicator {
     /// The largest finite-time Lyapunov exponent, one tangent vector (1/s).
     #[default]
     Ftle,
-    /// Exponent k (1..=4, largest first) of the spectrum: four tangent vectors kept
+    /// Exponent k (1..=4, in Gram-Schmidt order) of the spectrum: four tangent vectors kept
     /// orthonormal by modified Gram-Schmidt (1/s).
     Exponent(u8),
     /// The sum of the four exponents (1/s).
@@ -133,7 +133,7 @@ impl Indicator {
         match self {
             Indicator::Exponent(k) if !(1..=4).contains(&k) => Err(Error::invalid(
                 "exponent",
-                format!("{k} must be 1, 2, 3 or 4 (largest first)"),
+                format!("{k} must be 1, 2, 3 or 4 (in Gram-Schmidt order)"),
             )),
             Indicator::Alignment {
                 index: Alignment::Gali(k),

@@ -40,8 +40,14 @@ pub struct MapKindEntry {
     pub short: &'static str,
     /// The explorer's menu entry.
     pub label: &'static str,
-    /// What its colours mean, under the explorer's colour bar.
+    /// What its colours mean, under the explorer's colour bar; `{ends}` stands where the
+    /// picture's dark and bright ends are named, with the meanings `low` and `high` of its
+    /// low and high values in the order the picture draws them (`render::legend`).
     pub legend: &'static str,
+    /// What its low values mean ("" where its colours have no order).
+    pub low: &'static str,
+    /// What its high values mean.
+    pub high: &'static str,
     /// Whether its colours span a range the user may set (`--colour-range`).
     pub ranged: bool,
     /// Whether it has accurate settings (`--accurate`: f64, adaptive steps).
@@ -58,7 +64,9 @@ impl MapKind {
             name: "flip",
             short: "flip",
             label: "flip time",
-            legend: "Colour: time until an arm first flips (dark: soon, bright: late); black: no flip within t-max; green: NaN.",
+            legend: "Colour: time until an arm first flips ({ends}); black: no flip within t-max; green: NaN.",
+            low: "soon",
+            high: "late",
             ranged: false,
             accurate: true,
             indicator: None,
@@ -70,6 +78,8 @@ impl MapKind {
             short: "flip-kind",
             label: "which arm flips first",
             legend: "Colour: which arm flips over first, and which way (+: past +π, −: past −π); black: no flip within t-max; green: NaN.",
+            low: "",
+            high: "",
             ranged: false,
             // Located by the RK4 flip-time loop only.
             accurate: false,
@@ -81,7 +91,9 @@ impl MapKind {
             name: "lyapunov",
             short: "ftle",
             label: "divergence (FTLE)",
-            legend: "Colour: largest finite-time Lyapunov exponent (black: regular, bright: chaotic).",
+            legend: "Colour: largest finite-time Lyapunov exponent ({ends}).",
+            low: "regular",
+            high: "chaotic",
             ranged: true,
             accurate: true,
             indicator: Some(Indicator::Ftle),
@@ -93,6 +105,8 @@ impl MapKind {
             short: "exponent",
             label: "Lyapunov exponent λ2",
             legend: "Colour: the second of the four Lyapunov exponents (four tangent vectors kept orthonormal); about 0 where the motion is regular or the chaos has one unstable direction.",
+            low: "",
+            high: "",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Exponent(2)),
@@ -104,6 +118,8 @@ impl MapKind {
             short: "exponent-sum",
             label: "sum of the exponents",
             legend: "Colour: λ1 + λ2 + λ3 + λ4: 0 without losses (the flow keeps phase-space volume), the mean contraction rate with them.",
+            low: "",
+            high: "",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::ExponentSum),
@@ -114,7 +130,9 @@ impl MapKind {
             name: "sali",
             short: "sali",
             label: "alignment index SALI",
-            legend: "Colour: log10 SALI of two tangent vectors (dark: regular, SALI stays near 1; bright: chaotic, SALI falls to its threshold, 1e-5 here, and the pixel stops).",
+            legend: "Colour: log10 SALI of two tangent vectors ({ends}).",
+            low: "chaotic, SALI falls to its threshold, 1e-5 here, and the pixel stops",
+            high: "regular, SALI stays near 1",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Alignment {
@@ -128,7 +146,9 @@ impl MapKind {
             name: "gali",
             short: "gali",
             label: "alignment index GALI_4",
-            legend: "Colour: log10 GALI_4, the volume spanned by four unit tangent vectors (dark: regular, decays like t^-4, so it brightens with t-max too; bright: chaotic, decays exponentially to the threshold, 1e-5 here).",
+            legend: "Colour: log10 GALI_4, the volume spanned by four unit tangent vectors ({ends}).",
+            low: "chaotic, decays exponentially to the threshold, 1e-5 here",
+            high: "regular, decays like t^-4, so its colour moves with t-max too",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Alignment {
@@ -142,7 +162,9 @@ impl MapKind {
             name: "alignment-time",
             short: "alignment-time",
             label: "time until SALI aligns",
-            legend: "Colour: the time SALI took to fall below its threshold, 1e-5 here (bright: soon, strongly chaotic); black: not within t-max (regular).",
+            legend: "Colour: the time SALI took to fall below its threshold, 1e-5 here ({ends}); black: not within t-max (regular).",
+            low: "soon, strongly chaotic",
+            high: "late",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::AlignmentTime {
@@ -156,7 +178,9 @@ impl MapKind {
             name: "megno",
             short: "megno",
             label: "MEGNO <Y>",
-            legend: "Colour: MEGNO <Y> (dark: regular, tends to 2, or 0 for isochronous motion; bright: chaotic, grows like λ t / 2).",
+            legend: "Colour: MEGNO <Y> ({ends}).",
+            low: "regular, tends to 2, or 0 for isochronous motion",
+            high: "chaotic, grows like λ t / 2",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Megno),
@@ -167,7 +191,9 @@ impl MapKind {
             name: "fli",
             short: "fli",
             label: "fast Lyapunov indicator",
-            legend: "Colour: FLI, the largest log10 |v| of a tangent vector so far (dark: regular, grows like log t; bright: chaotic, like λ t).",
+            legend: "Colour: FLI, the largest log10 |v| of a tangent vector so far ({ends}).",
+            low: "regular, grows like log t",
+            high: "chaotic, like λ t",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Fli),
@@ -179,6 +205,8 @@ impl MapKind {
             short: "descriptor",
             label: "Lagrangian descriptor",
             legend: "Colour: the Lagrangian descriptor M, the integral of Σ|f_i|^0.5 of the phase-space velocity over [-t-max, t-max]; its sharp ridges and valleys trace the stable and unstable manifolds.",
+            low: "",
+            high: "",
             ranged: true,
             accurate: false,
             indicator: Some(Indicator::Descriptor { p: 0.5 }),

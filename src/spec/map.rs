@@ -211,6 +211,23 @@ pub struct LyapunovSpec {
 }
 
 impl LyapunovSpec {
+    /// The FTLE map of `chaoscope lyapunov` by default: the tangent method renormalised every
+    /// 0.1 s, mirrored, f32 on the GPU, RK4.
+    pub fn new(params: Params, grid: Grid, stepping: Stepping) -> Self {
+        LyapunovSpec {
+            params,
+            grid,
+            stepping,
+            method: Method::Tangent,
+            renorm: 0.1,
+            use_symmetry: true,
+            precision: Precision::F32,
+            band: None,
+            integrator: Integrator::Rk4,
+            indicator: Indicator::Ftle,
+        }
+    }
+
     /// Rows to integrate: the band's, or all from the top, or the top half when the other
     /// half mirrors it.
     pub fn rows_to_integrate(&self) -> u32 {

@@ -149,15 +149,30 @@ impl Var {
         matches!(self, Var::MassRatio | Var::LengthRatio)
     }
 
-    /// Which value it writes (a parameter's name, `joint` for the damping): two axes may
-    /// not write the same.
-    pub fn writes(self) -> &'static str {
+    /// The values it sets (parameters by name, the damping by joint): two axes may not set
+    /// one, nor an axis and a value given beside it.
+    pub fn writes(self) -> &'static [&'static str] {
         match self {
-            Var::MassRatio => "m2",
-            Var::LengthRatio => "l2",
-            Var::Damping | Var::Joint1 | Var::Joint2 => "joint",
-            v => v.name(),
+            Var::Theta1 => &["theta1"],
+            Var::Omega1 => &["omega1"],
+            Var::Theta2 => &["theta2"],
+            Var::Omega2 => &["omega2"],
+            Var::M1 => &["m1"],
+            Var::M2 | Var::MassRatio => &["m2"],
+            Var::L1 => &["l1"],
+            Var::L2 | Var::LengthRatio => &["l2"],
+            Var::G => &["g"],
+            Var::Damping => &["joint1", "joint2"],
+            Var::Joint1 => &["joint1"],
+            Var::Joint2 => &["joint2"],
+            Var::Rod1 => &["rod1"],
+            Var::Rod2 => &["rod2"],
         }
+    }
+
+    /// Whether it sets a value that `other` sets too.
+    pub fn overlaps(self, other: Var) -> bool {
+        self.writes().iter().any(|w| other.writes().contains(w))
     }
 
     /// Sets it to `v` in a start and its parameters.

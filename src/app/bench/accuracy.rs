@@ -112,7 +112,9 @@ pub(super) fn accurate_samples(
                     out: Some(&map),
                 };
                 match run_peer(args, dir, peer, &run).and_then(|mut s| {
-                    let data = std::fs::read(&map)?;
+                    // The peer's map: n x n float32 and a header.
+                    let cap = 4 * (args.accurate_size as u64).pow(2) + 4096;
+                    let data = crate::input::read_bounded("peers", &map, cap)?;
                     let npy = npyz::NpyFile::new(&data[..])?;
                     s.right = Some(right(&npy.into_vec::<f32>()?, reference));
                     s.name = format!("{} dt {dt}", s.name);

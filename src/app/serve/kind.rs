@@ -40,8 +40,8 @@ impl Kind {
     /// The page's menu entry and what its colours mean.
     pub fn describe(self) -> serde_json::Value {
         let (label, legend) = match self {
-            Kind::Map(k) => (k.entry().label, k.entry().legend),
-            Kind::Resolved => (Self::RESOLVED_LABEL, Self::RESOLVED_LEGEND),
+            Kind::Map(k) => (k.entry().label, crate::render::legend(k)),
+            Kind::Resolved => (Self::RESOLVED_LABEL, Self::RESOLVED_LEGEND.to_string()),
         };
         let (ranged, accurate) = match self {
             Kind::Map(k) => (k.entry().ranged, k.entry().accurate),

@@ -174,9 +174,13 @@ impl Query {
             });
         }
         for key in ["m1", "m2", "l1", "l2", "g", "damping"] {
-            let along = [("x", plane.x.var), ("y", plane.y.var)]
-                .into_iter()
-                .find(|(_, v)| v.writes() == key || (key == "damping" && *v == Var::Damping));
+            let along =
+                [("x", plane.x.var), ("y", plane.y.var)]
+                    .into_iter()
+                    .find(|(_, v)| match key {
+                        "damping" => v.overlaps(Var::Damping),
+                        _ => v.writes().contains(&key),
+                    });
             if let Some((axis, var)) = along
                 && self.values.contains_key(key)
             {
@@ -500,7 +504,8 @@ pub fn point(q: &mut Query, view: &View) -> Result<(Grid, (Params, State))> {
     };
     let (px, py) = (value("px")?, value("py")?);
     let dx = q.within("pixel", 1e-300, 1e6)?.unwrap_or(1e-3);
-    let dy = q.within("pixel_y", 1e-300, 1e6)?.unwrap_or(dx);
+    let dy_given = q.within("pixel_y", 1e-300, 1e6)?;
+    let dy = dy_given.unwrap_or(dx);
     let around = |a: Axis, v: f64, d: f64| Axis::new(a.var, v - 0.5 * d, v + 0.5 * d);
     let grid = Grid {
         width: 1,
@@ -522,12 +527,26 @@ pub fn point(q: &mut Query, view: &View) -> Result<(Grid, (Params, State))> {
             ));
         }
     }
-    // Errors name the point's keys, not the axes' (`x`, or `theta1` on the angle plane).
+    // Errors name the point's keys, not the axes' (`x`, or `theta1` on the angle plane): the
+    // point where it lies outside the axis' limits, else the pixel's size that reaches past.
+    let inside =
+        |var: crate::spec::Var, v: f64| !var.is_angle() || v.abs() <= std::f64::consts::PI + 1e-9;
+    let y_size = if dy_given.is_some() {
+        "pixel_y"
+    } else {
+        "pixel"
+    };
     let name = |e| match e {
         Error::InvalidSpec { field, reason } => {
             let key = match field {
-                f if f == "x" || f == grid.x.var.name() => "px",
-                f if f == "y" || f == grid.y.var.name() => "py",
+                f if f == "x" || f == grid.x.var.name() => match inside(grid.x.var, px) {
+                    true => "pixel",
+                    false => "px",
+                },
+                f if f == "y" || f == grid.y.var.name() => match inside(grid.y.var, py) {
+                    true => y_size,
+                    false => "py",
+                },
                 _ => return Error::InvalidSpec { field, reason },
             };
             Error::invalid(key, reason)

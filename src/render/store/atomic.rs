@@ -25,12 +25,43 @@ impl AtomicStore {
     }
 }
 
+/// A chunk file at most: a chunk holds 2^18 pixels (1 MiB of f32, `CHUNK_PIXELS`), or one
+/// row where a row is wider (65536 pixels at most), and a 4-byte checksum.
+const CHUNK_CAP: u64 = 4 << 20;
+
+impl AtomicStore {
+    /// That the file of `key` is one to read: a regular file (a FIFO or device put in a store
+    /// would block or never end) no larger than its kind may be; nothing there is fine (a
+    /// chunk not written yet).
+    fn readable(&self, key: &StoreKey) -> std::result::Result<(), StorageError> {
+        let path = self.root.join(key.as_str());
+        let cap = match key.as_str().ends_with("zarr.json") {
+            true => crate::input::METADATA_CAP,
+            false => CHUNK_CAP,
+        };
+        match std::fs::metadata(&path) {
+            Ok(m) if !m.is_file() => Err(StorageError::Other(format!(
+                "{}: not a regular file; only a regular file is read",
+                path.display()
+            ))),
+            Ok(m) if m.len() > cap => Err(StorageError::Other(format!(
+                "{}: {} is larger than the {} this file may have",
+                path.display(),
+                crate::input::bytes(m.len()),
+                crate::input::bytes(cap)
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
 impl ReadableStorageTraits for AtomicStore {
     fn get_partial_many<'a>(
         &'a self,
         key: &StoreKey,
         byte_ranges: ByteRangeIterator<'a>,
     ) -> std::result::Result<MaybeBytesIterator<'a>, StorageError> {
+        self.readable(key)?;
         self.inner.get_partial_many(key, byte_ranges)
     }
 
@@ -62,6 +93,8 @@ impl WritableStorageTraits for AtomicStore {
         if path.is_dir() {
             std::fs::remove_dir_all(&path).ok();
         }
+        crate::render::files::replaceable(&path)
+            .map_err(|why| StorageError::Other(format!("{}: {why}", path.display())))?;
         let written =
             std::fs::write(&temporary, &value).and_then(|()| std::fs::rename(&temporary, &path));
         if written.is_err() {
