@@ -1,5 +1,10 @@
-"""Writes examples/explore.ipynb (unexecuted; python/tests executes it): run with the venv's
-python, which has nbformat, after editing the cells here."""
+"""Writes examples/explore.ipynb and executes it in place, so that it is committed with its
+outputs (a reader on the web sees its figures): run with a Python that has chaoscope and
+`pip install .[notebook]` (scripts/test's venv has both), after editing the cells here.
+`--no-execute` writes the cells alone. python/tests executes it again."""
+import sys
+import tempfile
+
 import nbformat as nbf
 nb = nbf.v4.new_notebook()
 md, code = nbf.v4.new_markdown_cell, nbf.v4.new_code_cell
@@ -62,4 +67,11 @@ nb.cells = [
          "print(f\"{float(stored['resolved'].mean()):.1%} of the pixels resolved\")"),
 ]
 nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+if "--no-execute" not in sys.argv:
+    from nbclient import NotebookClient
+
+    # Run where its files go nowhere that matters; outputs stay in the notebook.
+    with tempfile.TemporaryDirectory() as where:
+        NotebookClient(nb, timeout=600, kernel_name="python3",
+                       resources={"metadata": {"path": where}}).execute()
 nbf.write(nb, str(__import__("pathlib").Path(__file__).with_name("explore.ipynb")))

@@ -504,3 +504,40 @@ fn f32_asked_of_the_cpu_is_said_to_run_in_f64() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains(note));
 }
+
+/// Every command that writes a file says so in one line (trajectory said nothing), and a
+/// value the command rounds is said rounded (`boundary --pairs 2000` drew 2048 silently).
+#[test]
+fn trajectory_and_boundary_say_what_they_did() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("t.csv");
+    common::chaoscope()
+        .args([
+            "trajectory",
+            "--theta1",
+            "1",
+            "--theta2",
+            "1",
+            "--t-max",
+            "1",
+            "--output",
+        ])
+        .arg(&csv)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(format!(
+            "101 rows from t = 0 to 1 s -> {}",
+            csv.display()
+        )));
+    common::chaoscope()
+        .args([
+            "boundary", "--t-max", "0.5", "--pairs", "300", "--levels", "3",
+        ])
+        .args(["--backend", "cpu", "--output"])
+        .arg(dir.path().join("b.png"))
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(
+            "512 pairs a level drawn for the 300 asked",
+        ));
+}

@@ -651,3 +651,50 @@ fn random_planes_indicators_and_outputs_are_refused_or_run() {
     // A fuzz run that only ever refused would test nothing.
     assert!(ok >= 10 && refusals >= 10, "{ok} ran, {refusals} refused");
 }
+
+/// Issue 35, item 9: `render` of a 65536^2 store under `ulimit -v 6 GiB` aborted (exit 134)
+/// allocating the picture; it is refused up front naming --max-size, and renders with it.
+#[test]
+fn render_refuses_a_picture_larger_than_the_process_may_hold() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("big.zarr");
+    // One chunk of the 65536^2 map is computed: the store exists, its picture is 40 GB.
+    chaoscope()
+        .args([
+            "flip",
+            "--size",
+            "65536",
+            "--t-max",
+            "0.1",
+            "--backend",
+            "cpu",
+        ])
+        .args(["--tile", "1/16384", "--data"])
+        .arg(&store)
+        .assert()
+        .success();
+    let bin = assert_cmd::cargo::cargo_bin("chaoscope");
+    let render = |extra: &str| {
+        std::process::Command::new("bash")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v 6291456; exec {} render {} --output {} {extra}",
+                bin.display(),
+                store.display(),
+                dir.path().join("big.png").display()
+            ))
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+            .output()
+            .unwrap()
+    };
+    let out = render("");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--max-size"), "{stderr}");
+    let out = render("--max-size 1024");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import warnings
 from pathlib import Path
 from typing import Any, Callable, Optional, Tuple, Union
@@ -121,6 +122,8 @@ def _as_xarray(answer: dict) -> Union[xr.DataArray, xr.Dataset]:
         "long_name": answer["quantity"],
         "command": answer["command"],
         "place": answer["place"],
+        "png_text": [tuple(pair) for pair in answer["png_text"]],
+        "rule": answer["rule"],
         "spec": answer["spec"],
         "start": dict(answer["start"]),
     }
@@ -334,7 +337,7 @@ def trajectory(
     progress: Progress = False,
 ) -> xr.Dataset:
     """One start's trajectory (``chaoscope trajectory``'s CSV, CPU f64 by default): a Dataset
-    over ``time`` (s) with the angles (rad), angular velocities (rad/s), the bobs' positions
+    over ``t`` (s; the CSV's column, each variable named as the CSV names it) with the angles (rad), angular velocities (rad/s), the bobs' positions
     (m, pivot at the origin, y up), the energy and the energy dissipated (J); a row every
     ``every`` s (every step by default). ``attrs["command"]`` reproduces the CSV.
 
@@ -353,13 +356,13 @@ def trajectory(
         "x1": "m", "y1": "m", "x2": "m", "y2": "m", "energy": "J", "dissipated": "J",
     }
     data = {
-        name: ("time", table[:, k], {"units": units.get(name, "")})
+        name: ("t", table[:, k], {"units": units.get(name, "")})
         for k, name in enumerate(names)
         if name != "t"
     }
     return xr.Dataset(
         data,
-        coords={"time": ("time", table[:, 0], {"units": "s"})},
+        coords={"t": ("t", table[:, 0], {"units": "s", "long_name": "time"})},
         attrs={"command": command},
     )
 
@@ -586,6 +589,10 @@ class Picture:
         return self.png
 
     def save(self, path: str) -> None:
+        """Writes the PNG to ``path``, making its missing folders as the command line does."""
+        folder = os.path.dirname(path)
+        if folder:
+            os.makedirs(folder, exist_ok=True)
         with open(path, "wb") as f:
             f.write(self.png)
 
@@ -614,6 +621,8 @@ def picture(
             np.ascontiguousarray(values.values, dtype=np.float32),
             None if resolved is None else np.ascontiguousarray(resolved, dtype=np.uint8),
             values.attrs["command"],
+            values.attrs["png_text"],
+            values.attrs["rule"],
             colormap,
             annotate,
             None if colour_range is None else (float(colour_range[0]), float(colour_range[1])),

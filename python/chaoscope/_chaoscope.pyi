@@ -21,6 +21,8 @@ def picture(
     values: np.ndarray,
     resolved: Optional[np.ndarray],
     command: str,
+    png_text: list[tuple[str, str]],
+    rule: str,
     colormap: Optional[str] = None,
     annotate: bool = False,
     colour_range: Optional[tuple[float, float]] = None,

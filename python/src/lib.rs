@@ -158,9 +158,13 @@ fn map_answer<'py, S: MapSpec>(
     field: Field,
     mask: Option<Vec<u8>>,
     command: String,
-    place: String,
-    notices: Vec<String>,
+    made: (&chaoscope::engine::RunInfo, Vec<String>, String),
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (info, notices, rule) = made;
+    let place = info.place().to_string();
+    // The PNG's text chunks as the command line writes them (its command is set when a
+    // picture is drawn, with the picture's flags): `picture` writes the same bytes.
+    let provenance: Vec<(String, String)> = chaoscope::render::provenance(String::new(), info);
     let g = *spec.grid();
     let (h, w) = (g.height as usize, g.width as usize);
     let out = PyDict::new(py);
@@ -204,6 +208,8 @@ fn map_answer<'py, S: MapSpec>(
     out.set_item("command", command)?;
     out.set_item("place", place)?;
     out.set_item("notices", notices)?;
+    out.set_item("png_text", provenance)?;
+    out.set_item("rule", rule)?;
     let any =
         serde_json::to_string(&spec.any()).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     out.set_item("spec", any)?;
@@ -256,8 +262,7 @@ fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
         field,
         mask,
         command,
-        made.info.place().to_string(),
-        made.notices,
+        (&made.info, made.notices, made.rule_in_full),
     )
 }
 
@@ -456,7 +461,7 @@ fn trajectory<'py>(
 /// A map's picture as the command line draws it (PNG bytes): `spec` (the map's JSON),
 /// its values and verdict, the colour map, the annotation, the colour range.
 #[pyfunction]
-#[pyo3(signature = (spec, values, resolved, command, colormap=None, annotate=false, colour_range=None, show_unresolved=false))]
+#[pyo3(signature = (spec, values, resolved, command, png_text, rule, colormap=None, annotate=false, colour_range=None, show_unresolved=false))]
 #[allow(clippy::too_many_arguments)]
 fn picture<'py>(
     py: Python<'py>,
@@ -464,6 +469,8 @@ fn picture<'py>(
     values: PyReadonlyArray2<'py, f32>,
     resolved: Option<PyReadonlyArray2<'py, u8>>,
     command: String,
+    png_text: Vec<(String, String)>,
+    rule: String,
     colormap: Option<String>,
     annotate: bool,
     colour_range: Option<(f32, f32)>,
@@ -509,11 +516,51 @@ fn picture<'py>(
             .and_then(|()| s.draw(&field, &pic, colour_range, shown)),
     }
     .map_err(py_err)?;
-    let mut text = drawn.text;
-    text.push(("chaoscope:command".into(), command));
+    // The PNG's chunks as the command line writes them: its provenance with the command
+    // that draws this picture, where the map sits, the picture's own, the verdict's rule.
+    let command = picture_command(&command, pic, colour_range, shown.is_some())?;
+    let mut text: Vec<(String, String)> = png_text
+        .into_iter()
+        .map(|(k, v)| match k.as_str() {
+            "chaoscope:command" => (k, command.clone()),
+            _ => (k, v),
+        })
+        .collect();
+    text.extend(drawn.picture.metadata());
+    text.extend(drawn.text);
+    if shown.is_some() {
+        text.push(("chaoscope:resolved-rule".into(), rule));
+    }
     let p = drawn.picture;
     let png = chaoscope::render::png_bytes(p.width, p.height, &p.rgb, &text).map_err(py_err)?;
     Ok(PyBytes::new(py, &png))
+}
+
+/// The command line that draws a map's picture: the map's `command` (parsed back into its
+/// job, as a stored command is) with the picture's flags.
+fn picture_command(
+    command: &str,
+    pic: PictureSpec,
+    colour_range: Option<(f32, f32)>,
+    show_unresolved: bool,
+) -> PyResult<String> {
+    use chaoscope::cli::{Cli, Job, LyapunovJob};
+    let bad = |e: String| PyValueError::new_err(format!("command: {e}"));
+    let cli = Cli::parse_args(command.split_whitespace()).map_err(|e| bad(e.to_string()))?;
+    match cli.command.job().map_err(|e| bad(e.to_string()))? {
+        Some(Job::Flip(mut job)) => {
+            job.picture = pic;
+            job.files.show_unresolved = show_unresolved;
+            Ok(command_line::flip(&job))
+        }
+        Some(Job::Lyapunov(LyapunovJob::Map(mut job))) => {
+            job.picture = pic;
+            job.colour_range = colour_range;
+            job.files.show_unresolved = show_unresolved;
+            Ok(command_line::lyapunov_map(&job))
+        }
+        _ => Err(bad(format!("{command:?} is not a map's command"))),
+    }
 }
 
 /// The model fitted to a camera-tracked run (`chaoscope fit`'s job): its summary as JSON (the

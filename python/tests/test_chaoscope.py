@@ -131,11 +131,13 @@ def test_lyapunov_maps_equal_their_commands(tmp_path, indicator):
 
 def test_trajectory_equals_its_command():
     run = chaoscope.trajectory(theta1=2.1, theta2=-0.7, t_max=2, every=0.05, joint_damping=0.01)
-    assert run.time.attrs["units"] == "s" and run.theta1.attrs["units"] == "rad"
+    assert run.t.attrs["units"] == "s" and run.theta1.attrs["units"] == "rad"
     csv = run_command(run.attrs["command"]).stdout.splitlines()
     table = np.loadtxt(csv[2:], delimiter=",")
     names = csv[1].split(",")
-    assert np.array_equal(table[:, 0], run.time.values)
+    # One name for each column in the CSV and the Dataset, time included.
+    assert [run.t.name, *run.data_vars] == names
+    assert np.array_equal(table[:, 0], run.t.values)
     for k, name in enumerate(names[1:], start=1):
         assert np.array_equal(table[:, k], run[name].values), name
 
@@ -162,10 +164,20 @@ def test_picture_is_the_commands_png(tmp_path):
     png = tmp_path / "cli.png"
     run_command(flips.attrs["command"], "--colormap", "turbo", "--annotate", "--output", str(png))
     assert png_pixels(pic.png) == png_pixels(png.read_bytes())
+    # The same PNG, byte for byte: pixels and every text chunk the command writes.
+    assert pic.png == png.read_bytes()
     bare = chaoscope.picture(flips)
     run_command(flips.attrs["command"], "--output", str(png))
-    assert png_pixels(bare.png) == png_pixels(png.read_bytes())
+    assert bare.png == png.read_bytes()
     assert png_pixels(bare.png)[0] == (64, 64)
+    # Saved where the folders do not exist yet, as the command line would.
+    bare.save(str(tmp_path / "new" / "folder" / "flip.png"))
+    assert (tmp_path / "new" / "folder" / "flip.png").read_bytes() == png.read_bytes()
+    checked = chaoscope.flip_map(size=32, t_max=2, resolved=True, progress=False)
+    shown = chaoscope.picture(checked, show_unresolved=True)
+    run_command(checked["map"].attrs["command"], "--show-unresolved", "--output", str(png),
+                "--resolved", str(tmp_path / "r.npy"))
+    assert shown.png == png.read_bytes()
 
 
 @pytest.mark.parametrize(
@@ -186,7 +198,6 @@ def test_picture_is_the_commands_png(tmp_path):
         ({"x": "omega1"}, "x"),
         ({"theta1": (-9.0, 9.0)}, "theta1"),
         ({"integrator": "euler"}, "integrator"),
-        ({"params_file": "/nonexistent/pendulum.toml"}, "params_file"),
     ],
 )
 def test_bad_values_raise_value_error_naming_the_keyword(keywords, name):
@@ -268,9 +279,10 @@ def test_python_manners():
 def test_the_readmes_python_runs(tmp_path, monkeypatch, capsys):
     readme = (Path(__file__).parents[2] / "README.md").read_text()
     code = readme.split("```python\n", 1)[1].split("```", 1)[0]
+    # Anywhere: the folder `out/` it saves into does not exist yet.
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "out").mkdir()
     exec(compile(code, "README.md", "exec"), {})
+    assert (tmp_path / "out" / "flip_python.png").exists()
     printed = capsys.readouterr().out.splitlines()
     assert printed[0].endswith(" s") and printed[1].startswith("chaoscope flip ")
     assert (tmp_path / "out" / "flip_python.png").read_bytes()[:4] == b"\x89PNG"
@@ -286,6 +298,13 @@ def test_the_notebook_executes_and_draws_its_figures(tmp_path):
     from nbclient import NotebookClient
 
     notebook = nbformat.read(EXAMPLES / "explore.ipynb", as_version=4)
+    # Committed with its outputs (examples/make_notebook.py executes it): a reader on the
+    # web sees its six figures.
+    committed = [
+        output for cell in notebook.cells if cell.cell_type == "code"
+        for output in cell.get("outputs", []) if "image/png" in output.get("data", {})
+    ]
+    assert len(committed) == 6, "examples/explore.ipynb lacks its outputs: run make_notebook.py"
     client = NotebookClient(notebook, timeout=600, kernel_name="python3",
                             resources={"metadata": {"path": str(tmp_path)}})
     client.execute()
@@ -433,6 +452,8 @@ def test_python_is_as_strict_as_the_command_line(tmp_path):
         chaoscope.flip_map(size=8, t_max=1, store=str(a_file), progress=False)
     with pytest.raises(FileNotFoundError, match="^file: "):
         chaoscope.forecast(str(tmp_path / "nope.csv"))
+    with pytest.raises(FileNotFoundError, match="^params_file: "):
+        chaoscope.flip_map(size=8, params_file="/nonexistent/pendulum.toml", progress=False)
     with pytest.raises(ValueError, match="^m1: .*m1 along x"):
         chaoscope.flip_map(size=8, t_max=1, x="m1", x_range=(1, 2), m1=3, progress=False)
     with pytest.raises(ValueError, match="^exposure: "):

@@ -165,7 +165,7 @@ pub fn run(job: &BoundaryJob, command: String, monitor: &Monitor) -> Result<Boun
     job.validate()?;
     let started = std::time::Instant::now();
     let all = eps_levels(job.eps.0, job.eps.1, job.levels);
-    let (levels, info, notices) = match job.class {
+    let (levels, info, mut notices) = match job.class {
         BoundaryClass::Chaotic => {
             let spec = |k, eps| job.divergence_spec(k, eps);
             measure(job, &all, spec, |s, v| s.counted(v) as u32, monitor)?
@@ -179,6 +179,16 @@ pub fn run(job: &BoundaryJob, command: String, monitor: &Monitor) -> Result<Boun
             measure(job, &all, spec, |_, v| v.is_finite() as u32, monitor)?
         }
     };
+    // A level is one map of whole rows of pairs: the pairs asked for, rounded up.
+    if let Some(l) = levels.first().filter(|l| l.pairs != job.pairs as u64) {
+        notices.insert(
+            0,
+            format!(
+                "note: {} pairs a level drawn for the {} asked (whole rows of {PAIRS_A_ROW})",
+                l.pairs, job.pairs
+            ),
+        );
+    }
     let fitted = fit(&levels);
     let mut out = Outputs::new();
     plot(&mut out, job, &levels, fitted.as_ref(), &command)?;

@@ -95,6 +95,16 @@ pub fn check_directory(
     check_distinct(&named, inputs)
 }
 
+/// The files a run on tracked data reads: the data (`file`) and a parameter file, if any.
+pub fn tracked_inputs<'a>(
+    file: &'a Path,
+    params: &'a crate::params::ParamSources,
+) -> Vec<(&'static str, &'a Path)> {
+    let mut inputs = vec![("file", file)];
+    inputs.extend(params.params.as_deref().map(|p| ("params", p)));
+    inputs
+}
+
 /// `path` must end in `.ext`, else an error naming `field`.
 pub fn check_extension(field: &'static str, path: &Path, ext: &str) -> Result<()> {
     match path.extension().and_then(|e| e.to_str()) {

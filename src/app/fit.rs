@@ -70,10 +70,6 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
     if !job.start.is_finite() {
         return Err(Error::invalid("start", "must be a finite time (s)"));
     }
-    let inputs = [
-        Some(("file", job.file.as_path())),
-        job.params.params.as_deref().map(|p| ("params", p)),
-    ];
     super::checks::check_directory(
         "output",
         &job.output,
@@ -84,7 +80,7 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
             "derived.csv",
             "summary.json",
         ],
-        &inputs.into_iter().flatten().collect::<Vec<_>>(),
+        &super::checks::tracked_inputs(&job.file, &job.params),
     )?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();

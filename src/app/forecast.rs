@@ -192,15 +192,11 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         job.candidates,
     )?;
     super::checks::check_damping_not_given(&job.params)?;
-    let inputs = [
-        Some(("file", job.file.as_path())),
-        job.params.params.as_deref().map(|p| ("params", p)),
-    ];
     super::checks::check_directory(
         "output",
         &job.output,
         &["forecast.png", "bands.csv", "summary.json"],
-        &inputs.into_iter().flatten().collect::<Vec<_>>(),
+        &super::checks::tracked_inputs(&job.file, &job.params),
     )?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();

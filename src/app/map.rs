@@ -532,7 +532,7 @@ pub fn map_engine(
     let mut notices = engine.notices();
     let (precision, grid) = (spec.precision(), spec.grid());
     let info = engine.map_info(grid, precision);
-    notices.extend(precision_notices(&engine, backend, precision, grid, &info)?);
+    notices.extend(precision_notices(engine, backend, precision, grid, &info)?);
     notices.extend(spec.notices(info.path));
     engine.plan(spec)?;
     if verdict {

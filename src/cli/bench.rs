@@ -34,7 +34,8 @@ pub struct BenchArgs {
     /// Skip the divergence-map (FTLE) rows.
     #[arg(long)]
     pub no_ftle: bool,
-    /// Directory of the peer scripts (e.g. ../shared/peers); no peers are run without it.
+    /// Directory of the peer scripts (numba_peer.py, taichi_peer.py, ...: other implementations
+    /// of the same maps, not part of chaoscope); no peers are run without it.
     #[arg(long)]
     pub peers: Option<PathBuf>,
     /// Python with the peers' requirements installed.

@@ -57,5 +57,13 @@ pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<serde_json::Value
     let command = command_line::trajectory(&job);
     let s = trajectory::run(&job, command, monitor, &mut std::io::stdout().lock())?;
     say(&s.notices);
+    let to = match &s.output {
+        Some(path) => path.display().to_string(),
+        None => "standard output".to_string(),
+    };
+    eprintln!(
+        "{} rows from t = 0 to {} s -> {to}",
+        s.rows, job.stepping.t_max
+    );
     json(&s)
 }
