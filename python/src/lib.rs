@@ -4,32 +4,30 @@
 //! validated job the command line builds, runs it with the GIL released and Ctrl-C feeding
 //! the engine's cancel flag, and hands the arrays to numpy without a copy.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
-
 use chaoscope::Error;
 use chaoscope::app::MapOutputs;
 use chaoscope::app::map::MapJob;
 use chaoscope::app::trajectory::TrajectoryJob;
 use chaoscope::cli::command_line;
-use chaoscope::engine::{Backend, Engine, MapKernels};
+use chaoscope::engine::{Backend, MapKernels};
 use chaoscope::field::Field;
 use chaoscope::model::State;
-use chaoscope::monitor::Monitor;
-use chaoscope::render::{MapPicture, PictureSpec};
+use chaoscope::render::PictureSpec;
 use chaoscope::spec::{
-    AnyMap, FlipMeasure, FlipSpec, IndicatorAsked, LyapunovSpec, MapSpec, Method, Precision,
+    FlipMeasure, FlipSpec, IndicatorAsked, LyapunovSpec, MapSpec, Method, Precision,
 };
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{
     PyFileNotFoundError, PyKeyboardInterrupt, PyRuntimeError, PyTypeError, PyValueError,
 };
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict};
+use pyo3::types::PyDict;
 
 mod keywords;
+mod picture;
+mod run;
 use keywords::Keywords;
+use run::{engine, watched};
 
 /// The Python keyword of a field the library names: the field's own name but where the
 /// wrappers take it under another (the Python column beside src/cli/names.rs's flags).
@@ -76,76 +74,6 @@ fn py_err(e: Error) -> PyErr {
         )),
         Error::Interrupted => PyKeyboardInterrupt::new_err("interrupted"),
         e => PyRuntimeError::new_err(e.to_string()),
-    }
-}
-
-/// The engine of `backend`, made on the module's first call that asks for it and lent to
-/// every later one: a GPU device and its compiled kernels are made once per process, not
-/// once per call (200 calls each making a device grew the process by 53 MB).
-fn engine(backend: Backend) -> PyResult<Arc<Engine>> {
-    static ENGINES: std::sync::Mutex<Vec<(Backend, Arc<Engine>)>> =
-        std::sync::Mutex::new(Vec::new());
-    let mut engines = ENGINES
-        .lock()
-        .map_err(|_| PyRuntimeError::new_err("the engines' lock was poisoned"))?;
-    if let Some((_, e)) = engines.iter().find(|(b, _)| *b == backend) {
-        return Ok(e.clone());
-    }
-    let made = Arc::new(Engine::new(backend).map_err(py_err)?);
-    engines.push((backend, made.clone()));
-    Ok(made)
-}
-
-/// Runs `work` on a thread of its own while this one, the GIL released between looks, checks
-/// Python's signals every 0.1 s (Ctrl-C sets the work's cancel flag; the work stops at its
-/// next dispatch and KeyboardInterrupt is raised) and reports progress to `progress(phase,
-/// done, total)` when given.
-fn watched<T: Send + 'static>(
-    py: Python<'_>,
-    progress: Option<Bound<'_, PyAny>>,
-    work: impl FnOnce(&Monitor) -> chaoscope::Result<T> + Send + 'static,
-) -> PyResult<T> {
-    let cancel = Arc::new(AtomicBool::new(false));
-    let monitor = Monitor::cancelled_by(cancel.clone());
-    let (tx, rx) = std::sync::mpsc::channel();
-    // Waited on with the GIL released, from this thread only.
-    let rx = std::sync::Mutex::new(rx);
-    let watched = monitor.clone();
-    std::thread::spawn(move || {
-        let _ = tx.send(work(&watched));
-    });
-    let mut stop: Option<PyErr> = None;
-    loop {
-        let next = py.detach(|| match rx.lock() {
-            Ok(rx) => rx.recv_timeout(Duration::from_millis(100)),
-            Err(_) => Err(std::sync::mpsc::RecvTimeoutError::Disconnected),
-        });
-        match next {
-            Ok(result) => {
-                return match (stop, result) {
-                    (Some(e), _) => Err(e),
-                    (None, r) => r.map_err(py_err),
-                };
-            }
-            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
-                return Err(PyRuntimeError::new_err("the work's thread panicked"));
-            }
-            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
-        }
-        if stop.is_some() {
-            continue;
-        }
-        let looked = py.check_signals().and_then(|()| match &progress {
-            Some(report) => {
-                let (phase, done, total) = monitor.progress();
-                report.call1((phase, done, total)).map(|_| ())
-            }
-            None => Ok(()),
-        });
-        if let Err(e) = looked {
-            cancel.store(true, Ordering::Relaxed);
-            stop = Some(e);
-        }
     }
 }
 
@@ -458,111 +386,6 @@ fn trajectory<'py>(
     String::from_utf8(csv).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
-/// A map's picture as the command line draws it (PNG bytes): `spec` (the map's JSON),
-/// its values and verdict, the colour map, the annotation, the colour range.
-#[pyfunction]
-#[pyo3(signature = (spec, values, resolved, command, png_text, rule, colormap=None, annotate=false, colour_range=None, show_unresolved=false))]
-#[allow(clippy::too_many_arguments)]
-fn picture<'py>(
-    py: Python<'py>,
-    spec: &str,
-    values: PyReadonlyArray2<'py, f32>,
-    resolved: Option<PyReadonlyArray2<'py, u8>>,
-    command: String,
-    png_text: Vec<(String, String)>,
-    rule: String,
-    colormap: Option<String>,
-    annotate: bool,
-    colour_range: Option<(f32, f32)>,
-    show_unresolved: bool,
-) -> PyResult<Bound<'py, PyBytes>> {
-    let map: AnyMap =
-        serde_json::from_str(spec).map_err(|e| PyValueError::new_err(format!("spec: {e}")))?;
-    let colormap = match colormap {
-        None => None,
-        Some(name) => Some(
-            chaoscope::render::Colormap::ALL
-                .into_iter()
-                .find(|c| c.name() == name)
-                .ok_or_else(|| PyValueError::new_err(format!("colormap: {name:?} is unknown")))?,
-        ),
-    };
-    let pic = PictureSpec { annotate, colormap };
-    let g = *map.grid();
-    let shape = [g.height as usize, g.width as usize];
-    if values.shape() != shape {
-        return Err(PyValueError::new_err(format!(
-            "values: shape {:?} for a {} x {} map",
-            values.shape(),
-            g.width,
-            g.height
-        )));
-    }
-    let field = Field {
-        width: g.width,
-        height: g.height,
-        data: values.as_array().iter().copied().collect(),
-    };
-    let resolved: Option<Vec<u8>> = resolved
-        .filter(|r| r.shape() == shape)
-        .map(|r| r.as_array().iter().copied().collect());
-    let shown = resolved.as_deref().filter(|_| show_unresolved);
-    let drawn = match &map {
-        AnyMap::Flip(s) => s
-            .check_picture(&pic, colour_range)
-            .and_then(|()| s.draw(&field, &pic, colour_range, shown)),
-        AnyMap::Lyapunov(s) => s
-            .check_picture(&pic, colour_range)
-            .and_then(|()| s.draw(&field, &pic, colour_range, shown)),
-    }
-    .map_err(py_err)?;
-    // The PNG's chunks as the command line writes them: its provenance with the command
-    // that draws this picture, where the map sits, the picture's own, the verdict's rule.
-    let command = picture_command(&command, pic, colour_range, shown.is_some())?;
-    let mut text: Vec<(String, String)> = png_text
-        .into_iter()
-        .map(|(k, v)| match k.as_str() {
-            "chaoscope:command" => (k, command.clone()),
-            _ => (k, v),
-        })
-        .collect();
-    text.extend(drawn.picture.metadata());
-    text.extend(drawn.text);
-    if shown.is_some() {
-        text.push(("chaoscope:resolved-rule".into(), rule));
-    }
-    let p = drawn.picture;
-    let png = chaoscope::render::png_bytes(p.width, p.height, &p.rgb, &text).map_err(py_err)?;
-    Ok(PyBytes::new(py, &png))
-}
-
-/// The command line that draws a map's picture: the map's `command` (parsed back into its
-/// job, as a stored command is) with the picture's flags.
-fn picture_command(
-    command: &str,
-    pic: PictureSpec,
-    colour_range: Option<(f32, f32)>,
-    show_unresolved: bool,
-) -> PyResult<String> {
-    use chaoscope::cli::{Cli, Job, LyapunovJob};
-    let bad = |e: String| PyValueError::new_err(format!("command: {e}"));
-    let cli = Cli::parse_args(command.split_whitespace()).map_err(|e| bad(e.to_string()))?;
-    match cli.command.job().map_err(|e| bad(e.to_string()))? {
-        Some(Job::Flip(mut job)) => {
-            job.picture = pic;
-            job.files.show_unresolved = show_unresolved;
-            Ok(command_line::flip(&job))
-        }
-        Some(Job::Lyapunov(LyapunovJob::Map(mut job))) => {
-            job.picture = pic;
-            job.colour_range = colour_range;
-            job.files.show_unresolved = show_unresolved;
-            Ok(command_line::lyapunov_map(&job))
-        }
-        _ => Err(bad(format!("{command:?} is not a map's command"))),
-    }
-}
-
 /// The model fitted to a camera-tracked run (`chaoscope fit`'s job): its summary as JSON (the
 /// pivot, the arm lengths with errors, the energy's decay fits, how long the model from `start`
 /// agrees with the data), its plots, derived.csv and summary.json written to `output`.
@@ -725,7 +548,7 @@ fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(flip_map, m)?)?;
     m.add_function(wrap_pyfunction!(lyapunov_map, m)?)?;
     m.add_function(wrap_pyfunction!(trajectory, m)?)?;
-    m.add_function(wrap_pyfunction!(picture, m)?)?;
+    m.add_function(wrap_pyfunction!(picture::picture, m)?)?;
     m.add_function(wrap_pyfunction!(params, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(forecast, m)?)?;

@@ -6,6 +6,7 @@ mod annotate;
 mod colormap;
 mod exposure;
 pub(crate) mod files;
+mod legend;
 mod maps;
 pub mod store;
 
@@ -21,7 +22,8 @@ pub use files::{
     Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic, write_gif,
     write_npy, write_npy_shaped, write_png,
 };
+pub use legend::legend;
 pub use maps::{
-    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, default_range, flip_picture, legend,
+    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, default_range, flip_picture,
     lyapunov_bar, lyapunov_picture, provenance,
 };
