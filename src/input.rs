@@ -83,7 +83,8 @@ pub fn read_text(field: &'static str, path: &Path, cap: u64) -> Result<String> {
     })
 }
 
-fn too_large(len: u64, cap: u64) -> String {
+/// "10.0 GiB is larger than the 256.0 MiB this file may have".
+pub(crate) fn too_large(len: u64, cap: u64) -> String {
     format!(
         "{} is larger than the {} this file may have",
         bytes(len),

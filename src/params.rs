@@ -128,9 +128,7 @@ impl ParamSources {
         }
         Ok(())
     }
-}
 
-impl ParamSources {
     /// The parameters of a map on `grid`, none given that an axis sets ([`Self::check_along`]).
     pub fn resolve_on(&self, grid: &crate::spec::Grid) -> Result<Params> {
         self.check_along(&[("x", grid.x.var), ("y", grid.y.var)])?;

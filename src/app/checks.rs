@@ -79,17 +79,22 @@ pub fn check_distinct(
     Ok(())
 }
 
-/// The files `names` a run writes into the directory `dir` (given as `field`): each one a
-/// place that can be written and none of them one of the run's `inputs`.
+/// The files `names` a run writes into the directory `dir` (given as `field`): the folder
+/// one that takes files (probed once), each file one that may be replaced, and none of them
+/// one of the run's `inputs`.
 pub fn check_directory(
     field: &'static str,
     dir: &Path,
-    names: &[&str],
+    names: &[impl AsRef<Path>],
     inputs: &[(&'static str, &Path)],
 ) -> Result<()> {
     let paths: Vec<_> = names.iter().map(|n| dir.join(n)).collect();
+    if let Some(first) = paths.first() {
+        check_writable(field, first)?;
+    }
     for path in &paths {
-        check_writable(field, path)?;
+        crate::render::files::replaceable(path)
+            .map_err(|why| Error::invalid(field, format!("{}: {why}", path.display())))?;
     }
     let named: Vec<_> = paths.iter().map(|p| (field, p.as_path())).collect();
     check_distinct(&named, inputs)

@@ -411,14 +411,10 @@ impl MapOutputs {
 
     /// The files a run writes.
     pub fn files(&self) -> Vec<PathBuf> {
-        [
-            Some(self.output.clone()),
-            self.data.clone(),
-            self.resolved.clone(),
-        ]
-        .into_iter()
-        .flatten()
-        .collect()
+        self.named()
+            .into_iter()
+            .map(|(_, p)| p.to_path_buf())
+            .collect()
     }
 }
 

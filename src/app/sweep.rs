@@ -245,7 +245,11 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
 }
 
 fn frame_path(dir: &Path, k: u32) -> PathBuf {
-    dir.join(format!("frame_{k:04}.png"))
+    dir.join(frame_name(k))
+}
+
+fn frame_name(k: u32) -> String {
+    format!("frame_{k:04}.png")
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -299,13 +303,11 @@ pub fn run(
     if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
         return Err(Error::invalid("ftle_max", "must be > 0"));
     }
-    render::check_writable("output", &job.output.join("animation.png"))?;
-    // A frame kept from an interrupted run is read back: each must be a regular file too.
-    for k in 0..frames.len() as u32 {
-        let path = frame_path(&job.output, k);
-        render::files::replaceable(&path)
-            .map_err(|why| Error::invalid("output", format!("{}: {why}", path.display())))?;
-    }
+    // The animation and every frame (a frame kept from an interrupted run is read back).
+    let names: Vec<String> = std::iter::once("animation.png".to_string())
+        .chain((0..frames.len() as u32).map(frame_name))
+        .collect();
+    super::checks::check_directory("output", &job.output, &names, &[])?;
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;
         if job.zoom.is_some() || job.vary.is_none() {

@@ -409,14 +409,7 @@ pub fn read_png(path: &Path) -> Result<Png> {
     let err = |e: png::DecodingError| Error::format(path, e);
     let (file, len) = crate::input::open_regular(path).map_err(|e| file_error(path, e))?;
     if len > cap {
-        return Err(Error::format(
-            path,
-            format!(
-                "{} is larger than the {} this PNG may have",
-                crate::input::bytes(len),
-                crate::input::bytes(cap)
-            ),
-        ));
+        return Err(Error::format(path, crate::input::too_large(len, cap)));
     }
     use std::io::Read;
     let file = std::io::BufReader::new(file.take(cap));

@@ -45,10 +45,9 @@ impl AtomicStore {
                 path.display()
             ))),
             Ok(m) if m.len() > cap => Err(StorageError::Other(format!(
-                "{}: {} is larger than the {} this file may have",
+                "{}: {}",
                 path.display(),
-                crate::input::bytes(m.len()),
-                crate::input::bytes(cap)
+                crate::input::too_large(m.len(), cap)
             ))),
             _ => Ok(()),
         }
