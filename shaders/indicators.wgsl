@@ -18,7 +18,8 @@ struct IndicatorSlot {
     // threshold, stopped, -). Growth: (s-weighted ln |v| sum, time integral of Y,
     // ln |v| so far, the largest log10 |v|). Descriptor: (left sums of both ways, g at the start, -, -).
     sums: vec4<real>,
-    unused: vec4<real>,
+    // The adaptive spectrum's clock: (next step, attempts so far, stalled, -).
+    clock: vec4<real>,
 }
 
 const SLOT: u32 = 8u;

@@ -8,11 +8,12 @@ use crate::cpu;
 use crate::error::{Error, Result};
 use crate::field::{Convergence, Field};
 use crate::gpu::{GpuContext, Kernels, STEPS_PER_DISPATCH};
+use crate::measure::Runs;
 use crate::model::{Params, Positions, State};
 use crate::monitor::Monitor;
 use crate::spec::{
-    FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, MapSpec, Method, Precision,
-    Range, Stepping,
+    FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Method, Precision, Range,
+    Stepping,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -126,30 +127,30 @@ impl MapKernels for FlipSpec {
 
 impl MapKernels for LyapunovSpec {
     fn on_gpu(&self, k: &Kernels, precision: Precision, monitor: &Monitor) -> Result<Field> {
-        match self.indicator {
-            Indicator::Ftle => k
+        match self.indicator.measure().runs(self.indicator) {
+            Runs::Divergence => k
                 .lyapunov(self.method, precision)
                 .run(&k.ctx, self, monitor),
-            _ => k.indicators(precision).run(&k.ctx, self, monitor),
+            Runs::Indicators(_) => k.indicators(precision).run(&k.ctx, self, monitor),
         }
     }
 
     fn on_cpu(&self, monitor: &Monitor) -> Result<Field> {
-        match self.indicator {
-            Indicator::Ftle => cpu::ftle_map(self, monitor),
-            _ => cpu::indicator_map(self, monitor),
+        match self.indicator.measure().runs(self.indicator) {
+            Runs::Divergence => cpu::ftle_map(self, monitor),
+            Runs::Indicators(_) => cpu::indicator_map(self, monitor),
         }
     }
 
-    /// f32 cannot resolve a twin separation much below 1e-6 of the state: say so. A
-    /// descriptor's backward half runs anti-damped where there are losses: say that too.
+    /// What the measure tells of these physics (`Measure::notices`); f32 cannot resolve a
+    /// twin separation much below 1e-6 of the state: say so.
     fn notices(&self, path: Path) -> Vec<String> {
-        if matches!(self.indicator, Indicator::Descriptor { .. }) && self.params.losses.kinds() != 0
-        {
-            return vec![
-                "note: with losses the descriptor's backward run is anti-damped (energy grows as it goes back), and a start may leave the numbers (NaN); a shorter --t-max keeps more"
-                    .into(),
-            ];
+        let told = self
+            .indicator
+            .measure()
+            .notices(self.indicator, &self.params);
+        if !told.is_empty() {
+            return told;
         }
         match self.method {
             Method::Twin { eps } if eps < 1e-4 && path == Path::Gpu(Precision::F32) => {

@@ -27,6 +27,7 @@ pub mod field;
 pub mod fit;
 pub mod gpu;
 pub mod input;
+pub mod measure;
 pub mod model;
 pub mod monitor;
 pub mod params;

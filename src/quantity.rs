@@ -15,7 +15,7 @@ pub const FTLE_ABSOLUTE: f64 = 0.02;
 
 /// Whether `a` and `b` lie within `relative` of the larger or `absolute`, whichever is larger
 /// (NaN never does).
-fn within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
+pub fn within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
     let (a, b) = (a as f64, b as f64);
     (a - b).abs() <= (relative * a.abs().max(b.abs())).max(absolute)
 }

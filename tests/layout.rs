@@ -144,12 +144,12 @@ fn storage_structs_match_their_rust_mirrors() {
             let (wgsl, span) = wgsl_struct(&module, "IndicatorSlot");
             let (rust, size) = if name.ends_with("_f64") {
                 (
-                    rust_offsets!(GpuIndicatorSlot64; y, u, v, sums, unused),
+                    rust_offsets!(GpuIndicatorSlot64; y, u, v, sums, clock),
                     std::mem::size_of::<GpuIndicatorSlot64>(),
                 )
             } else {
                 (
-                    rust_offsets!(GpuIndicatorSlot; y, u, v, sums, unused),
+                    rust_offsets!(GpuIndicatorSlot; y, u, v, sums, clock),
                     std::mem::size_of::<GpuIndicatorSlot>(),
                 )
             };

@@ -895,9 +895,9 @@ fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
     let colours = colours_in("plane.png");
     assert!(colours > 200, "{colours} colours in the plane");
     // The page's menu of maps is the kinds' table, and the verdict.
-    let mut kinds: Vec<&str> = chaoscope::spec::MapKind::TABLE
+    let mut kinds: Vec<&str> = chaoscope::spec::MapKind::all()
         .iter()
-        .map(|e| e.short)
+        .map(|k| k.short())
         .collect();
     kinds.push("resolved");
     assert_eq!(report["kinds"], serde_json::json!(kinds), "{report}");

@@ -544,7 +544,7 @@ fn main(py: Python<'_>, args: Vec<String>) -> u8 {
 #[pymodule]
 fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("INDICATORS", chaoscope::spec::INDICATORS.to_vec())?;
+    m.add("INDICATORS", chaoscope::measure::names())?;
     m.add_function(wrap_pyfunction!(flip_map, m)?)?;
     m.add_function(wrap_pyfunction!(lyapunov_map, m)?)?;
     m.add_function(wrap_pyfunction!(trajectory, m)?)?;

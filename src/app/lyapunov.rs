@@ -9,9 +9,10 @@ use crate::cpu;
 use crate::engine::{Backend, Engine, MapKernels};
 use crate::error::Error;
 use crate::error::Result;
+use crate::measure::Runs;
 use crate::model::State;
 use crate::monitor::Monitor;
-use crate::spec::{self, Indicator, LyapunovSpec, MapSpec};
+use crate::spec::{self, LyapunovSpec, MapSpec};
 
 use super::map::MapSummary;
 
@@ -62,11 +63,13 @@ pub fn run_point(
         check_output("output", path, "csv")?;
     }
     let indicator = job.spec.indicator;
-    if indicator != Indicator::Ftle && job.backend == Backend::Gpu {
+    let measure = indicator.measure();
+    let on_engine = measure.runs(indicator) == Runs::Divergence;
+    if !on_engine && job.backend == Backend::Gpu {
         return Err(Error::invalid(
             "backend",
             format!(
-                "a single start's {} runs on the CPU (f64); leave out --backend gpu",
+                "a single start's {} runs on the CPU (f64); leave the backend to auto or cpu",
                 indicator.title()
             ),
         ));
@@ -76,18 +79,19 @@ pub fn run_point(
     let path = engine.map_info(&job.spec.grid, job.spec.precision).path;
     notices.extend(job.spec.notices(path));
     // (t, the columns at t) at every renormalisation, and the map's value at t-max.
-    let (header, rows, value) = match indicator {
-        Indicator::Ftle => {
+    let header = measure.columns(indicator);
+    let (rows, value) = match on_engine {
+        true => {
             let trace = engine.ftle_convergence(&job.spec, job.start, monitor)?;
             let rows = trace.t.iter().zip(&trace.ftle).map(|(&t, &l)| (t, vec![l]));
-            (vec!["ftle"], rows.collect(), trace.last())
+            (rows.collect(), trace.last())
         }
-        _ => {
+        false => {
             let mut rows = Vec::new();
             let value = cpu::indicator_run(&job.spec, job.start, Some(monitor), &mut |t, row| {
                 rows.push((t, row.to_vec()))
             })?;
-            (cpu::columns(indicator), rows, value)
+            (rows, value)
         }
     };
     if value.is_nan() {
@@ -110,7 +114,7 @@ pub fn run_point(
         t_max: job.spec.stepping.t_max,
         quantity: job.spec.quantity().name,
         value,
-        ftle: (indicator == Indicator::Ftle).then_some(value),
+        ftle: (job.spec.quantity().name == crate::quantity::FTLE.name).then_some(value),
         output: job.output.clone(),
         files: job.output.iter().cloned().collect(),
         notices,
@@ -129,13 +133,14 @@ pub fn run_spectrum(
     use crate::render::MapPicture;
     let started = std::time::Instant::now();
     let spec = &job.spec;
-    if !matches!(
-        spec.indicator,
-        Indicator::Exponent(_) | Indicator::ExponentSum
-    ) {
+    let measure = spec.indicator.measure();
+    // Its map is read off the four layers (an empty run asks whether it is).
+    let empty: [crate::field::Field; 4] =
+        std::array::from_fn(|_| crate::field::Field::new(0, 0, 0.0));
+    if measure.of_spectrum(spec.indicator, &empty).is_none() {
         return Err(Error::invalid(
             "spectrum",
-            "is for --indicator exponent or exponent-sum",
+            "is for the indicators exponent and exponent-sum",
         ));
     }
     if job.files.store().is_some() || job.tile.is_some() {
@@ -159,15 +164,9 @@ pub fn run_spectrum(
     let engine = crate::engine::Engine::new(job.backend)?;
     let (info, notices) = super::map::map_engine(&engine, spec, false)?;
     let layers = engine.spectrum(spec, monitor)?;
-    let field = match spec.indicator {
-        Indicator::Exponent(k) => layers[k as usize - 1].clone(),
-        _ => crate::field::Field {
-            data: (0..layers[0].data.len())
-                .map(|i| layers.iter().map(|l| l.data[i]).sum())
-                .collect(),
-            ..layers[0].clone()
-        },
-    };
+    let field = measure
+        .of_spectrum(spec.indicator, &layers)
+        .expect("checked above: the spectrum's measure");
     let drawn = spec.draw(&field, &job.picture, job.colour_range, None)?;
     super::map::write_map(
         &drawn.picture,

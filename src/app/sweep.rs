@@ -458,14 +458,14 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
         precision: Precision::F32,
         band: None,
         integrator: crate::spec::Integrator::Rk4,
-        indicator: crate::spec::Indicator::Ftle,
+        indicator: crate::spec::Indicator::default(),
     }
 }
 
 fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
     match job.map {
-        MapKind::FlipTime => FrameMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
-        MapKind::FlipKind => FrameMap::Flip(FlipSpec {
+        MapKind::FLIP_TIME => FrameMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
+        MapKind::FLIP_KIND => FrameMap::Flip(FlipSpec {
             measure: FlipMeasure::Kind,
             ..FlipSpec::new(frame.params, frame.grid, job.stepping)
         }),
@@ -491,6 +491,6 @@ fn frame_field(map: &FrameMap, engine: &Engine, monitor: &Monitor) -> Result<Fie
 fn frame_picture(job: &SweepJob, map: &FrameMap, field: &Field) -> Result<Picture> {
     // One colour range for every frame of the FTLE (--ftle-max); the other indicators take
     // their own default range per frame.
-    let range = (job.map == MapKind::Ftle).then_some((0.0, job.ftle_max as f32));
+    let range = (job.map == MapKind::FTLE).then_some((0.0, job.ftle_max as f32));
     Ok(map.draw(field, &job.picture, range, None)?.picture)
 }

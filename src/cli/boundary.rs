@@ -11,7 +11,7 @@ use crate::app::boundary::{self, BoundaryClass, BoundaryJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, Indicator, Integrator, LyapunovSpec, Method, Precision};
+use crate::spec::{FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, Method, Precision};
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("20")))]
@@ -94,11 +94,9 @@ impl BoundaryArgs {
                 precision: self.precision,
                 band: None,
                 integrator: Integrator::Rk4,
-                indicator: match self.indicator.as_deref().unwrap_or("megno") {
-                    "ftle" => Indicator::Ftle,
-                    "fli" => Indicator::Fli,
-                    _ => Indicator::Megno,
-                },
+                // Clap took one of ftle, megno, fli: options take their defaults.
+                indicator: IndicatorAsked::named(self.indicator.as_deref().unwrap_or("megno"))
+                    .indicator()?,
             },
             class: self.class,
             pairs: self.pairs,

@@ -18,8 +18,8 @@ use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::PictureSpec;
 use crate::spec::{
-    Alignment, FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, Method, Precision,
-    Spread, Stepping, Var,
+    FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, Method, Precision, Spread,
+    Stepping, Var,
 };
 
 /// The flags that reproduce `p` exactly.
@@ -233,22 +233,15 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
 
 /// `--indicator` and its settings (nothing for the FTLE, the default).
 fn indicator(i: Indicator) -> String {
-    let alignment = |name: &str, index: Alignment, threshold: f64| match index {
-        Alignment::Sali => format!(" --indicator sali{name} --threshold {threshold:e}"),
-        Alignment::Gali(k) => {
-            format!(" --indicator gali{name} --gali {k} --threshold {threshold:e}")
-        }
-    };
-    match i {
-        Indicator::Ftle => String::new(),
-        Indicator::Exponent(k) => format!(" --indicator exponent --exponent {k}"),
-        Indicator::ExponentSum => " --indicator exponent-sum".into(),
-        Indicator::Alignment { index, threshold } => alignment("", index, threshold),
-        Indicator::AlignmentTime { index, threshold } => alignment("-time", index, threshold),
-        Indicator::Megno => " --indicator megno".into(),
-        Indicator::Fli => " --indicator fli".into(),
-        Indicator::Descriptor { p } => format!(" --indicator descriptor --ld-p {p}"),
+    let (name, options) = i.spelled();
+    if i == Indicator::default() {
+        return String::new();
     }
+    let mut out = format!(" --indicator {name}");
+    for (opt, value) in options {
+        out += &format!(" --{} {value}", opt.field().replace('_', "-"));
+    }
+    out
 }
 
 pub fn lyapunov_map(job: &LyapunovMapJob) -> String {
@@ -410,11 +403,7 @@ pub fn boundary(job: &BoundaryJob) -> String {
     ) + &match job.class {
         crate::app::boundary::BoundaryClass::Chaotic => format!(
             " --indicator {} --renorm {}",
-            match job.divergence.indicator {
-                Indicator::Ftle => "ftle",
-                Indicator::Fli => "fli",
-                _ => "megno",
-            },
+            job.divergence.indicator.spelled().0,
             job.divergence.renorm
         ),
         _ => String::new(),

@@ -100,12 +100,8 @@ pub struct LyapunovArgs {
     /// indices; 0 to --t-max for their times; the 0.5th to 99.5th percentile otherwise].
     #[arg(long, value_parser = parse_range, allow_hyphen_values = true)]
     pub colour_range: Option<Range>,
-    /// What to map of each start: ftle (the largest exponent), exponent (one of the four,
-    /// --exponent), exponent-sum, sali or gali (log10 of an alignment index of 2 or --gali
-    /// tangent vectors; a start stops, called chaotic, once it falls below --threshold),
-    /// sali-time or gali-time (the time that took), megno (<Y>), fli (the fast Lyapunov
-    /// indicator), descriptor (the Lagrangian descriptor M over [-t-max, t-max], --ld-p).
-    #[arg(long, default_value = "ftle", value_parser = clap::builder::PossibleValuesParser::new(INDICATORS))]
+    /// What to map of each start (the measures' list: `measure::about`).
+    #[arg(long, default_value = "ftle", help = indicator_help(), value_parser = clap::builder::PossibleValuesParser::new(crate::measure::names()))]
     pub indicator: String,
     /// Which exponent --indicator exponent maps, 1..4, in Gram-Schmidt order: the k-th
     /// orthonormalised tangent vector's growth. The first is the largest; at a finite time the
@@ -137,14 +133,19 @@ fn short_unit(unit: &str) -> &str {
     }
 }
 
-/// The names `--indicator` takes.
-pub use crate::spec::INDICATORS;
-
 /// What the flags ask for: a map or a convergence run.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LyapunovJob {
     Map(LyapunovMapJob),
     Point(LyapunovPointJob),
+}
+
+/// `--indicator`'s help, from the measures.
+fn indicator_help() -> String {
+    format!(
+        "What to map of each start: {}",
+        crate::measure::about(|field| super::names::flag("lyapunov", field))
+    )
 }
 
 impl LyapunovArgs {

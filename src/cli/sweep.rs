@@ -18,7 +18,7 @@ use crate::spec::Var;
 pub struct SweepArgs {
     /// Which map each frame shows: flip (times), flip-kind (which arm flips first and which
     /// way) or lyapunov.
-    #[arg(long, default_value = "flip", value_parser = one_of(&MapKind::ALL, MapKind::name))]
+    #[arg(long, default_value = "flip", value_parser = one_of(MapKind::all(), MapKind::name))]
     pub map: MapKind,
     /// PARAM=FROM:TO, PARAM one of m1, m2, l1, l2, g, m2/m1, l2/l1, mass, omega1, omega2,
     /// damping (both joints, N m s).

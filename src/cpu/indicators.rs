@@ -8,9 +8,10 @@ use super::lyapunov::{TANGENT_START, tangent_step};
 use super::{derivative, map_pixels, rk4_step};
 use crate::error::Result;
 use crate::field::Field;
+use crate::measure::{Alignment, CpuRun};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::{Alignment, Indicator, LyapunovSpec};
+use crate::spec::LyapunovSpec;
 
 /// The tangent vectors every run starts from: an orthonormal frame whose first vector is the
 /// FTLE's (the rows of a 4 x 4 Hadamard matrix, halved). The first two differ in their angle
@@ -65,32 +66,15 @@ pub fn alignment_index(index: Alignment, v: &[[f64; 4]]) -> f64 {
     }
 }
 
-/// The columns a point run writes for `indicator` (after `t`).
-pub fn columns(indicator: Indicator) -> Vec<&'static str> {
-    match indicator {
-        Indicator::Ftle => vec!["ftle"],
-        Indicator::Exponent(_) | Indicator::ExponentSum => {
-            vec!["lambda1", "lambda2", "lambda3", "lambda4", "sum"]
-        }
-        Indicator::Alignment { .. } | Indicator::AlignmentTime { .. } => vec!["log10_index"],
-        Indicator::Megno | Indicator::Fli => vec!["megno", "y", "fli"],
-        Indicator::Descriptor { .. } => vec!["descriptor"],
-    }
-}
-
 /// One start's run of `spec`'s indicator: its map value, and `sample(t, columns)` at every
-/// renormalisation (see [`columns`]); progress and Ctrl-C there when `monitor` is given.
+/// renormalisation (the measure's columns); progress and Ctrl-C there when `monitor` is given.
 pub fn indicator_run(
     spec: &LyapunovSpec,
     start: State,
     monitor: Option<&Monitor>,
     sample: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<f64> {
-    let p = &spec.params;
-    let dt = spec.stepping.dt;
-    let steps = spec.stepping.steps();
     let every = spec.renorm_steps();
-    let renormalise = |k: u32| k.is_multiple_of(every) || k == steps;
     let tick = |k: u32| -> Result<()> {
         if let Some(m) = monitor {
             m.check()?;
@@ -99,143 +83,144 @@ pub fn indicator_run(
         Ok(())
     };
     if let Some(m) = monitor {
-        m.start("steps", steps as u64);
+        m.start("steps", spec.stepping.steps() as u64);
     }
-    let t_end = steps as f64 * dt;
-    let mut y = start.to_array();
-    let value = match spec.indicator {
-        Indicator::Exponent(_) | Indicator::ExponentSum
-            if spec.integrator.tolerances().is_some() =>
-        {
-            spectrum_adaptive(spec, start, &mut |t, row| sample(t, row), &tick)?
-        }
-        Indicator::Ftle | Indicator::Exponent(_) | Indicator::ExponentSum => {
-            let n = spec.indicator.vectors() as usize;
-            let mut v = FRAME[..n].to_vec();
-            let mut sums = vec![0.0; n];
-            for k in 1..=steps {
-                y = step_vectors(p, &y, &mut v, dt);
-                if renormalise(k) {
-                    for (sum, l) in sums.iter_mut().zip(gram_schmidt(&mut v)) {
-                        *sum += l.ln();
-                    }
-                    let t = k as f64 * dt;
-                    let mut row: Vec<f64> = sums.iter().map(|s| s / t).collect();
-                    if n == 4 {
-                        row.push(row.iter().sum());
-                    }
-                    sample(t, &row);
-                    tick(k)?;
-                }
-            }
-            match spec.indicator {
-                Indicator::Exponent(k) => sums[k as usize - 1] / t_end,
-                Indicator::ExponentSum => sums.iter().sum::<f64>() / t_end,
-                _ => sums[0] / t_end,
-            }
-        }
-        Indicator::Alignment { index, threshold }
-        | Indicator::AlignmentTime { index, threshold } => {
-            let mut v = FRAME[..index.vectors() as usize].to_vec();
-            let mut log = 0.0;
-            let mut aligned_at = f64::INFINITY;
-            for k in 1..=steps {
-                y = step_vectors(p, &y, &mut v, dt);
-                if renormalise(k) {
-                    for v in &mut v {
-                        let n = norm(v);
-                        *v = v.map(|x| x / n);
-                    }
-                    let a = alignment_index(index, &v);
-                    log = a.log10();
-                    let t = k as f64 * dt;
-                    sample(t, &[log]);
-                    tick(k)?;
-                    if a < threshold {
-                        aligned_at = t;
-                        break;
-                    }
-                }
-            }
-            match (spec.indicator, log.is_nan()) {
-                (_, true) => f64::NAN,
-                (Indicator::AlignmentTime { .. }, false) => aligned_at,
-                _ => log,
-            }
-        }
-        Indicator::Megno | Indicator::Fli => {
-            // Renormalised every step: ln |v| of a step is the integrand of both.
-            let mut v = TANGENT_START;
-            let (mut weighted, mut mean, mut total, mut fli) = (0.0, 0.0, 0.0, 0.0f64);
-            for k in 1..=steps {
-                let (next, w) = tangent_step(p, &y, &v, dt);
-                let n = norm(&w);
-                (y, v) = (next, w.map(|x| x / n));
-                let t = k as f64 * dt;
-                // Y(t) = 2/t int_0^t s d(ln |v|), s at the step's middle; <Y> its time mean.
-                weighted += (t - 0.5 * dt) * n.ln();
-                let y_now = 2.0 * weighted / t;
-                mean += dt * y_now;
-                total += n.ln();
-                fli = fli.max(total / std::f64::consts::LN_10);
-                if renormalise(k) {
-                    sample(t, &[mean / t, y_now, fli]);
-                    tick(k)?;
-                }
-                if !total.is_finite() {
-                    (mean, fli) = (f64::NAN, f64::NAN);
-                    break;
-                }
-            }
-            match spec.indicator {
-                Indicator::Megno => mean / t_end,
-                _ => fli,
-            }
-        }
-        Indicator::Descriptor { p: power } => {
-            let g = |s: &State| -> f64 {
-                derivative(p, s)
-                    .to_array()
-                    .iter()
-                    .map(|f| f.abs().powf(power))
-                    .sum()
-            };
-            let (mut ahead, mut back) = (start, start);
-            let (mut g_ahead, mut g_back) = (g(&start), g(&start));
-            let mut m = 0.0;
-            for k in 1..=steps {
-                ahead = rk4_step(p, &ahead, dt);
-                back = rk4_step(p, &back, -dt);
-                let (ga, gb) = (g(&ahead), g(&back));
-                // The trapezoid rule each way.
-                m += 0.5 * dt * (g_ahead + ga) + 0.5 * dt * (g_back + gb);
-                (g_ahead, g_back) = (ga, gb);
-                if renormalise(k) {
-                    sample(k as f64 * dt, &[m]);
-                    tick(k)?;
-                }
-            }
-            if m.is_finite() { m } else { f64::NAN }
-        }
+    let mut run = CpuRun {
+        spec,
+        start,
+        sample,
+        tick: &tick,
     };
+    let value = spec.indicator.measure().cpu(spec.indicator, &mut run)?;
     if let Some(m) = monitor {
         m.finish();
     }
     Ok(value)
 }
 
+/// The log sums of the first `n` vectors of [`FRAME`] after RK4 steps to t-max, renormalised
+/// by Gram-Schmidt every `renorm`; the running exponents sampled there (and their sum when
+/// `n` is 4).
+pub fn tangent_sums(run: &mut CpuRun, n: usize) -> Result<Vec<f64>> {
+    let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+    let mut y = run.start.to_array();
+    let mut v = FRAME[..n].to_vec();
+    let mut sums = vec![0.0; n];
+    for k in 1..=run.spec.stepping.steps() {
+        y = step_vectors(p, &y, &mut v, dt);
+        if run.renormalise(k) {
+            for (sum, l) in sums.iter_mut().zip(gram_schmidt(&mut v)) {
+                *sum += l.ln();
+            }
+            let t = k as f64 * dt;
+            let mut row: Vec<f64> = sums.iter().map(|s| s / t).collect();
+            if n == 4 {
+                row.push(row.iter().sum());
+            }
+            (run.sample)(t, &row);
+            (run.tick)(k)?;
+        }
+    }
+    Ok(sums)
+}
+
+/// `index` of normalised vectors after RK4 steps, normalised every `renorm`, until t-max or
+/// until it falls below `threshold`: (its log10 at the end, the time it fell below, +inf if
+/// it did not).
+pub fn alignment_run(run: &mut CpuRun, index: Alignment, threshold: f64) -> Result<(f64, f64)> {
+    let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+    let mut y = run.start.to_array();
+    let mut v = FRAME[..index.vectors() as usize].to_vec();
+    let mut log = 0.0;
+    for k in 1..=run.spec.stepping.steps() {
+        y = step_vectors(p, &y, &mut v, dt);
+        if run.renormalise(k) {
+            for v in &mut v {
+                let n = norm(v);
+                *v = v.map(|x| x / n);
+            }
+            let a = alignment_index(index, &v);
+            log = a.log10();
+            let t = k as f64 * dt;
+            (run.sample)(t, &[log]);
+            (run.tick)(k)?;
+            if a < threshold {
+                return Ok((log, t));
+            }
+        }
+    }
+    Ok((log, f64::INFINITY))
+}
+
+/// One vector renormalised every step (ln |v| of a step is the integrand of both): (MEGNO
+/// <Y>, the FLI) at t-max, sampled with Y(t) every `renorm`; NaN where it left the numbers.
+pub fn growth_run(run: &mut CpuRun) -> Result<(f64, f64)> {
+    let (p, dt, steps) = (
+        &run.spec.params,
+        run.spec.stepping.dt,
+        run.spec.stepping.steps(),
+    );
+    let mut y = run.start.to_array();
+    let mut v = TANGENT_START;
+    let (mut weighted, mut mean, mut total, mut fli) = (0.0, 0.0, 0.0, 0.0f64);
+    for k in 1..=steps {
+        let (next, w) = tangent_step(p, &y, &v, dt);
+        let n = norm(&w);
+        (y, v) = (next, w.map(|x| x / n));
+        let t = k as f64 * dt;
+        // Y(t) = 2/t int_0^t s d(ln |v|), s at the step's middle; <Y> its time mean.
+        weighted += (t - 0.5 * dt) * n.ln();
+        let y_now = 2.0 * weighted / t;
+        mean += dt * y_now;
+        total += n.ln();
+        fli = fli.max(total / std::f64::consts::LN_10);
+        if run.renormalise(k) {
+            (run.sample)(t, &[mean / t, y_now, fli]);
+            (run.tick)(k)?;
+        }
+        if !total.is_finite() {
+            return Ok((f64::NAN, f64::NAN));
+        }
+    }
+    Ok((mean / (steps as f64 * dt), fli))
+}
+
+/// The Lagrangian descriptor with the power `power`: one RK4 trajectory forward and one
+/// backward, the trapezoid rule each way; NaN where it left the numbers.
+pub fn descriptor_run(run: &mut CpuRun, power: f64) -> Result<f64> {
+    let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+    let g = |s: &State| -> f64 {
+        derivative(p, s)
+            .to_array()
+            .iter()
+            .map(|f| f.abs().powf(power))
+            .sum()
+    };
+    let (mut ahead, mut back) = (run.start, run.start);
+    let (mut g_ahead, mut g_back) = (g(&run.start), g(&run.start));
+    let mut m = 0.0;
+    for k in 1..=run.spec.stepping.steps() {
+        ahead = rk4_step(p, &ahead, dt);
+        back = rk4_step(p, &back, -dt);
+        let (ga, gb) = (g(&ahead), g(&back));
+        m += 0.5 * dt * (g_ahead + ga) + 0.5 * dt * (g_back + gb);
+        (g_ahead, g_back) = (ga, gb);
+        if run.renormalise(k) {
+            (run.sample)(k as f64 * dt, &[m]);
+            (run.tick)(k)?;
+        }
+    }
+    Ok(if m.is_finite() { m } else { f64::NAN })
+}
+
 /// The spectrum with DP54 steps (`spec.integrator`'s tolerances, steps of at most dt) over
 /// the state and the four vectors together, the error controlled over all twenty components,
-/// every renormalisation window landed on exactly; a stalled run ends in NaN. The map's value.
-fn spectrum_adaptive(
-    spec: &LyapunovSpec,
-    start: State,
-    sample: &mut dyn FnMut(f64, &[f64]),
-    tick: &dyn Fn(u32) -> Result<()>,
-) -> Result<f64> {
+/// every renormalisation window landed on exactly: the four log sums (NaN where it stalled).
+pub fn spectrum_adaptive(run: &mut CpuRun) -> Result<[f64; 4]> {
     use super::adaptive::{Clock, DP54, step_factor};
     use num_dual::Dual64;
     const N: usize = 20;
+    let spec = run.spec;
     let p = &spec.params;
     let (rtol, atol) = spec.integrator.tolerances().expect("adaptive");
     let (dt, steps, every) = (spec.stepping.dt, spec.stepping.steps(), spec.renorm_steps());
@@ -253,7 +238,7 @@ fn spectrum_adaptive(
         out
     };
     let mut x = [0.0; N];
-    x[..4].copy_from_slice(&start.to_array());
+    x[..4].copy_from_slice(&run.start.to_array());
     for (j, v) in FRAME.iter().enumerate() {
         x[4 + 4 * j..8 + 4 * j].copy_from_slice(v);
     }
@@ -266,8 +251,8 @@ fn spectrum_adaptive(
         let mut k1 = rate(&x);
         while clock.t < t_end {
             let Ok((h, last)) = clock.attempt(t_end) else {
-                sample(t_end, &[f64::NAN; 5]);
-                return Ok(f64::NAN);
+                (run.sample)(t_end, &[f64::NAN; 5]);
+                return Ok([f64::NAN; 4]);
             };
             let mut k = [[0.0; N]; 7];
             k[0] = k1;
@@ -305,15 +290,11 @@ fn spectrum_adaptive(
         }
         let mut row: Vec<f64> = sums.iter().map(|s| s / t_end).collect();
         row.push(row.iter().sum());
-        sample(t_end, &row);
-        tick(end)?;
+        (run.sample)(t_end, &row);
+        (run.tick)(end)?;
         done = end;
     }
-    let t = steps as f64 * dt;
-    Ok(match spec.indicator {
-        Indicator::Exponent(k) => sums[k as usize - 1] / t,
-        _ => sums.iter().sum::<f64>() / t,
-    })
+    Ok(sums)
 }
 
 /// One RK4 step of the state and each of `v` along it (each vector the FTLE's own step); the
@@ -331,14 +312,11 @@ fn step_vectors(p: &Params, y: &[f64; 4], v: &mut [[f64; 4]], dt: f64) -> [f64; 
 }
 
 /// All four exponents of `spec`'s grid (1/s, in Gram-Schmidt order), one run of four vectors a
-/// pixel, rows in parallel.
+/// pixel (RK4, or DP54 where `spec` steps with it), rows in parallel.
 pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]> {
     use rayon::prelude::*;
-    let four = LyapunovSpec {
-        indicator: Indicator::ExponentSum,
-        ..*spec
-    };
     let (grid, span) = (&spec.grid, spec.row_span());
+    let t_end = spec.stepping.steps() as f64 * spec.stepping.dt;
     monitor.start("cpu", span.count as u64);
     let rows: Vec<Vec<[f64; 4]>> = (0..span.count)
         .into_par_iter()
@@ -346,13 +324,22 @@ pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]
             monitor.check()?;
             let values = (0..grid.width)
                 .map(|col| {
-                    let mut last = [f64::NAN; 4];
                     let (params, start) = grid.pixel(&spec.params, col, span.first + row);
-                    let four = LyapunovSpec { params, ..four };
-                    indicator_run(&four, start, None, &mut |_, r| {
-                        last = [r[0], r[1], r[2], r[3]];
-                    })?;
-                    Ok(last)
+                    let spec = LyapunovSpec { params, ..*spec };
+                    let mut run = CpuRun {
+                        spec: &spec,
+                        start,
+                        sample: &mut |_, _| {},
+                        tick: &|_| Ok(()),
+                    };
+                    let sums = match spec.integrator.tolerances() {
+                        Some(_) => spectrum_adaptive(&mut run)?,
+                        None => {
+                            let s = tangent_sums(&mut run, 4)?;
+                            [s[0], s[1], s[2], s[3]]
+                        }
+                    };
+                    Ok(sums.map(|s| s / t_end))
                 })
                 .collect::<Result<Vec<_>>>()?;
             monitor.advance(1);

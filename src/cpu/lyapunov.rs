@@ -20,12 +20,7 @@ pub const TANGENT_START: [f64; 4] = [0.5, 0.5, 0.5, 0.5];
 
 /// One RK4 step of the state and of a tangent vector along it: each stage evaluates the rate
 /// at dual numbers (y + eps v), whose dual part is J(y) v.
-pub(super) fn tangent_step(
-    p: &Params,
-    y: &[f64; 4],
-    v: &[f64; 4],
-    dt: f64,
-) -> ([f64; 4], [f64; 4]) {
+pub fn tangent_step(p: &Params, y: &[f64; 4], v: &[f64; 4], dt: f64) -> ([f64; 4], [f64; 4]) {
     let rate = |y: &[f64; 4], v: &[f64; 4]| {
         let x: [Dual64; 4] = std::array::from_fn(|i| Dual64::new(y[i], v[i]));
         let r = rate_of(p, &x);

@@ -15,9 +15,12 @@ pub use flip_adaptive::{flip_map_adaptive, flip_time_adaptive};
 pub use flip_kind::flip_kind_map;
 pub use flip_time::{FirstFlip, first_flip, flip_map, flip_time};
 pub use indicators::{
-    FRAME, alignment_index, columns, gram_schmidt, indicator_map, indicator_run, spectrum_map,
+    FRAME, alignment_index, alignment_run, descriptor_run, gram_schmidt, growth_run, indicator_map,
+    indicator_run, spectrum_adaptive, spectrum_map, tangent_sums,
 };
-pub use lyapunov::{ftle, ftle_map, ftle_monitored, lyapunov_spectrum};
+pub use lyapunov::{
+    TANGENT_START, ftle, ftle_map, ftle_monitored, lyapunov_spectrum, tangent_step,
+};
 
 use nalgebra::{Matrix2, Matrix4, RealField, Vector2, Vector4};
 use num_dual::DualSVec64;

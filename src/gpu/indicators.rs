@@ -3,7 +3,7 @@
 //! index's pixel stops once it falls below its threshold).
 
 use super::context::{GpuContext, read_buffer};
-use super::layout::{NEVER, Real, Run, RunParams, TileParams, read_reals, with_real};
+use super::layout::{Real, Run, RunParams, TileParams, read_reals, with_real};
 use super::pipeline::{
     Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer_of,
     storage_buffer,
@@ -12,51 +12,25 @@ use super::shaders::Kernel;
 use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
+use crate::measure::Runs;
 use crate::monitor::Monitor;
-use crate::spec::{Alignment, Indicator, LyapunovSpec, Precision};
-
-/// A tangent step costs about this many plain steps (as `lyapunov.rs`), per vector.
-const TANGENT_COST: u64 = 3;
+use crate::spec::{LyapunovSpec, Precision};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 /// A value below this is the kernel's "left the numbers" (-3e38): NaN.
 const LEFT_BELOW: f64 = -1e38;
 
-/// The (init, advance) entries of each indicator family, in the order of [`entry_of`].
-const FAMILIES: [[&str; 2]; 8] = [
-    ["indicator_init", "spectrum_advance"],
-    ["indicator_init", "sali_advance"],
-    ["indicator_init", "gali2_advance"],
-    ["indicator_init", "gali3_advance"],
-    ["indicator_init", "gali4_advance"],
-    ["indicator_init", "growth_advance"],
-    ["indicator_init", "descriptor_advance"],
-    // The spectrum with DP54 steps (its windows as the dispatches' units).
-    ["indicator_init", "spectrum_adaptive"],
-];
-
-/// The kernel's entry for `indicator` (an index into [`FAMILIES`]) and the value it writes
-/// (`params.measure`).
-fn entry_of(indicator: Indicator) -> (usize, u32) {
-    let alignment = |index: Alignment| match index {
-        Alignment::Sali => 1,
-        Alignment::Gali(k) => k as usize,
-    };
-    match indicator {
-        Indicator::Ftle => (0, 0),
-        Indicator::Exponent(k) => (0, k as u32 - 1),
-        Indicator::ExponentSum => (0, 4),
-        Indicator::Alignment { index, .. } => (alignment(index), 0),
-        Indicator::AlignmentTime { index, .. } => (alignment(index), 1),
-        Indicator::Megno => (5, 0),
-        Indicator::Fli => (5, 1),
-        Indicator::Descriptor { .. } => (6, 0),
-    }
-}
+/// The entries every measure's kernel starts with.
+const INIT: &str = "indicator_init";
 
 pub struct IndicatorKernel {
     precision: Precision,
-    /// (init, advance) of each family, compiled on first use.
-    families: Vec<Variants>,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// (init, advance) of each advance entry asked for so far, its pipelines compiled on
+    /// first use.
+    entries: Mutex<HashMap<&'static str, Arc<Variants>>>,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -65,15 +39,29 @@ impl IndicatorKernel {
     pub fn with_precision(ctx: &GpuContext, precision: Precision) -> Self {
         let module = kernel_module(ctx, Kernel::Indicators, precision);
         let (layout, pipeline_layout) = layouts(ctx, "indicators", &[false, false]);
-        let families = FAMILIES
-            .iter()
-            .map(|entries| Variants::new(module.clone(), pipeline_layout.clone(), entries, None))
-            .collect();
         IndicatorKernel {
             precision,
-            families,
+            module,
+            pipeline_layout,
+            entries: Mutex::default(),
             layout,
         }
+    }
+
+    /// The (init, `advance`) pipelines' variants.
+    fn variants(&self, advance: &'static str) -> Arc<Variants> {
+        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        let made = entries.entry(advance).or_insert_with(|| {
+            // Variants keep their entries' names for good: one leaked pair per entry point.
+            let pair: &'static [&'static str] = Box::leak(Box::new([INIT, advance]));
+            Arc::new(Variants::new(
+                self.module.clone(),
+                self.pipeline_layout.clone(),
+                pair,
+                None,
+            ))
+        });
+        made.clone()
     }
 
     /// The map of `spec`'s indicator (its quantity's unit).
@@ -89,10 +77,6 @@ impl IndicatorKernel {
         spec: &LyapunovSpec,
         monitor: &Monitor,
     ) -> Result<[Field; 4]> {
-        assert!(
-            entry_of(spec.indicator).0 == 0,
-            "the spectrum comes from the spectrum kernel"
-        );
         let mut layers: [Vec<f64>; 4] = Default::default();
         with_real!(self.precision, R => self.run_in::<R>(ctx, spec, monitor, Some(&mut layers)))?;
         let t_end = spec.stepping.steps() as f64 * spec.stepping.dt;
@@ -123,17 +107,20 @@ impl IndicatorKernel {
     ) -> Result<Field> {
         use std::mem::size_of;
         let indicator = spec.indicator;
-        let (family, measure) = entry_of(indicator);
+        let measure = indicator.measure();
+        let Runs::Indicators(gpu) = measure.runs(indicator) else {
+            unreachable!("the divergence kernel's map is gpu::lyapunov's")
+        };
         let adaptive = spec.integrator.tolerances();
-        let family = match adaptive {
-            Some(_) if family == 0 => 7,
-            Some(_) => {
+        let advance = match (adaptive, gpu.adaptive) {
+            (None, _) => gpu.entry,
+            (Some(_), Some(entry)) => entry,
+            (Some(_), None) => {
                 return Err(crate::Error::invalid(
                     "integrator",
-                    "only the spectrum steps with dp54",
+                    format!("the {} steps with rk4 only", indicator.title()),
                 ));
             }
-            None => family,
         };
         let (rtol, atol) = adaptive.unwrap_or_default();
         let total_steps = spec.stepping.steps();
@@ -142,16 +129,14 @@ impl IndicatorKernel {
             .with_run(Run {
                 interval: spec.renorm_steps(),
                 total_steps,
-                setting: match indicator {
-                    Indicator::Descriptor { p } => p,
-                    other => other.threshold().unwrap_or(0.0),
-                },
-                measure,
+                setting: gpu.setting,
+                measure: gpu.measure,
                 rtol,
                 atol,
                 ..Run::default()
             });
-        let [init, advance] = self.families[family].get(
+        let variants = self.variants(advance);
+        let [init, advance] = variants.get(
             ctx,
             spec.params.losses.kinds(),
             false,
@@ -181,11 +166,7 @@ impl IndicatorKernel {
                 .write_buffer(&params_buf, 0, bytemuck::bytes_of(params));
             dispatch_and_wait(ctx, pipeline, &bind, params.count())
         };
-        // Tangent vectors cost a tangent step each; a descriptor two plain steps.
-        let cost = match indicator.vectors() {
-            0 => 2,
-            n => TANGENT_COST * n as u64,
-        };
+        let cost = gpu.cost;
         // The adaptive kernel's dispatches count renormalisation windows, each about
         // `interval` steps of DP54's six rates.
         let interval = spec.renorm_steps();
@@ -195,15 +176,9 @@ impl IndicatorKernel {
         };
         let t_end = total_steps as f64 * spec.stepping.dt;
         let finish = |raw: f64| -> f32 {
-            if raw < LEFT_BELOW {
-                return f32::NAN;
-            }
-            match indicator {
-                Indicator::Ftle | Indicator::Exponent(_) | Indicator::ExponentSum => {
-                    (raw / t_end) as f32
-                }
-                Indicator::AlignmentTime { .. } if raw == NEVER as f64 => f32::INFINITY,
-                _ => raw as f32,
+            match raw < LEFT_BELOW {
+                true => f32::NAN,
+                false => measure.finish(indicator, raw, t_end),
             }
         };
         let grid = spec.grid;
@@ -228,10 +203,9 @@ impl IndicatorKernel {
             )?;
             let raw = read_reals::<R>(&read_buffer(ctx, &values, pixels as u64 * value_bytes)?);
             if let Some(layers) = layers.as_deref_mut() {
-                // IndicatorSlot: y, u, four vectors, then the four log sums.
-                let slots = read_reals::<R>(&read_buffer(ctx, &states, pixels as u64 * slot)?);
-                for sums in slots.chunks_exact(32).map(|s| &s[24..28]) {
-                    for (layer, &sum) in layers.iter_mut().zip(sums) {
+                let bytes = read_buffer(ctx, &states, pixels as u64 * slot)?;
+                for s in bytemuck::pod_collect_to_vec::<u8, R::IndicatorSlot>(&bytes) {
+                    for (layer, sum) in layers.iter_mut().zip(R::slot_sums(&s)) {
                         layer.push(sum);
                     }
                 }

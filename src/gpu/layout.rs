@@ -94,13 +94,14 @@ mirrors! {
     }
 
     /// Mirror of WGSL `IndicatorSlot` (shaders/indicators.wgsl), one per pixel of an
-    /// indicator map: the pendulum, four tangent vectors, the running sums.
+    /// indicator map: the pendulum, four tangent vectors, the running sums, and the adaptive
+    /// spectrum's clock (the next step, attempts so far, stalled).
     struct GpuIndicatorSlot / GpuIndicatorSlot64 {
         y: [real; 4],
         u: [real; 4],
         v: [real; 16],
         sums: [real; 4],
-        unused: [real; 4],
+        clock: [real; 4],
     }
 
     /// Mirror of WGSL `Params`, laid out by WGSL's rules (f64 aligned to 8 bytes; the padding
@@ -277,6 +278,8 @@ pub trait Real: Pod + Copy + Default + PartialEq + std::fmt::Debug + Send + Sync
     type LyapunovSlot: Pod + Default;
     type AdaptiveSlot: Pod + Default;
     type IndicatorSlot: Pod + Default;
+    /// An indicator slot's running sums (the spectrum's four log sums).
+    fn slot_sums(slot: &Self::IndicatorSlot) -> [f64; 4];
     fn from_f64(x: f64) -> Self;
     fn to_f64(self) -> f64;
 }
@@ -290,6 +293,9 @@ macro_rules! real {
             type LyapunovSlot = $slot;
             type AdaptiveSlot = $adaptive;
             type IndicatorSlot = $indicator;
+            fn slot_sums(slot: &$indicator) -> [f64; 4] {
+                slot.sums.map(|x| x as f64)
+            }
             fn from_f64(x: f64) -> Self {
                 x as $r
             }

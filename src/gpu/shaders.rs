@@ -72,7 +72,11 @@ impl Kernel {
             Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{}\n{FLIP_DP54}", dp54()),
             Kernel::FlipDop853 => flip_dop853(),
             Kernel::Lyapunov => format!("{}\n{LYAPUNOV}", dp54()),
-            Kernel::Indicators => format!("{}\n{LYAPUNOV}\n{INDICATORS}", dp54()),
+            Kernel::Indicators => format!(
+                "{}\n{LYAPUNOV}\n{INDICATORS}\n{}",
+                dp54(),
+                crate::measure::wgsl()
+            ),
             Kernel::Trajectory => TRAJECTORY.to_string(),
             Kernel::Positions => POSITIONS.to_string(),
         }

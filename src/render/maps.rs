@@ -4,10 +4,9 @@
 use crate::engine::RunInfo;
 use crate::error::{Error, Result};
 use crate::field::Field;
+use crate::measure::Look;
 use crate::model::Params;
-use crate::spec::{
-    AnyMap, FlipMeasure, FlipSpec, Grid, Indicator, LyapunovSpec, MapKind, MapSpec, on_any,
-};
+use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapKind, MapSpec, on_any};
 
 use super::{
     Annotation, Axis, ColorBar, Colormap, FlipColors, NEVER_RGB, annotate, decimal_ticks,
@@ -288,98 +287,16 @@ fn flip_kind_picture(
     })
 }
 
-/// How a divergence-family map's indicator is drawn: its title, colour bar label and unit,
-/// and whether its low values are the chaotic ones (the colours then run the other way, so
-/// that chaos is bright in every map).
-struct Look {
-    title: String,
-    label: String,
-    unit: &'static str,
-    /// Low values chaotic (alignment indices and their times).
-    reversed: bool,
-}
-
+/// How `spec`'s measure is drawn.
 fn look(spec: &LyapunovSpec) -> Look {
-    let t_max = spec.stepping.t_max;
-    let over = |what: &str| format!("{what} over {t_max} s");
-    let (title, label, unit, reversed) = match spec.indicator {
-        Indicator::Ftle => (
-            over("Largest finite-time Lyapunov exponent"),
-            "FTLE (1/s)".to_string(),
-            "1/s",
-            false,
-        ),
-        Indicator::Exponent(k) => (
-            over(&format!("Lyapunov exponent {k} of 4")),
-            format!("λ{k} (1/s)"),
-            "1/s",
-            false,
-        ),
-        Indicator::ExponentSum => (
-            over("Sum of the four Lyapunov exponents"),
-            "Σλ (1/s)".into(),
-            "1/s",
-            false,
-        ),
-        Indicator::Alignment { index, threshold } => (
-            format!(
-                "Alignment index {} over {t_max} s (a start stops below {threshold:e})",
-                index.name()
-            ),
-            format!("log10 {}", index.name()),
-            "(log10)",
-            true,
-        ),
-        Indicator::AlignmentTime { index, threshold } => (
-            format!(
-                "Time until {} < {threshold:e} within {t_max} s (black: never)",
-                index.name()
-            ),
-            "time (s)".into(),
-            "s",
-            true,
-        ),
-        Indicator::Megno => (
-            format!("MEGNO over {t_max} s (2: regular; chaotic: grows like λt/2)"),
-            "<Y>".into(),
-            "",
-            false,
-        ),
-        Indicator::Fli => (
-            format!("Fast Lyapunov indicator over {t_max} s: the largest log10 |v|"),
-            "FLI".into(),
-            "",
-            false,
-        ),
-        Indicator::Descriptor { p } => (
-            format!("Lagrangian descriptor M over [-{t_max}, {t_max}] s, p = {p}"),
-            "M".into(),
-            "",
-            false,
-        ),
-    };
-    Look {
-        title,
-        label,
-        unit,
-        reversed,
-    }
+    let i = spec.indicator;
+    i.measure().look(i, spec.stepping.t_max)
 }
 
-/// The colour range a divergence-family map takes by default: 0 to the 99.5th percentile
-/// for exponents and growth indicators, the threshold to 1 for alignment indices, 0 to
-/// t-max for their times, the 0.5th to 99.5th percentile otherwise.
+/// The colour range a divergence-family map takes by default (its measure's).
 pub fn default_range(spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
-    let spread = || super::percentile_range(field, 0.005, 0.995);
-    let upper = |floor: f32| (0.0, super::percentile_range(field, 0.0, 0.995).1.max(floor));
-    match spec.indicator {
-        Indicator::Ftle | Indicator::Exponent(1) => super::ftle_range(field),
-        Indicator::Exponent(_) | Indicator::ExponentSum | Indicator::Descriptor { .. } => spread(),
-        Indicator::Alignment { threshold, .. } => (threshold.log10() as f32, 0.0),
-        Indicator::AlignmentTime { .. } => (0.0, spec.stepping.t_max as f32),
-        Indicator::Megno => upper(4.0),
-        Indicator::Fli => upper(1.0),
-    }
+    let i = spec.indicator;
+    i.measure().default_range(i, spec, field)
 }
 
 /// The colour bar of a divergence-family map over `range`: colours from left to right,
@@ -427,10 +344,9 @@ pub fn lyapunov_picture(
                 "{} · {}{}{}",
                 physics_line(&spec.params, &spec.grid),
                 stepping_note(spec),
-                match spec.indicator {
-                    // One plain trajectory each way: nothing renormalised.
-                    Indicator::Descriptor { .. } => String::new(),
-                    _ => format!(" · renormalised every {} s", spec.renorm),
+                match spec.indicator.measure().renormalised() {
+                    false => String::new(),
+                    true => format!(" · renormalised every {} s", spec.renorm),
                 },
                 unresolved_note(unresolved, false)
             ),
@@ -532,10 +448,7 @@ impl MapPicture for LyapunovSpec {
     ) -> Result<Drawn> {
         let look = look(self);
         let range = range.unwrap_or_else(|| default_range(self, field));
-        let name = match self.indicator {
-            Indicator::Ftle => "FTLE".to_string(),
-            other => other.title(),
-        };
+        let name = self.indicator.measure().short_title(self.indicator);
         let text = vec![(
             "chaoscope:colour-range".into(),
             format!(

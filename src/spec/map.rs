@@ -1,6 +1,6 @@
 //! The two map families' specs: flip-time maps and divergence maps, and the rows a run covers.
 
-use super::indicator::Indicator;
+use super::Indicator;
 use super::stability::{validate_speeds, validate_stability};
 use super::{
     ACCURATE, ACCURATE_FTLE, Grid, Integrator, Precision, Stepping, validate_grid_holding,
@@ -224,7 +224,7 @@ impl LyapunovSpec {
             precision: Precision::F32,
             band: None,
             integrator: Integrator::Rk4,
-            indicator: Indicator::Ftle,
+            indicator: Indicator::default(),
         }
     }
 
@@ -295,31 +295,30 @@ impl LyapunovSpec {
         }
         self.integrator.validate(Precision::F64)?;
         self.indicator.validate(Precision::F64)?;
-        if self.indicator != Indicator::Ftle {
-            if self.method != Method::Tangent {
-                return Err(Error::invalid(
-                    "method",
-                    format!(
-                        "the {} follows tangent vectors: take --method tangent",
-                        self.indicator.title()
-                    ),
-                ));
-            }
-            let spectrum = matches!(
-                self.indicator,
-                Indicator::Exponent(_) | Indicator::ExponentSum
-            );
-            if !(self.integrator == Integrator::Rk4
-                || spectrum && matches!(self.integrator, Integrator::Dp54 { .. }))
-            {
-                return Err(Error::invalid(
-                    "integrator",
-                    format!(
-                        "the {} steps with rk4 only (the spectrum also with dp54)",
-                        self.indicator.title()
-                    ),
-                ));
-            }
+        let measure = self.indicator.measure();
+        if measure.tangent_only() && self.method != Method::Tangent {
+            return Err(Error::invalid(
+                "method",
+                format!(
+                    "the {} follows tangent vectors: take the tangent method",
+                    self.indicator.title()
+                ),
+            ));
+        }
+        if !(self.integrator == Integrator::Rk4 || measure.adaptive()) {
+            let adaptive: Vec<String> = crate::measure::MEASURES
+                .iter()
+                .filter(|m| m.adaptive())
+                .map(|m| m.names().join(", "))
+                .collect();
+            return Err(Error::invalid(
+                "integrator",
+                format!(
+                    "the {} steps with rk4 only (dp54 steps {})",
+                    self.indicator.title(),
+                    adaptive.join(", ")
+                ),
+            ));
         }
         match (self.method, self.integrator) {
             (_, Integrator::Rk4) | (Method::Tangent, Integrator::Dp54 { .. }) => {}
@@ -537,20 +536,11 @@ impl MapSpec for LyapunovSpec {
         self.integrator.validate(precision)?;
         self.indicator.validate(precision)
     }
-    /// An alignment index counts the starts it stopped: those below its threshold (a
-    /// running pixel's last value is at or above it).
+    /// The pixels its measure counts (an alignment index: the starts it stopped).
     fn counted(&self, x: f32) -> bool {
-        match self.indicator {
-            Indicator::Alignment { threshold, .. } => (x as f64) < threshold.log10(),
-            _ => (self.quantity().counted)(x),
-        }
+        self.indicator.measure().counted(self.indicator, x)
     }
     fn counted_rule(&self) -> String {
-        match self.indicator {
-            Indicator::Alignment { index, threshold } => {
-                format!("{} fell below {threshold:e}", index.name())
-            }
-            _ => self.quantity().counted_rule.to_string(),
-        }
+        self.indicator.measure().counted_rule(self.indicator)
     }
 }

@@ -6,7 +6,6 @@ use crate::error::{Error, Result, finite_positive};
 use crate::model::{Params, State};
 
 mod grid;
-mod indicator;
 mod kind;
 mod map;
 mod memory;
@@ -15,8 +14,8 @@ mod plane;
 mod stability;
 mod var;
 
+pub use crate::measure::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator, IndicatorAsked};
 pub use grid::{Axis, Grid, Sampling, Var, pcg};
-pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, INDICATORS, Indicator, IndicatorAsked};
 pub use kind::{MapKind, MapKindEntry};
 pub(crate) use map::on_any;
 pub use map::{AnyMap, FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, Method, RowSpan};

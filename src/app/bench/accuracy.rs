@@ -155,7 +155,7 @@ pub(super) fn ftle_accuracy_spec(
         precision,
         band: None,
         integrator,
-        indicator: crate::spec::Indicator::Ftle,
+        indicator: crate::spec::Indicator::default(),
     }
 }
 

@@ -4,38 +4,16 @@
 
 use super::*;
 use crate::engine::Engine;
-use crate::spec::{Alignment, Indicator};
+use crate::spec::Indicator;
 
-/// The indicators timed, by their `--indicator` names, the FTLE first (the baseline); the
-/// spectrum's row is the four-vector kernel (any exponent costs the same).
-pub(super) fn problems() -> [(&'static str, Indicator); 7] {
-    let threshold = NEVER_ALIGNED;
-    [
-        ("ftle", Indicator::Ftle),
-        ("spectrum", Indicator::Exponent(1)),
-        (
-            "sali",
-            Indicator::Alignment {
-                index: Alignment::Sali,
-                threshold,
-            },
-        ),
-        (
-            "gali4",
-            Indicator::Alignment {
-                index: Alignment::Gali(4),
-                threshold,
-            },
-        ),
-        ("megno", Indicator::Megno),
-        ("fli", Indicator::Fli),
-        ("descriptor", Indicator::Descriptor { p: 0.5 }),
-    ]
+/// The indicators timed, by the names of their rows, the FTLE first (the baseline): each
+/// measure's own choice ([`crate::measure::Measure::bench`]).
+pub(super) fn problems() -> Vec<(&'static str, Indicator)> {
+    crate::measure::MEASURES
+        .iter()
+        .flat_map(|m| m.bench())
+        .collect()
 }
-
-/// An alignment threshold that nothing reaches, so that every pixel runs every step (the
-/// peer has no early stop): the rows time the indicator's work, not the map's.
-const NEVER_ALIGNED: f64 = 1e-300;
 
 /// The peer's names for the indicators it has.
 const PEER_HAS: [&str; 4] = ["ftle", "spectrum", "sali", "megno"];

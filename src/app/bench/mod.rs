@@ -159,7 +159,7 @@ fn ftle_spec(size: u32, args: &BenchJob) -> LyapunovSpec {
         precision: Precision::F32,
         band: None,
         integrator: crate::spec::Integrator::Rk4,
-        indicator: crate::spec::Indicator::Ftle,
+        indicator: crate::spec::Indicator::default(),
     }
 }
 

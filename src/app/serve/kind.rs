@@ -1,11 +1,11 @@
-//! The maps the explorer shows: every line of the kinds' table ([`MapKind::TABLE`]), and the
+//! The maps the explorer shows: every line of the kinds' table ([`MapKind::all`]), and the
 //! verdict; the page's menu and legends are built from [`Kind::describe`].
 
 use crate::app::sweep::FrameMap;
 use crate::error::{Error, Result};
 use crate::spec::MapKind;
 
-/// The map a tile shows: a map of the kinds' table ([`MapKind::TABLE`]), or the verdict.
+/// The map a tile shows: a map of the kinds' table ([`MapKind::all`]), or the verdict.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Kind {
     Map(MapKind),
@@ -14,18 +14,18 @@ pub enum Kind {
 }
 
 impl Kind {
-    pub const FLIP: Kind = Kind::Map(MapKind::FlipTime);
-    pub const FLIP_KIND: Kind = Kind::Map(MapKind::FlipKind);
-    pub const FTLE: Kind = Kind::Map(MapKind::Ftle);
+    pub const FLIP: Kind = Kind::Map(MapKind::FLIP_TIME);
+    pub const FLIP_KIND: Kind = Kind::Map(MapKind::FLIP_KIND);
+    pub const FTLE: Kind = Kind::Map(MapKind::FTLE);
 
     const RESOLVED_LABEL: &str = "verdict (white: resolved)";
     const RESOLVED_LEGEND: &str = "White: the pixel's flip time agrees with a finer run (resolved); black: it does not, so its colour cannot be trusted.";
 
     /// Every kind, in the page's menu order.
     pub fn all() -> impl Iterator<Item = Kind> {
-        MapKind::ALL
-            .into_iter()
-            .map(Kind::Map)
+        MapKind::all()
+            .iter()
+            .map(|&k| Kind::Map(k))
             .chain([Kind::Resolved])
     }
 

@@ -464,7 +464,7 @@ impl View {
             integrator: crate::spec::Integrator::Rk4,
             indicator: match self.kind {
                 Kind::Map(k) => k.entry().indicator.unwrap_or_default(),
-                Kind::Resolved => crate::spec::Indicator::Ftle,
+                Kind::Resolved => crate::spec::Indicator::default(),
             },
         };
         if self.accurate { spec.accurate() } else { spec }

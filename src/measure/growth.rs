@@ -1,0 +1,121 @@
+//! The growth of one tangent vector renormalised every step: MEGNO, the mean exponential
+//! growth of nearby orbits (Cincotta and Simó 2000), and the fast Lyapunov indicator, the
+//! largest log10 |v| so far (Froeschlé, Lega, Gonczi 1997).
+
+use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
+use crate::error::Result;
+use crate::field::Field;
+use crate::quantity::{FLI, MEGNO, Quantity};
+use crate::spec::{LyapunovSpec, MapKindEntry};
+
+pub struct Growth;
+
+static KINDS: [MapKindEntry; 2] = [
+    MapKindEntry {
+        quantity: &MEGNO,
+        name: "megno",
+        short: "megno",
+        label: "MEGNO <Y>",
+        legend: "Colour: MEGNO <Y> ({ends}).",
+        low: "regular, tends to 2, or 0 for isochronous motion",
+        high: "chaotic, grows like λ t / 2",
+        ranged: true,
+        accurate: false,
+        indicator: Some(Indicator::Megno),
+    },
+    MapKindEntry {
+        quantity: &FLI,
+        name: "fli",
+        short: "fli",
+        label: "fast Lyapunov indicator",
+        legend: "Colour: FLI, the largest log10 |v| of a tangent vector so far ({ends}).",
+        low: "regular, grows like log t",
+        high: "chaotic, like λ t",
+        ranged: true,
+        accurate: false,
+        indicator: Some(Indicator::Fli),
+    },
+];
+
+fn is_megno(i: Indicator) -> bool {
+    i == Indicator::Megno
+}
+
+impl Measure for Growth {
+    fn names(&self) -> &'static [&'static str] {
+        &["megno", "fli"]
+    }
+    fn about(&self) -> &'static [(&'static str, &'static str)] {
+        &[("megno", "<Y>"), ("fli", "the fast Lyapunov indicator")]
+    }
+    fn options(&self, _name: &str) -> &'static [Opt] {
+        &[]
+    }
+    fn asked(&self, name: &str, _asked: &IndicatorAsked) -> Indicator {
+        match name {
+            "megno" => Indicator::Megno,
+            _ => Indicator::Fli,
+        }
+    }
+    fn spelled(&self, i: Indicator) -> (&'static str, Vec<(Opt, String)>) {
+        (if is_megno(i) { "megno" } else { "fli" }, Vec::new())
+    }
+    fn quantity(&self, i: Indicator) -> &'static Quantity {
+        if is_megno(i) { &MEGNO } else { &FLI }
+    }
+    fn vectors(&self, _i: Indicator) -> u32 {
+        1
+    }
+    fn title(&self, i: Indicator) -> String {
+        match is_megno(i) {
+            true => "MEGNO <Y>".into(),
+            false => "FLI (log10 |v|)".into(),
+        }
+    }
+    fn runs(&self, i: Indicator) -> Runs {
+        Runs::Indicators(GpuEntry {
+            entry: "growth_advance",
+            adaptive: None,
+            // 0: <Y>, 1: the FLI.
+            measure: !is_megno(i) as u32,
+            setting: 0.0,
+            cost: TANGENT_COST,
+        })
+    }
+    fn columns(&self, _i: Indicator) -> &'static [&'static str] {
+        &["megno", "y", "fli"]
+    }
+    fn cpu(&self, i: Indicator, run: &mut CpuRun) -> Result<f64> {
+        let (megno, fli) = crate::cpu::growth_run(run)?;
+        Ok(if is_megno(i) { megno } else { fli })
+    }
+    fn look(&self, i: Indicator, t_max: f64) -> Look {
+        match is_megno(i) {
+            true => Look {
+                title: format!("MEGNO over {t_max} s (2: regular; chaotic: grows like λt/2)"),
+                label: "<Y>".into(),
+                unit: "",
+                reversed: false,
+            },
+            false => Look {
+                title: format!("Fast Lyapunov indicator over {t_max} s: the largest log10 |v|"),
+                label: "FLI".into(),
+                unit: "",
+                reversed: false,
+            },
+        }
+    }
+    /// 0 to the 99.5th percentile, at least to 4 (MEGNO) or 1 (the FLI): a regular map is
+    /// then drawn dark, not stretched over its small spread.
+    fn default_range(&self, i: Indicator, _spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+        let floor = if is_megno(i) { 4.0 } else { 1.0 };
+        let high = crate::render::percentile_range(field, 0.0, 0.995).1;
+        (0.0, high.max(floor))
+    }
+    fn kinds(&self) -> &'static [MapKindEntry] {
+        &KINDS
+    }
+    fn bench(&self) -> Vec<(&'static str, Indicator)> {
+        vec![("megno", Indicator::Megno), ("fli", Indicator::Fli)]
+    }
+}
