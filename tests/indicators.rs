@@ -362,6 +362,7 @@ fn every_indicator() -> Vec<Indicator> {
         all.push(Indicator::AlignmentTime { index, threshold });
     }
     all.extend([0.25, 0.5, 1.0, 2.0].map(|p| Indicator::Descriptor { p }));
+    all.push(Indicator::Ofli);
     all
 }
 

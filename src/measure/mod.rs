@@ -10,6 +10,7 @@ mod alignment;
 mod descriptor;
 mod ftle;
 mod growth;
+mod ofli;
 mod spectrum;
 
 use crate::error::{Error, Result};
@@ -42,15 +43,18 @@ pub enum Indicator {
     Fli,
     /// The Lagrangian descriptor M with the power `p`.
     Descriptor { p: f64 },
+    /// The orthogonal FLI: the largest log10 of the tangent vector's part across the flow.
+    Ofli,
 }
 
 /// Every family, in the order the doors list them.
-pub static MEASURES: [&dyn Measure; 5] = [
+pub static MEASURES: [&dyn Measure; 6] = [
     &ftle::Ftle,
     &spectrum::Spectrum,
     &alignment::AlignmentIndex,
     &growth::Growth,
     &descriptor::Descriptor,
+    &ofli::Ofli,
 ];
 
 impl Indicator {
@@ -64,6 +68,7 @@ impl Indicator {
             }
             Indicator::Megno | Indicator::Fli => &growth::Growth,
             Indicator::Descriptor { .. } => &descriptor::Descriptor,
+            Indicator::Ofli => &ofli::Ofli,
         }
     }
 
