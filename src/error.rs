@@ -101,6 +101,29 @@ impl Error {
     }
 }
 
+/// `text` with every setting it names, `[[field]]` or `[[field=value]]` (a spec field and the
+/// value to give it), worded by `word(field, value)`: the library names fields, each door
+/// words them (the CLI `--precision f64`, Python `precision='f64'`, the explorer
+/// `precision=f64`). Messages and notices name settings this way and no door's flag.
+pub fn spell(text: &str, word: impl Fn(&str, Option<&str>) -> String) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find("[[") {
+        let Some(len) = rest[start + 2..].find("]]") else {
+            break;
+        };
+        let inner = &rest[start + 2..start + 2 + len];
+        out.push_str(&rest[..start]);
+        out.push_str(&match inner.split_once('=') {
+            Some((field, value)) => word(field, Some(value)),
+            None => word(inner, None),
+        });
+        rest = &rest[start + 2 + len + 2..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// `v` finite and > 0, else an error naming `field`.
 pub(crate) fn finite_positive(field: &'static str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
@@ -110,5 +133,23 @@ pub(crate) fn finite_positive(field: &'static str, v: f64) -> Result<()> {
             field,
             format!("{v} is not allowed; it must be a finite number > 0"),
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_door_words_the_settings_a_message_names() {
+        // A door that writes <field value>.
+        let cli = |f: &str, v: Option<&str>| match v {
+            Some(v) => format!("<{f} {v}>"),
+            None => format!("<{f}>"),
+        };
+        assert_eq!(
+            super::spell("take [[precision=f64]] or widen [[t_max]]; [not one]", cli),
+            "take <precision f64> or widen <t_max>; [not one]"
+        );
+        assert_eq!(super::spell("no setting", cli), "no setting");
+        assert_eq!(super::spell("open [[end", cli), "open [[end");
     }
 }

@@ -47,7 +47,7 @@ pub fn check_step(spec: &impl MapSpec, verdict: bool) -> crate::error::Result<()
         return Err(crate::error::Error::invalid(
             "dt",
             format!(
-                "{dt} s is too coarse for the verdict (--resolved, --show-unresolved): above {LARGEST_VOUCHED_DT} s more than 0.1 % of the pixels it would call resolved are wrong (measured: 0.16 % at 0.02 s, 0.46 % at 0.05 s); take --dt {LARGEST_VOUCHED_DT} or finer, or an adaptive integrator"
+                "{dt} s is too coarse for the verdict ([[resolved]], [[show_unresolved]]): above {LARGEST_VOUCHED_DT} s more than 0.1 % of the pixels it would call resolved are wrong (measured: 0.16 % at 0.02 s, 0.46 % at 0.05 s); take [[dt={LARGEST_VOUCHED_DT}]] or finer, or an adaptive integrator"
             ),
         ));
     }

@@ -698,3 +698,45 @@ fn render_refuses_a_picture_larger_than_the_process_may_hold() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Issue 36, item 5: the library names the setting a message asks to change; the command
+/// line words it as its flag (and Python as its keyword: python/tests).
+#[test]
+fn messages_name_settings_as_the_commands_flags() {
+    for (args, expected) in [
+        (
+            vec!["flip", "--size", "8", "--t-max", "1", "--dt", "0.05"],
+            "take --dt 0.01 or finer",
+        ),
+        (
+            vec![
+                "lyapunov",
+                "--size",
+                "8",
+                "--t-max",
+                "1",
+                "--indicator",
+                "sali",
+                "--threshold",
+                "1e-8",
+                "--backend",
+                "gpu",
+            ],
+            "take --precision f64",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = common::chaoscope()
+            .args(&args)
+            .arg("--resolved")
+            .arg(dir.path().join("r.npy"))
+            .arg("--output")
+            .arg(dir.path().join("m.png"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(!stderr.contains("[["), "{args:?}: {stderr}");
+    }
+}

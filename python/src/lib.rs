@@ -42,12 +42,22 @@ fn keyword(field: &str) -> &str {
     }
 }
 
+/// `text` with the settings it names (`chaoscope::error::spell`) as keywords:
+/// `precision='f64'`, `t_max=`.
+fn spelt(text: &str) -> String {
+    chaoscope::error::spell(text, |field, value| match value {
+        Some(v) if v.parse::<f64>().is_ok() => format!("{}={v}", keyword(field)),
+        Some(v) => format!("{}='{v}'", keyword(field)),
+        None => format!("{}=", keyword(field)),
+    })
+}
+
 /// The library's error as Python's: a bad value is a ValueError naming its keyword (the
 /// spec's field), Ctrl-C a KeyboardInterrupt.
 fn py_err(e: Error) -> PyErr {
     match e {
         Error::InvalidSpec { field, reason } => {
-            PyValueError::new_err(format!("{}: {reason}", keyword(field)))
+            PyValueError::new_err(format!("{}: {}", keyword(field), spelt(&reason)))
         }
         Error::StoreDiffers { field, .. } => {
             PyValueError::new_err(format!("{}: {e}", keyword(field)))
@@ -135,7 +145,10 @@ fn map_answer<'py, S: MapSpec>(
     out.set_item("unit", q.unit)?;
     out.set_item("command", command)?;
     out.set_item("place", place)?;
-    out.set_item("notices", notices)?;
+    out.set_item(
+        "notices",
+        notices.iter().map(|n| spelt(n)).collect::<Vec<_>>(),
+    )?;
     out.set_item("png_text", provenance)?;
     out.set_item("rule", rule)?;
     let any =
@@ -248,7 +261,10 @@ fn fill_store<'py, S: MapKernels + Copy + Send + Sync + 'static>(
         out.set_item(key, v)?;
     }
     out.set_item("place", made.info.place().to_string())?;
-    out.set_item("notices", made.notices)?;
+    out.set_item(
+        "notices",
+        made.notices.iter().map(|n| spelt(n)).collect::<Vec<_>>(),
+    )?;
     Ok(out)
 }
 

@@ -499,3 +499,14 @@ print(json.dumps({"grown": rss() - before}))
     grown = json.loads(out.stdout.strip().splitlines()[-1])["grown"]
     print(f"RSS grew {grown / 2**20:.2f} MB over 200 calls")
     assert grown <= 2 << 20, grown
+
+
+def test_a_message_names_settings_as_keywords_not_flags():
+    # The library names the setting to change; Python words it as its keyword.
+    with pytest.raises(ValueError, match="^dt: ") as caught:
+        chaoscope.flip_map(size=8, t_max=1, dt=0.05, resolved=True, progress=False)
+    assert "dt=0.01" in str(caught.value) and "--" not in str(caught.value)
+    with pytest.raises(ValueError, match="^threshold: ") as caught:
+        chaoscope.lyapunov_map(size=8, t_max=1, indicator="sali", threshold=1e-8,
+                               backend="gpu", progress=False)
+    assert "precision='f64'" in str(caught.value) and "--" not in str(caught.value)

@@ -281,7 +281,7 @@ fn plot(
             f.alpha_se,
             f.dimension()
         ),
-        None => "too few uncertain pairs to fit α (widen --eps or draw more --pairs)".into(),
+        None => "too few uncertain pairs to fit α (widen [[eps]] or draw more [[pairs]])".into(),
     };
     let shown: Vec<&Level> = levels.iter().filter(|l| l.uncertain > 0).collect();
     let (lo, hi) = (job.eps.0 / 1.5, job.eps.1 * 1.5);

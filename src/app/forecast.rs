@@ -270,7 +270,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         "ensemble": {
             "members": job.members, "seed": job.seed, "clamped_negative_damping": f.clamped,
             "tracking_error": o.tracking_error,
-            "tracking_error_from": if job.tracking_error.is_some() { "--tracking-error" } else { "the fit's residuals" },
+            "tracking_error_from": if job.tracking_error.is_some() { "the tracking error given" } else { "the fit's residuals" },
             "backend": o.fit.backend, "precision": job.precision.name(),
             "step": f.dt, "end": settings.end,
         },

@@ -53,6 +53,7 @@ pub struct LyapunovPointSummary {
 
 pub fn run_point(
     job: &LyapunovPointJob,
+    engine: &Engine,
     command: String,
     monitor: &Monitor,
     stdout: &mut dyn Write,
@@ -69,12 +70,11 @@ pub fn run_point(
         return Err(Error::invalid(
             "backend",
             format!(
-                "a single start's {} runs on the CPU (f64); leave the backend to auto or cpu",
+                "a single start's {} runs on the CPU (f64); leave out [[backend=gpu]]",
                 indicator.title()
             ),
         ));
     }
-    let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     let path = engine.map_info(&job.spec.grid, job.spec.precision).path;
     notices.extend(job.spec.notices(path));
@@ -126,6 +126,7 @@ pub fn run_point(
 /// float32 of shape (4, height, width). No verdict and no store: they hold one quantity.
 pub fn run_spectrum(
     job: &LyapunovMapJob,
+    engine: &Engine,
     spectrum: &std::path::Path,
     command: String,
     monitor: &Monitor,
@@ -146,13 +147,13 @@ pub fn run_spectrum(
     if job.files.store().is_some() || job.tile.is_some() {
         return Err(Error::invalid(
             "spectrum",
-            "writes a .npy beside a map; a Zarr store holds one quantity (leave out --spectrum)",
+            "writes a .npy beside a map; a Zarr store holds one quantity (leave out [[spectrum]])",
         ));
     }
     if job.files.wants_verdict() {
         return Err(Error::invalid(
             "spectrum",
-            "has no verdict: leave out --resolved and --show-unresolved, or --spectrum",
+            "has no verdict: leave out [[resolved]] and [[show_unresolved]], or [[spectrum]]",
         ));
     }
     spec.check_picture(&job.picture, job.colour_range)?;
@@ -161,8 +162,7 @@ pub fn run_spectrum(
     let mut named = job.files.named();
     named.push(("spectrum", spectrum));
     super::checks::check_distinct(&named, &[])?;
-    let engine = crate::engine::Engine::new(job.backend)?;
-    let (info, notices) = super::map::map_engine(&engine, spec, false)?;
+    let (info, notices) = super::map::map_engine(engine, spec, false)?;
     let layers = engine.spectrum(spec, monitor)?;
     let field = measure
         .of_spectrum(spec.indicator, &layers)

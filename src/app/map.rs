@@ -87,10 +87,11 @@ impl serde::Serialize for MapSummary {
     }
 }
 
-/// Runs `job`: its map (and verdict) into files, or its part of a store; `command` (the line
-/// that reproduces it) goes into the PNG or the store.
+/// Runs `job` on the `engine` its door lends: its map (and verdict) into files, or its part
+/// of a store; `command` (the line that reproduces it) goes into the PNG or the store.
 pub fn run<S: MapKernels + MapPicture>(
     job: &MapJob<S>,
+    engine: &Engine,
     command: String,
     monitor: &Monitor,
 ) -> Result<MapSummary> {
@@ -116,10 +117,9 @@ pub fn run<S: MapKernels + MapPicture>(
         files: job.files.files(),
         notices: Vec::new(),
     };
-    let engine = Engine::new(job.backend)?;
     if let Some(store) = job.files.store() {
         let made = make_store(
-            &job.spec, &engine, store, command, job.tile, verdict, monitor,
+            &job.spec, engine, store, command, job.tile, verdict, monitor,
         )?;
         let filled = &made.made;
         return Ok(MapSummary {
@@ -132,7 +132,7 @@ pub fn run<S: MapKernels + MapPicture>(
             ..summary(&made.info, filled.counted, filled.nan, filled.pixels)
         });
     }
-    let made = compute(&job.spec, &engine, verdict, job.samples, monitor)?;
+    let made = compute(&job.spec, engine, verdict, job.samples, monitor)?;
     let (field, mask) = &made.made;
     let shown = mask.as_deref().filter(|_| job.files.show_unresolved);
     let drawn = job
@@ -353,7 +353,7 @@ impl MapOutputs {
         if self.resolved.is_some() && self.resolved == self.data && self.store().is_none() {
             return Err(Error::invalid(
                 "resolved",
-                "is the --data file: the mask would overwrite the map; give it its own .npy",
+                "is the [[data]] file: the mask would overwrite the map; give it its own .npy",
             ));
         }
         if let Some(store) = self.store() {
@@ -424,7 +424,7 @@ pub fn check_tile(tile: Option<(u32, u32)>, files: &MapOutputs) -> Result<()> {
         if files.store().is_none() {
             return Err(Error::invalid(
                 "tile",
-                "needs a store to fill: --data MAP.zarr",
+                "needs a store to fill: [[data=MAP.zarr]]",
             ));
         }
         if count == 0 || index >= count {
@@ -570,7 +570,7 @@ pub fn precision_notices(
     }
     if grid.beyond_f64() {
         notices.push(format!(
-            "note: the pixel step is {}: neighbouring pixels start from the same numbers, and the verdict (--resolved) marks every pixel unresolved",
+            "note: the pixel step is {}: neighbouring pixels start from the same numbers, and the verdict ([[resolved]]) marks every pixel unresolved",
             below(crate::spec::F64_MIN_PIXEL_STEP, "even f64")
         ));
     }

@@ -313,7 +313,7 @@ pub fn run(
         if job.zoom.is_some() || job.vary.is_none() {
             return Err(Error::invalid(
                 "data",
-                "a store holds a --vary sweep (a zoom's frames each have angles of their own)",
+                "a store holds a sweep along [[vary]] (a zoom's frames each have angles of their own)",
             ));
         }
     }

@@ -102,7 +102,7 @@ pub fn run(args: &BenchArgs, monitor: &Monitor, as_json: bool) -> Result<serde_j
         ));
     }
     let r = bench::run(&job, monitor)?;
-    say(&r.notices);
+    say("bench", &r.notices);
     if as_json {
         return super::json(&r);
     }

@@ -113,7 +113,7 @@ impl BoundaryArgs {
 pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let s = boundary::run(&job, command_line::boundary(&job), monitor)?;
-    say(&s.notices);
+    say("boundary", &s.notices);
     for l in &s.levels {
         eprintln!(
             "eps {:.2e}: {} of {} resolved pairs differ (f = {:.3e})",

@@ -73,7 +73,7 @@ pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
     let s = fit::run(&job, command_line::fit(&job), monitor)?;
-    say(&s.notices);
+    say("fit", &s.notices);
     eprintln!(
         "pivot ({:.4}, {:.4}) m, l1 {:.4} ± {:.4} m, l2 {:.4} ± {:.4} m; energy a exp(b t): a {:.3} J, b {:.4} 1/s (chi2/dof {:.2}); inverse square chi2/dof {:.2}: {} fits better; model from t = {} s agrees within {} m until {} s ({:.2} s) -> {}",
         s.pivot.0,

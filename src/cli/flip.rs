@@ -11,7 +11,7 @@ use super::parse::{one_of, parse_number, parse_tile};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::flip::{self, FlipJob};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::{FlipMeasure, FlipSpec, Integrator, MapSpec, Precision};
@@ -153,8 +153,9 @@ pub fn nan_note(nan: usize) -> String {
 pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
-    let s = flip::run(&job, command_line::flip(&job), monitor)?;
-    say(&s.notices);
+    let engine = Engine::new(job.backend)?;
+    let s = flip::run(&job, &engine, command_line::flip(&job), monitor)?;
+    say("flip", &s.notices);
     eprintln!(
         "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s{}{} -> {}",
         s.width,

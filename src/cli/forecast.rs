@@ -78,7 +78,7 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
     let s = forecast::run(&job, command_line::forecast(&job), monitor)?;
-    say(&s.notices);
+    say("forecast", &s.notices);
     let lt = |v: Option<f64>| v.map_or(String::new(), |v| format!(" ({v:.1} Lyapunov times)"));
     eprintln!(
         "fit {}..{} s, {} members, tracking error {:.1} mm; horizon: spread > {} m {}{}, data out of the 90 % band {}{}; FTLE along the orbit {:.2} 1/s -> {}",

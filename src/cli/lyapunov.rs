@@ -9,7 +9,7 @@ use super::parse::{Angles, one_of, parse_number, parse_range, parse_size, parse_
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::lyapunov::{self, LyapunovMapJob, LyapunovPointJob};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::model::State;
 use crate::monitor::Monitor;
@@ -306,14 +306,15 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
         LyapunovJob::Map(job) => {
             super::args::f32_on_the_cpu(args.precision, job.backend);
             let command = command_line::lyapunov_map(&job);
+            let engine = Engine::new(job.backend)?;
             let s = match &args.spectrum {
                 Some(path) => {
                     let command = format!("{command} --spectrum {}", path.display());
-                    lyapunov::run_spectrum(&job, path, command, monitor)?
+                    lyapunov::run_spectrum(&job, &engine, path, command, monitor)?
                 }
-                None => lyapunov::run_map(&job, command, monitor)?,
+                None => lyapunov::run_map(&job, &engine, command, monitor)?,
             };
-            say(&s.notices);
+            say("lyapunov", &s.notices);
             let q = job.spec.quantity();
             eprintln!(
                 "{}x{} on {} in {:.2} s: {:.1} % {} ({} at {} s){}{}{} -> {}",
@@ -344,8 +345,15 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
         LyapunovJob::Point(job) => {
             super::args::f32_on_the_cpu(args.precision, job.backend);
             let command = command_line::lyapunov_point(&job);
-            let s = lyapunov::run_point(&job, command, monitor, &mut std::io::stdout().lock())?;
-            say(&s.notices);
+            let engine = Engine::new(job.backend)?;
+            let s = lyapunov::run_point(
+                &job,
+                &engine,
+                command,
+                monitor,
+                &mut std::io::stdout().lock(),
+            )?;
+            say("lyapunov", &s.notices);
             if let Some(path) = &s.output {
                 eprintln!(
                     "{} at {} s: {:.4} -> {}",

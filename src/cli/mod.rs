@@ -270,11 +270,23 @@ pub fn out(text: &str) -> crate::Result<()> {
     }
 }
 
-/// Notices from a run, one a line.
-fn say(notices: &[String]) {
+/// Notices from a run of `command`, one a line, the settings they name as its flags.
+fn say(command: &str, notices: &[String]) {
     for n in notices {
-        eprintln!("{n}");
+        eprintln!("{}", spelt(command, n));
     }
+}
+
+/// `text` with the settings it names (`crate::error::spell`) as `command`'s flags:
+/// `--precision f64`.
+pub fn spelt(command: &str, text: &str) -> String {
+    crate::error::spell(text, |field, value| {
+        let flag = names::flag(command, field);
+        match value {
+            Some(v) => format!("{flag} {v}"),
+            None => flag,
+        }
+    })
 }
 
 /// Runs a parsed command. Invalid values exit 2 (like clap's own errors) naming the flag,
@@ -358,6 +370,13 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
         if cli.json && !summary.is_null() {
             if let Some(object) = summary.as_object_mut() {
                 object.insert("command".into(), command.into());
+                if let Some(serde_json::Value::Array(notices)) = object.get_mut("notices") {
+                    for n in notices.iter_mut() {
+                        if let serde_json::Value::String(text) = n {
+                            *text = spelt(command, text);
+                        }
+                    }
+                }
                 object
                     .entry("seconds")
                     .or_insert(started.elapsed().as_secs_f64().into());
@@ -369,8 +388,9 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
         Ok(()) => 0,
         Err(Error::InvalidSpec { field, reason }) => {
             eprintln!(
-                "error: invalid value for {}: {reason}",
-                names::flag(command, field)
+                "error: invalid value for {}: {}",
+                names::flag(command, field),
+                spelt(command, &reason)
             );
             2
         }

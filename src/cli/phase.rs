@@ -90,7 +90,7 @@ pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let s = phase::run(&job, command_line::phase(&job), monitor)?;
-    say(&s.notices);
+    say("phase", &s.notices);
     eprintln!("phase portrait -> {}", s.output.display());
     json(&s)
 }

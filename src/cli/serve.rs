@@ -74,7 +74,7 @@ pub const COMMANDS: Commands = Commands {
 /// it), and with `json` only JSON: the URL as `{"url": ...}`, then the summary.
 pub fn run(args: &ServeArgs, monitor: &Monitor, json_out: bool) -> Result<serde_json::Value> {
     let summary = serve::run(&args.job()?, COMMANDS, monitor, |ready| {
-        say(&ready.notices);
+        say("serve", &ready.notices);
         match json_out {
             true => println!("{}", serde_json::json!({ "url": ready.url })),
             false => println!("{}", ready.url),

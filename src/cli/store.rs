@@ -85,7 +85,7 @@ pub fn render(args: &RenderArgs, monitor: &Monitor) -> Result<serde_json::Value>
         max_size: args.max_size,
     };
     let s = store::render(&job, command, monitor)?;
-    say(&s.notices);
+    say("render", &s.notices);
     eprintln!(
         "{}x{} picture ({}) in {:.2} s -> {}",
         s.width,

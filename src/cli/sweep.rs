@@ -113,7 +113,7 @@ pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         &command_line::frame,
         monitor,
     )?;
-    say(&s.notices);
+    say("sweep", &s.notices);
     eprintln!(
         "{} frames ({} kept from an earlier run) in {} -> {}",
         s.frames,

@@ -77,7 +77,7 @@ pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let s = traces::run(&job, command_line::traces(&job), monitor)?;
-    say(&s.notices);
+    say("traces", &s.notices);
     eprintln!(
         "{} releases over {} s on {} -> {}",
         s.runs,

@@ -56,7 +56,7 @@ pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<serde_json::Value
     let job = args.job()?;
     let command = command_line::trajectory(&job);
     let s = trajectory::run(&job, command, monitor, &mut std::io::stdout().lock())?;
-    say(&s.notices);
+    say("trajectory", &s.notices);
     let to = match &s.output {
         Some(path) => path.display().to_string(),
         None => "standard output".to_string(),

@@ -111,7 +111,7 @@ pub fn run(args: &TwinArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
     let s = twin::run(&job, command_line::twin(&job), monitor)?;
-    say(&s.notices);
+    say("twin", &s.notices);
     for l in &s.slopes {
         eprintln!(
             "{} Hz: horizon against ln sigma: slope {:.3} ± {:.3} s, -1/lambda {:.3} s (lambda {:.2} ± {:.2} 1/s; ratio {:.2} ± {:.2})",

@@ -188,7 +188,7 @@ impl Measure for AlignmentIndex {
             return Err(Error::invalid(
                 "threshold",
                 format!(
-                    "{threshold:e} is below what f32 resolves of an alignment index ({ALIGNED_F32_FLOOR:e}, its round-off): take --precision f64 or a threshold >= {ALIGNED_F32_FLOOR:e}"
+                    "{threshold:e} is below what f32 resolves of an alignment index ({ALIGNED_F32_FLOOR:e}, its round-off): take [[precision=f64]] or a threshold >= {ALIGNED_F32_FLOOR:e}"
                 ),
             ));
         }

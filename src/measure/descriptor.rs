@@ -114,7 +114,7 @@ impl Measure for Descriptor {
         match params.losses.kinds() {
             0 => Vec::new(),
             _ => vec![
-                "note: with losses the descriptor's backward run is anti-damped (energy grows as it goes back), and a start may leave the numbers (NaN); a shorter t-max keeps more"
+                "note: with losses the descriptor's backward run is anti-damped (energy grows as it goes back), and a start may leave the numbers (NaN); a shorter [[t_max]] keeps more"
                     .into(),
             ],
         }

@@ -396,7 +396,7 @@ impl MapPicture for FlipSpec {
         if self.measure == FlipMeasure::Kind && picture.colormap.is_some() {
             return Err(Error::invalid(
                 "colormap",
-                "the flip kind has a colour a class of its own; leave out --colormap",
+                "the flip kind has a colour a class of its own; leave out [[colormap]]",
             ));
         }
         match range {

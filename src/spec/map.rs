@@ -151,7 +151,7 @@ impl FlipSpec {
         if self.measure == FlipMeasure::Kind && self.integrator != Integrator::Rk4 {
             return Err(Error::invalid(
                 "integrator",
-                "the flip kind is located with rk4 only (take --integrator rk4)",
+                "the flip kind is located with rk4 only (take [[integrator=rk4]])",
             ));
         }
         // The f64 range here; the f32 GPU's own is checked where the engine has picked it.
@@ -300,7 +300,7 @@ impl LyapunovSpec {
             return Err(Error::invalid(
                 "method",
                 format!(
-                    "the {} follows tangent vectors: take the tangent method",
+                    "the {} follows tangent vectors: take [[method=tangent]]",
                     self.indicator.title()
                 ),
             ));

@@ -100,7 +100,7 @@ impl Integrator {
             if !(v.is_finite() && (least..=1e-2).contains(&v)) {
                 // Advice only where it helps: a tolerance too tight for f32.
                 let advice = match precision == Precision::F32 && v < least {
-                    true => " (use --precision f64 for tighter tolerances)",
+                    true => " (use [[precision=f64]] for tighter tolerances)",
                     false => "",
                 };
                 return Err(Error::invalid(

@@ -7,12 +7,28 @@ use super::*;
 /// queue or a request past its time 503, the rest 500.
 pub(super) fn reply(e: Error) -> Response {
     match e {
-        Error::InvalidSpec { .. } => (StatusCode::BAD_REQUEST, format!("{e}\n")).into_response(),
+        Error::InvalidSpec { field, reason } => {
+            let reason = spelt(&reason);
+            (
+                StatusCode::BAD_REQUEST,
+                format!("invalid value for {field}: {reason}\n"),
+            )
+                .into_response()
+        }
         Error::Interrupted => {
             (StatusCode::SERVICE_UNAVAILABLE, "cancelled\n".to_string()).into_response()
         }
         e => (StatusCode::INTERNAL_SERVER_ERROR, format!("{e}\n")).into_response(),
     }
+}
+
+/// `text` with the settings it names (`crate::error::spell`) as the page's query keys:
+/// `precision=f64`.
+pub(super) fn spelt(text: &str) -> String {
+    crate::error::spell(text, |field, value| match value {
+        Some(v) => format!("{field}={v}"),
+        None => field.to_string(),
+    })
 }
 
 pub(super) fn busy(why: &str) -> Response {

@@ -82,9 +82,10 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
     let result = on_engine(&shared, move |engine, monitor| {
         let spec = view.flip_spec(grid);
         spec.validate()?;
+        let precision = planned(engine, &spec, true)?;
         let (field, mask) = crate::app::map_and_verdict(engine, &spec, true, monitor)?;
         let resolved = mask.is_some_and(|m| m[0] == 1);
-        Ok((field, resolved, precision_of(engine, &grid, spec.precision)))
+        Ok((field, resolved, precision))
     })
     .await;
     match result {
@@ -175,6 +176,7 @@ pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
         };
         let spec = view.lyapunov_spec(overview);
         spec.validate()?;
+        planned(engine, &spec, false)?;
         Ok(render::default_range(&spec, &engine.map(&spec, monitor)?))
     })
     .await;
@@ -204,7 +206,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
         Err(e) => return reply(e),
     };
     let (backend, commands) = (shared.backend, shared.commands);
-    let result = on_engine(&shared, move |_engine, monitor| {
+    let result = on_engine(&shared, move |engine, monitor| {
         let dir = tempfile::tempdir()?;
         let files = MapOutputs {
             output: dir.path().join("view.png"),
@@ -227,7 +229,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     colour_range: None,
                     samples: 1,
                 };
-                crate::app::flip::run(&job, (commands.flip)(&job), monitor)?;
+                crate::app::flip::run(&job, engine, (commands.flip)(&job), monitor)?;
                 "chaoscope-flip.png"
             }
             Kind::Map(_) => {
@@ -240,7 +242,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     colour_range: Some(view.range),
                     samples: 1,
                 };
-                crate::app::lyapunov::run_map(&job, (commands.lyapunov)(&job), monitor)?;
+                crate::app::lyapunov::run_map(&job, engine, (commands.lyapunov)(&job), monitor)?;
                 "chaoscope-lyapunov.png"
             }
         };

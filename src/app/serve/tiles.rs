@@ -2,11 +2,18 @@
 //! a store down to its own pixels; and the colour bar they are coloured with.
 
 use super::*;
+use crate::engine::MapKernels;
 use crate::render::MapPicture;
 
-/// Where a map over `grid` runs and in which precision, in words ("f32", "f64").
-pub(super) fn precision_of(engine: &Engine, grid: &Grid, asked: Precision) -> &'static str {
-    engine.map_info(grid, asked).path.precision().name()
+/// The precision `spec`'s map runs in ("f32", "f64"), planned as every door plans a map
+/// (`app::map_engine`: its path, the checks that depend on it, the verdict's finer map's).
+pub(super) fn planned<S: MapKernels>(
+    engine: &Engine,
+    spec: &S,
+    verdict: bool,
+) -> Result<&'static str> {
+    let (info, _) = crate::app::map_engine(engine, spec, verdict)?;
+    Ok(info.path.precision().name())
 }
 
 /// The tile (z, x, y), as the bare PNG `chaoscope flip` / `lyapunov` would make of it.
@@ -102,8 +109,8 @@ pub fn tile_rgb(
         Kind::FLIP | Kind::FLIP_KIND | Kind::Resolved => {
             let spec = view.flip_spec(grid);
             spec.validate()?;
-            let precision = engine.plan(&spec)?.path.precision().name();
             let verdict = view.unresolved || view.kind == Kind::Resolved;
+            let precision = planned(engine, &spec, verdict)?;
             let (field, mask) = crate::app::map_and_verdict(engine, &spec, verdict, monitor)?;
             let rgb = match (view.kind, mask) {
                 (Kind::Resolved, Some(mask)) => mask_rgb(&mask),
@@ -117,13 +124,14 @@ pub fn tile_rgb(
         Kind::Map(_) => {
             let spec = view.lyapunov_spec(grid);
             spec.validate()?;
+            let precision = planned(engine, &spec, view.unresolved)?;
             let (field, mask) =
                 crate::app::map_and_verdict(engine, &spec, view.unresolved, monitor)?;
             let rgb = spec
                 .draw(&field, &picture, Some(view.range), mask.as_deref())?
                 .picture
                 .rgb;
-            Ok((rgb, precision_of(engine, &grid, spec.precision)))
+            Ok((rgb, precision))
         }
     }
 }
@@ -170,7 +178,7 @@ pub(super) fn stored_rgb(
                 true => Some(store.read_resolved(row as u32, 1)?.ok_or_else(|| {
                     Error::invalid(
                         "kind",
-                        "the store has no verdict (make it with --resolved MAP.zarr)",
+                        "the store has no verdict (make it with [[resolved=MAP.zarr]])",
                     )
                 })?),
                 false => None,

@@ -155,7 +155,7 @@ impl Query {
                 if self.values.contains_key(key) {
                     return Err(Error::invalid(
                         key,
-                        "is fixed by the store's command (serve --store)",
+                        "is fixed by the command of the store this explorer serves",
                     ));
                 }
             }
@@ -258,7 +258,7 @@ impl Query {
                 if let Some(key) = PLANE_KEYS.iter().find(|k| self.values.contains_key(**k)) {
                     return Err(Error::invalid(
                         key,
-                        "is fixed by the store's command (serve --store)",
+                        "is fixed by the command of the store this explorer serves",
                     ));
                 }
                 grid

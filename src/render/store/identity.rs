@@ -26,7 +26,7 @@ pub(super) fn check_same(
         return Err(Error::invalid(
             field,
             format!(
-                "{} was made {} the verdict (--resolved): ask for it {}",
+                "{} was made {} the verdict ([[resolved]]): ask for it {}",
                 path.display(),
                 if theirs.resolved { "with" } else { "without" },
                 if theirs.resolved {

@@ -370,7 +370,7 @@ impl MapStore {
             Some(c) => {
                 let (a, n) = self.chunk_span(c);
                 Error::Format(format!(
-                    "{}: chunk {c} (rows {a}..{}) is damaged ({e}): run `chaoscope status` on the store and the --tile task it names again",
+                    "{}: chunk {c} (rows {a}..{}) is damaged ({e}): run `chaoscope status` on the store and the [[tile]] task it names again",
                     self.path.display(),
                     a + n
                 ))
