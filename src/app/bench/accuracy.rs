@@ -1,7 +1,15 @@
 //! The accurate rows: the accurate flip map and the accurate divergence map against
 //! converged references, each path with the share of its pixels right.
 
-use super::*;
+use super::peers::{PeerRun, run_peer};
+use super::{BenchJob, Sample};
+use crate::cpu;
+use crate::error::Result;
+use crate::field::Field;
+use crate::model::Params;
+use crate::monitor::Monitor;
+use crate::spec::{FlipSpec, Grid, Integrator, LyapunovSpec, Method, Precision, Stepping};
+use std::time::Instant;
 
 /// The "accurate map" problem (issue 11): the default pendulum over the full grid at
 /// `accurate_size`, `accurate_t_max`.

@@ -2,13 +2,16 @@
 //! drawn from a window fit, integrated with their own joint damping, bands, spread and the
 //! FTLE along the fitted orbit) over 6 s past the window, on the GPU engine.
 
-use super::*;
+use super::Sample;
 use crate::app::forecast::Settings;
 use crate::app::twin::{experiment, make_track};
 use crate::engine::Engine;
+use crate::error::Result;
 use crate::fit::forecast::{ForecastSpec, forecast};
 use crate::model::State;
+use crate::monitor::Monitor;
 use crate::params::Preset;
+use std::time::Instant;
 
 /// Seconds forecast past the window (the "the data's 6 s").
 const SPAN: f64 = 6.0;

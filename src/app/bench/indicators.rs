@@ -2,9 +2,15 @@
 //! largest-exponent map of the same grid, step and time (its cost ratio), and beside the Numba
 //! f64 peer `indicators_numba.py` (f64, exact Jacobian, RK4) on the same problem.
 
-use super::*;
+use super::peers::peer_report;
+use super::{BenchJob, Row, Sample, ftle_spec};
 use crate::engine::Engine;
+use crate::error::Result;
+use crate::monitor::Monitor;
 use crate::spec::Indicator;
+use crate::spec::{Grid, LyapunovSpec, Precision};
+use std::process::Command;
+use std::time::Instant;
 
 /// The indicators timed, by the names of their rows, the FTLE first (the baseline): each
 /// measure's own choice ([`crate::measure::Measure::bench`]).

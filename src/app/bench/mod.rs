@@ -11,11 +11,13 @@ mod indicators;
 mod peers;
 
 pub use self::accuracy::ftle_accuracy_size;
-use self::accuracy::*;
-use self::peers::*;
+use self::accuracy::{
+    accurate_problem, accurate_reference, accurate_samples, ftle_accuracy_paths,
+    ftle_accuracy_samples, ftle_reference,
+};
+use self::peers::{PeerRun, run_peer};
 
 use std::path::PathBuf;
-use std::process::Command;
 use std::time::Instant;
 
 use crate::cpu;

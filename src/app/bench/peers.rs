@@ -1,7 +1,10 @@
 //! The peers of `../shared/peers`, run beside chaoscope in the same bench: one process each,
 //! its JSON report read back.
 
-use super::*;
+use super::{BenchJob, Sample};
+use crate::error::{Error, Result};
+use std::path::PathBuf;
+use std::process::Command;
 
 /// What a peer is asked to run.
 pub(super) struct PeerRun<'a> {

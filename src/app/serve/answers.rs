@@ -1,7 +1,15 @@
 //! How a request is answered: errors as the page sees them, the bounded queue for the one
 //! engine with its time limit and cancellation, the cache of computed answers.
 
-use super::*;
+use super::{MAX_WAITING, REQUEST_LIMIT, S};
+use crate::engine::Engine;
+use crate::error::{Error, Result};
+use crate::monitor::Monitor;
+use axum::body::Bytes;
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// An error as the page sees it: invalid values 400 with the key and the reason, a full
 /// queue or a request past its time 503, the rest 500.

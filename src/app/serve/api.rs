@@ -1,7 +1,23 @@
 //! The page's other questions: what the server runs, a clicked pixel, its trajectory, the
 //! divergence colour range, a saved view, the counters.
 
-use super::*;
+use super::answers::{busy, cached, json, on_engine, remember, reply};
+use super::tiles::planned;
+use super::{Kind, Params, Query, REQUEST_LIMIT, S, View, World, view};
+use crate::app::MapOutputs;
+use crate::app::flip::FlipJob;
+use crate::app::lyapunov::LyapunovMapJob;
+use crate::app::trajectory::TrajectoryJob;
+use crate::engine::Backend;
+use crate::error::{Error, Result};
+use crate::monitor::Monitor;
+use crate::render::{self, PictureSpec};
+use crate::spec::{Grid, MapSpec, Precision};
+use axum::body::Bytes;
+use axum::extract::{Query as AxumQuery, State as AxumState};
+use axum::http::header;
+use axum::response::{IntoResponse, Response};
+use std::sync::atomic::Ordering;
 
 /// What the page needs to know first: where tiles run, the limits, the starting physics.
 pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {

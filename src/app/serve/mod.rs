@@ -12,41 +12,37 @@ mod tiles;
 pub mod view;
 pub mod world;
 
-use self::answers::*;
-use self::api::*;
-use self::tiles::*;
+use self::api::{info, point, range, save, stats, trajectory};
+use self::tiles::{legend, tile};
 pub use self::tiles::{mask_rgb, tile_rgb};
 
 use std::net::IpAddr;
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use axum::Router;
 use axum::body::Bytes;
-use axum::extract::{Path, Query as AxumQuery, State as AxumState};
-use axum::http::{StatusCode, header};
-use axum::response::{IntoResponse, Response};
+use axum::extract::{Path, Query as AxumQuery};
+use axum::http::StatusCode;
+use axum::response::Response;
 use axum::routing::get;
 use lru::LruCache;
 
 use self::view::{Kind, Query, View};
 use self::world::World;
-use crate::app::MapOutputs;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::LyapunovMapJob;
 use crate::app::sweep::FrameMap;
 use crate::app::trajectory::TrajectoryJob;
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
-use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::store::MapStore;
-use crate::render::{self, PictureSpec};
-use crate::spec::{Grid, MapSpec, Precision};
+use crate::spec::{Grid, MapSpec};
 
 /// Requests waiting for (or holding) the engine at most; more get 503 at once, so a burst
 /// of requests holds a bounded amount of memory.

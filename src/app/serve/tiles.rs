@@ -1,9 +1,21 @@
 //! Tiles: a view over a tile's region computed as the map commands compute it, or read from
 //! a store down to its own pixels; and the colour bar they are coloured with.
 
-use super::*;
+use super::answers::{cached, json, on_engine, png, remember, reply};
+use super::{Kind, Params, Query, S, View, World, view};
+use crate::engine::Engine;
 use crate::engine::MapKernels;
+use crate::error::{Error, Result};
+use crate::field::Field;
+use crate::monitor::Monitor;
 use crate::render::MapPicture;
+use crate::render::store::MapStore;
+use crate::render::{self, PictureSpec};
+use crate::spec::Grid;
+use axum::body::Bytes;
+use axum::extract::{Path, Query as AxumQuery, State as AxumState};
+use axum::response::Response;
+use std::sync::atomic::Ordering;
 
 /// The precision `spec`'s map runs in ("f32", "f64"), planned as every door plans a map
 /// (`app::map_engine`: its path, the checks that depend on it, the verdict's finer map's).

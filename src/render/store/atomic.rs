@@ -1,7 +1,15 @@
 //! [`AtomicStore`]: zarrs' filesystem store with every write a temporary file renamed into
 //! place, so a killed writer leaves no half-written chunk.
 
-use super::*;
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use zarrs::filesystem::FilesystemStore;
+use zarrs::storage::{
+    Bytes, ListableStorageTraits, MaybeBytesIterator, OffsetBytesIterator, ReadableStorageTraits,
+    StorageError, StoreKey, StoreKeys, StoreKeysPrefixes, StorePrefix, WritableStorageTraits,
+    byte_range::ByteRangeIterator,
+};
 
 /// The filesystem store, but every `set` goes to a temporary file renamed into place.
 pub struct AtomicStore {

@@ -1,7 +1,9 @@
 //! A store's identity: what it holds, compared with what a task would add to it (the version,
 //! the verdict, and its settings as data, field by field).
 
-use super::*;
+use super::StoreInfo;
+use crate::error::{Error, Result};
+use std::path::Path;
 
 /// `theirs` (a store's) and `ours` made by the same command and version, else an error naming
 /// `field` and what differs.

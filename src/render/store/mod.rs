@@ -10,16 +10,10 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use zarrs::array::{Array, ArrayBuilder, ArrayError, ArraySubset, CodecOptions, data_type};
-use zarrs::filesystem::FilesystemStore;
 use zarrs::group::{Group, GroupBuilder};
-use zarrs::storage::{
-    Bytes, ListableStorageTraits, MaybeBytesIterator, OffsetBytesIterator, ReadableStorageTraits,
-    StorageError, StoreKey, StoreKeys, StoreKeysPrefixes, StorePrefix, WritableStorageTraits,
-    byte_range::ByteRangeIterator,
-};
+use zarrs::storage::ReadableStorageTraits;
 
 mod atomic;
 mod identity;

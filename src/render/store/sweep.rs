@@ -1,6 +1,19 @@
 //! [`SweepStore`]: a sweep's frames as one 3-D array.
 
-use super::*;
+use super::atomic::AtomicStore;
+use super::identity::check_same;
+use super::{
+    StoreInfo, checksummed, chunk_rows, first_chunk_rows, padded, store_error, write_axes,
+    write_coordinate, write_group,
+};
+use crate::error::Result;
+use crate::field::Field;
+use crate::spec::Grid;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use zarrs::array::{Array, ArrayBuilder, ArraySubset, CodecOptions, data_type};
+use zarrs::group::Group;
+use zarrs::storage::ReadableStorageTraits;
 
 /// A sweep's store: the maps of its frames as one 3-D array `map` (frame, theta2, theta1),
 /// chunks of one frame's row band, the varied parameter as the coordinate array of the frame

@@ -1,7 +1,8 @@
 //! Units of work: a store's chunks (and their mirror images on a symmetric grid) as the
 //! tasks of `--tile I/N` share them.
 
-use super::*;
+use super::chunk_rows;
+use crate::spec::Grid;
 
 /// Bands of whole chunks computed together: a chunk, or a chunk and its mirror image through
 /// the map's centre (computed once and written twice, as a whole map mirrors its top half).
