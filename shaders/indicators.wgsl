@@ -1,8 +1,8 @@
 // Chaos indicators beyond the largest exponent: the spectrum, SALI and GALI_k, MEGNO and the
 // FLI, Lagrangian descriptors. Twin of src/cpu/indicators.rs; driven by
-// src/gpu/indicators.rs. Appended to lyapunov.wgsl, whose bindings, Tangent and tangent_step
-// it uses: per pixel an IndicatorSlot in `states` (8 i ..= 8 i + 7), the map's value so far in
-// `log_sums` (an exponent as its log sum: the host divides by t-max, as for the FTLE).
+// src/gpu/indicators.rs. After tangent.wgsl, whose Tangent and tangent_step it uses: per
+// pixel an IndicatorSlot in `slots`, the map's value so far in `log_sums` (an exponent as its
+// log sum: the host divides by t-max, as for the FTLE).
 // `params.measure` picks the value; `params.setting` is the alignment threshold or the
 // descriptor's exponent p.
 
@@ -22,7 +22,10 @@ struct IndicatorSlot {
     clock: vec4<real>,
 }
 
-const SLOT: u32 = 8u;
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> slots: array<IndicatorSlot>;
+@group(0) @binding(2) var<storage, read_write> log_sums: array<real>;
+
 const LOG10_E: real = 0.4342944819032518;
 // As lyapunov.wgsl STALLED_LOG_SUM: the host reads a value below -1e38 as NaN.
 const LEFT_THE_NUMBERS: real = -3.0e38;
@@ -43,14 +46,13 @@ fn indicator_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         return;
     }
     let p = pendulum_from(grid_start(params, i));
-    let b = SLOT * i;
-    states[b] = p.y;
-    states[b + 1u] = p.u;
+    slots[i].y = p.y;
+    slots[i].u = p.u;
     for (var j = 0u; j < 4u; j++) {
-        states[b + 2u + j] = frame_vector(j);
+        slots[i].v[j] = frame_vector(j);
     }
-    states[b + 6u] = vec4<real>();
-    states[b + 7u] = vec4<real>();
+    slots[i].sums = vec4<real>();
+    slots[i].clock = vec4<real>();
     log_sums[i] = 0.0;
 }
 
@@ -63,15 +65,15 @@ struct Vectors {
     d: vec4<real>,
 }
 
-fn load_vectors(b: u32) -> Vectors {
-    return Vectors(states[b + 2u], states[b + 3u], states[b + 4u], states[b + 5u]);
+fn load_vectors(i: u32) -> Vectors {
+    return Vectors(slots[i].v[0], slots[i].v[1], slots[i].v[2], slots[i].v[3]);
 }
 
-fn store_vectors(b: u32, v: Vectors) {
-    states[b + 2u] = v.a;
-    states[b + 3u] = v.b;
-    states[b + 4u] = v.c;
-    states[b + 5u] = v.d;
+fn store_vectors(i: u32, v: Vectors) {
+    slots[i].v[0] = v.a;
+    slots[i].v[1] = v.b;
+    slots[i].v[2] = v.c;
+    slots[i].v[3] = v.d;
 }
 
 // One RK4 step of the state and the first n vectors (n a constant at every call). Without air
@@ -225,10 +227,9 @@ fn spectrum_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
         return;
     }
     let c = pixel_coeffs(params, i);
-    let b = SLOT * i;
-    var t = Tangent(states[b], states[b + 1u], vec4<real>());
-    var v = load_vectors(b);
-    var sums = states[b + 6u];
+    var t = Tangent(slots[i].y, slots[i].u, vec4<real>());
+    var v = load_vectors(i);
+    var sums = slots[i].sums;
     for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
         step_vectors(c, &t, &v, 4u, params.dt);
         if renormalise_after(k) {
@@ -236,10 +237,10 @@ fn spectrum_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
             sums += vec4<real>(ln_real(l.x), ln_real(l.y), ln_real(l.z), ln_real(l.w));
         }
     }
-    states[b] = t.y;
-    states[b + 1u] = t.u;
-    store_vectors(b, v);
-    states[b + 6u] = sums;
+    slots[i].y = t.y;
+    slots[i].u = t.u;
+    store_vectors(i, v);
+    slots[i].sums = sums;
     // measure 0..3: exponent 1..4; 4: their sum.
     log_sums[i] = select(sums.x + sums.y + sums.z + sums.w, sums[min(params.measure, 3u)], params.measure < 4u);
 }
@@ -286,10 +287,9 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     let c = pixel_coeffs(params, i);
-    let b = SLOT * i;
-    var x = Set(states[b], states[b + 1u], load_vectors(b));
-    var sums = states[b + 6u];
-    var clock = states[b + 7u];
+    var x = Set(slots[i].y, slots[i].u, load_vectors(i));
+    var sums = slots[i].sums;
+    var clock = slots[i].clock;
     var h = select(clock.x, params.dt, params.step0 == 0u);
     var attempts = clock.y;
     var stalled = clock.z != 0.0;
@@ -350,11 +350,11 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
             sums += vec4<real>(ln_real(l.x), ln_real(l.y), ln_real(l.z), ln_real(l.w));
         }
     }
-    states[b] = x.y;
-    states[b + 1u] = x.u;
-    store_vectors(b, x.v);
-    states[b + 6u] = sums;
-    states[b + 7u] = vec4<real>(h, attempts, real(select(0u, 1u, stalled)), 0.0);
+    slots[i].y = x.y;
+    slots[i].u = x.u;
+    store_vectors(i, x.v);
+    slots[i].sums = sums;
+    slots[i].clock = vec4<real>(h, attempts, real(select(0u, 1u, stalled)), 0.0);
     log_sums[i] = select(sums.x + sums.y + sums.z + sums.w, sums[min(params.measure, 3u)], params.measure < 4u);
 }
 
@@ -362,11 +362,10 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
 // stops once the index falls below params.setting. measure 0: log10 index, 1: the time.
 fn alignment_advance(i: u32, n: u32, sali: bool) {
     let c = pixel_coeffs(params, i);
-    let b = SLOT * i;
-    var at = states[b + 6u];
+    var at = slots[i].sums;
     if at.z == 0.0 {
-        var t = Tangent(states[b], states[b + 1u], vec4<real>());
-        var v = load_vectors(b);
+        var t = Tangent(slots[i].y, slots[i].u, vec4<real>());
+        var v = load_vectors(i);
         for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
             step_vectors(c, &t, &v, n, params.dt);
             if renormalise_after(k) {
@@ -387,10 +386,10 @@ fn alignment_advance(i: u32, n: u32, sali: bool) {
                 }
             }
         }
-        states[b] = t.y;
-        states[b + 1u] = t.u;
-        store_vectors(b, v);
-        states[b + 6u] = at;
+        slots[i].y = t.y;
+        slots[i].u = t.u;
+        store_vectors(i, v);
+        slots[i].sums = at;
     }
     log_sums[i] = select(at.x, select(NEVER, at.y, at.z != 0.0), params.measure == 1u);
 }
@@ -436,10 +435,9 @@ fn growth_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         return;
     }
     let c = pixel_coeffs(params, i);
-    let b = SLOT * i;
     let dt = params.dt;
-    var t = Tangent(states[b], states[b + 1u], states[b + 2u]);
-    var g = states[b + 6u];
+    var t = Tangent(slots[i].y, slots[i].u, slots[i].v[0]);
+    var g = slots[i].sums;
     for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
         t = tangent_step(c, t, dt);
         let n = length(t.v);
@@ -452,10 +450,10 @@ fn growth_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         g.z += l;
         g.w = max(g.w, g.z * LOG10_E);
     }
-    states[b] = t.y;
-    states[b + 1u] = t.u;
-    states[b + 2u] = t.v;
-    states[b + 6u] = g;
+    slots[i].y = t.y;
+    slots[i].u = t.u;
+    slots[i].v[0] = t.v;
+    slots[i].sums = g;
     let now = real(params.step0 + params.steps) * dt;
     // A NaN or infinite log makes max() meaningless: say the pixel left the numbers.
     let finite = abs(g.z) <= 1.0e30 && abs(g.y) <= 1.0e30;
@@ -486,15 +484,14 @@ fn descriptor_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
         return;
     }
     let c = pixel_coeffs(params, i);
-    let b = SLOT * i;
     let dt = params.dt;
-    var ahead = Pendulum(states[b], states[b + 1u]);
-    var back = Pendulum(states[b], states[b + 1u]);
-    var sums = states[b + 6u];
+    var ahead = Pendulum(slots[i].y, slots[i].u);
+    var back = Pendulum(slots[i].y, slots[i].u);
+    var sums = slots[i].sums;
     if params.step0 == 0u {
         sums.y = velocity_measure(rate(c, ahead).dy);
     } else {
-        back = Pendulum(states[b + 2u], states[b + 3u]);
+        back = Pendulum(slots[i].v[0], slots[i].v[1]);
     }
     for (var k = params.step0 + 1u; k <= params.step0 + params.steps; k++) {
         let ka = rate(c, ahead);
@@ -503,11 +500,11 @@ fn descriptor_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
         ahead = rk4_step_with(c, ahead, ka, dt);
         back = rk4_step_with(c, back, kb, -dt);
     }
-    states[b] = ahead.y;
-    states[b + 1u] = ahead.u;
-    states[b + 2u] = back.y;
-    states[b + 3u] = back.u;
-    states[b + 6u] = sums;
+    slots[i].y = ahead.y;
+    slots[i].u = ahead.u;
+    slots[i].v[0] = back.y;
+    slots[i].v[1] = back.u;
+    slots[i].sums = sums;
     var m = sums.x;
     if params.step0 + params.steps == params.total_steps {
         let ends = velocity_measure(rate(c, ahead).dy) + velocity_measure(rate(c, back).dy);

@@ -23,9 +23,8 @@ fn ofli_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     let c = pixel_coeffs(params, i);
-    let b = SLOT * i;
-    var t = Tangent(states[b], states[b + 1u], states[b + 2u]);
-    var g = states[b + 6u];
+    var t = Tangent(slots[i].y, slots[i].u, slots[i].v[0]);
+    var g = slots[i].sums;
     if params.step0 == 0u {
         g.w = log10_across(c, Pendulum(t.y, t.u), t.v);
     }
@@ -36,10 +35,10 @@ fn ofli_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         g.z += ln_real(n);
         g.w = max(g.w, g.z * LOG10_E + log10_across(c, Pendulum(t.y, t.u), t.v));
     }
-    states[b] = t.y;
-    states[b + 1u] = t.u;
-    states[b + 2u] = t.v;
-    states[b + 6u] = g;
+    slots[i].y = t.y;
+    slots[i].u = t.u;
+    slots[i].v[0] = t.v;
+    slots[i].sums = g;
     // A NaN or infinite log makes max() meaningless: say the pixel left the numbers.
     let finite = abs(g.z) <= 1.0e30 && abs(g.w) <= 1.0e30;
     log_sums[i] = select(LEFT_THE_NUMBERS, g.w, finite);

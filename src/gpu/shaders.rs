@@ -13,6 +13,7 @@ const ADAPTIVE_COMMON: &str = include_str!("../../shaders/adaptive_common.wgsl")
 const DP54: &str = include_str!("../../shaders/dp54.wgsl");
 const FLIP_DP54: &str = include_str!("../../shaders/flip_adaptive.wgsl");
 const FLIP_DOP853: &str = include_str!("../../shaders/flip_dop853.wgsl");
+const TANGENT: &str = include_str!("../../shaders/tangent.wgsl");
 const LYAPUNOV: &str = include_str!("../../shaders/lyapunov.wgsl");
 const INDICATORS: &str = include_str!("../../shaders/indicators.wgsl");
 const TRAJECTORY: &str = include_str!("../../shaders/trajectory.wgsl");
@@ -29,9 +30,10 @@ pub enum Kernel {
     FlipDp54,
     /// Flip times, DOP853: the shared part and the stages written out from the tableau.
     FlipDop853,
-    /// Divergence maps (tangent, twin, adaptive tangent; DP54's coefficients) and Jacobians.
+    /// Divergence maps (tangent, twin, adaptive tangent; DP54's coefficients, the tangent
+    /// arithmetic) and Jacobians.
     Lyapunov,
-    /// Chaos indicators: the divergence kernel's file and the indicators' own.
+    /// Chaos indicators: the tangent arithmetic, the indicators' file and the measures' own.
     Indicators,
     /// Trajectories and ensembles.
     Trajectory,
@@ -71,9 +73,9 @@ impl Kernel {
             Kernel::FlipKind => format!("{FLIP_TIME}\n{FLIP_KIND}"),
             Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{}\n{FLIP_DP54}", dp54()),
             Kernel::FlipDop853 => flip_dop853(),
-            Kernel::Lyapunov => format!("{}\n{LYAPUNOV}", dp54()),
+            Kernel::Lyapunov => format!("{}\n{TANGENT}\n{LYAPUNOV}", dp54()),
             Kernel::Indicators => format!(
-                "{}\n{LYAPUNOV}\n{INDICATORS}\n{}",
+                "{}\n{TANGENT}\n{INDICATORS}\n{}",
                 dp54(),
                 crate::measure::wgsl()
             ),
