@@ -11,8 +11,7 @@ use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::render::{self, MapPicture, Picture, PictureSpec};
 use crate::spec::{
-    self, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method,
-    Precision, Range, Stepping,
+    self, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Range, Stepping,
 };
 
 pub use crate::spec::MapKind;
@@ -449,16 +448,8 @@ pub fn run(
 
 fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
     LyapunovSpec {
-        params: frame.params,
-        grid: frame.grid,
-        stepping: job.stepping,
-        method: Method::Tangent,
         renorm: job.renorm,
-        use_symmetry: true,
-        precision: Precision::F32,
-        band: None,
-        integrator: crate::spec::Integrator::Rk4,
-        indicator: crate::spec::Indicator::default(),
+        ..LyapunovSpec::new(frame.params, frame.grid, job.stepping)
     }
 }
 

@@ -11,7 +11,7 @@ use crate::app::boundary::{self, BoundaryClass, BoundaryJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, Method, Precision};
+use crate::spec::{FlipSpec, IndicatorAsked, LyapunovSpec, Precision};
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("20")))]
@@ -85,18 +85,13 @@ impl BoundaryArgs {
         Ok(BoundaryJob {
             spec,
             divergence: LyapunovSpec {
-                params: spec.params,
-                grid: spec.grid,
-                stepping: spec.stepping,
-                method: Method::Tangent,
                 renorm: self.renorm.unwrap_or(0.1),
                 use_symmetry: false,
                 precision: self.precision,
-                band: None,
-                integrator: Integrator::Rk4,
                 // Clap took one of ftle, megno, fli: options take their defaults.
                 indicator: IndicatorAsked::named(self.indicator.as_deref().unwrap_or("megno"))
                     .indicator()?,
+                ..LyapunovSpec::new(spec.params, spec.grid, spec.stepping)
             },
             class: self.class,
             pairs: self.pairs,

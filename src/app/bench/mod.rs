@@ -148,20 +148,13 @@ fn spec(size: u32, args: &BenchJob, mode: &str) -> FlipSpec {
 
 /// The divergence-map benchmark: the FLIP-512 grid and time, tangent method.
 fn ftle_spec(size: u32, args: &BenchJob) -> LyapunovSpec {
+    let stepping = Stepping {
+        dt: args.dt,
+        t_max: args.t_max,
+    };
     LyapunovSpec {
-        params: Params::default(),
-        grid: Grid::square(size),
-        stepping: Stepping {
-            dt: args.dt,
-            t_max: args.t_max,
-        },
-        method: Method::Tangent,
-        renorm: 0.1,
         use_symmetry: false,
-        precision: Precision::F32,
-        band: None,
-        integrator: crate::spec::Integrator::Rk4,
-        indicator: crate::spec::Indicator::default(),
+        ..LyapunovSpec::new(Params::default(), Grid::square(size), stepping)
     }
 }
 

@@ -11,8 +11,7 @@ use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
 use crate::spec::{
-    Axis, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Method, Precision, Range, Sampling,
-    Stepping, Var,
+    Axis, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Range, Sampling, Stepping, Var,
 };
 
 pub use super::kind::Kind;
@@ -453,19 +452,12 @@ impl View {
             };
         }
         let spec = LyapunovSpec {
-            params: self.params,
-            grid,
-            stepping: self.stepping,
-            method: Method::Tangent,
             renorm: renorm_of(self.stepping.dt),
-            use_symmetry: true,
-            precision: Precision::F32,
-            band: None,
-            integrator: crate::spec::Integrator::Rk4,
             indicator: match self.kind {
                 Kind::Map(k) => k.entry().indicator.unwrap_or_default(),
                 Kind::Resolved => crate::spec::Indicator::default(),
             },
+            ..LyapunovSpec::new(self.params, grid, self.stepping)
         };
         if self.accurate { spec.accurate() } else { spec }
     }
