@@ -92,15 +92,7 @@ fn the_ofli_never_exceeds_the_fli_and_follows_it_in_chaos() {
 #[test]
 fn the_ofli_map_runs_through_every_door_of_the_registry() {
     // Its name, its map on the CPU, its picture's range.
-    let asked = chaoscope::spec::IndicatorAsked {
-        name: "ofli",
-        exponent: None,
-        gali: None,
-        threshold: None,
-        ld_p: None,
-        accurate: false,
-        gpu_f32: false,
-    };
+    let asked = chaoscope::spec::IndicatorAsked::named("ofli");
     assert_eq!(asked.indicator().unwrap(), Indicator::Ofli);
     assert!(
         chaoscope::spec::MapKind::all()
