@@ -114,7 +114,7 @@ pub fn run_point(
         t_max: job.spec.stepping.t_max,
         quantity: job.spec.quantity().name,
         value,
-        ftle: (job.spec.quantity().name == crate::quantity::FTLE.name).then_some(value),
+        ftle: on_engine.then_some(value),
         output: job.output.clone(),
         files: job.output.iter().cloned().collect(),
         notices,

@@ -52,12 +52,10 @@ impl IndicatorKernel {
     fn variants(&self, advance: &'static str) -> Arc<Variants> {
         let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
         let made = entries.entry(advance).or_insert_with(|| {
-            // Variants keep their entries' names for good: one leaked pair per entry point.
-            let pair: &'static [&'static str] = Box::leak(Box::new([INIT, advance]));
             Arc::new(Variants::new(
                 self.module.clone(),
                 self.pipeline_layout.clone(),
-                pair,
+                &[INIT, advance],
                 None,
             ))
         });

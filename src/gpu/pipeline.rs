@@ -55,7 +55,7 @@ pub fn compute_pipeline(
 pub struct Variants {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    entries: &'static [&'static str],
+    entries: Vec<&'static str>,
     switch: Option<&'static str>,
     compiled: [std::sync::OnceLock<Vec<wgpu::ComputePipeline>>; 32],
 }
@@ -64,13 +64,13 @@ impl Variants {
     pub fn new(
         module: wgpu::ShaderModule,
         layout: wgpu::PipelineLayout,
-        entries: &'static [&'static str],
+        entries: &[&'static str],
         switch: Option<&'static str>,
     ) -> Self {
         Variants {
             module,
             layout,
-            entries,
+            entries: entries.to_vec(),
             switch,
             compiled: Default::default(),
         }
