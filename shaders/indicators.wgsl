@@ -18,7 +18,8 @@ struct IndicatorSlot {
     // threshold, stopped, -). Growth: (s-weighted ln |v| sum, time integral of Y,
     // ln |v| so far, the largest log10 |v|). Descriptor: (left sums of both ways, g at the start, -, -).
     sums: vec4<real>,
-    // The adaptive spectrum's clock: (next step, attempts so far, stalled, -).
+    // The adaptive spectrum's clock: (next step, attempts so far (-1: stalled), windows done,
+    // the time into the next), as lyapunov.wgsl's adaptive tangent keeps it.
     clock: vec4<real>,
 }
 
@@ -52,7 +53,7 @@ fn indicator_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         slots[i].v[j] = frame_vector(j);
     }
     slots[i].sums = vec4<real>();
-    slots[i].clock = vec4<real>();
+    slots[i].clock = vec4<real>(params.dt, 0.0, 0.0, 0.0);
     log_sums[i] = 0.0;
 }
 
@@ -279,7 +280,8 @@ fn scaled_squares(e: vec4<real>, x: vec4<real>, next: vec4<real>) -> real {
 // The spectrum with DP54 steps (dp54.wgsl) over the state and the four vectors, the error
 // controlled over the twenty components (RMS), as lyapunov.wgsl's tangent_adaptive does for
 // one: step0 and steps count renormalisation windows, every pixel lands on each exactly, steps
-// are at most dt. The clock (next step, attempts, stalled) is the slot's last vec4.
+// are at most dt; at most ATTEMPTS_PER_DISPATCH attempts a dispatch, a pixel keeping its own
+// place in its clock (the slot's last vec4) as the adaptive tangent does.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = linear_index(gid, groups);
@@ -289,19 +291,25 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     let c = pixel_coeffs(params, i);
     var x = Set(slots[i].y, slots[i].u, load_vectors(i));
     var sums = slots[i].sums;
-    var clock = slots[i].clock;
-    var h = select(clock.x, params.dt, params.step0 == 0u);
+    let clock = slots[i].clock;
+    var h = clock.x;
     var attempts = clock.y;
-    var stalled = clock.z != 0.0;
-    for (var k = params.step0 + 1u; k <= params.step0 + params.steps && !stalled; k++) {
-        let first = (k - 1u) * params.interval;
-        let window = real(min(k * params.interval, params.total_steps) - first) * params.dt;
-        var s: real = 0.0;
+    var stalled = attempts < 0.0;
+    var done = u32(clock.z);
+    var s = clock.w;
+    var budget = ATTEMPTS_PER_DISPATCH;
+    loop {
+        if stalled || done >= params.step0 + params.steps || budget == 0u {
+            break;
+        }
+        let first = done * params.interval;
+        let window = real(min((done + 1u) * params.interval, params.total_steps) - first) * params.dt;
         var k1 = set_rate(c, x);
         loop {
-            if s >= window {
+            if s >= window || budget == 0u {
                 break;
             }
+            budget -= 1u;
             if attempts >= 16777216.0 {
                 stalled = true;
                 break;
@@ -342,19 +350,25 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         }
         if stalled {
             sums = vec4<real>(LEFT_THE_NUMBERS);
-        } else {
-            // (A pointer to a member of `x` trips naga 30's SPIR-V writer: a copy.)
-            var v = x.v;
-            let l = gram_schmidt(&v, 4u);
-            x.v = v;
-            sums += vec4<real>(ln_real(l.x), ln_real(l.y), ln_real(l.z), ln_real(l.w));
+            break;
         }
+        if s < window {
+            // The budget ran out mid-window.
+            break;
+        }
+        // (A pointer to a member of `x` trips naga 30's SPIR-V writer: a copy.)
+        var v = x.v;
+        let l = gram_schmidt(&v, 4u);
+        x.v = v;
+        sums += vec4<real>(ln_real(l.x), ln_real(l.y), ln_real(l.z), ln_real(l.w));
+        done += 1u;
+        s = 0.0;
     }
     slots[i].y = x.y;
     slots[i].u = x.u;
     store_vectors(i, x.v);
     slots[i].sums = sums;
-    slots[i].clock = vec4<real>(h, attempts, real(select(0u, 1u, stalled)), 0.0);
+    slots[i].clock = vec4<real>(h, select(attempts, -1.0, stalled), real(done), s);
     log_sums[i] = select(sums.x + sums.y + sums.z + sums.w, sums[min(params.measure, 3u)], params.measure < 4u);
 }
 

@@ -29,7 +29,8 @@ fn tangent_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     states[4u * i] = p.y;
     states[4u * i + 1u] = p.u;
     states[4u * i + 2u] = TANGENT_START;
-    // The adaptive tangent's clock: the next step, attempts so far, stalled.
+    // The adaptive tangent's clock: the next step, attempts so far (-1: stalled), windows
+    // done, the time into the next.
     states[4u * i + 3u] = vec4<real>(params.dt, 0.0, 0.0, 0.0);
     log_sums[i] = 0.0;
 }
@@ -40,7 +41,12 @@ const STALLED_LOG_SUM: real = -3.0e38;
 // The adaptive tangent: DP54 (dp54.wgsl) over the state and the tangent vector, the error
 // controlled over both (RMS of error / (atol + rtol |y|) over the eight components). Here
 // step0 and steps count renormalisation windows: window k ends at step min(k interval,
-// total_steps) of dt, and every pixel lands on it exactly; steps are at most dt.
+// total_steps) of dt, and every pixel lands on it exactly; steps are at most dt. A pixel
+// takes at most ATTEMPTS_PER_DISPATCH attempts a dispatch (lavapipe ends all of an
+// invocation's loops after 65,535 iterations, silently) and keeps its own place: the
+// windows it has done and the time into the next (the clock), so a pixel the budget stopped
+// mid-window goes on from there in the next dispatch, up to that dispatch's last window
+// (the host dispatches the last window again until every pixel is there: `catch_up`).
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = linear_index(gid, groups);
@@ -52,17 +58,23 @@ fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     let clock = states[4u * i + 3u];
     var h = clock.x;
     var attempts = clock.y;
-    var stalled = clock.z != 0.0;
+    var stalled = attempts < 0.0;
+    var done = u32(clock.z);
+    var s = clock.w;
+    var budget = ATTEMPTS_PER_DISPATCH;
     var log_sum = log_sums[i];
-    for (var k = params.step0 + 1u; k <= params.step0 + params.steps && !stalled; k++) {
-        let first = (k - 1u) * params.interval;
-        let window = real(min(k * params.interval, params.total_steps) - first) * params.dt;
-        var s: real = 0.0;
+    loop {
+        if stalled || done >= params.step0 + params.steps || budget == 0u {
+            break;
+        }
+        let first = done * params.interval;
+        let window = real(min((done + 1u) * params.interval, params.total_steps) - first) * params.dt;
         var k1 = tangent_rate(c, t);
         loop {
-            if s >= window {
+            if s >= window || budget == 0u {
                 break;
             }
+            budget -= 1u;
             // As adaptive_common.wgsl's `attempt`: 2^24 attempts at most, and a step that
             // still advances the time.
             if attempts >= 16777216.0 {
@@ -101,14 +113,20 @@ fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
         }
         if stalled {
             log_sum = STALLED_LOG_SUM;
-        } else {
-            log_sum += ln_real(unit_tangent(&t));
+            break;
         }
+        if s < window {
+            // The budget ran out mid-window.
+            break;
+        }
+        log_sum += ln_real(unit_tangent(&t));
+        done += 1u;
+        s = 0.0;
     }
     states[4u * i] = t.y;
     states[4u * i + 1u] = t.u;
     states[4u * i + 2u] = t.v;
-    states[4u * i + 3u] = vec4<real>(h, attempts, real(select(0u, 1u, stalled)), 0.0);
+    states[4u * i + 3u] = vec4<real>(h, select(attempts, -1.0, stalled), real(done), s);
     log_sums[i] = log_sum;
 }
 

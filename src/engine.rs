@@ -12,8 +12,8 @@ use crate::measure::Runs;
 use crate::model::{Params, Positions, State};
 use crate::monitor::Monitor;
 use crate::spec::{
-    FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Method, Precision, Range,
-    Stepping,
+    Chunk, EnsembleSpec, FlipMeasure, FlipSpec, Grid, Integrator, Keep, LyapunovSpec, MapSpec,
+    Method, Precision, Range, Stepping,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -298,15 +298,6 @@ impl Engine {
         }
     }
 
-    /// The path `spec`'s map takes, and the checks that depend on it, made once: the
-    /// tolerances must be within what that path's precision can follow (an f32 kernel's
-    /// error estimate is round-off below [`crate::spec::MIN_TOLERANCE_F32`]).
-    pub fn plan(&self, spec: &impl MapSpec) -> Result<RunInfo> {
-        let info = self.map_info(spec.grid(), spec.precision());
-        spec.validate_in(info.path.precision())?;
-        Ok(info)
-    }
-
     /// The map of a validated `spec`, whichever quantity it measures.
     pub fn map<S: MapKernels>(&self, spec: &S, monitor: &Monitor) -> Result<Field> {
         match self.map_gpu(spec.grid(), spec.precision()) {
@@ -373,7 +364,7 @@ impl Engine {
             Some(k) => {
                 let states = k
                     .trajectory(self.precision)
-                    .run(&k.ctx, p, &[start], stepping.dt, steps, 1)?
+                    .run(&k.ctx, &EnsembleSpec::new(*p, &[start], stepping.dt, steps))?
                     .remove(0);
                 let work = cpu::dissipated_along(p, &states, stepping.dt);
                 Ok((states, work))
@@ -382,96 +373,96 @@ impl Engine {
         }
     }
 
-    /// Trajectories of all `starts` over `steps` steps of `dt`, keeping the start and every
-    /// `stride`-th state (GPU: one invocation per run; CPU: runs in parallel), all at once.
-    pub fn ensemble(
-        &self,
-        p: &Params,
-        starts: &[State],
-        dt: f64,
-        steps: u32,
-        stride: u32,
-        monitor: &Monitor,
-    ) -> Result<Vec<Vec<State>>> {
-        let mut runs = Vec::with_capacity(starts.len());
-        self.ensemble_each(p, starts, dt, steps, stride, monitor, |_, chunk| {
-            runs.extend(chunk);
+    /// Every run of `spec` (which keeps states), all at once.
+    pub fn ensemble_all(&self, spec: &EnsembleSpec, monitor: &Monitor) -> Result<Vec<Vec<State>>> {
+        let mut runs = Vec::with_capacity(spec.starts.len());
+        self.ensemble(spec, monitor, |_, chunk| {
+            runs.extend(chunk.into_states());
             Ok(())
         })?;
         Ok(runs)
     }
 
-    /// Runs per chunk of an ensemble: at most a dispatch's worth of pendulum-steps (on the
-    /// CPU a sixteenth, ~0.1 s) and [`ENSEMBLE_CHUNK_STATES`] kept states, at least one run.
-    pub fn ensemble_chunk(&self, runs: usize, steps: u32, stride: u32) -> usize {
-        self.chunk_of(runs, steps, (steps / stride.max(1) + 1) as u64)
-    }
-
-    /// Runs per chunk of runs of `steps` steps that keep `kept` states (or sets of four
-    /// f32 positions, as large as an f32 state) each.
-    fn chunk_of(&self, runs: usize, steps: u32, kept: u64) -> usize {
+    /// Runs per chunk of `spec`'s ensemble: at most a dispatch's worth of pendulum-steps (on
+    /// the CPU a sixteenth, ~0.1 s) and [`ENSEMBLE_CHUNK_STATES`] kept states, at least one
+    /// run. The GPU's positions kernel splits its dispatches itself and reads back once: its
+    /// chunks are bounded by memory alone.
+    pub fn ensemble_chunk(&self, spec: &EnsembleSpec) -> usize {
+        let work = match (spec.keep, self.gpu.is_some()) {
+            (Keep::At(_), true) => 1,
+            _ => spec.steps,
+        };
         let budget = if self.gpu.is_some() {
             STEPS_PER_DISPATCH
         } else {
             STEPS_PER_DISPATCH / 16
         };
-        let by_work = budget / steps.max(1) as u64;
-        let by_memory = ENSEMBLE_CHUNK_STATES / kept.max(1);
-        by_work.min(by_memory).clamp(1, runs.max(1) as u64) as usize
+        let by_work = budget / work.max(1) as u64;
+        let by_memory = ENSEMBLE_CHUNK_STATES / spec.kept().max(1);
+        by_work
+            .min(by_memory)
+            .clamp(1, spec.starts.len().max(1) as u64) as usize
     }
 
-    /// The bobs' positions (x1, y1, x2, y2) of one run per start at `times` (s from the
-    /// start, ascending, within `steps` steps of `dt`), run i with joint damping `damping[i]`
-    /// (N m s at the pivot and the middle joint) in place of `p`'s when given (GPU: one
-    /// invocation per run, `shaders/positions.wgsl`; CPU: `cpu::positions`, runs in
-    /// parallel). Each chunk of runs is handed to `each` in order, with the index of its
-    /// first run, its positions time-major: time j, coordinate c, run i of the chunk's n at
-    /// (4 j + c) n + i. Progress and Ctrl-C between chunks.
-    #[allow(clippy::too_many_arguments)]
-    pub fn ensemble_positions_each(
+    /// The runs of `spec`, handed to `each` chunk by chunk (in order, with the index of the
+    /// chunk's first run) in what the spec keeps: memory holds one chunk, whatever the number
+    /// of runs. GPU: one invocation a run (`shaders/trajectory.wgsl`, `shaders/positions.wgsl`);
+    /// CPU: runs in parallel. Progress (runs) and Ctrl-C between chunks.
+    pub fn ensemble(
         &self,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        times: &[f64],
+        spec: &EnsembleSpec,
         monitor: &Monitor,
-        mut each: impl FnMut(usize, &[f32]) -> Result<()>,
+        mut each: impl FnMut(usize, Chunk<'_>) -> Result<()>,
     ) -> Result<()> {
-        // The GPU kernel splits its dispatches itself and reads back once: chunks by memory.
-        let work = if self.gpu.is_some() { 1 } else { steps };
-        let per_chunk = self.chunk_of(starts.len(), work, times.len() as u64);
-        monitor.start("runs", starts.len() as u64);
-        for (k, chunk) in starts.chunks(per_chunk).enumerate() {
+        let per_chunk = self.ensemble_chunk(spec);
+        let total = spec.starts.len();
+        monitor.start("runs", total as u64);
+        for first in (0..total).step_by(per_chunk.max(1)) {
             monitor.check()?;
-            let first = k * per_chunk;
-            let pairs = damping.map(|d| &d[first..first + chunk.len()]);
-            match &self.gpu {
-                Some(g) => g.positions(self.precision).run_with(
-                    &g.ctx,
-                    p,
-                    chunk,
-                    pairs,
-                    dt,
-                    steps,
-                    times,
-                    monitor,
-                    |v| each(first, v),
-                )??,
-                None => {
-                    let runs: Vec<Vec<Positions>> = chunk
-                        .par_iter()
-                        .enumerate()
-                        .map(|(i, s)| {
-                            let mut q = *p;
-                            if let Some(d) = pairs {
-                                (q.losses.joint1, q.losses.joint2) = d[i];
-                            }
-                            cpu::positions(&q, *s, dt, steps, times)
+            let chunk = spec.runs(first, per_chunk.min(total - first));
+            let n = chunk.starts.len();
+            match (&self.gpu, chunk.keep) {
+                (Some(g), Keep::Every(_)) => {
+                    let runs = g.trajectory(self.precision).run(&g.ctx, &chunk)?;
+                    each(first, Chunk::States(runs))?;
+                    monitor.advance(n as u64);
+                }
+                // The kernel counts its runs as its dispatches finish.
+                (Some(g), Keep::At(_)) => {
+                    g.positions(self.precision)
+                        .run_with(&g.ctx, &chunk, monitor, |v| {
+                            each(first, Chunk::Positions(v))
+                        })??
+                }
+                (None, Keep::Every(stride)) => {
+                    let runs = (0..n)
+                        .into_par_iter()
+                        .map(|i| {
+                            let run = cpu::trajectory(
+                                &chunk.params_of(i),
+                                chunk.starts[i],
+                                chunk.dt,
+                                chunk.steps,
+                            );
+                            run.into_iter().step_by(stride as usize).collect()
                         })
                         .collect();
-                    let n = chunk.len();
+                    each(first, Chunk::States(runs))?;
+                    monitor.advance(n as u64);
+                }
+                (None, Keep::At(times)) => {
+                    let runs: Vec<Vec<Positions>> = (0..n)
+                        .into_par_iter()
+                        .map(|i| {
+                            cpu::positions(
+                                &chunk.params_of(i),
+                                chunk.starts[i],
+                                chunk.dt,
+                                chunk.steps,
+                                times,
+                            )
+                        })
+                        .collect();
                     let mut v = vec![0f32; 4 * times.len() * n];
                     v.par_chunks_mut(4 * n).enumerate().for_each(|(j, v)| {
                         for (i, run) in runs.iter().enumerate() {
@@ -481,76 +472,10 @@ impl Engine {
                             }
                         }
                     });
-                    each(first, &v)?;
-                    // The GPU kernel counts its runs as its dispatches finish.
-                    monitor.advance(chunk.len() as u64);
+                    each(first, Chunk::Positions(&v))?;
+                    monitor.advance(n as u64);
                 }
-            };
-        }
-        monitor.finish();
-        Ok(())
-    }
-
-    /// As [`Engine::ensemble`], handing each chunk of runs (in order, with the index of its
-    /// first run) to `each` as it is done: memory holds one chunk, whatever the number of
-    /// runs. Progress and Ctrl-C between chunks.
-    #[allow(clippy::too_many_arguments)]
-    pub fn ensemble_each(
-        &self,
-        p: &Params,
-        starts: &[State],
-        dt: f64,
-        steps: u32,
-        stride: u32,
-        monitor: &Monitor,
-        each: impl FnMut(usize, Vec<Vec<State>>) -> Result<()>,
-    ) -> Result<()> {
-        self.ensemble_damped_each(p, starts, None, dt, steps, stride, monitor, each)
-    }
-
-    /// As [`Engine::ensemble_each`], run i with joint damping `damping[i]` (N m s at the
-    /// pivot and the middle joint, one pair per start) in place of `p`'s when given.
-    #[allow(clippy::too_many_arguments)]
-    pub fn ensemble_damped_each(
-        &self,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        stride: u32,
-        monitor: &Monitor,
-        mut each: impl FnMut(usize, Vec<Vec<State>>) -> Result<()>,
-    ) -> Result<()> {
-        let per_chunk = self.ensemble_chunk(starts.len(), steps, stride);
-        monitor.start("runs", starts.len() as u64);
-        for (k, chunk) in starts.chunks(per_chunk).enumerate() {
-            monitor.check()?;
-            let first = k * per_chunk;
-            let pairs = damping.map(|d| &d[first..first + chunk.len()]);
-            match &self.gpu {
-                Some(g) => each(
-                    first,
-                    g.trajectory(self.precision)
-                        .run_damped(&g.ctx, p, chunk, pairs, dt, steps, stride)?,
-                )?,
-                None => {
-                    let runs = chunk
-                        .par_iter()
-                        .enumerate()
-                        .map(|(i, s)| {
-                            let mut q = *p;
-                            if let Some(d) = pairs {
-                                (q.losses.joint1, q.losses.joint2) = d[i];
-                            }
-                            let run = cpu::trajectory(&q, *s, dt, steps);
-                            run.into_iter().step_by(stride as usize).collect()
-                        })
-                        .collect();
-                    each(first, runs)?
-                }
-            };
-            monitor.advance(chunk.len() as u64);
+            }
         }
         monitor.finish();
         Ok(())

@@ -31,6 +31,7 @@ pub mod measure;
 pub mod model;
 pub mod monitor;
 pub mod params;
+pub mod plan;
 pub mod quantity;
 pub mod render;
 pub mod spec;

@@ -9,7 +9,7 @@ use chaoscope::field::Field;
 use chaoscope::gpu::{FlipTimeKernel, GpuContext, TrajectoryKernel};
 use chaoscope::model::{Params, State};
 use chaoscope::monitor::Monitor;
-use chaoscope::spec::{FlipSpec, Grid, Integrator, Precision, Range, Stepping};
+use chaoscope::spec::{EnsembleSpec, FlipSpec, Grid, Integrator, Keep, Precision, Range, Stepping};
 use common::chaoscope;
 
 /// The two adaptive pairs at tolerance `tol`.
@@ -182,7 +182,12 @@ fn f64_gpu_rk4_error_falls_like_dt4() {
     let kernel = TrajectoryKernel::with_precision(&ctx, Precision::F64);
     let error = |dt: f64| {
         let steps = (2.0 / dt).round() as u32;
-        let run = kernel.run(&ctx, &p, &[start], dt, steps, steps).unwrap();
+        let run = kernel
+            .run(
+                &ctx,
+                &EnsembleSpec::new(p, &[start], dt, steps).keeping(Keep::Every(steps)),
+            )
+            .unwrap();
         let end = run[0].last().unwrap().to_array();
         (0..4)
             .map(|i| (end[i] - exact.y[i]).abs())

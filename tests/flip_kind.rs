@@ -4,7 +4,6 @@
 mod common;
 
 use chaoscope::Field;
-use chaoscope::app::map_and_verdict;
 use chaoscope::engine::{Backend, Engine};
 use chaoscope::model::Params;
 use chaoscope::monitor::Monitor;
@@ -105,7 +104,9 @@ fn gpu_and_cpu_name_the_same_first_flip_where_resolved() {
     let Some(ctx) = common::gpu() else { return };
     let spec = kind_spec(96, 20.0, Params::default());
     let run = |engine: &Engine| -> (Field, Vec<u8>) {
-        let (map, mask) = map_and_verdict(engine, &spec, true, &Monitor::hidden()).unwrap();
+        let (map, mask) = engine
+            .planned_map(&engine.plan(&spec, true).unwrap(), &Monitor::hidden())
+            .unwrap();
         (map, mask.unwrap())
     };
     let (gpu, gpu_mask) = run(&Engine::on_gpu(ctx));

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::Path;
 
-use chaoscope::app::forecast::Settings;
+use chaoscope::app::forecast::ForecastSettings;
 use chaoscope::app::twin::{self, TwinJob, experiment, make_track};
 use chaoscope::cpu;
 use chaoscope::engine::{Backend, Engine};
@@ -15,7 +15,7 @@ use chaoscope::fit::window::{STEPS_PER_SECOND, track, track_with};
 use chaoscope::model::{Params, State};
 use chaoscope::monitor::Monitor;
 use chaoscope::params::{ParamSources, Preset};
-use chaoscope::spec::Precision;
+use chaoscope::spec::{EnsembleSpec, Keep, Precision};
 use common::chaoscope;
 
 fn lab_with_damping() -> Params {
@@ -69,16 +69,13 @@ fn per_member_damping_agrees_on_gpu_and_cpu() {
     let run = |engine: &Engine| {
         let mut out = Vec::new();
         engine
-            .ensemble_damped_each(
-                &p,
-                &starts,
-                Some(&damping),
-                dt,
-                steps,
-                stride,
+            .ensemble(
+                &EnsembleSpec::new(p, &starts, dt, steps)
+                    .damped(&damping)
+                    .keeping(Keep::Every(stride)),
                 &Monitor::hidden(),
                 |_, runs| {
-                    out.extend(runs);
+                    out.extend(runs.into_states());
                     Ok(())
                 },
             )
@@ -130,15 +127,13 @@ fn positions_on(
     let m = starts.len();
     let mut all = vec![f32::NAN; 4 * times.len() * m];
     engine
-        .ensemble_positions_each(
-            p,
-            starts,
-            Some(damping),
-            dt,
-            steps,
-            times,
+        .ensemble(
+            &EnsembleSpec::new(*p, starts, dt, steps)
+                .damped(damping)
+                .keeping(Keep::At(times)),
             &Monitor::hidden(),
-            |first, v| {
+            |first, chunk| {
+                let v = chunk.positions();
                 let n = v.len() / (4 * times.len());
                 for (row, chunk) in all.chunks_mut(m).zip(v.chunks(n)) {
                     row[first..first + n].copy_from_slice(chunk);
@@ -249,9 +244,8 @@ fn forecast_bands_agree_on_gpu_and_cpu_across_chunks() {
     }
     let truth = lab_with_damping();
     let track_ = make_track(&truth, RELEASE, 100.0, 1.5, 0.002, 1);
-    let settings = Settings {
+    let settings = ForecastSettings {
         window: (0.0, 1.0),
-        end: 1.5,
         members: 16,
         seed: 1,
         tolerance: 0.03,
@@ -264,6 +258,7 @@ fn forecast_bands_agree_on_gpu_and_cpu_across_chunks() {
         RELEASE,
         &track_,
         &settings,
+        1.5,
         &cpu_engine,
         &Monitor::hidden(),
     )
@@ -280,7 +275,10 @@ fn forecast_bands_agree_on_gpu_and_cpu_across_chunks() {
     };
     let (_, steps) = stepping(fit.t0, spec.end);
     assert!(
-        cpu_engine.ensemble_chunk(spec.members, steps, steps) < spec.members,
+        cpu_engine.ensemble_chunk(
+            &EnsembleSpec::new(fit.params, &vec![RELEASE; spec.members], 1e-3, steps)
+                .keeping(Keep::Every(steps))
+        ) < spec.members,
         "the CPU forecast should come in several chunks"
     );
     let on = |engine: &Engine| forecast(&fit, 1.0, &spec, engine, &Monitor::hidden()).unwrap();
@@ -360,9 +358,8 @@ fn zero_noise_twin_holds_the_truth() {
     eprintln!("the model's step against a ten times finer one: {error:e} m");
     // RK4 at 1/300 s: its error over 1.5 s of this chaotic release is micrometres.
     assert!(error < 1e-5, "the model's step errs by {error} m");
-    let settings = Settings {
+    let settings = ForecastSettings {
         window: (0.0, 1.0),
-        end: 1.5,
         members: 200,
         seed: 1,
         tolerance: 0.03,
@@ -375,6 +372,7 @@ fn zero_noise_twin_holds_the_truth() {
         RELEASE,
         &track_,
         &settings,
+        1.5,
         &engine,
         &Monitor::hidden(),
     )
@@ -431,13 +429,16 @@ fn twin_experiments_are_calibrated() {
         sigmas: vec![0.002],
         rates: vec![100.0],
         replicates: 24,
-        window: (0.0, 1.0),
+        settings: ForecastSettings {
+            window: (0.0, 1.0),
+            members: 1000,
+            seed: 1,
+            tolerance: 0.03,
+            tracking_error: None,
+            candidates: 1024,
+        },
         duration: 2.5,
         start: RELEASE,
-        members: 1000,
-        seed: 1,
-        tolerance: 0.03,
-        candidates: 1024,
         params: ParamSources {
             preset: Some(Preset::Lab),
             joint_damping: Some((1e-3, 1e-3)),

@@ -363,7 +363,10 @@ fn gpu_runs_go_past_lavapipes_loop_limit() {
     let (start, dt, steps) = (State::at_rest(0.5, 0.3), 1e-4, 70_000);
     let want = cpu::trajectory(&p, start, dt, steps);
     let got = TrajectoryKernel::with_precision(&ctx, Precision::F64)
-        .run(&ctx, &p, &[start], dt, steps, 1)
+        .run(
+            &ctx,
+            &chaoscope::spec::EnsembleSpec::new(p, &[start], dt, steps),
+        )
         .unwrap()
         .remove(0);
     for k in [65_535, 65_536, 70_000] {

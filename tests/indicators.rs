@@ -697,7 +697,9 @@ fn the_verdict_vouches_only_for_pixels_a_converged_reference_confirms() {
             precision: Precision::F32,
             ..spec(indicator, 20.0)
         };
-        let (map, mask) = chaoscope::app::map_and_verdict(&engine, &s, true, &quiet).unwrap();
+        let (map, mask) = engine
+            .planned_map(&engine.plan(&s, true).unwrap(), &quiet)
+            .unwrap();
         let mask = mask.unwrap();
         let at = |dt: f64| {
             let fine = LyapunovSpec {

@@ -145,7 +145,10 @@ fn gpu_cpu_difference(ctx: &GpuContext, p: &Params, precision: Precision, dt: f6
     let start = State::at_rest(2.0, -1.0);
     let steps = (1.0 / dt).round() as u32;
     let gpu = TrajectoryKernel::with_precision(ctx, precision)
-        .run(ctx, p, &[start], dt, steps, 1)
+        .run(
+            ctx,
+            &chaoscope::spec::EnsembleSpec::new(*p, &[start], dt, steps),
+        )
         .unwrap()
         .remove(0);
     let cpu = cpu::trajectory(p, start, dt, steps);

@@ -1219,3 +1219,63 @@ fn every_kind_of_store_is_named_as_the_menu_names_it() {
         );
     }
 }
+
+/// A divergence tile is planned as the commands plan a map: on the GPU an f32 kernel refuses
+/// a DP54 tolerance below its floor (its error estimate would be round-off), naming the key
+/// and the explorer's own spelling of the way out; in f64 the same tolerance runs, and on
+/// the CPU (f64 whatever is asked) so does f32's. `chaoscope lyapunov` refuses it alike.
+#[test]
+fn a_divergence_tile_refuses_an_f32_tolerance_below_the_floor_as_the_cli_does() {
+    if gpu().is_none() {
+        return;
+    }
+    let tight = "kind=ftle&integrator=dp54&rtol=1e-9&size=16&t_max=0.5";
+    let server = Server::start(&["--backend", "gpu"]);
+    let (status, _, body) = server.get(&format!("/tile/0/0/0.png?{tight}&precision=f32"));
+    let body = String::from_utf8_lossy(&body);
+    assert_eq!(status, 400, "{body}");
+    assert!(body.starts_with("invalid value for rtol:"), "{body}");
+    assert!(body.contains("precision=f64"), "{body}");
+    let (status, ran, body) = server.get(&format!("/tile/0/0/0.png?{tight}&precision=f64"));
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+    assert_eq!(ran.as_deref(), Some("f64"));
+    drop(server);
+    let cpu = Server::start(&["--backend", "cpu"]);
+    let (status, ran, body) = cpu.get(&format!("/tile/0/0/0.png?{tight}&precision=f32"));
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+    assert_eq!(ran.as_deref(), Some("f64"));
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(assert_cmd::cargo::cargo_bin("chaoscope"))
+        .args([
+            "lyapunov",
+            "--size",
+            "16",
+            "--t-max",
+            "0.5",
+            "--integrator",
+            "dp54",
+        ])
+        .args([
+            "--rtol",
+            "1e-9",
+            "--precision",
+            "f32",
+            "--backend",
+            "gpu",
+            "--output",
+        ])
+        .arg(dir.path().join("never.png"))
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--rtol") && stderr.contains("--precision f64"),
+        "{stderr}"
+    );
+    assert!(
+        !dir.path().join("never.png").exists(),
+        "a refused map writes nothing"
+    );
+}

@@ -171,7 +171,7 @@ fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let samples: u32 = k.whole("samples")?.unwrap_or(1);
     let resolved: bool = k.or("resolved", false)?;
-    let command = command_of(&MapJob {
+    let job = MapJob {
         spec,
         backend,
         picture: PictureSpec::default(),
@@ -179,11 +179,10 @@ fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
         tile: None,
         colour_range: None,
         samples,
-    });
+    };
+    let command = command_of(&job);
     if let Some(path) = k.get::<std::path::PathBuf>("store")? {
-        return fill_store(
-            py, k, spec, backend, path, resolved, samples, command, progress,
-        );
+        return fill_store(py, k, &job, path, resolved, command, progress);
     }
     if k.get::<(i64, i64)>("tile")?.is_some() {
         return Err(PyValueError::new_err(
@@ -210,19 +209,17 @@ fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
 /// A map into a Zarr store, as `--data MAP.zarr` fills it: band by band (memory holds one),
 /// resumable, only part `tile` = (index, count) of it when given (tasks of one map on many
 /// workers). Returns what was filled; the store is opened lazily by the wrapper.
-#[allow(clippy::too_many_arguments)]
 fn fill_store<'py, S: MapKernels + Copy + Send + Sync + 'static>(
     py: Python<'py>,
     k: &Keywords<'py>,
-    spec: S,
-    backend: Backend,
+    job: &MapJob<S>,
     path: std::path::PathBuf,
     resolved: bool,
-    samples: u32,
     command: String,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if samples != 1 {
+    let (spec, backend) = (job.spec, job.backend);
+    if job.samples != 1 {
         return Err(PyValueError::new_err(
             "samples: is for maps made in memory; a store is filled band by band at one start a pixel",
         ));
@@ -499,12 +496,14 @@ fn forecast<'py>(
             .get("file")?
             .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
         output: k.or("output", std::path::PathBuf::from("out/forecast"))?,
-        window: k.or("window", (0.6, 2.1))?,
-        members: k.whole("members")?.unwrap_or(10_000),
-        seed: k.whole("seed")?.unwrap_or(1),
-        tolerance: k.or("tolerance", 0.03)?,
-        tracking_error: k.get("tracking_error")?,
-        candidates: k.whole("candidates")?.unwrap_or(65536),
+        settings: chaoscope::app::forecast::ForecastSettings {
+            window: k.or("window", (0.6, 2.1))?,
+            members: k.whole("members")?.unwrap_or(10_000),
+            seed: k.whole("seed")?.unwrap_or(1),
+            tolerance: k.or("tolerance", 0.03)?,
+            tracking_error: k.get("tracking_error")?,
+            candidates: k.whole("candidates")?.unwrap_or(65536),
+        },
         params: k.sources()?,
         backend: k.backend()?,
         precision: k.precision()?,

@@ -6,7 +6,6 @@ use std::path::PathBuf;
 
 use plotters::prelude::*;
 
-use super::map::{map_and_verdict, map_engine};
 use crate::boundary::{Fit, Level, count, eps_levels, fit, level_seed};
 use crate::engine::Backend;
 use crate::engine::MapKernels;
@@ -237,12 +236,13 @@ fn measure<S: MapKernels>(
     monitor: &Monitor,
 ) -> Result<(Vec<Level>, crate::engine::RunInfo, Vec<String>)> {
     let engine = crate::engine::Engine::new(job.backend)?;
-    let (info, notices) = map_engine(&engine, &spec(0, all[0]), true)?;
+    let first = engine.plan(&spec(0, all[0]), true)?;
+    let (info, notices) = (first.info, first.notices);
     let mut levels = Vec::new();
     for (k, &eps) in all.iter().enumerate() {
         monitor.check()?;
         let s = spec(k as u32, eps);
-        let (field, mask) = map_and_verdict(&engine, &s, true, monitor)?;
+        let (field, mask) = engine.planned_map(&engine.plan(&s, true)?, monitor)?;
         let mask = mask.expect("asked for");
         let classes: Vec<[Option<u32>; 2]> = field
             .data

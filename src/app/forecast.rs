@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::fit::forecast::{self, Forecast, ForecastSpec, QUANTILES, band_times, most_members};
 use crate::fit::forecast_plot::{self, Marks};
 use crate::fit::read_frames;
-use crate::fit::window::{FITTED, WindowFit, fit_window};
+use crate::fit::window::{FITTED, TrackRows, WindowFit, fit_window};
 use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
@@ -25,18 +25,8 @@ pub struct ForecastJob {
     pub file: PathBuf,
     /// Directory for forecast.png, bands.csv and summary.json.
     pub output: PathBuf,
-    /// The fit window (s): the model is fitted to the rows from its start to its end.
-    pub window: (f64, f64),
-    /// Number of ensemble members.
-    pub members: usize,
-    /// Seed of the members' draws and of the measurement noise in the bands.
-    pub seed: u64,
-    /// The lower bob's spread (m) that ends the forecast's horizon.
-    pub tolerance: f64,
-    /// A measurement's error (m per coordinate); None: what the fit's residuals imply.
-    pub tracking_error: Option<f64>,
-    /// Candidates of the fit's ensemble search.
-    pub candidates: usize,
+    /// The fit window, the ensemble and the horizon.
+    pub settings: ForecastSettings,
     /// The model: the lab preset unless a preset or file is given, arm lengths from the data
     /// unless given.
     pub params: ParamSources,
@@ -66,50 +56,51 @@ impl Outcome {
     }
 }
 
-/// The settings of a fit and forecast of one track.
-#[derive(Clone, Copy, Debug)]
-pub struct Settings {
+/// The settings of a fit and forecast of one track (`forecast`'s, and each of `twin`'s
+/// experiments').
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForecastSettings {
+    /// The fit window (s): the model is fitted to the rows from its start to its end.
     pub window: (f64, f64),
-    pub end: f64,
+    /// Number of ensemble members.
     pub members: usize,
+    /// Seed of the members' draws and of the measurement noise in the bands.
     pub seed: u64,
+    /// The lower bob's spread (m) that ends the forecast's horizon.
     pub tolerance: f64,
+    /// A measurement's error (m per coordinate); None: what the fit's residuals imply.
     pub tracking_error: Option<f64>,
+    /// Candidates of the fit's ensemble search.
     pub candidates: usize,
 }
 
-/// Checks the settings every forecast shares.
-pub fn check_settings(
-    members: usize,
-    tolerance: f64,
-    tracking_error: Option<f64>,
-    candidates: usize,
-) -> Result<()> {
-    if members == 0 {
-        return Err(Error::invalid(
-            "members",
-            "must be at least 1 (10000 draws a smooth band)",
-        ));
+impl ForecastSettings {
+    /// Checks the settings every forecast shares (the window against the data, later).
+    pub fn validate(&self) -> Result<()> {
+        if self.members == 0 {
+            return Err(Error::invalid(
+                "members",
+                "must be at least 1 (10000 draws a smooth band)",
+            ));
+        }
+        check_within("tolerance", self.tolerance, 1e-4, 1.0)?;
+        if let Some(e) = self.tracking_error {
+            check_within("tracking_error", e, 0.0, 0.1)?;
+        }
+        check_count("candidates", self.candidates as u64, 64, 4_000_000)
     }
-    check_within("tolerance", tolerance, 1e-4, 1.0)?;
-    if let Some(e) = tracking_error {
-        check_within("tracking_error", e, 0.0, 0.1)?;
-    }
-    check_count("candidates", candidates as u64, 64, 4_000_000)
 }
 
-/// Fits `p` to the track (`t`, `data` relative to the pivot, its `angles`) in the window and
-/// forecasts to `settings.end`.
-#[allow(clippy::too_many_arguments)]
+/// Fits `p` to the `track` in the settings' window and forecasts to `end` (s).
 pub fn fit_and_forecast(
-    t: &[f64],
-    data: &[[f64; 4]],
-    angles: &[(f64, f64)],
+    track: &TrackRows,
     p: &Params,
-    settings: &Settings,
+    settings: &ForecastSettings,
+    end: f64,
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<Outcome> {
+    let (t, data) = (track.t, track.data);
     let (first, last) = (t[0], t[t.len() - 1]);
     let (a, b) = settings.window;
     if !(a.is_finite() && b.is_finite() && a < b && a >= first - 1e-6 && b < last) {
@@ -120,7 +111,7 @@ pub fn fit_and_forecast(
             ),
         ));
     }
-    let times = band_times(a, settings.end, t).len();
+    let times = band_times(a, end, t).len();
     let most = most_members(times);
     if settings.members > most {
         return Err(Error::invalid(
@@ -134,9 +125,7 @@ pub fn fit_and_forecast(
         ));
     }
     let fit = fit_window(
-        t,
-        data,
-        angles,
+        track,
         p,
         settings.window,
         settings.candidates,
@@ -149,7 +138,7 @@ pub fn fit_and_forecast(
         seed: settings.seed,
         tolerance: settings.tolerance,
         tracking_error,
-        end: settings.end,
+        end,
         data_times: t.to_vec(),
     };
     // The window ends at its last row.
@@ -185,12 +174,7 @@ pub struct ForecastSummary {
 
 /// Runs the forecast; `command` reproduces it and goes into summary.json.
 pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<ForecastSummary> {
-    check_settings(
-        job.members,
-        job.tolerance,
-        job.tracking_error,
-        job.candidates,
-    )?;
+    job.settings.validate()?;
     super::checks::check_damping_not_given(&job.params)?;
     super::checks::check_directory(
         "output",
@@ -210,16 +194,13 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
     } = super::fit::tracked_model(&frames, &job.params)?;
     let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices = engine.notices();
-    let settings = Settings {
-        window: job.window,
-        end: t[t.len() - 1],
-        members: job.members,
-        seed: job.seed,
-        tolerance: job.tolerance,
-        tracking_error: job.tracking_error,
-        candidates: job.candidates,
+    let (settings, end) = (job.settings, t[t.len() - 1]);
+    let track = TrackRows {
+        t: &t,
+        data: &data,
+        angles: &angle,
     };
-    let o = fit_and_forecast(&t, &data, &angle, &params, &settings, &engine, monitor)?;
+    let o = fit_and_forecast(&track, &params, &settings, end, &engine, monitor)?;
     let f = &o.forecast;
     let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
     let (data_after, data_lt) = o.after_window(o.data_horizon);
@@ -232,9 +213,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         .into_iter()
         .chain(o.data_horizon)
         .fold(f.window_end, f64::max);
-    let until = (last_horizon + 3.0)
-        .max(f.window_end + 3.0)
-        .min(settings.end);
+    let until = (last_horizon + 3.0).max(f.window_end + 3.0).min(end);
     forecast_plot::forecast(
         &mut files,
         &out.join("forecast.png"),
@@ -243,7 +222,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
             measured: (&t, &data),
             truth: None,
             data_horizon: o.data_horizon,
-            tolerance: job.tolerance,
+            tolerance: settings.tolerance,
             until,
             title: format!(
                 "{}: fit {}..{} s, {} members; spread > {} m {}; data out of the 90 % band {}",
@@ -251,10 +230,10 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
                     .file_name()
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default(),
-                job.window.0,
-                job.window.1,
-                job.members,
-                job.tolerance,
+                settings.window.0,
+                settings.window.1,
+                settings.members,
+                settings.tolerance,
                 fmt_time(f.spread_horizon),
                 fmt_time(o.data_horizon),
             ),
@@ -268,14 +247,14 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         "parameters": super::fit::params_json(&o.fit.params),
         "fit": fit_json(&o.fit),
         "ensemble": {
-            "members": job.members, "seed": job.seed, "clamped_negative_damping": f.clamped,
+            "members": settings.members, "seed": settings.seed, "clamped_negative_damping": f.clamped,
             "tracking_error": o.tracking_error,
-            "tracking_error_from": if job.tracking_error.is_some() { "the tracking error given" } else { "the fit's residuals" },
+            "tracking_error_from": if settings.tracking_error.is_some() { "the tracking error given" } else { "the fit's residuals" },
             "backend": o.fit.backend, "precision": job.precision.name(),
-            "step": f.dt, "end": settings.end,
+            "step": f.dt, "end": end,
         },
         "horizon": {
-            "tolerance": job.tolerance,
+            "tolerance": settings.tolerance,
             "spread": f.spread_horizon, "spread_after_window": spread_after,
             "spread_lyapunov_times": spread_lt,
             "data": o.data_horizon, "data_after_window": data_after, "data_lyapunov_times": data_lt,
@@ -285,7 +264,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         },
         "lyapunov": {
             "exponent": f.lyapunov, "time": (f.lyapunov > 0.0).then(|| 1.0 / f.lyapunov),
-            "over": [f.window_end, settings.end],
+            "over": [f.window_end, end],
             "along": "the fitted orbit: ln of the tangent propagator's largest singular value over the time",
         },
         "report": "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s",
@@ -293,8 +272,8 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
     super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
     files.commit(monitor)?;
     Ok(ForecastSummary {
-        window: job.window,
-        members: job.members,
+        window: settings.window,
+        members: settings.members,
         tracking_error: o.tracking_error,
         spread_horizon: f.spread_horizon,
         spread_horizon_lyapunov_times: spread_lt,

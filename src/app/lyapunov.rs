@@ -162,7 +162,7 @@ pub fn run_spectrum(
     let mut named = job.files.named();
     named.push(("spectrum", spectrum));
     super::checks::check_distinct(&named, &[])?;
-    let (info, notices) = super::map::map_engine(engine, spec, false)?;
+    let crate::plan::MapPlan { info, notices, .. } = engine.plan(spec, false)?;
     let layers = engine.spectrum(spec, monitor)?;
     let field = measure
         .of_spectrum(spec.indicator, &layers)

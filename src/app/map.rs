@@ -12,9 +12,10 @@ use crate::engine::{Backend, Engine, MapKernels, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
+use crate::plan::{MapPlan, check_verdict};
 use crate::quantity::Quantity;
 use crate::render::{self, MapPicture, Outputs, Picture, PictureSpec, check_writable};
-use crate::spec::{Grid, Integrator, MapSpec, Precision};
+use crate::spec::{Grid, MapSpec};
 use crate::verdict;
 
 /// A map to make, whatever it measures.
@@ -193,11 +194,8 @@ pub fn compute<S: MapKernels>(
 /// What [`run`] checks of a map made in memory (no files): the spec, the verdict's step and
 /// finer map, the sub-samples.
 pub fn check_in_memory<S: MapSpec>(spec: &S, verdict: bool, samples: u32) -> Result<()> {
-    verdict::check_step(spec, verdict)?;
     spec.validate()?;
-    if verdict {
-        check_finer(verdict::finer(spec, true).validate())?;
-    }
+    check_verdict(spec, verdict)?;
     validate_samples(spec, samples, false)
 }
 
@@ -240,7 +238,6 @@ fn validate_samples<S: MapSpec>(spec: &S, samples: u32, store: bool) -> Result<(
 }
 
 pub fn validate(spec: &impl MapSpec, files: &MapOutputs, tile: Option<(u32, u32)>) -> Result<()> {
-    verdict::check_step(spec, files.wants_verdict())?;
     match files.store() {
         // A store's run holds one band at a time: its memory is a band's, not the map's.
         Some(_) => {
@@ -251,9 +248,7 @@ pub fn validate(spec: &impl MapSpec, files: &MapOutputs, tile: Option<(u32, u32)
         None => spec.validate()?,
     }
     files.validate()?;
-    if files.wants_verdict() {
-        check_finer(verdict::finer(spec, true).validate())?;
-    }
+    check_verdict(spec, files.wants_verdict())?;
     check_tile(tile, files)
 }
 
@@ -267,6 +262,18 @@ pub struct Made<T> {
     pub rule_in_full: String,
 }
 
+impl<T> Made<T> {
+    fn of<S>(plan: MapPlan<S>, made: T) -> Self {
+        Made {
+            made,
+            info: plan.info,
+            notices: plan.notices,
+            rule: plan.rule,
+            rule_in_full: plan.rule_in_full,
+        }
+    }
+}
+
 /// `spec`'s map on `backend` and, with `verdict`, its mask.
 pub fn make<S: MapKernels>(
     spec: &S,
@@ -274,16 +281,9 @@ pub fn make<S: MapKernels>(
     verdict: bool,
     monitor: &Monitor,
 ) -> Result<Made<(Field, Option<Vec<u8>>)>> {
-    let (info, notices) = map_engine(engine, spec, verdict)?;
-    let finer = verdict::finer(spec, engine.has_f64());
-    let made = map_and_verdict(engine, spec, verdict, monitor)?;
-    Ok(Made {
-        made,
-        info,
-        notices,
-        rule: verdict::rule_short(spec, &finer),
-        rule_in_full: verdict::rule(spec, &finer),
-    })
+    let plan = engine.plan(spec, verdict)?;
+    let made = engine.planned_map(&plan, monitor)?;
+    Ok(Made::of(plan, made))
 }
 
 /// `spec`'s map into its Zarr store at `path` ([`fill_store`]): this task's part of it
@@ -297,8 +297,7 @@ pub fn make_store<S: MapKernels>(
     verdict: bool,
     monitor: &Monitor,
 ) -> Result<Made<Filled>> {
-    let (info, mut notices) = map_engine(engine, spec, verdict)?;
-    let finer = verdict::finer(spec, engine.has_f64());
+    let mut plan = engine.plan(spec, verdict)?;
     let quantity = spec.quantity();
     let backend = engine.asked();
     let fill = StoreFill {
@@ -314,17 +313,11 @@ pub fn make_store<S: MapKernels>(
     let filled = fill_store(
         &fill,
         monitor,
-        |rows, monitor| map_and_verdict(engine, &spec.with_band(rows), verdict, monitor),
+        |rows, monitor| engine.planned_map(&plan.with_band(rows), monitor),
         |x| spec.counted(x),
     )?;
-    notices.extend(missing_note(&filled, path));
-    Ok(Made {
-        made: filled,
-        info,
-        notices,
-        rule: verdict::rule_short(spec, &finer),
-        rule_in_full: verdict::rule(spec, &finer),
-    })
+    plan.notices.extend(missing_note(&filled, path));
+    Ok(Made::of(plan, filled))
 }
 
 /// Where a map's files go, and whether it carries the verdict ([`crate::verdict`]).
@@ -437,17 +430,6 @@ pub fn check_tile(tile: Option<(u32, u32)>, files: &MapOutputs) -> Result<()> {
     Ok(())
 }
 
-/// The verdict's map (half the step, a tenth of the tolerances) checked as the map was: its
-/// errors say so.
-pub fn check_finer(finer: Result<()>) -> Result<()> {
-    finer.map_err(|e| match e {
-        Error::InvalidSpec { field, reason } => {
-            Error::invalid(field, format!("the verdict's finer map: {reason}"))
-        }
-        e => e,
-    })
-}
-
 /// A map's files, as a set: the picture as PNG with its provenance, where the map sits in it
 /// and `extra` text, the raw values as .npy and the verdict's `mask` as .npy when asked.
 pub fn write_map(
@@ -477,102 +459,4 @@ pub fn write_map(
         files.mask(path, field.width, field.height, mask)?;
     }
     files.commit(monitor)
-}
-
-/// A map and, with `verdict`, its mask against the finer map ([`verdict::finer`]).
-pub fn map_and_verdict<S: MapKernels>(
-    engine: &Engine,
-    spec: &S,
-    verdict: bool,
-    monitor: &Monitor,
-) -> Result<(Field, Option<Vec<u8>>)> {
-    let field = engine.map(spec, monitor)?;
-    if !verdict {
-        return Ok((field, None));
-    }
-    let agree = |spec: &S, a: &Field, b: &Field| {
-        verdict::grid_mask(spec.grid(), a, b, spec.quantity().vouch)
-    };
-    let agreement = |spec: &S, map: &Field| -> Result<Vec<u8>> {
-        let finer_spec = verdict::finer(spec, engine.has_f64());
-        let finer = engine.map(&finer_spec, monitor)?;
-        let mut mask = agree(spec, map, &finer);
-        // Fixed steps: the finer map must agree with one finer still. A chaotic pixel's runs
-        // at dt and dt/2 agree by chance often enough to break the verdict's promise at
-        // coarse steps (issue 25: 0.83 % of the resolved pixels wrong at dt 0.05); a chance
-        // agreement of three is rare (0.46 %, and <= 0.05 % at dt <= 0.01).
-        if spec.integrator() == Integrator::Rk4 {
-            let finest = engine.map(&verdict::finer(&finer_spec, engine.has_f64()), monitor)?;
-            let settled = agree(spec, &finer, &finest);
-            mask.iter_mut().zip(settled).for_each(|(m, s)| *m &= s);
-        }
-        Ok(mask)
-    };
-    let mut mask = agreement(spec, &field)?;
-    if let Some(under) = spec.underlying() {
-        let resolved = agreement(&under, &engine.map(&under, monitor)?)?;
-        mask.iter_mut().zip(resolved).for_each(|(m, r)| *m &= r);
-    }
-    Ok((field, Some(mask)))
-}
-
-/// The engine for `spec`'s map on `backend`, the path it takes ([`Engine::plan`], and the
-/// verdict's finer map's with `verdict`), and the notices to give about both
-/// ([`precision_notices`]).
-pub fn map_engine(
-    engine: &Engine,
-    spec: &impl MapKernels,
-    verdict: bool,
-) -> Result<(RunInfo, Vec<String>)> {
-    let backend = engine.asked();
-    let mut notices = engine.notices();
-    let (precision, grid) = (spec.precision(), spec.grid());
-    let info = engine.map_info(grid, precision);
-    notices.extend(precision_notices(engine, backend, precision, grid, &info)?);
-    notices.extend(spec.notices(info.path));
-    engine.plan(spec)?;
-    if verdict {
-        check_finer(
-            engine
-                .plan(&verdict::finer(spec, engine.has_f64()))
-                .map(|_| ()),
-        )?;
-    }
-    Ok((info, notices))
-}
-
-/// What a map's precision means on this engine: f64 asked of a GPU without it is an error
-/// naming `precision` when the GPU was asked for, else a note that the CPU runs it; a grid
-/// finer than f32 resolves gets a note saying where it runs in f64 (`info`).
-pub fn precision_notices(
-    engine: &Engine,
-    backend: Backend,
-    precision: Precision,
-    grid: &Grid,
-    info: &RunInfo,
-) -> Result<Vec<String>> {
-    let mut notices: Vec<String> = engine.check_f64(precision, backend)?.into_iter().collect();
-    // Today's plane says it as it always has; any other names its axes.
-    let below = |step: f64, float: &str| match grid.is_angle_plane() {
-        true => format!("below {step:.1e} rad, finer than {float} resolves near pi"),
-        false => format!(
-            "finer along {} or {} than {float} resolves",
-            grid.x.var.name(),
-            grid.y.var.name()
-        ),
-    };
-    if engine.gpu().is_some() && precision == Precision::F32 && grid.needs_f64() {
-        notices.push(format!(
-            "note: the pixel step is {}; the map runs on the {} in f64",
-            below(crate::spec::F32_MIN_PIXEL_STEP, "f32"),
-            if info.path.on_gpu() { "GPU" } else { "CPU" }
-        ));
-    }
-    if grid.beyond_f64() {
-        notices.push(format!(
-            "note: the pixel step is {}: neighbouring pixels start from the same numbers, and the verdict ([[resolved]]) marks every pixel unresolved",
-            below(crate::spec::F64_MIN_PIXEL_STEP, "even f64")
-        ));
-    }
-    Ok(notices)
 }

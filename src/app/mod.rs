@@ -21,6 +21,4 @@ pub mod trajectory;
 pub mod twin;
 
 pub use checks::{check_count, check_extension, check_output, check_within, write_text};
-pub use map::{
-    MapOutputs, check_finer, check_tile, map_and_verdict, map_engine, precision_notices, write_map,
-};
+pub use map::{MapOutputs, check_tile, write_map};

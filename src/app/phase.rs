@@ -10,7 +10,7 @@ use crate::field::Field;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::render::{self, Colormap, Outputs};
-use crate::spec::{self, Precision, Spread, Stepping, releases};
+use crate::spec::{self, EnsembleSpec, Precision, Spread, Stepping, releases};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhaseJob {
@@ -104,10 +104,12 @@ fn double_pendulum_portraits(
     // Streamed, so memory holds one chunk of runs however many there are: a first pass finds
     // each arm's largest |omega| (the panels' scale), a second adds the densities up. With
     // a single chunk the runs are kept from the first pass instead of integrated again.
-    let single = engine.ensemble_chunk(starts.len(), steps, 1) >= starts.len();
+    let ensemble = EnsembleSpec::new(*p, &starts, dt, steps);
+    let single = engine.ensemble_chunk(&ensemble) >= starts.len();
     let mut peak = [0.0f64; 2];
     let mut kept = Vec::new();
-    engine.ensemble_each(p, &starts, dt, steps, 1, monitor, |_, runs| {
+    engine.ensemble(&ensemble, monitor, |_, chunk| {
+        let runs = chunk.into_states();
         for (arm, peak) in peak.iter_mut().enumerate() {
             let w = runs.iter().flatten().map(|s| pick(arm, s).1.abs());
             *peak = w.fold(*peak, f64::max);
@@ -132,7 +134,7 @@ fn double_pendulum_portraits(
     if single {
         add(kept)?;
     } else {
-        engine.ensemble_each(p, &starts, dt, steps, 1, monitor, |_, runs| add(runs))?;
+        engine.ensemble(&ensemble, monitor, |_, runs| add(runs.into_states()))?;
     }
     let s = &job.start;
     let subtitle = format!(

@@ -471,11 +471,13 @@ fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
 }
 
 /// One frame's map, on the GPU unless it needs f64 (the engine decides).
+/// One frame's map, planned as every map is ([`Engine::plan`]: the checks of its path).
 fn frame_field(map: &FrameMap, engine: &Engine, monitor: &Monitor) -> Result<Field> {
-    match map {
-        FrameMap::Flip(spec) => engine.map(spec, monitor),
-        FrameMap::Lyapunov(spec) => engine.map(spec, monitor),
-    }
+    let (field, _) = match map {
+        FrameMap::Flip(spec) => engine.planned_map(&engine.plan(spec, false)?, monitor)?,
+        FrameMap::Lyapunov(spec) => engine.planned_map(&engine.plan(spec, false)?, monitor)?,
+    };
+    Ok(field)
 }
 
 /// One frame's picture.

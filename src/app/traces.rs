@@ -9,7 +9,7 @@ use crate::error::Result;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::render::{self, Bobs, Colormap, Film, Outputs, View};
-use crate::spec::{self, Precision, Spread, Stepping, releases};
+use crate::spec::{self, EnsembleSpec, Precision, Spread, Stepping, releases};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct TracesJob {
@@ -89,7 +89,8 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
     let colors: Vec<[u8; 3]> = (0..n).map(|k| run_color(k, n)).collect();
     let meta = render::provenance(command, &info);
     let mut files = Outputs::new();
-    if engine.ensemble_chunk(n, job.stepping.steps(), 1) >= n {
+    let ensemble = EnsembleSpec::new(*p, &starts, job.stepping.dt, job.stepping.steps());
+    if engine.ensemble_chunk(&ensemble) >= n {
         all_at_once(job, &engine, &starts, &colors, &meta, &mut files, monitor)?;
     } else {
         streamed(job, &engine, &starts, &colors, &meta, &mut files, monitor)?;
@@ -150,7 +151,7 @@ fn all_at_once(
 ) -> Result<()> {
     let p = &job.params;
     let (dt, steps) = (job.stepping.dt, job.stepping.steps());
-    let runs = engine.ensemble(p, starts, dt, steps, 1, monitor)?;
+    let runs = engine.ensemble_all(&EnsembleSpec::new(*p, starts, dt, steps), monitor)?;
     let positions: Vec<Vec<Bobs>> = runs
         .iter()
         .map(|r| r.iter().map(|s| bobs(p, s)).collect())
@@ -230,8 +231,9 @@ fn streamed(
             .collect()
     };
     let mut histogram = vec![0u64; BINS];
-    engine.ensemble_each(p, starts, dt, steps, 1, monitor, |_, runs| {
-        for run in &runs {
+    let ensemble = EnsembleSpec::new(*p, starts, dt, steps);
+    engine.ensemble(&ensemble, monitor, |_, runs| {
+        for run in &runs.into_states() {
             let pos: Vec<Bobs> = run.iter().map(|s| bobs(p, s)).collect();
             for v in speeds(&pos) {
                 histogram[bin(v)] += 1;
@@ -259,8 +261,8 @@ fn streamed(
     let mut arms: Vec<Vec<Bobs>> = Vec::new();
     let mut candidates = Vec::new();
     let mut second_pass = |sink: &mut dyn FnMut(&[f32]) -> Result<()>| {
-        engine.ensemble_each(p, starts, dt, steps, 1, monitor, |first, runs| {
-            for (j, run) in runs.iter().enumerate() {
+        engine.ensemble(&ensemble, monitor, |first, runs| {
+            for (j, run) in runs.into_states().iter().enumerate() {
                 let k = first + j;
                 let pos: Vec<Bobs> = run.iter().map(|s| bobs(p, s)).collect();
                 candidates.extend(speeds(&pos).into_iter().filter(|&v| bin(v) == median_bin));

@@ -12,11 +12,12 @@ use rand_pcg::Pcg64;
 use serde_json::json;
 
 use super::check_count;
-use super::forecast::{Outcome, Settings, check_settings, fit_and_forecast, fit_json};
+use super::forecast::{ForecastSettings, Outcome, fit_and_forecast, fit_json};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::fit::forecast::Slope;
 use crate::fit::forecast_plot::{self, Marks};
+use crate::fit::window::TrackRows;
 use crate::fit::window::{STEPS_PER_SECOND, track_with};
 use crate::fit::{Frame, angles};
 use crate::model::{Params, State};
@@ -39,15 +40,13 @@ pub struct TwinJob {
     pub rates: Vec<f64>,
     /// Noise realisations per noise and rate.
     pub replicates: usize,
-    /// The fit window (s) and the track's length (s) from the release.
-    pub window: (f64, f64),
+    /// The fit window, the ensemble and the horizon of each experiment (its seed the
+    /// replicates' base seed; no tracking error given: each fit's residuals give it).
+    pub settings: ForecastSettings,
+    /// The track's length (s) from the release.
     pub duration: f64,
     /// The release.
     pub start: State,
-    pub members: usize,
-    pub seed: u64,
-    pub tolerance: f64,
-    pub candidates: usize,
     /// The truth's parameters, joint damping included; the model fits the damping and takes
     /// the rest from them.
     pub params: ParamSources,
@@ -135,7 +134,8 @@ pub fn experiment(
     truth: &Params,
     start: State,
     track: &Track,
-    settings: &Settings,
+    settings: &ForecastSettings,
+    end: f64,
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<(Outcome, Vec<[f64; 4]>)> {
@@ -152,15 +152,12 @@ pub fn experiment(
         })
         .collect();
     let angle = angles(&frames, (0.0, 0.0));
-    let o = fit_and_forecast(
-        &track.t,
-        &track.measured,
-        &angle,
-        truth,
-        settings,
-        engine,
-        monitor,
-    )?;
+    let rows = TrackRows {
+        t: &track.t,
+        data: &track.measured,
+        angles: &angle,
+    };
+    let o = fit_and_forecast(&rows, truth, settings, end, engine, monitor)?;
     // The truth at the bands' times, from the release.
     let mut times = vec![0.0];
     times.extend(o.forecast.times.iter().filter(|&&x| x > 0.0));
@@ -252,7 +249,7 @@ pub struct TwinSummary {
 }
 
 pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSummary> {
-    check_settings(job.members, job.tolerance, None, job.candidates)?;
+    job.settings.validate()?;
     check_count("replicates", job.replicates as u64, 1, 100)?;
     for (field, v, most) in [
         ("theta1", job.start.theta1, 100.0),
@@ -297,15 +294,7 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
     let truth = job.params.resolve()?;
     let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices = engine.notices();
-    let settings = Settings {
-        window: job.window,
-        end: job.duration,
-        members: job.members,
-        seed: job.seed,
-        tolerance: job.tolerance,
-        tracking_error: None,
-        candidates: job.candidates,
-    };
+    let settings = job.settings;
     let mut rows = Vec::new();
     // The experiment pictured: (outcome, truth at its times, track, sigma, rate).
     type Shown = (Outcome, Vec<[f64; 4]>, Track, f64, f64);
@@ -321,12 +310,20 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
                 monitor.check()?;
                 // Replicate k: its own release near the given one (k > 0) and its own noise,
                 // the same for every sigma, so that sigma alone differs between them.
-                let seed =
-                    job.seed ^ ((ri as u64) << 32 | k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-                let start = release(job.start, k, job.seed);
+                let seed = job.settings.seed
+                    ^ ((ri as u64) << 32 | k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                let start = release(job.start, k, job.settings.seed);
                 let track = make_track(&truth, start, rate, job.duration, sigma, seed);
-                let settings = Settings { seed, ..settings };
-                let (o, at) = experiment(&truth, start, &track, &settings, &engine, &nested)?;
+                let settings = ForecastSettings { seed, ..settings };
+                let (o, at) = experiment(
+                    &truth,
+                    start,
+                    &track,
+                    &settings,
+                    job.duration,
+                    &engine,
+                    &nested,
+                )?;
                 let f = &o.forecast;
                 let until = f.spread_horizon.unwrap_or(f64::INFINITY);
                 let coverage = f.coverage(&at, until);
@@ -428,14 +425,14 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
                 measured: (&track.t, &track.measured),
                 truth: Some(at),
                 data_horizon: o.data_horizon,
-                tolerance: job.tolerance,
+                tolerance: job.settings.tolerance,
                 until: job.duration,
                 title: format!(
                     "twin experiment: {rate} Hz, noise {} mm, fit {}..{} s, {} members; truth green",
                     sigma * 1e3,
-                    job.window.0,
-                    job.window.1,
-                    job.members
+                    job.settings.window.0,
+                    job.settings.window.1,
+                    job.settings.members
                 ),
             },
         )?;
@@ -461,8 +458,8 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
     let summary = json!({
         "command": command,
         "truth": { "parameters": super::fit::params_json(&truth), "start": job.start.to_array() },
-        "window": job.window, "duration": job.duration, "members": job.members,
-        "tolerance": job.tolerance, "table": table,
+        "window": job.settings.window, "duration": job.duration, "members": job.settings.members,
+        "tolerance": job.settings.tolerance, "table": table,
         "coverage": coverage,
         "slopes": slopes.iter().map(|s| json!({
             "rate": s.rate, "slope": s.slope, "slope_error": s.slope_error, "lambda": s.lambda,

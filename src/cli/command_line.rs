@@ -426,17 +426,18 @@ pub fn fit(job: &FitJob) -> String {
 
 pub fn forecast(job: &ForecastJob) -> String {
     let noise = job
+        .settings
         .tracking_error
         .map_or(String::new(), |e| format!(" --tracking-error {e}"));
     format!(
         "chaoscope forecast {} --window {}:{} --members {} --seed {} --tolerance {}{noise} --candidates {}{} --backend {}",
         job.file.display(),
-        job.window.0,
-        job.window.1,
-        job.members,
-        job.seed,
-        job.tolerance,
-        job.candidates,
+        job.settings.window.0,
+        job.settings.window.1,
+        job.settings.members,
+        job.settings.seed,
+        job.settings.tolerance,
+        job.settings.candidates,
         sources(&job.params),
         job.backend.name()
     ) + &precision(job.precision)
@@ -454,17 +455,17 @@ pub fn twin(job: &TwinJob) -> String {
         list(&job.sigmas),
         list(&job.rates),
         job.replicates,
-        job.window.0,
-        job.window.1,
+        job.settings.window.0,
+        job.settings.window.1,
         job.duration,
         job.start.theta1,
         job.start.omega1,
         job.start.theta2,
         job.start.omega2,
-        job.members,
-        job.seed,
-        job.tolerance,
-        job.candidates,
+        job.settings.members,
+        job.settings.seed,
+        job.settings.tolerance,
+        job.settings.candidates,
         sources(&job.params),
         job.backend.name()
     ) + &precision(job.precision)

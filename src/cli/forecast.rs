@@ -7,7 +7,7 @@ use clap::Args;
 use super::args::{PhysicalArgs, backend_parser};
 use super::parse::{one_of, parse_length, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
-use crate::app::forecast::{self, ForecastJob, fmt_time};
+use crate::app::forecast::{self, ForecastJob, ForecastSettings, fmt_time};
 use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
@@ -61,12 +61,14 @@ impl ForecastArgs {
         ForecastJob {
             file: self.file.clone(),
             output: self.output.clone(),
-            window: self.window,
-            members: self.members,
-            seed: self.seed,
-            tolerance: self.tolerance,
-            tracking_error: self.tracking_error,
-            candidates: self.candidates,
+            settings: ForecastSettings {
+                window: self.window,
+                members: self.members,
+                seed: self.seed,
+                tolerance: self.tolerance,
+                tracking_error: self.tracking_error,
+                candidates: self.candidates,
+            },
             params: self.physical.sources(),
             backend: self.backend,
             precision: self.precision.unwrap_or_default(),
@@ -86,7 +88,7 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
         s.window.1,
         s.members,
         s.tracking_error * 1e3,
-        job.tolerance,
+        job.settings.tolerance,
         fmt_time(s.spread_horizon),
         lt(s.spread_horizon_lyapunov_times),
         fmt_time(s.data_horizon),

@@ -7,6 +7,7 @@ use clap::Args;
 use super::args::{PhysicalArgs, backend_parser};
 use super::parse::{one_of, parse_length, parse_number, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
+use crate::app::forecast::ForecastSettings;
 use crate::app::twin::{self, TwinJob};
 use crate::engine::Backend;
 use crate::error::Result;
@@ -88,7 +89,14 @@ impl TwinArgs {
             sigmas: self.sigma.clone(),
             rates: self.rate.clone(),
             replicates: self.replicates,
-            window: self.window,
+            settings: ForecastSettings {
+                window: self.window,
+                members: self.members,
+                seed: self.seed,
+                tolerance: self.tolerance,
+                tracking_error: None,
+                candidates: self.candidates,
+            },
             duration: self.duration,
             start: State {
                 theta1: self.theta1,
@@ -96,10 +104,6 @@ impl TwinArgs {
                 theta2: self.theta2,
                 omega2: self.omega2,
             },
-            members: self.members,
-            seed: self.seed,
-            tolerance: self.tolerance,
-            candidates: self.candidates,
             params,
             backend: self.backend,
             precision: self.precision.unwrap_or_default(),

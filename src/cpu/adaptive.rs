@@ -216,6 +216,60 @@ impl Clock {
     }
 }
 
+/// One DP54 attempt of step `h` from the N-component state `x` whose rate is `k1` (FSAL):
+/// the proposed state, the seven stages, and the error's RMS over the components scaled by
+/// `atol + rtol max(|x|, |next|)`. The one stepper of every state the CPU steps adaptively:
+/// the pendulum (4), the pendulum and a tangent vector (8), and four vectors (20).
+pub fn dp54_attempt<const N: usize>(
+    x: &[f64; N],
+    k1: [f64; N],
+    h: f64,
+    (rtol, atol): (f64, f64),
+    rate: impl Fn(&[f64; N]) -> [f64; N],
+) -> ([f64; N], [[f64; N]; 7], f64) {
+    let mut k = [[0.0; N]; 7];
+    k[0] = k1;
+    for s in 1..7 {
+        let stage: [f64; N] =
+            std::array::from_fn(|i| x[i] + h * (0..s).map(|j| DP54.a[s][j] * k[j][i]).sum::<f64>());
+        k[s] = rate(&stage);
+    }
+    // The last stage was evaluated at the propagated solution (FSAL).
+    let next: [f64; N] =
+        std::array::from_fn(|i| x[i] + h * (0..7).map(|j| DP54.b[j] * k[j][i]).sum::<f64>());
+    let err = ((0..N)
+        .map(|i| {
+            let e = h * (0..7).map(|j| DP54.e[0][j] * k[j][i]).sum::<f64>();
+            (e / (atol + rtol * x[i].abs().max(next[i].abs()))).powi(2)
+        })
+        .sum::<f64>()
+        / N as f64)
+        .sqrt();
+    (next, k, err)
+}
+
+/// DP54 steps of the N-component state `x` on `clock` until it reaches `t_end` exactly (a
+/// renormalisation window), or the stall that stopped it.
+pub fn dp54_to<const N: usize>(
+    x: &mut [f64; N],
+    clock: &mut Clock,
+    t_end: f64,
+    tolerances: (f64, f64),
+    rate: impl Fn(&[f64; N]) -> [f64; N],
+) -> std::result::Result<(), Stall> {
+    let mut k1 = rate(x);
+    while clock.t < t_end {
+        let (h, last) = clock.attempt(t_end)?;
+        let (next, k, err) = dp54_attempt(x, k1, h, tolerances, &rate);
+        clock.settle(h, last, t_end, step_factor(err), err <= 1.0);
+        if err <= 1.0 {
+            *x = next;
+            k1 = k[6];
+        }
+    }
+    Ok(())
+}
+
 impl<'a> Adaptive<'a> {
     /// Starts at `start` with the first step `h` (also the largest).
     pub fn new(p: &'a Params, start: State, h: f64, rtol: f64, atol: f64) -> Self {
@@ -234,27 +288,9 @@ impl<'a> Adaptive<'a> {
     pub fn step(&mut self, t_end: f64) -> std::result::Result<Step, Stall> {
         loop {
             let (h, last) = self.clock.attempt(t_end)?;
-            let mut k = [[0.0; 4]; 7];
-            k[0] = self.k1;
-            for s in 1..7 {
-                let stage: [f64; 4] = std::array::from_fn(|i| {
-                    self.y[i] + h * (0..s).map(|j| DP54.a[s][j] * k[j][i]).sum::<f64>()
-                });
-                k[s] = rate_of(self.p, &stage);
-            }
-            // The last stage was evaluated at the propagated solution (FSAL).
-            let y1: [f64; 4] = std::array::from_fn(|i| {
-                self.y[i] + h * (0..7).map(|j| DP54.b[j] * k[j][i]).sum::<f64>()
-            });
-            let err = (0..4)
-                .map(|i| {
-                    let e = h * (0..7).map(|j| DP54.e[0][j] * k[j][i]).sum::<f64>();
-                    let scale = self.atol + self.rtol * self.y[i].abs().max(y1[i].abs());
-                    (e / scale).powi(2)
-                })
-                .sum::<f64>()
-                * 0.25;
-            let err = err.sqrt();
+            let tolerances = (self.rtol, self.atol);
+            let (y1, k, err) =
+                dp54_attempt(&self.y, self.k1, h, tolerances, |y| rate_of(self.p, y));
             let t = self.clock.t;
             self.clock
                 .settle(h, last, t_end, step_factor(err), err <= 1.0);

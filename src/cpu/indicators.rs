@@ -217,7 +217,7 @@ pub fn descriptor_run(run: &mut CpuRun, power: f64) -> Result<f64> {
 /// the state and the four vectors together, the error controlled over all twenty components,
 /// every renormalisation window landed on exactly: the four log sums (NaN where it stalled).
 pub fn spectrum_adaptive(run: &mut CpuRun) -> Result<[f64; 4]> {
-    use super::adaptive::{Clock, DP54, step_factor};
+    use super::adaptive::{Clock, dp54_to};
     use num_dual::Dual64;
     const N: usize = 20;
     let spec = run.spec;
@@ -248,36 +248,9 @@ pub fn spectrum_adaptive(run: &mut CpuRun) -> Result<[f64; 4]> {
     while done < steps {
         let end = (done + every).min(steps);
         let t_end = end as f64 * dt;
-        let mut k1 = rate(&x);
-        while clock.t < t_end {
-            let Ok((h, last)) = clock.attempt(t_end) else {
-                (run.sample)(t_end, &[f64::NAN; 5]);
-                return Ok([f64::NAN; 4]);
-            };
-            let mut k = [[0.0; N]; 7];
-            k[0] = k1;
-            for st in 1..7 {
-                let stage: [f64; N] = std::array::from_fn(|i| {
-                    x[i] + h * (0..st).map(|j| DP54.a[st][j] * k[j][i]).sum::<f64>()
-                });
-                k[st] = rate(&stage);
-            }
-            let next: [f64; N] = std::array::from_fn(|i| {
-                x[i] + h * (0..7).map(|j| DP54.b[j] * k[j][i]).sum::<f64>()
-            });
-            let err = ((0..N)
-                .map(|i| {
-                    let e = h * (0..7).map(|j| DP54.e[0][j] * k[j][i]).sum::<f64>();
-                    (e / (atol + rtol * x[i].abs().max(next[i].abs()))).powi(2)
-                })
-                .sum::<f64>()
-                / N as f64)
-                .sqrt();
-            clock.settle(h, last, t_end, step_factor(err), err <= 1.0);
-            if err <= 1.0 {
-                x = next;
-                k1 = k[6];
-            }
+        if dp54_to(&mut x, &mut clock, t_end, (rtol, atol), rate).is_err() {
+            (run.sample)(t_end, &[f64::NAN; 5]);
+            return Ok([f64::NAN; 4]);
         }
         let mut v: Vec<[f64; 4]> = (0..4)
             .map(|j| std::array::from_fn(|i| x[4 + 4 * j + i]))

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix4, Vector4};
 use num_dual::Dual64;
 
-use super::adaptive::{Clock, DP54, step_factor};
+use super::adaptive::{Clock, dp54_to};
 use super::{jacobian, map_pixels, rate_of, rk4_step};
 use crate::error::Result;
 use crate::field::{Convergence, Field};
@@ -138,37 +138,10 @@ fn tangent_adaptive(
     while done < steps {
         let end = (done + every).min(steps);
         let t_end = end as f64 * dt;
-        let mut k1 = rate(&x);
-        while clock.t < t_end {
-            let Ok((h, last)) = clock.attempt(t_end) else {
-                out.t.push(t_end);
-                out.ftle.push(f64::NAN);
-                return Ok(());
-            };
-            let mut k = [[0.0; 8]; 7];
-            k[0] = k1;
-            for s in 1..7 {
-                let stage: [f64; 8] = std::array::from_fn(|i| {
-                    x[i] + h * (0..s).map(|j| DP54.a[s][j] * k[j][i]).sum::<f64>()
-                });
-                k[s] = rate(&stage);
-            }
-            let next: [f64; 8] = std::array::from_fn(|i| {
-                x[i] + h * (0..7).map(|j| DP54.b[j] * k[j][i]).sum::<f64>()
-            });
-            let err = ((0..8)
-                .map(|i| {
-                    let e = h * (0..7).map(|j| DP54.e[0][j] * k[j][i]).sum::<f64>();
-                    (e / (atol + rtol * x[i].abs().max(next[i].abs()))).powi(2)
-                })
-                .sum::<f64>()
-                / 8.0)
-                .sqrt();
-            clock.settle(h, last, t_end, step_factor(err), err <= 1.0);
-            if err <= 1.0 {
-                x = next;
-                k1 = k[6];
-            }
+        if dp54_to(&mut x, &mut clock, t_end, (rtol, atol), rate).is_err() {
+            out.t.push(t_end);
+            out.ftle.push(f64::NAN);
+            return Ok(());
         }
         monitor.check()?;
         monitor.advance((end - done) as u64);

@@ -17,6 +17,7 @@ use crate::engine::Engine;
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
+use crate::spec::{EnsembleSpec, Keep};
 
 /// Spacing (s) of the bands' times between the data's own: smooth curves in the pictures.
 pub const BAND_STEP: f64 = 0.02;
@@ -170,27 +171,22 @@ pub fn forecast(
     // chunk, else from the chunks gathered.
     let mut stats = Vec::new();
     let mut gathered: Option<Vec<f32>> = None;
-    engine.ensemble_positions_each(
-        &fit.params,
-        &starts,
-        Some(&damping),
-        dt,
-        steps,
-        &since_start,
-        monitor,
-        |first, v| {
-            let n = v.len() / (4 * times.len());
-            if n == m {
-                stats = bands(v, m, spec);
-                return Ok(());
-            }
-            let values = gathered.get_or_insert_with(|| vec![0f32; times.len() * 4 * m]);
-            for (row, chunk) in values.chunks_mut(m).zip(v.chunks(n)) {
-                row[first..first + n].copy_from_slice(chunk);
-            }
-            Ok(())
-        },
-    )?;
+    let ensemble = EnsembleSpec::new(fit.params, &starts, dt, steps)
+        .damped(&damping)
+        .keeping(Keep::At(&since_start));
+    engine.ensemble(&ensemble, monitor, |first, chunk| {
+        let v = chunk.positions();
+        let n = v.len() / (4 * times.len());
+        if n == m {
+            stats = bands(v, m, spec);
+            return Ok(());
+        }
+        let values = gathered.get_or_insert_with(|| vec![0f32; times.len() * 4 * m]);
+        for (row, chunk) in values.chunks_mut(m).zip(v.chunks(n)) {
+            row[first..first + n].copy_from_slice(chunk);
+        }
+        Ok(())
+    })?;
     monitor.check()?;
     if let Some(values) = gathered {
         stats = bands(&values, m, spec);

@@ -10,6 +10,7 @@ use crate::engine::Engine;
 use crate::error::Result;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
+use crate::spec::{EnsembleSpec, Keep};
 
 /// Simulation steps per data interval (~1/300 s for 1/3 s frames).
 const SUBSTEPS: u32 = 100;
@@ -180,7 +181,8 @@ pub fn fit_model(
     let mut best = (f64::INFINITY, guess, 0.0);
     for &c in &dampings {
         let p = with_damping(&spec.params, c, c);
-        let runs = engine.ensemble(&p, &starts, dt, n_sub, SUBSTEPS, monitor)?;
+        let ensemble = EnsembleSpec::new(p, &starts, dt, n_sub).keeping(Keep::Every(SUBSTEPS));
+        let runs = engine.ensemble_all(&ensemble, monitor)?;
         for (s, run) in starts.iter().zip(&runs) {
             let sim: Vec<[f64; 4]> = run.iter().map(|y| positions(&p, y)).collect();
             let e = cost(&sim);

@@ -11,6 +11,7 @@ use crate::engine::Engine;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
+use crate::spec::{EnsembleSpec, Keep};
 
 /// Fitted parameters: the state (theta1, omega1, theta2, omega2) and the joint damping at
 /// the pivot and the middle joint (N m s).
@@ -91,20 +92,26 @@ pub fn window_rows(t: &[f64], window: (f64, f64)) -> (usize, usize) {
     (row0, rows)
 }
 
-/// Fits `p`'s state and joint damping to the measured positions `data` (relative to the
-/// pivot) at times `t` within `window`, from the tracked `angles`; `candidates` states and
-/// dampings are searched on `engine` first.
-#[allow(clippy::too_many_arguments)]
+/// A track's rows: times (s), the measured positions (x1, y1, x2, y2, m, relative to the
+/// pivot, y up) and the arms' angles from them (rad).
+#[derive(Clone, Copy, Debug)]
+pub struct TrackRows<'a> {
+    pub t: &'a [f64],
+    pub data: &'a [[f64; 4]],
+    pub angles: &'a [(f64, f64)],
+}
+
+/// Fits `p`'s state and joint damping to the `track`'s measured positions within `window`;
+/// `candidates` states and dampings are searched on `engine` first.
 pub fn fit_window(
-    t: &[f64],
-    data: &[[f64; 4]],
-    angles: &[(f64, f64)],
+    rows: &TrackRows,
     p: &Params,
     window: (f64, f64),
     candidates: usize,
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<WindowFit> {
+    let (t, data, angles) = (rows.t, rows.data, rows.angles);
     let (row0, rows) = window_rows(t, window);
     // Four coordinates a row against six parameters, and one degree of freedom to estimate
     // the tracking error from.
@@ -160,35 +167,29 @@ pub fn fit_window(
     // The best few candidates (cost, index), each refined below: in a chaotic window the
     // least-squares valley of the best one need not hold the least minimum.
     let mut best: Vec<(f64, usize)> = Vec::with_capacity(REFINED + 1);
-    engine.ensemble_damped_each(
-        p,
-        &starts,
-        Some(&pairs),
-        dt,
-        steps,
-        stride,
-        monitor,
-        |first, runs| {
-            for (k, run) in runs.iter().enumerate() {
-                let q = with_damping(p, pairs[first + k].0, pairs[first + k].1);
-                let cost: f64 = run
-                    .iter()
-                    .zip(data)
-                    .map(|(y, d)| {
-                        let s = q.positions(y);
-                        let e = [s.x1 - d[0], s.y1 - d[1], s.x2 - d[2], s.y2 - d[3]];
-                        e.iter().map(|e| e * e).sum::<f64>()
-                    })
-                    .sum();
-                if best.len() < REFINED || cost < best[REFINED - 1].0 {
-                    best.push((cost, first + k));
-                    best.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    best.truncate(REFINED);
-                }
+    let ensemble = EnsembleSpec::new(*p, &starts, dt, steps)
+        .damped(&pairs)
+        .keeping(Keep::Every(stride));
+    engine.ensemble(&ensemble, monitor, |first, runs| {
+        for (k, run) in runs.into_states().iter().enumerate() {
+            let q = with_damping(p, pairs[first + k].0, pairs[first + k].1);
+            let cost: f64 = run
+                .iter()
+                .zip(data)
+                .map(|(y, d)| {
+                    let s = q.positions(y);
+                    let e = [s.x1 - d[0], s.y1 - d[1], s.x2 - d[2], s.y2 - d[3]];
+                    e.iter().map(|e| e * e).sum::<f64>()
+                })
+                .sum();
+            if best.len() < REFINED || cost < best[REFINED - 1].0 {
+                best.push((cost, first + k));
+                best.sort_by(|a, b| a.0.total_cmp(&b.0));
+                best.truncate(REFINED);
             }
-            Ok(())
-        },
-    )?;
+        }
+        Ok(())
+    })?;
     // Refine the state and both dampings together in f64, at the data's own times. The
     // damping is fitted as it is (not squared to keep it positive) so that its covariance is
     // that of the quantity itself; a forecast keeps members' damping >= 0.

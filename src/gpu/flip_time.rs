@@ -7,7 +7,7 @@ use super::pipeline::{
     Variants, bind_group, kernel_module, layouts, params_buffer_of, record_dispatch, storage_buffer,
 };
 use super::shaders::Kernel;
-use super::tiled::{Tiling, adaptive_loop, map_tiles, max_pixels, time_loop};
+use super::tiled::{TileWork, Tiling, adaptive_loop, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
 use crate::monitor::Monitor;
@@ -314,16 +314,15 @@ impl FlipTimeKernel {
                     |steps, active| advance_by(0, steps, active),
                 )?;
             } else {
-                time_loop(
-                    total_steps,
+                let work = TileWork {
+                    total: total_steps,
                     pixels,
                     active,
-                    1,
-                    None,
+                    cost: 1,
+                    max_steps: None,
                     later,
-                    monitor,
-                    advance_by,
-                )?;
+                };
+                time_loop(work, monitor, advance_by)?;
             }
             let bytes = read_buffer(ctx, &bufs.times, pixels as u64 * time_bytes)?;
             let t_max = t_max_of(t_max, self.precision);

@@ -9,7 +9,7 @@ use super::pipeline::{
     storage_buffer,
 };
 use super::shaders::Kernel;
-use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
+use super::tiled::{TileWork, Tiling, catch_up, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::Field;
 use crate::measure::Runs;
@@ -185,20 +185,29 @@ impl IndicatorKernel {
             let mut params = base;
             params.set_tile(row0, rows, pixels);
             dispatch(init, &params)?;
-            time_loop(
-                units,
+            let work = TileWork {
+                total: units,
                 pixels,
-                pixels,
-                unit_cost,
-                None,
+                active: pixels,
+                cost: unit_cost,
+                max_steps: None,
                 later,
-                monitor,
-                |step0, steps, active| {
-                    params.set_steps(step0, steps, pixels);
-                    dispatch(advance, &params)?;
-                    Ok(active)
-                },
-            )?;
+            };
+            // The adaptive spectrum's pixels keep their own place in their slot's clock
+            // (shaders/indicators.wgsl).
+            let clocks = || -> Result<Vec<[f64; 4]>> {
+                let bytes = read_buffer(ctx, &states, pixels as u64 * slot)?;
+                let slots = bytemuck::pod_collect_to_vec::<u8, R::IndicatorSlot>(&bytes);
+                Ok(slots.iter().map(R::slot_clock).collect())
+            };
+            time_loop(work, monitor, |step0, steps, active| {
+                params.set_steps(step0, steps, pixels);
+                dispatch(advance, &params)?;
+                if adaptive.is_some() && step0 + steps == units {
+                    catch_up(units, monitor, clocks, || dispatch(advance, &params))?;
+                }
+                Ok(active)
+            })?;
             let raw = read_reals::<R>(&read_buffer(ctx, &values, pixels as u64 * value_bytes)?);
             if let Some(layers) = layers.as_deref_mut() {
                 let bytes = read_buffer(ctx, &states, pixels as u64 * slot)?;

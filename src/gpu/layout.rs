@@ -95,7 +95,8 @@ mirrors! {
 
     /// Mirror of WGSL `IndicatorSlot` (shaders/indicators.wgsl), one per pixel of an
     /// indicator map: the pendulum, four tangent vectors, the running sums, and the adaptive
-    /// spectrum's clock (the next step, attempts so far, stalled).
+    /// spectrum's clock (the next step, attempts so far (-1: stalled), windows done, the time
+    /// into the next).
     struct GpuIndicatorSlot / GpuIndicatorSlot64 {
         y: [real; 4],
         u: [real; 4],
@@ -280,6 +281,8 @@ pub trait Real: Pod + Copy + Default + PartialEq + std::fmt::Debug + Send + Sync
     type IndicatorSlot: Pod + Default;
     /// An indicator slot's running sums (the spectrum's four log sums).
     fn slot_sums(slot: &Self::IndicatorSlot) -> [f64; 4];
+    /// An indicator slot's adaptive clock ([`super::tiled::catch_up`]).
+    fn slot_clock(slot: &Self::IndicatorSlot) -> [f64; 4];
     fn from_f64(x: f64) -> Self;
     fn to_f64(self) -> f64;
 }
@@ -295,6 +298,9 @@ macro_rules! real {
             type IndicatorSlot = $indicator;
             fn slot_sums(slot: &$indicator) -> [f64; 4] {
                 slot.sums.map(|x| x as f64)
+            }
+            fn slot_clock(slot: &$indicator) -> [f64; 4] {
+                slot.clock.map(|x| x as f64)
             }
             fn from_f64(x: f64) -> Self {
                 x as $r

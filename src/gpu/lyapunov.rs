@@ -10,7 +10,7 @@ use super::pipeline::{
     params_buffer_of, storage_buffer,
 };
 use super::shaders::Kernel;
-use super::tiled::{Tiling, map_tiles, max_pixels, time_loop};
+use super::tiled::{TileWork, Tiling, catch_up, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
 use crate::field::{Convergence, Field};
 use crate::model::{Params, State};
@@ -200,33 +200,47 @@ impl LyapunovKernel {
             let mut params = base;
             params.set_tile(row0, rows, pixels);
             dispatch(init, &params)?;
-            time_loop(
-                units,
+            let work = TileWork {
+                total: units,
                 pixels,
-                pixels,
-                unit_cost,
+                active: pixels,
+                cost: unit_cost,
                 max_steps,
                 later,
-                monitor,
-                |step0, steps, active| {
-                    params.set_steps(step0, steps, pixels);
-                    dispatch(advance, &params)?;
-                    if let Some(trace) = trace.as_deref_mut() {
-                        let log_sum = sums(&read_buffer(ctx, &log_sums, sum_bytes)?)[0];
-                        let done = match adaptive {
-                            true => ((step0 + steps) * interval).min(total_steps),
-                            false => step0 + steps,
-                        };
-                        let t = done as f64 * spec.stepping.dt;
-                        trace.t.push(t);
-                        trace.ftle.push(match log_sum < STALLED_BELOW {
-                            true => f64::NAN,
-                            false => log_sum / t,
-                        });
-                    }
-                    Ok(active)
-                },
-            )?;
+            };
+            // The adaptive tangent's pixels keep their own place (shaders/lyapunov.wgsl): its
+            // clock, the last vec4 of the slot's four.
+            let clocks = || -> Result<Vec<[f64; 4]>> {
+                let all = sums(&read_buffer(ctx, &states, pixels as u64 * slot)?);
+                Ok(all
+                    .chunks_exact(16)
+                    .map(|s| [s[12], s[13], s[14], s[15]])
+                    .collect())
+            };
+            time_loop(work, monitor, |step0, steps, active| {
+                params.set_steps(step0, steps, pixels);
+                dispatch(advance, &params)?;
+                // A convergence run reads every window's sum: its pixel there first.
+                if adaptive && (trace.is_some() || step0 + steps == units) {
+                    catch_up(step0 + steps, monitor, clocks, || {
+                        dispatch(advance, &params)
+                    })?;
+                }
+                if let Some(trace) = trace.as_deref_mut() {
+                    let log_sum = sums(&read_buffer(ctx, &log_sums, sum_bytes)?)[0];
+                    let done = match adaptive {
+                        true => ((step0 + steps) * interval).min(total_steps),
+                        false => step0 + steps,
+                    };
+                    let t = done as f64 * spec.stepping.dt;
+                    trace.t.push(t);
+                    trace.ftle.push(match log_sum < STALLED_BELOW {
+                        true => f64::NAN,
+                        false => log_sum / t,
+                    });
+                }
+                Ok(active)
+            })?;
             let all = sums(&read_buffer(ctx, &log_sums, pixels as u64 * sum_bytes)?);
             Ok(all
                 .into_iter()

@@ -11,9 +11,8 @@ use super::shaders::Kernel;
 use super::tiled::{STEPS_PER_DISPATCH, STEPS_PER_INVOCATION};
 use super::trajectory::{damped_pipeline, damping_buffer, pendulums_buffer};
 use crate::error::{Error, Result};
-use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::spec::Precision;
+use crate::spec::{EnsembleSpec, Precision};
 
 pub struct PositionsKernel {
     precision: Precision,
@@ -33,41 +32,30 @@ impl PositionsKernel {
         }
     }
 
-    /// The positions (x1, y1, x2, y2) of one run per start at `times` (s from the start,
-    /// ascending, within `steps` steps of `dt`), integrated in the kernel's precision, run i
-    /// with joint damping `damping[i]` (N m s at the pivot and the middle joint) in place of
-    /// `p`'s when given; handed to `f` where they are read back, time-major: time j,
-    /// coordinate c, run i of n at (4 j + c) n + i. Progress (runs) and Ctrl-C between
-    /// dispatches.
-    #[allow(clippy::too_many_arguments)]
+    /// The positions (x1, y1, x2, y2) of the runs of `spec` (which keeps positions at given
+    /// times) integrated in the kernel's precision, handed to `f` where they are read back,
+    /// time-major: time j, coordinate c, run i of n at (4 j + c) n + i. Progress (runs) and
+    /// Ctrl-C between dispatches.
     pub fn run_with<T>(
         &self,
         ctx: &GpuContext,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        times: &[f64],
+        spec: &EnsembleSpec,
         monitor: &Monitor,
         f: impl FnOnce(&[f32]) -> T,
     ) -> Result<T> {
-        with_real!(self.precision, R => self.run_in::<R, T>(ctx, p, starts, damping, dt, steps, times, monitor, f))
+        with_real!(self.precision, R => self.run_in::<R, T>(ctx, spec, monitor, f))
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn run_in<R: Real, T>(
         &self,
         ctx: &GpuContext,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        times: &[f64],
+        spec: &EnsembleSpec,
         monitor: &Monitor,
         f: impl FnOnce(&[f32]) -> T,
     ) -> Result<T> {
+        let (p, starts, damping, dt, steps) =
+            (&spec.params, spec.starts, spec.damping, spec.dt, spec.steps);
+        let times = spec.times();
         if let Some(d) = damping {
             assert_eq!(d.len(), starts.len(), "one damping pair per start");
         }

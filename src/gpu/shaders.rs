@@ -135,6 +135,10 @@ fn dp54() -> String {
             named(format!("{letter}{}", j + 1), w);
         }
     }
+    lines.push(format!(
+        "const ATTEMPTS_PER_DISPATCH: u32 = {}u;",
+        super::tiled::ATTEMPTS_PER_DISPATCH
+    ));
     let body = DP54.replace("//{{COEFFICIENTS}}", &lines.join("\n"));
     assert!(!body.contains("{{"), "a placeholder left in dp54.wgsl");
     body

@@ -19,6 +19,12 @@ pub const STEPS_PER_DISPATCH: u64 = 1 << 24;
 /// loops (bisections at a flip).
 pub const STEPS_PER_INVOCATION: u32 = 1 << 15;
 
+/// Step attempts an adaptive window kernel's invocation takes at most a dispatch (the tangent
+/// and spectrum kernels): with at most [`STEPS_PER_INVOCATION`] windows' loop turns besides,
+/// well within lavapipe's 65,535 loop iterations an invocation. A pixel the budget stops
+/// goes on in the next dispatch from where it was ([`catch_up`] after the last).
+pub const ATTEMPTS_PER_DISPATCH: u32 = 1 << 14;
+
 /// Fewest steps a dispatch takes (its per-pixel bookkeeping, the active list, costs about
 /// a step; spread over a few steps it would rival the steps themselves).
 const MIN_STEPS: u64 = 16;
@@ -103,28 +109,67 @@ pub fn map_tiles(
     Ok(field)
 }
 
+/// After the dispatches of an adaptive window kernel up to window `target`: dispatches again
+/// (`again`, the target unchanged) while `clocks` reads a pixel short of it and not stalled.
+/// A clock is (the next step, attempts so far (-1: stalled), windows done, time into the
+/// next); each round gives every such pixel [`ATTEMPTS_PER_DISPATCH`] more attempts and a
+/// pixel stalls after 2^24 in all, so the rounds end. Ctrl-C between rounds.
+pub fn catch_up(
+    target: u32,
+    monitor: &Monitor,
+    mut clocks: impl FnMut() -> Result<Vec<[f64; 4]>>,
+    mut again: impl FnMut() -> Result<()>,
+) -> Result<()> {
+    while clocks()?
+        .iter()
+        .any(|c| c[1] >= 0.0 && c[2] < target as f64)
+    {
+        monitor.check()?;
+        again()?;
+    }
+    Ok(())
+}
+
+/// A tile's work for [`time_loop`].
+#[derive(Clone, Copy, Debug)]
+pub struct TileWork {
+    /// Steps to take.
+    pub total: u32,
+    /// The tile's pixels, and those still active at the start.
+    pub pixels: u32,
+    pub active: u32,
+    /// Plain steps a step costs.
+    pub cost: u64,
+    /// At most this many steps a dispatch, when given.
+    pub max_steps: Option<u32>,
+    /// Pixels of the tiles still to come.
+    pub later: u64,
+}
+
 /// A tile's time loop: `dispatch(step0, steps, active)` advances the `active` pixels by
-/// `steps` steps from `step0` and returns how many are still active, until `total` steps are
-/// done or none is. Each dispatch holds at most STEPS_PER_DISPATCH / `cost` pendulum-steps
-/// (`cost`: plain steps a step costs), at most `max_steps` steps when given, and at most
-/// [`STEPS_PER_INVOCATION`] / `cost` steps (a step's loop iterations are at most its cost).
+/// `steps` steps from `step0` and returns how many are still active, until `work.total` steps
+/// are done or none is. Each dispatch holds at most STEPS_PER_DISPATCH / `cost` pendulum-steps,
+/// at most `max_steps` steps when given, and at most [`STEPS_PER_INVOCATION`] / `cost` steps
+/// (a step's loop iterations are at most its cost).
 ///
 /// Progress counts pendulum-steps. What is left is estimated from the work itself: the
 /// still-active pixels run until they flip, at the rate at which they flipped over the last
 /// quarter of the steps so far (survival exp(-h k) over the steps left; h = 0 when none
 /// flipped), and the `later` pixels of the tiles still to come cost what this tile's pixels
 /// cost on average.
-#[allow(clippy::too_many_arguments)]
 pub fn time_loop(
-    total: u32,
-    pixels: u32,
-    mut active: u32,
-    cost: u64,
-    max_steps: Option<u32>,
-    later: u64,
+    work: TileWork,
     monitor: &Monitor,
     mut dispatch: impl FnMut(u32, u32, u32) -> Result<u32>,
 ) -> Result<()> {
+    let TileWork {
+        total,
+        pixels,
+        mut active,
+        cost,
+        max_steps,
+        later,
+    } = work;
     let mut step0 = 0;
     let mut done = 0u64;
     let mut hazard = 0.0f64;

@@ -11,7 +11,7 @@ use super::shaders::Kernel;
 use super::tiled::STEPS_PER_INVOCATION;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
-use crate::spec::Precision;
+use crate::spec::{EnsembleSpec, Precision};
 
 pub struct TrajectoryKernel {
     precision: Precision,
@@ -36,48 +36,16 @@ impl TrajectoryKernel {
         }
     }
 
-    /// One run per start, integrated over `steps` steps of `dt` in the kernel's precision,
-    /// keeping the start and every `stride`-th state (`steps` a multiple of `stride`).
-    pub fn run(
-        &self,
-        ctx: &GpuContext,
-        p: &Params,
-        starts: &[State],
-        dt: f64,
-        steps: u32,
-        stride: u32,
-    ) -> Result<Vec<Vec<State>>> {
-        self.run_damped(ctx, p, starts, None, dt, steps, stride)
+    /// The runs of `spec` (which keeps every n-th state) integrated in the kernel's
+    /// precision, each run's start and kept states converted where they are read back.
+    pub fn run(&self, ctx: &GpuContext, spec: &EnsembleSpec) -> Result<Vec<Vec<State>>> {
+        with_real!(self.precision, R => self.run_in::<R>(ctx, spec))
     }
 
-    /// As [`TrajectoryKernel::run`], run i with joint damping `damping[i]` (N m s at the pivot
-    /// and the middle joint) in place of `p`'s when given (one pair per start), the kept states
-    /// converted where they are read back.
-    #[allow(clippy::too_many_arguments)]
-    pub fn run_damped(
-        &self,
-        ctx: &GpuContext,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        stride: u32,
-    ) -> Result<Vec<Vec<State>>> {
-        with_real!(self.precision, R => self.run_in::<R>(ctx, p, starts, damping, dt, steps, stride))
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn run_in<R: Real>(
-        &self,
-        ctx: &GpuContext,
-        p: &Params,
-        starts: &[State],
-        damping: Option<&[(f64, f64)]>,
-        dt: f64,
-        steps: u32,
-        stride: u32,
-    ) -> Result<Vec<Vec<State>>> {
+    fn run_in<R: Real>(&self, ctx: &GpuContext, spec: &EnsembleSpec) -> Result<Vec<Vec<State>>> {
+        let (p, starts, damping, dt, steps) =
+            (&spec.params, spec.starts, spec.damping, spec.dt, spec.steps);
+        let stride = spec.stride();
         if let Some(d) = damping {
             assert_eq!(d.len(), starts.len(), "one damping pair per start");
         }

@@ -5,6 +5,7 @@
 use crate::error::{Error, Result, finite_positive};
 use crate::model::{Params, State};
 
+mod ensemble;
 mod grid;
 mod kind;
 mod map;
@@ -15,6 +16,7 @@ mod stability;
 mod var;
 
 pub use crate::measure::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator, IndicatorAsked};
+pub use ensemble::{Chunk, EnsembleSpec, Keep};
 pub use grid::{Axis, Grid, Sampling, Var, pcg};
 pub use kind::{MapKind, MapKindEntry};
 pub(crate) use map::on_any;

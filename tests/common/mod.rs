@@ -92,7 +92,10 @@ pub fn gpu_trajectory(
     steps: u32,
 ) -> Vec<State> {
     chaoscope::gpu::TrajectoryKernel::new(ctx)
-        .run(ctx, p, &[start], dt, steps, 1)
+        .run(
+            ctx,
+            &chaoscope::spec::EnsembleSpec::new(*p, &[start], dt, steps),
+        )
         .expect("gpu trajectory")
         .remove(0)
 }

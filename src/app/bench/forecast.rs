@@ -3,7 +3,7 @@
 //! FTLE along the fitted orbit) over 6 s past the window, on the GPU engine.
 
 use super::Sample;
-use crate::app::forecast::Settings;
+use crate::app::forecast::ForecastSettings;
 use crate::app::twin::{experiment, make_track};
 use crate::engine::Engine;
 use crate::error::Result;
@@ -28,18 +28,19 @@ pub(super) fn prepare(engine: &Engine, monitor: &Monitor) -> Result<crate::fit::
         omega2: 0.0,
     };
     let track = make_track(&p, start, 30.0, 0.5 + SPAN, 0.002, 1);
-    let settings = Settings {
+    let settings = ForecastSettings {
         window: (0.0, 0.5),
-        end: 0.5 + SPAN,
         members: 16,
         seed: 1,
         tolerance: 0.03,
         tracking_error: None,
         candidates: 4096,
     };
-    Ok(experiment(&p, start, &track, &settings, engine, monitor)?
-        .0
-        .fit)
+    Ok(
+        experiment(&p, start, &track, &settings, 0.5 + SPAN, engine, monitor)?
+            .0
+            .fit,
+    )
 }
 
 /// One timed forecast of `members` from `fit`.

@@ -98,8 +98,7 @@ pub(super) async fn point(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
     let result = on_engine(&shared, move |engine, monitor| {
         let spec = view.flip_spec(grid);
         spec.validate()?;
-        let precision = planned(engine, &spec, true)?;
-        let (field, mask) = crate::app::map_and_verdict(engine, &spec, true, monitor)?;
+        let (field, mask, precision) = planned(engine, &spec, true, monitor)?;
         let resolved = mask.is_some_and(|m| m[0] == 1);
         Ok((field, resolved, precision))
     })
@@ -192,8 +191,8 @@ pub(super) async fn range(AxumState(shared): AxumState<S>, AxumQuery(q): Params)
         };
         let spec = view.lyapunov_spec(overview);
         spec.validate()?;
-        planned(engine, &spec, false)?;
-        Ok(render::default_range(&spec, &engine.map(&spec, monitor)?))
+        let (field, _, _) = planned(engine, &spec, false, monitor)?;
+        Ok(render::default_range(&spec, &field))
     })
     .await;
     match result {

@@ -8,6 +8,7 @@ mod answers;
 mod api;
 mod assets;
 mod kind;
+mod query;
 mod tiles;
 pub mod view;
 pub mod world;

@@ -17,15 +17,18 @@ use axum::extract::{Path, Query as AxumQuery, State as AxumState};
 use axum::response::Response;
 use std::sync::atomic::Ordering;
 
-/// The precision `spec`'s map runs in ("f32", "f64"), planned as every door plans a map
-/// (`app::map_engine`: its path, the checks that depend on it, the verdict's finer map's).
+/// `spec`'s map (with `verdict`, its mask) as every door makes one: planned on the engine
+/// ([`Engine::plan`]: its path, the checks that depend on it, the verdict's finer maps), then
+/// computed; and the precision it ran in ("f32", "f64").
 pub(super) fn planned<S: MapKernels>(
     engine: &Engine,
     spec: &S,
     verdict: bool,
-) -> Result<&'static str> {
-    let (info, _) = crate::app::map_engine(engine, spec, verdict)?;
-    Ok(info.path.precision().name())
+    monitor: &Monitor,
+) -> Result<(Field, Option<Vec<u8>>, &'static str)> {
+    let plan = engine.plan(spec, verdict)?;
+    let (field, mask) = engine.planned_map(&plan, monitor)?;
+    Ok((field, mask, plan.info.path.precision().name()))
 }
 
 /// The tile (z, x, y), as the bare PNG `chaoscope flip` / `lyapunov` would make of it.
@@ -122,8 +125,7 @@ pub fn tile_rgb(
             let spec = view.flip_spec(grid);
             spec.validate()?;
             let verdict = view.unresolved || view.kind == Kind::Resolved;
-            let precision = planned(engine, &spec, verdict)?;
-            let (field, mask) = crate::app::map_and_verdict(engine, &spec, verdict, monitor)?;
+            let (field, mask, precision) = planned(engine, &spec, verdict, monitor)?;
             let rgb = match (view.kind, mask) {
                 (Kind::Resolved, Some(mask)) => mask_rgb(&mask),
                 (_, mask) => {
@@ -136,9 +138,7 @@ pub fn tile_rgb(
         Kind::Map(_) => {
             let spec = view.lyapunov_spec(grid);
             spec.validate()?;
-            let precision = planned(engine, &spec, view.unresolved)?;
-            let (field, mask) =
-                crate::app::map_and_verdict(engine, &spec, view.unresolved, monitor)?;
+            let (field, mask, precision) = planned(engine, &spec, view.unresolved, monitor)?;
             let rgb = spec
                 .draw(&field, &picture, Some(view.range), mask.as_deref())?
                 .picture

@@ -2,7 +2,6 @@
 //! stepping and the picture, each value checked; an error names the query key, which the
 //! page shows as it is (400).
 
-use std::collections::HashMap;
 use std::f64::consts::PI;
 
 use crate::app::sweep::FrameMap;
@@ -11,10 +10,12 @@ use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
 use crate::spec::{
-    Axis, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Range, Sampling, Stepping, Var,
+    Axis, FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Precision, Range,
+    Sampling, Stepping, Var,
 };
 
 pub use super::kind::Kind;
+pub use super::query::{PHYSICS_KEYS, PLANE_KEYS, Query};
 
 /// The deepest zoom level: 256 * 2^42 pixels across a turn, a pixel step of 5.6e-15 rad,
 /// below what f64 resolves (the verdict then says so); Leaflet's pixel coordinates stay
@@ -43,6 +44,10 @@ pub struct View {
     pub stepping: Stepping,
     /// `--accurate`'s settings (f64, DP54): `flip`'s for flip maps, `lyapunov`'s for FTLE.
     pub accurate: bool,
+    /// The precision and integrator asked for (`precision`, `integrator`, `rtol`, `atol`),
+    /// when not `accurate`'s: checked against the path where a map is planned, as the
+    /// commands' are (an f32 kernel refuses tolerances below its floor).
+    pub method: Option<(Precision, Integrator)>,
     pub colormap: Option<Colormap>,
     /// Paint the pixels the verdict cannot resolve grey.
     pub unresolved: bool,
@@ -57,88 +62,7 @@ pub struct View {
     pub region_given: bool,
 }
 
-/// A query string's values by key, each key read at most once; keys nobody read are
-/// refused ([`Query::finish`]), so a misspelt key is an error, not a silent default.
-pub struct Query {
-    values: HashMap<String, String>,
-}
-
 impl Query {
-    /// The query's pairs, each key once: a repeated key (`size=16&size=512`) is refused
-    /// naming it, rather than one of its values being taken silently.
-    pub fn new(pairs: Vec<(String, String)>) -> Result<Self> {
-        let mut values = HashMap::with_capacity(pairs.len());
-        for (key, value) in pairs {
-            if values.contains_key(&key) {
-                let key = KNOWN_KEYS
-                    .iter()
-                    .copied()
-                    .find(|k| *k == key)
-                    .unwrap_or("query");
-                return Err(Error::invalid(key, "is given more than once"));
-            }
-            values.insert(key, value);
-        }
-        Ok(Query { values })
-    }
-
-    fn take(&mut self, key: &'static str) -> Option<String> {
-        self.values.remove(key)
-    }
-
-    /// A finite number, if given.
-    pub fn number(&mut self, key: &'static str) -> Result<Option<f64>> {
-        self.take(key)
-            .map(|s| match s.trim().parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(v),
-                _ => Err(Error::invalid(key, format!("{s:?} is not a finite number"))),
-            })
-            .transpose()
-    }
-
-    /// A number within [lo, hi], if given.
-    pub fn within(&mut self, key: &'static str, lo: f64, hi: f64) -> Result<Option<f64>> {
-        let v = self.number(key)?;
-        if let Some(v) = v
-            && !(lo..=hi).contains(&v)
-        {
-            return Err(Error::invalid(key, format!("{v} must be in [{lo}, {hi}]")));
-        }
-        Ok(v)
-    }
-
-    /// A whole number within [lo, hi], if given.
-    pub fn count(&mut self, key: &'static str, lo: u32, hi: u32) -> Result<Option<u32>> {
-        self.take(key)
-            .map(|s| match s.trim().parse::<u32>() {
-                Ok(v) if (lo..=hi).contains(&v) => Ok(v),
-                _ => Err(Error::invalid(
-                    key,
-                    format!("{s:?} must be a whole number in [{lo}, {hi}]"),
-                )),
-            })
-            .transpose()
-    }
-
-    /// `1`/`true` or `0`/`false`, false when absent.
-    pub fn flag(&mut self, key: &'static str) -> Result<bool> {
-        match self.take(key).as_deref() {
-            None | Some("0" | "false") => Ok(false),
-            Some("1" | "true") => Ok(true),
-            Some(s) => Err(Error::invalid(key, format!("{s:?}: 1 or 0"))),
-        }
-    }
-
-    /// An error naming the first key nobody asked for.
-    pub fn finish(self) -> Result<()> {
-        let mut left: Vec<String> = self.values.into_keys().collect();
-        left.sort();
-        match left.first() {
-            None => Ok(()),
-            Some(k) => Err(Error::invalid("query", format!("unknown key {k:?}"))),
-        }
-    }
-
     /// The view's settings; `base` gives the physics not in the query (the server's flags),
     /// or `stored`, a store's map, fixes them (and the query may not name them).
     pub fn view(&mut self, base: &ParamSources, stored: Option<FrameMap>) -> Result<View> {
@@ -164,6 +88,7 @@ impl Query {
                 params,
                 stepping,
                 accurate: false,
+                method: None,
                 colormap: self.colormap()?,
                 unresolved: self.flag("unresolved")?,
                 range: self.range()?,
@@ -218,6 +143,7 @@ impl Query {
                 ),
             ));
         }
+        let method = self.method(accurate)?;
         let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
         let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
         if let Kind::Map(k) = kind
@@ -237,6 +163,7 @@ impl Query {
             params,
             stepping: Stepping { dt, t_max },
             accurate,
+            method,
             colormap: self.colormap()?,
             unresolved: self.flag("unresolved")?,
             range: self.range()?,
@@ -343,75 +270,7 @@ impl Query {
         plane.validate_axes()?;
         Ok(plane)
     }
-
-    fn colormap(&mut self) -> Result<Option<Colormap>> {
-        let Some(name) = self.take("cmap") else {
-            return Ok(None);
-        };
-        Colormap::ALL
-            .into_iter()
-            .find(|c| c.name() == name)
-            .map(Some)
-            .ok_or_else(|| {
-                let names: Vec<&str> = Colormap::ALL.iter().map(|c| c.name()).collect();
-                Error::invalid("cmap", format!("{name:?}: one of {}", names.join(", ")))
-            })
-    }
-
-    /// The colour range `lo`..`hi` of a divergence-family map (its quantity's unit).
-    fn range(&mut self) -> Result<(f32, f32)> {
-        let lo = self.within("lo", -1e6, 1e6)?.unwrap_or(0.0) as f32;
-        let hi = self.within("hi", -1e6, 1e6)?.unwrap_or(2.0) as f32;
-        if lo >= hi {
-            return Err(Error::invalid("hi", format!("{hi} must exceed lo = {lo}")));
-        }
-        Ok((lo, hi))
-    }
 }
-
-/// The query's keys for the physics and the stepping, which a store's command fixes.
-/// Every key a query may hold (a repeated one is named from here).
-const KNOWN_KEYS: [&str; 32] = [
-    "kind",
-    "t_max",
-    "dt",
-    "cmap",
-    "m1",
-    "m2",
-    "l1",
-    "l2",
-    "g",
-    "damping",
-    "accurate",
-    "unresolved",
-    "lo",
-    "hi",
-    "size",
-    "width",
-    "height",
-    "annotate",
-    "x",
-    "y",
-    "x_min",
-    "x_max",
-    "y_min",
-    "y_max",
-    "theta1",
-    "omega1",
-    "theta2",
-    "omega2",
-    "px",
-    "py",
-    "pixel",
-    "pixel_y",
-];
-
-/// The keys of the plane's axes and fixed start, which a store's map fixes.
-pub const PLANE_KEYS: [&str; 6] = ["x", "y", "theta1", "omega1", "theta2", "omega2"];
-
-pub const PHYSICS_KEYS: [&str; 9] = [
-    "m1", "m2", "l1", "l2", "g", "damping", "t_max", "dt", "accurate",
-];
 
 /// The same error, naming `to` where it named `from` (the query's key for a spec's field).
 fn rename(e: Error, from: &str, to: &'static str) -> Error {
@@ -438,7 +297,13 @@ impl View {
             },
             ..FlipSpec::new(self.params, grid, self.stepping)
         };
-        if self.accurate { spec.accurate() } else { spec }
+        match (self.accurate, self.method) {
+            (true, _) => spec.accurate(),
+            (false, Some((precision, integrator))) => {
+                spec.restepped(self.stepping, integrator, precision)
+            }
+            (false, None) => spec,
+        }
     }
 
     /// The divergence map of this view over `grid`, as `chaoscope lyapunov` makes it by
@@ -459,7 +324,13 @@ impl View {
             },
             ..LyapunovSpec::new(self.params, grid, self.stepping)
         };
-        if self.accurate { spec.accurate() } else { spec }
+        match (self.accurate, self.method) {
+            (true, _) => spec.accurate(),
+            (false, Some((precision, integrator))) => {
+                spec.restepped(self.stepping, integrator, precision)
+            }
+            (false, None) => spec,
+        }
     }
 }
 
