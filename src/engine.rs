@@ -198,6 +198,12 @@ impl Engine {
         })
     }
 
+    /// The engine for `backend` whose trajectories and ensembles run in `precision`
+    /// ([`Engine::with_precision`]): what a door makes and lends to a command that runs them.
+    pub fn in_precision(backend: Backend, precision: Precision) -> Result<Self> {
+        Engine::new(backend)?.with_precision(precision, backend)
+    }
+
     /// The engine on an existing GPU context.
     pub fn on_gpu(ctx: GpuContext) -> Self {
         Engine {

@@ -447,7 +447,8 @@ fn twin_experiments_are_calibrated() {
         backend: Backend::Cpu,
         precision: Precision::F32,
     };
-    let s = twin::run(&job, "test".into(), &Monitor::hidden()).unwrap();
+    let engine = Engine::in_precision(job.backend, job.precision).unwrap();
+    let s = twin::run(&job, &engine, "test".into(), &Monitor::hidden()).unwrap();
     let defined = s.rows.iter().filter(|r| r.coverage.is_some()).count();
     eprintln!(
         "twin calibration: coverage {} over {defined} replicates",

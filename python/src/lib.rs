@@ -27,7 +27,7 @@ mod keywords;
 mod picture;
 mod run;
 use keywords::Keywords;
-use run::{engine, watched};
+use run::{engine, engine_in, watched};
 
 /// The Python keyword of a field the library names: the field's own name but where the
 /// wrappers take it under another (the Python column beside src/cli/names.rs's flags).
@@ -391,9 +391,10 @@ fn trajectory<'py>(
         output: None,
     };
     let command = command_line::trajectory(&job);
+    let engine = engine_in(job.backend, job.precision)?;
     let csv = watched(py, progress, move |monitor| {
         let mut csv = Vec::new();
-        chaoscope::app::trajectory::run(&job, command, monitor, &mut csv)?;
+        chaoscope::app::trajectory::run(&job, &engine, command, monitor, &mut csv)?;
         Ok(csv)
     })?;
     String::from_utf8(csv).map_err(|e| PyRuntimeError::new_err(e.to_string()))
@@ -425,8 +426,9 @@ fn fit<'py>(
         precision: k.precision()?,
     };
     let command = command_line::fit(&job);
+    let engine = engine_in(job.backend, job.precision)?;
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::fit::run(&job, command, monitor)
+        chaoscope::app::fit::run(&job, &engine, command, monitor)
     })?;
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
@@ -469,8 +471,9 @@ fn traces<'py>(
         data: k.get("data")?,
     };
     let command = command_line::traces(&job);
+    let engine = engine_in(job.backend, job.precision)?;
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::traces::run(&job, command.clone(), monitor)
+        chaoscope::app::traces::run(&job, &engine, command.clone(), monitor)
             .map(|s| (s, command))
             .map_err(|e| e.renamed("t_max", "exposure"))
     })?;
@@ -509,8 +512,9 @@ fn forecast<'py>(
         precision: k.precision()?,
     };
     let command = command_line::forecast(&job);
+    let engine = engine_in(job.backend, job.precision)?;
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::forecast::run(&job, command, monitor)
+        chaoscope::app::forecast::run(&job, &engine, command, monitor)
     })?;
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }

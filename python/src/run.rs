@@ -7,25 +7,35 @@ use std::time::Duration;
 
 use chaoscope::engine::{Backend, Engine};
 use chaoscope::monitor::Monitor;
+use chaoscope::spec::Precision;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 use crate::py_err;
 
-/// The engine of `backend`, made on the module's first call that asks for it and lent to
-/// every later one: a GPU device and its compiled kernels are made once per process, not
-/// once per call (200 calls each making a device grew the process by 53 MB).
+/// The engine of `backend` for maps (each map carries its own precision).
 pub fn engine(backend: Backend) -> PyResult<Arc<Engine>> {
-    static ENGINES: std::sync::Mutex<Vec<(Backend, Arc<Engine>)>> =
-        std::sync::Mutex::new(Vec::new());
+    engine_in(backend, Precision::F32)
+}
+
+/// The engine of `backend` whose trajectories and ensembles run in `precision`, made on the
+/// module's first call that asks for it and lent to every later one: a GPU device and its
+/// compiled kernels are made once per process and (backend, precision), not once per call
+/// (200 calls each making a device grew the process by 53 MB).
+pub fn engine_in(backend: Backend, precision: Precision) -> PyResult<Arc<Engine>> {
+    type Made = (Backend, Precision, Arc<Engine>);
+    static ENGINES: std::sync::Mutex<Vec<Made>> = std::sync::Mutex::new(Vec::new());
     let mut engines = ENGINES
         .lock()
         .map_err(|_| PyRuntimeError::new_err("the engines' lock was poisoned"))?;
-    if let Some((_, e)) = engines.iter().find(|(b, _)| *b == backend) {
+    if let Some((_, _, e)) = engines
+        .iter()
+        .find(|(b, p, _)| (*b, *p) == (backend, precision))
+    {
         return Ok(e.clone());
     }
-    let made = Arc::new(Engine::new(backend).map_err(py_err)?);
-    engines.push((backend, made.clone()));
+    let made = Arc::new(Engine::in_precision(backend, precision).map_err(py_err)?);
+    engines.push((backend, precision, made.clone()));
     Ok(made)
 }
 

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use plotters::prelude::*;
 
 use crate::boundary::{Fit, Level, count, eps_levels, fit, level_seed};
-use crate::engine::Backend;
 use crate::engine::MapKernels;
+use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::render::{self, Outputs};
@@ -160,22 +160,27 @@ impl BoundaryJob {
     }
 }
 
-pub fn run(job: &BoundaryJob, command: String, monitor: &Monitor) -> Result<BoundarySummary> {
+pub fn run(
+    job: &BoundaryJob,
+    engine: &Engine,
+    command: String,
+    monitor: &Monitor,
+) -> Result<BoundarySummary> {
     job.validate()?;
     let started = std::time::Instant::now();
     let all = eps_levels(job.eps.0, job.eps.1, job.levels);
     let (levels, info, mut notices) = match job.class {
         BoundaryClass::Chaotic => {
             let spec = |k, eps| job.divergence_spec(k, eps);
-            measure(job, &all, spec, |s, v| s.counted(v) as u32, monitor)?
+            measure(engine, &all, spec, |s, v| s.counted(v) as u32, monitor)?
         }
         BoundaryClass::FlipKind => {
             let spec = |k, eps| job.level_spec(k, eps);
-            measure(job, &all, spec, |_, v| v as u32, monitor)?
+            measure(engine, &all, spec, |_, v| v as u32, monitor)?
         }
         BoundaryClass::Flipped => {
             let spec = |k, eps| job.level_spec(k, eps);
-            measure(job, &all, spec, |_, v| v.is_finite() as u32, monitor)?
+            measure(engine, &all, spec, |_, v| v.is_finite() as u32, monitor)?
         }
     };
     // A level is one map of whole rows of pairs: the pairs asked for, rounded up.
@@ -229,13 +234,12 @@ pub fn run(job: &BoundaryJob, command: String, monitor: &Monitor) -> Result<Boun
 /// `class` (NaN: none), pairs counted where both classes are resolved. The engine and its
 /// notices are the finest level's (the one most likely to need f64).
 fn measure<S: MapKernels>(
-    job: &BoundaryJob,
+    engine: &Engine,
     all: &[f64],
     spec: impl Fn(u32, f64) -> S,
     class: impl Fn(&S, f32) -> u32,
     monitor: &Monitor,
 ) -> Result<(Vec<Level>, crate::engine::RunInfo, Vec<String>)> {
-    let engine = crate::engine::Engine::new(job.backend)?;
     let first = engine.plan(&spec(0, all[0]), true)?;
     let (info, notices) = (first.info, first.notices);
     let mut levels = Vec::new();

@@ -61,7 +61,12 @@ pub struct FitSummary {
 }
 
 /// Runs the fit; `command` reproduces it and goes into summary.json.
-pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummary> {
+pub fn run(
+    job: &FitJob,
+    engine: &Engine,
+    command: String,
+    monitor: &Monitor,
+) -> Result<FitSummary> {
     check_within("window", job.window, 0.3, 60.0)?;
     check_within("tolerance", job.tolerance, 1e-4, 1.0)?;
     check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
@@ -131,9 +136,8 @@ pub fn run(job: &FitJob, command: String, monitor: &Monitor) -> Result<FitSummar
         tolerance: job.tolerance,
         candidates: job.candidates,
     };
-    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices: Vec<String> = engine.notices();
-    let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, &engine, monitor)?;
+    let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, engine, monitor)?;
 
     // Plots, derived quantities and summary, written as a set.
     let out = &job.output;

@@ -173,7 +173,12 @@ pub struct ForecastSummary {
 }
 
 /// Runs the forecast; `command` reproduces it and goes into summary.json.
-pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<ForecastSummary> {
+pub fn run(
+    job: &ForecastJob,
+    engine: &Engine,
+    command: String,
+    monitor: &Monitor,
+) -> Result<ForecastSummary> {
     job.settings.validate()?;
     super::checks::check_damping_not_given(&job.params)?;
     super::checks::check_directory(
@@ -192,7 +197,6 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         params,
         ..
     } = super::fit::tracked_model(&frames, &job.params)?;
-    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices = engine.notices();
     let (settings, end) = (job.settings, t[t.len() - 1]);
     let track = TrackRows {
@@ -200,7 +204,7 @@ pub fn run(job: &ForecastJob, command: String, monitor: &Monitor) -> Result<Fore
         data: &data,
         angles: &angle,
     };
-    let o = fit_and_forecast(&track, &params, &settings, end, &engine, monitor)?;
+    let o = fit_and_forecast(&track, &params, &settings, end, engine, monitor)?;
     let f = &o.forecast;
     let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
     let (data_after, data_lt) = o.after_window(o.data_horizon);

@@ -61,7 +61,12 @@ pub struct PhaseSummary {
     pub notices: Vec<String>,
 }
 
-pub fn run(job: &PhaseJob, command: String, monitor: &Monitor) -> Result<PhaseSummary> {
+pub fn run(
+    job: &PhaseJob,
+    engine: &Engine,
+    command: String,
+    monitor: &Monitor,
+) -> Result<PhaseSummary> {
     job.validate()?;
     let colormap = job.colormap.unwrap_or(Colormap::Inferno);
     monitor.check()?;
@@ -69,9 +74,8 @@ pub fn run(job: &PhaseJob, command: String, monitor: &Monitor) -> Result<PhaseSu
         let (rgb, w, h) = single_pendulum_portrait(job, colormap)?;
         (rgb, w, h, RunInfo::CPU, Vec::new())
     } else {
-        let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
         let notices: Vec<String> = engine.notices();
-        let (rgb, w, h) = double_pendulum_portraits(job, &engine, colormap, monitor)?;
+        let (rgb, w, h) = double_pendulum_portraits(job, engine, colormap, monitor)?;
         (rgb, w, h, engine.info(), notices)
     };
     let meta = render::provenance(command, &info);

@@ -268,6 +268,7 @@ pub struct SweepSummary {
 /// identifies it when a sweep resumes).
 pub fn run(
     job: &SweepJob,
+    engine: &Engine,
     command: String,
     frame_command: &dyn Fn(&FrameMap, Backend, &PictureSpec) -> String,
     monitor: &Monitor,
@@ -316,7 +317,6 @@ pub fn run(
             ));
         }
     }
-    let engine = Engine::new(job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     if let (Some(_), Some(k)) = (engine.gpu(), frames.iter().position(|f| f.grid.needs_f64())) {
         notices.push(format!(
@@ -371,7 +371,7 @@ pub fn run(
         };
         if path.exists() && !stored {
             // The picture is there but not the store's frame: the map once more.
-            let field = frame_field(&map, &engine, &quiet)?;
+            let field = frame_field(&map, engine, &quiet)?;
             if let Some(s) = &store {
                 s.write_frame(k as u32, &field)?;
             }
@@ -394,7 +394,7 @@ pub fn run(
             }
             kept += 1;
         } else {
-            let field = frame_field(&map, &engine, &quiet)?;
+            let field = frame_field(&map, engine, &quiet)?;
             if let Some(s) = &store {
                 s.write_frame(k as u32, &field)?;
             }

@@ -77,11 +77,15 @@ fn run_color(k: usize, n: usize) -> [u8; 3] {
     [r, gg, b]
 }
 
-pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<TracesSummary> {
+pub fn run(
+    job: &TracesJob,
+    engine: &Engine,
+    command: String,
+    monitor: &Monitor,
+) -> Result<TracesSummary> {
     job.validate()?;
     monitor.check()?;
     let p = &job.params;
-    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices: Vec<String> = engine.notices();
     let info = engine.info();
     let starts = releases(p, job.start, job.runs, job.spread);
@@ -91,9 +95,9 @@ pub fn run(job: &TracesJob, command: String, monitor: &Monitor) -> Result<Traces
     let mut files = Outputs::new();
     let ensemble = EnsembleSpec::new(*p, &starts, job.stepping.dt, job.stepping.steps());
     if engine.ensemble_chunk(&ensemble) >= n {
-        all_at_once(job, &engine, &starts, &colors, &meta, &mut files, monitor)?;
+        all_at_once(job, engine, &starts, &colors, &meta, &mut files, monitor)?;
     } else {
-        streamed(job, &engine, &starts, &colors, &meta, &mut files, monitor)?;
+        streamed(job, engine, &starts, &colors, &meta, &mut files, monitor)?;
     }
     files.commit(monitor)?;
     Ok(TracesSummary {

@@ -57,6 +57,7 @@ pub const COLUMNS: &str = "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,diss
 
 pub fn run(
     job: &TrajectoryJob,
+    engine: &Engine,
     command: String,
     monitor: &Monitor,
     stdout: &mut dyn Write,
@@ -75,7 +76,6 @@ pub fn run(
     if let Some(path) = &job.output {
         check_output("output", path, "csv")?;
     }
-    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let mut notices: Vec<String> = engine.notices();
     let (states, dissipated) = engine.trajectory(&job.params, job.start, job.stepping, monitor)?;
     let finite = |s: &State| s.to_array().iter().all(|v| v.is_finite());

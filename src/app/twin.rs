@@ -248,7 +248,12 @@ pub struct TwinSummary {
     pub notices: Vec<String>,
 }
 
-pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSummary> {
+pub fn run(
+    job: &TwinJob,
+    engine: &Engine,
+    command: String,
+    monitor: &Monitor,
+) -> Result<TwinSummary> {
     job.settings.validate()?;
     check_count("replicates", job.replicates as u64, 1, 100)?;
     for (field, v, most) in [
@@ -292,7 +297,6 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
         &inputs,
     )?;
     let truth = job.params.resolve()?;
-    let engine = Engine::new(job.backend)?.with_precision(job.precision, job.backend)?;
     let notices = engine.notices();
     let settings = job.settings;
     let mut rows = Vec::new();
@@ -321,7 +325,7 @@ pub fn run(job: &TwinJob, command: String, monitor: &Monitor) -> Result<TwinSumm
                     &track,
                     &settings,
                     job.duration,
-                    &engine,
+                    engine,
                     &nested,
                 )?;
                 let f = &o.forecast;

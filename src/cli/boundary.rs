@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, PlaneArgs, StepArgs, backend_parser};
 use super::parse::{one_of, parse_range, parse_u32};
 use super::{command_line, json, say};
 use crate::app::boundary::{self, BoundaryClass, BoundaryJob};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::spec::{FlipSpec, IndicatorAsked, LyapunovSpec, Precision};
@@ -107,7 +107,8 @@ impl BoundaryArgs {
 
 pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
-    let s = boundary::run(&job, command_line::boundary(&job), monitor)?;
+    let engine = Engine::new(job.backend)?;
+    let s = boundary::run(&job, &engine, command_line::boundary(&job), monitor)?;
     say("boundary", &s.notices);
     for l in &s.levels {
         eprintln!(

@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, backend_parser};
 use super::parse::{one_of, parse_number, parse_usize};
 use super::{command_line, json, say};
 use crate::app::fit::{self, FitJob};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::Precision;
@@ -72,7 +72,8 @@ impl FitArgs {
 pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
-    let s = fit::run(&job, command_line::fit(&job), monitor)?;
+    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let s = fit::run(&job, &engine, command_line::fit(&job), monitor)?;
     say("fit", &s.notices);
     eprintln!(
         "pivot ({:.4}, {:.4}) m, l1 {:.4} ± {:.4} m, l2 {:.4} ± {:.4} m; energy a exp(b t): a {:.3} J, b {:.4} 1/s (chi2/dof {:.2}); inverse square chi2/dof {:.2}: {} fits better; model from t = {} s agrees within {} m until {} s ({:.2} s) -> {}",

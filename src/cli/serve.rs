@@ -8,7 +8,7 @@ use clap::Args;
 use super::args::{PhysicalArgs, backend_parser};
 use super::{command_line, json, say};
 use crate::app::serve::{self, Commands, ServeJob, StoredMap};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
@@ -73,7 +73,10 @@ pub const COMMANDS: Commands = Commands {
 /// Serves until Ctrl-C. Standard output holds the URL once listening (scripts and tests read
 /// it), and with `json` only JSON: the URL as `{"url": ...}`, then the summary.
 pub fn run(args: &ServeArgs, monitor: &Monitor, json_out: bool) -> Result<serde_json::Value> {
-    let summary = serve::run(&args.job()?, COMMANDS, monitor, |ready| {
+    let job = args.job()?;
+    // The explorer's one engine, lent to every tile, point, range and saved view.
+    let engine = Engine::new(job.backend)?;
+    let summary = serve::run(&job, engine, COMMANDS, monitor, |ready| {
         say("serve", &ready.notices);
         match json_out {
             true => println!("{}", serde_json::json!({ "url": ready.url })),

@@ -8,7 +8,7 @@ use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser}
 use super::parse::{one_of, parse_number, parse_point, parse_u32, parse_vary};
 use super::{command_line, json, say};
 use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::Var;
@@ -107,8 +107,10 @@ impl SweepArgs {
 
 pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
+    let engine = Engine::new(job.backend)?;
     let s = sweep::run(
         &job,
+        &engine,
         command_line::sweep(&job),
         &command_line::frame,
         monitor,

@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, StartArgs, backend_parser};
 use super::parse::{one_of, parse_number, parse_spread, parse_u32};
 use super::{command_line, json, say};
 use crate::app::traces::{self, TracesJob};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::{Precision, Spread, Stepping};
@@ -76,7 +76,8 @@ impl TracesArgs {
 pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
-    let s = traces::run(&job, command_line::traces(&job), monitor)?;
+    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let s = traces::run(&job, &engine, command_line::traces(&job), monitor)?;
     say("traces", &s.notices);
     eprintln!(
         "{} releases over {} s on {} -> {}",

@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, StartArgs, StepArgs, backend_parser};
 use super::parse::{one_of, parse_number};
 use super::{command_line, json, say};
 use crate::app::trajectory::{self, TrajectoryJob};
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::Precision;
@@ -55,7 +55,9 @@ pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<serde_json::Value
     super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let command = command_line::trajectory(&job);
-    let s = trajectory::run(&job, command, monitor, &mut std::io::stdout().lock())?;
+    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let mut out = std::io::stdout().lock();
+    let s = trajectory::run(&job, &engine, command, monitor, &mut out)?;
     say("trajectory", &s.notices);
     let to = match &s.output {
         Some(path) => path.display().to_string(),

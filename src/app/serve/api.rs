@@ -157,7 +157,10 @@ pub(super) async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Pa
     let command = (shared.commands.trajectory)(&job);
     let work = tokio::task::spawn_blocking(move || {
         let mut csv = Vec::new();
-        crate::app::trajectory::run(&job, command, &Monitor::hidden(), &mut csv).map(|_| csv)
+        // A single run on the CPU: an engine without a device, made per request.
+        let engine = crate::engine::Engine::new(Backend::Cpu)?;
+        crate::app::trajectory::run(&job, &engine, command, &Monitor::hidden(), &mut csv)
+            .map(|_| csv)
     });
     match tokio::time::timeout(REQUEST_LIMIT, work).await {
         Ok(Ok(Ok(csv))) => ([(header::CONTENT_TYPE, "text/csv")], csv).into_response(),

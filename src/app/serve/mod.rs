@@ -178,9 +178,11 @@ impl Shared {
 
 type S = Arc<Shared>;
 
-/// Serves until `monitor` is cancelled (Ctrl-C); `ready` is told the URL once it listens.
+/// Serves on `engine` (the door's, kept for the explorer's life) until `monitor` is cancelled
+/// (Ctrl-C); `ready` is told the URL once it listens.
 pub fn run(
     job: &ServeJob,
+    engine: Engine,
     commands: Commands,
     monitor: &Monitor,
     ready: impl FnOnce(&Ready),
@@ -192,7 +194,6 @@ pub fn run(
         None => None,
     };
     let store_world = job.store.as_ref().map(|s| World::of_grid(&s.grid()));
-    let engine = Engine::new(job.backend)?;
     warm_up(&engine, &job.base.resolve()?, monitor)?;
     let info = engine.info();
     let shared = Arc::new(Shared {
