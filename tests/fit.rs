@@ -7,13 +7,13 @@ use common::chaoscope;
 
 use chaoscope::cpu;
 use chaoscope::engine::{Backend, Engine};
-use chaoscope::fit::{self, Frame, ModelFitSpec};
+use chaoscope::fit::{self, ModelFitSpec, TrackedRow};
 use chaoscope::model::{Params, State};
 use chaoscope::params::Preset;
 use predicates::prelude::*;
 
 /// Frames of a simulated pendulum hung from `pivot`, every `every` s for `n` frames.
-fn synthetic(p: &Params, start: State, pivot: (f64, f64), every: f64, n: usize) -> Vec<Frame> {
+fn synthetic(p: &Params, start: State, pivot: (f64, f64), every: f64, n: usize) -> Vec<TrackedRow> {
     let sub = 100;
     let states = cpu::trajectory(p, start, every / sub as f64, ((n - 1) * sub) as u32);
     states
@@ -22,7 +22,7 @@ fn synthetic(p: &Params, start: State, pivot: (f64, f64), every: f64, n: usize) 
         .enumerate()
         .map(|(k, s)| {
             let q = p.positions(s);
-            Frame {
+            TrackedRow {
                 t: k as f64 * every,
                 x1: q.x1 + pivot.0,
                 y1: q.y1 + pivot.1,

@@ -290,7 +290,10 @@ pub(crate) struct Tracked {
 
 /// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
 /// `frames`, and the model of `given`.
-pub(crate) fn tracked_model(frames: &[crate::fit::Frame], given: &ParamSources) -> Result<Tracked> {
+pub(crate) fn tracked_model(
+    frames: &[crate::fit::TrackedRow],
+    given: &ParamSources,
+) -> Result<Tracked> {
     let pivot = fit_pivot(frames)?;
     let (l1, l2) = arm_lengths(frames, (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));

@@ -8,7 +8,7 @@ use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
-use crate::render::{self, Bobs, Colormap, Film, Outputs, View};
+use crate::render::{self, Bobs, Canvas, Colormap, Film, Outputs};
 use crate::spec::{self, EnsembleSpec, Precision, Spread, Stepping, releases};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -95,9 +95,9 @@ pub fn run(
     let mut files = Outputs::new();
     let ensemble = EnsembleSpec::new(*p, &starts, job.stepping.dt, job.stepping.steps());
     if engine.ensemble_chunk(&ensemble) >= n {
-        all_at_once(job, engine, &starts, &colors, &meta, &mut files, monitor)?;
+        all_at_once(job, engine, &ensemble, &colors, &meta, &mut files, monitor)?;
     } else {
-        streamed(job, engine, &starts, &colors, &meta, &mut files, monitor)?;
+        streamed(job, engine, &ensemble, &colors, &meta, &mut files, monitor)?;
     }
     files.commit(monitor)?;
     Ok(TracesSummary {
@@ -125,8 +125,8 @@ fn bobs(p: &crate::model::Params, s: &State) -> Bobs {
     (q.x1, q.y1, q.x2, q.y2)
 }
 
-fn view(job: &TracesJob, size: u32) -> View {
-    View {
+fn canvas(job: &TracesJob, size: u32) -> Canvas {
+    Canvas {
         size,
         reach: 1.08 * (job.params.l1 + job.params.l2),
     }
@@ -147,22 +147,21 @@ fn upto(f: usize, frames: usize, samples: usize) -> usize {
 fn all_at_once(
     job: &TracesJob,
     engine: &Engine,
-    starts: &[State],
+    ensemble: &EnsembleSpec,
     colors: &[[u8; 3]],
     meta: &[(String, String)],
     files: &mut Outputs,
     monitor: &Monitor,
 ) -> Result<()> {
-    let p = &job.params;
-    let (dt, steps) = (job.stepping.dt, job.stepping.steps());
-    let runs = engine.ensemble_all(&EnsembleSpec::new(*p, starts, dt, steps), monitor)?;
+    let (p, dt) = (&ensemble.params, ensemble.dt);
+    let runs = engine.ensemble_all(ensemble, monitor)?;
     let positions: Vec<Vec<Bobs>> = runs
         .iter()
         .map(|r| r.iter().map(|s| bobs(p, s)).collect())
         .collect();
     let n = positions.len();
     let speed = reference_speed(&positions, dt);
-    let mut film = Film::new(view(job, job.size));
+    let mut film = Film::new(canvas(job, job.size));
     expose(&mut film, &positions, colors, dt, 0, usize::MAX);
     let rgb = develop(&film, speed, &positions, colors, None, n)?;
     files.png(&job.output, job.size, job.size, &rgb, meta)?;
@@ -172,21 +171,27 @@ fn all_at_once(
         files.npy_shaped(path, &[n as u64, samples as u64, 4], &data)?;
     }
     if let Some(path) = &job.gif {
-        let gview = view(job, job.size.min(480));
+        let gcanvas = canvas(job, job.size.min(480));
         let (frames, samples) = (gif_frames(job), positions[0].len());
         monitor.start("gif", frames as u64);
         // One film, exposed a frame's worth further each time, each frame encoded as made.
-        let mut film = Film::new(gview);
+        let mut film = Film::new(gcanvas);
         let mut exposed = 0;
-        files.gif_from(path, (gview.size, gview.size), frames, delay_cs(), |k| {
-            monitor.check()?;
-            let upto = upto(k + 1, frames, samples);
-            expose(&mut film, &positions, colors, dt, exposed, upto);
-            exposed = upto - 1;
-            monitor.advance(1);
-            // Arms of at most 50 runs, or the picture is all arms.
-            develop(&film, speed, &positions, colors, Some(upto - 1), n.min(50))
-        })?;
+        files.gif_from(
+            path,
+            (gcanvas.size, gcanvas.size),
+            frames,
+            delay_cs(),
+            |k| {
+                monitor.check()?;
+                let upto = upto(k + 1, frames, samples);
+                expose(&mut film, &positions, colors, dt, exposed, upto);
+                exposed = upto - 1;
+                monitor.advance(1);
+                // Arms of at most 50 runs, or the picture is all arms.
+                develop(&film, speed, &positions, colors, Some(upto - 1), n.min(50))
+            },
+        )?;
         monitor.finish();
     }
     Ok(())
@@ -204,19 +209,18 @@ fn delay_cs() -> u16 {
 fn streamed(
     job: &TracesJob,
     engine: &Engine,
-    starts: &[State],
+    ensemble: &EnsembleSpec,
     colors: &[[u8; 3]],
     meta: &[(String, String)],
     files: &mut Outputs,
     monitor: &Monitor,
 ) -> Result<()> {
-    let p = &job.params;
-    let (dt, steps) = (job.stepping.dt, job.stepping.steps());
-    let (n, samples) = (starts.len(), steps as usize + 1);
-    let gview = view(job, job.size.min(480));
+    let (p, dt, steps) = (&ensemble.params, ensemble.dt, ensemble.steps);
+    let (n, samples) = (ensemble.starts.len(), steps as usize + 1);
+    let gcanvas = canvas(job, job.size.min(480));
     let frames = gif_frames(job);
     if job.gif.is_some() {
-        let film_bytes = (gview.size as u64).pow(2) * 12;
+        let film_bytes = (gcanvas.size as u64).pow(2) * 12;
         spec::check_memory("gif", frames as u64 * film_bytes, "the GIF's films")?;
     }
     // Log-spaced speed bins over 1e-9 .. 1e9 m/s.
@@ -235,8 +239,7 @@ fn streamed(
             .collect()
     };
     let mut histogram = vec![0u64; BINS];
-    let ensemble = EnsembleSpec::new(*p, starts, dt, steps);
-    engine.ensemble(&ensemble, monitor, |_, runs| {
+    engine.ensemble(ensemble, monitor, |_, runs| {
         for run in &runs.into_states() {
             let pos: Vec<Bobs> = run.iter().map(|s| bobs(p, s)).collect();
             for v in speeds(&pos) {
@@ -256,16 +259,16 @@ fn streamed(
         }
         before += count;
     }
-    let mut film = Film::new(view(job, job.size));
+    let mut film = Film::new(canvas(job, job.size));
     let mut increments: Vec<Film> = match job.gif {
-        Some(_) => (0..frames).map(|_| Film::new(gview)).collect(),
+        Some(_) => (0..frames).map(|_| Film::new(gcanvas)).collect(),
         None => Vec::new(),
     };
     let arms_shown = n.min(50);
     let mut arms: Vec<Vec<Bobs>> = Vec::new();
     let mut candidates = Vec::new();
     let mut second_pass = |sink: &mut dyn FnMut(&[f32]) -> Result<()>| {
-        engine.ensemble(&ensemble, monitor, |first, runs| {
+        engine.ensemble(ensemble, monitor, |first, runs| {
             for (j, run) in runs.into_states().iter().enumerate() {
                 let k = first + j;
                 let pos: Vec<Bobs> = run.iter().map(|s| bobs(p, s)).collect();
@@ -315,18 +318,24 @@ fn streamed(
         (2.0 * *median).max(1e-3)
     };
     // The photograph: trails, and every run's arms at its release, grey and faint.
-    let released: Vec<Vec<Bobs>> = starts.iter().map(|s| vec![bobs(p, s)]).collect();
+    let released: Vec<Vec<Bobs>> = ensemble.starts.iter().map(|s| vec![bobs(p, s)]).collect();
     let rgb = develop(&film, speed, &released, colors, None, n)?;
     files.png(&job.output, job.size, job.size, &rgb, meta)?;
     if let Some(path) = &job.gif {
         monitor.start("gif", frames as u64);
-        let mut shown = Film::new(gview);
-        files.gif_from(path, (gview.size, gview.size), frames, delay_cs(), |f| {
-            monitor.check()?;
-            shown.add(&increments[f]);
-            monitor.advance(1);
-            develop(&shown, speed, &arms, colors, Some(f), arms_shown)
-        })?;
+        let mut shown = Film::new(gcanvas);
+        files.gif_from(
+            path,
+            (gcanvas.size, gcanvas.size),
+            frames,
+            delay_cs(),
+            |f| {
+                monitor.check()?;
+                shown.add(&increments[f]);
+                monitor.advance(1);
+                develop(&shown, speed, &arms, colors, Some(f), arms_shown)
+            },
+        )?;
         monitor.finish();
     }
     Ok(())
@@ -374,8 +383,8 @@ fn develop(
         })
         .collect();
     let alpha = if sample.is_none() { 0.25 } else { 0.85 };
-    let radius = (film.view.size / 120).max(2) as i32;
-    render::draw_arms(&mut rgb, film.view, &drawn, alpha, radius)?;
+    let radius = (film.canvas.size / 120).max(2) as i32;
+    render::draw_arms(&mut rgb, film.canvas, &drawn, alpha, radius)?;
     Ok(rgb)
 }
 

@@ -19,7 +19,7 @@ use crate::fit::forecast::Slope;
 use crate::fit::forecast_plot::{self, Marks};
 use crate::fit::window::TrackRows;
 use crate::fit::window::{STEPS_PER_SECOND, track_with};
-use crate::fit::{Frame, angles};
+use crate::fit::{TrackedRow, angles};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
@@ -139,11 +139,11 @@ pub fn experiment(
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<(Outcome, Vec<[f64; 4]>)> {
-    let frames: Vec<Frame> = track
+    let frames: Vec<TrackedRow> = track
         .t
         .iter()
         .zip(&track.measured)
-        .map(|(&t, m)| Frame {
+        .map(|(&t, m)| TrackedRow {
             t,
             x1: m[0],
             y1: m[1],

@@ -8,7 +8,7 @@ use clap::Args;
 use super::parse::{
     Angles, AxisArg, one_of, parse_angles, parse_axis, parse_number, parse_pair, parse_size,
 };
-use crate::engine::Backend;
+use crate::engine::{Backend, Engine};
 use crate::model::State;
 use crate::params::{ParamSources, Preset};
 use crate::render::{Colormap, PictureSpec};
@@ -21,6 +21,16 @@ pub fn f32_on_the_cpu(precision: Option<crate::spec::Precision>, backend: Backen
     if precision == Some(crate::spec::Precision::F32) && backend == Backend::Cpu {
         eprintln!("note: --precision f32 is the GPU's; the CPU backend computes in f64");
     }
+}
+
+/// The engine a command that runs trajectories or ensembles lends its run: in the precision
+/// asked (f32 unless given), made once for the command ([`f32_on_the_cpu`]'s note first).
+pub fn lent_engine(
+    asked: Option<crate::spec::Precision>,
+    backend: Backend,
+) -> crate::Result<Engine> {
+    f32_on_the_cpu(asked, backend);
+    Engine::in_precision(backend, asked.unwrap_or_default())
 }
 
 pub fn backend_parser() -> impl clap::builder::TypedValueParser<Value = Backend> {

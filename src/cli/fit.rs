@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, backend_parser};
 use super::parse::{one_of, parse_number, parse_usize};
 use super::{command_line, json, say};
 use crate::app::fit::{self, FitJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::Precision;
@@ -70,9 +70,8 @@ impl FitArgs {
 }
 
 pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
-    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let engine = super::args::lent_engine(args.precision, job.backend)?;
     let s = fit::run(&job, &engine, command_line::fit(&job), monitor)?;
     say("fit", &s.notices);
     eprintln!(

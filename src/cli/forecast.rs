@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, backend_parser};
 use super::parse::{one_of, parse_length, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
 use crate::app::forecast::{self, ForecastJob, ForecastSettings, fmt_time};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::Precision;
@@ -77,9 +77,8 @@ impl ForecastArgs {
 }
 
 pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
-    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let engine = super::args::lent_engine(args.precision, job.backend)?;
     let s = forecast::run(&job, &engine, command_line::forecast(&job), monitor)?;
     say("forecast", &s.notices);
     let lt = |v: Option<f64>| v.map_or(String::new(), |v| format!(" ({v:.1} Lyapunov times)"));

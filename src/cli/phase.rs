@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, StepArgs, backend_parser, colormap_parser};
 use super::parse::{one_of, parse_number, parse_spread, parse_u32};
 use super::{command_line, json, say};
 use crate::app::phase::{self, PhaseJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
@@ -87,9 +87,8 @@ impl PhaseArgs {
 }
 
 pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
-    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let engine = super::args::lent_engine(args.precision, job.backend)?;
     let s = phase::run(&job, &engine, command_line::phase(&job), monitor)?;
     say("phase", &s.notices);
     eprintln!("phase portrait -> {}", s.output.display());

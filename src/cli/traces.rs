@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, StartArgs, backend_parser};
 use super::parse::{one_of, parse_number, parse_spread, parse_u32};
 use super::{command_line, json, say};
 use crate::app::traces::{self, TracesJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::{Precision, Spread, Stepping};
@@ -74,9 +74,8 @@ impl TracesArgs {
 }
 
 pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
-    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let engine = super::args::lent_engine(args.precision, job.backend)?;
     let s = traces::run(&job, &engine, command_line::traces(&job), monitor)?;
     say("traces", &s.notices);
     eprintln!(

@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, StartArgs, StepArgs, backend_parser};
 use super::parse::{one_of, parse_number};
 use super::{command_line, json, say};
 use crate::app::trajectory::{self, TrajectoryJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::Precision;
@@ -52,10 +52,9 @@ impl TrajectoryArgs {
 }
 
 pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job()?;
     let command = command_line::trajectory(&job);
-    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let engine = super::args::lent_engine(args.precision, job.backend)?;
     let mut out = std::io::stdout().lock();
     let s = trajectory::run(&job, &engine, command, monitor, &mut out)?;
     say("trajectory", &s.notices);

@@ -9,7 +9,7 @@ use super::parse::{one_of, parse_length, parse_number, parse_u64, parse_usize, p
 use super::{command_line, json, say};
 use crate::app::forecast::ForecastSettings;
 use crate::app::twin::{self, TwinJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
@@ -112,9 +112,8 @@ impl TwinArgs {
 }
 
 pub fn run(args: &TwinArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend);
     let job = args.job();
-    let engine = Engine::in_precision(job.backend, job.precision)?;
+    let engine = super::args::lent_engine(args.precision, job.backend)?;
     let s = twin::run(&job, &engine, command_line::twin(&job), monitor)?;
     say("twin", &s.notices);
     for l in &s.slopes {

@@ -8,9 +8,9 @@ use nalgebra::{DMatrix, DVector};
 use super::lsq::{Fit, least_squares};
 use crate::error::{Error, Result};
 
-/// One tracked frame: time (s) and positions (m) of both masses, y up.
+/// One row of tracked data (a camera frame's): time (s) and positions (m) of both masses, y up.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Frame {
+pub struct TrackedRow {
     pub t: f64,
     pub x1: f64,
     pub y1: f64,
@@ -35,7 +35,7 @@ fn bad(path: &Path, line: usize, what: String) -> Error {
 
 /// Reads a CSV with a header naming t, x1, y1, x2, y2 (any order, other columns ignored);
 /// lines starting with # are comments. Errors name the line.
-pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
+pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
     let text = crate::input::read_text("file", path, crate::input::CSV_CAP)?;
     // A byte-order mark (as some spreadsheets write) is not part of the first column's name.
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
@@ -133,7 +133,7 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
                 ),
             ));
         }
-        if let Some(prev) = frames.last().map(|f: &Frame| f.t)
+        if let Some(prev) = frames.last().map(|f: &TrackedRow| f.t)
             && v[0] <= prev
         {
             return Err(bad(
@@ -144,7 +144,7 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
         }
         // Tracked frames come from a camera: steps below a microsecond are a unit mistake,
         // and their velocities and energies overflow.
-        if let Some(prev) = frames.last().map(|f: &Frame| f.t)
+        if let Some(prev) = frames.last().map(|f: &TrackedRow| f.t)
             && v[0] - prev < MIN_TIME_STEP
         {
             return Err(bad(
@@ -156,7 +156,7 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>> {
                 ),
             ));
         }
-        frames.push(Frame {
+        frames.push(TrackedRow {
             t: v[0],
             x1: v[1],
             y1: v[2],
@@ -184,7 +184,7 @@ pub struct Pivot {
     pub rms_residual: f64,
 }
 
-pub fn fit_pivot(frames: &[Frame]) -> Result<Pivot> {
+pub fn fit_pivot(frames: &[TrackedRow]) -> Result<Pivot> {
     let n = frames.len();
     // x^2 + y^2 + D x + E y + F = 0, linear in (D, E, F).
     let a = DMatrix::from_fn(n, 3, |i, j| match j {
@@ -245,7 +245,7 @@ pub fn fit_pivot(frames: &[Frame]) -> Result<Pivot> {
 
 /// The report's method: the point of a grid (step `step` m, within `half` m of `around`)
 /// whose distances to all upper-mass positions have the least variance.
-pub fn grid_pivot(frames: &[Frame], around: (f64, f64), half: f64, step: f64) -> (f64, f64) {
+pub fn grid_pivot(frames: &[TrackedRow], around: (f64, f64), half: f64, step: f64) -> (f64, f64) {
     let k = (half / step).round() as i64;
     let mut best = (f64::INFINITY, around);
     for i in -k..=k {
@@ -285,7 +285,7 @@ pub fn estimate(values: &[f64]) -> Estimate {
 }
 
 /// Arm lengths from the distances pivot - mass 1 and mass 1 - mass 2.
-pub fn arm_lengths(frames: &[Frame], pivot: (f64, f64)) -> (Estimate, Estimate) {
+pub fn arm_lengths(frames: &[TrackedRow], pivot: (f64, f64)) -> (Estimate, Estimate) {
     let d1: Vec<f64> = frames
         .iter()
         .map(|f| ((f.x1 - pivot.0).powi(2) + (f.y1 - pivot.1).powi(2)).sqrt())
@@ -298,7 +298,7 @@ pub fn arm_lengths(frames: &[Frame], pivot: (f64, f64)) -> (Estimate, Estimate) 
 }
 
 /// Angles from the downward vertical (rad), unwrapped along the run.
-pub fn angles(frames: &[Frame], pivot: (f64, f64)) -> Vec<(f64, f64)> {
+pub fn angles(frames: &[TrackedRow], pivot: (f64, f64)) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::with_capacity(frames.len());
     for f in frames {
         let mut a = (
@@ -332,7 +332,7 @@ pub struct Energies {
 }
 
 pub fn energies(
-    frames: &[Frame],
+    frames: &[TrackedRow],
     pivot: (f64, f64),
     masses: (f64, f64),
     lengths: (f64, f64),
@@ -340,7 +340,7 @@ pub fn energies(
     dv: f64,
 ) -> Energies {
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
-    let col = |f: fn(&Frame) -> f64| -> Vec<f64> { frames.iter().map(f).collect() };
+    let col = |f: fn(&TrackedRow) -> f64| -> Vec<f64> { frames.iter().map(f).collect() };
     let (vx1, vy1) = (
         central_differences(&t, &col(|f| f.x1)),
         central_differences(&t, &col(|f| f.y1)),

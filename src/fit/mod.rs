@@ -12,7 +12,8 @@ mod quantiles;
 pub mod window;
 
 pub use data::{
-    Energies, Frame, angles, arm_lengths, energies, fit_decay, fit_pivot, grid_pivot, read_frames,
+    Energies, TrackedRow, angles, arm_lengths, energies, fit_decay, fit_pivot, grid_pivot,
+    read_frames,
 };
 pub use lsq::{Fit, least_squares};
 pub use model::{ModelFit, ModelFitSpec, fit_model, measured};

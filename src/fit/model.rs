@@ -3,7 +3,7 @@
 
 use nalgebra::DVector;
 
-use super::data::Frame;
+use super::data::TrackedRow;
 use super::lsq::{least_squares, numeric_jacobian};
 use crate::cpu;
 use crate::engine::Engine;
@@ -43,7 +43,7 @@ pub struct ModelFitSpec {
 }
 
 /// Measured positions relative to the pivot.
-pub fn measured(frames: &[Frame], pivot: (f64, f64)) -> Vec<[f64; 4]> {
+pub fn measured(frames: &[TrackedRow], pivot: (f64, f64)) -> Vec<[f64; 4]> {
     frames
         .iter()
         .map(|f| {
@@ -121,7 +121,7 @@ pub(super) fn halton(k: usize, d: usize) -> Vec<f64> {
 /// Fits the model to `frames` from the row nearest `spec.start_time`, the ensemble search
 /// on `engine`'s path.
 pub fn fit_model(
-    frames: &[Frame],
+    frames: &[TrackedRow],
     pivot: (f64, f64),
     angles: &[(f64, f64)],
     spec: &ModelFitSpec,

@@ -315,12 +315,8 @@ impl FlipTimeKernel {
                 )?;
             } else {
                 let work = TileWork {
-                    total: total_steps,
-                    pixels,
                     active,
-                    cost: 1,
-                    max_steps: None,
-                    later,
+                    ..TileWork::new(total_steps, pixels, 1, later)
                 };
                 time_loop(work, monitor, advance_by)?;
             }

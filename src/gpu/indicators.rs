@@ -185,14 +185,7 @@ impl IndicatorKernel {
             let mut params = base;
             params.set_tile(row0, rows, pixels);
             dispatch(init, &params)?;
-            let work = TileWork {
-                total: units,
-                pixels,
-                active: pixels,
-                cost: unit_cost,
-                max_steps: None,
-                later,
-            };
+            let work = TileWork::new(units, pixels, unit_cost, later);
             // The adaptive spectrum's pixels keep their own place in their slot's clock
             // (shaders/indicators.wgsl).
             let clocks = || -> Result<Vec<[f64; 4]>> {

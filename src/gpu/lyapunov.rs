@@ -201,12 +201,8 @@ impl LyapunovKernel {
             params.set_tile(row0, rows, pixels);
             dispatch(init, &params)?;
             let work = TileWork {
-                total: units,
-                pixels,
-                active: pixels,
-                cost: unit_cost,
                 max_steps,
-                later,
+                ..TileWork::new(units, pixels, unit_cost, later)
             };
             // The adaptive tangent's pixels keep their own place (shaders/lyapunov.wgsl): its
             // clock, the last vec4 of the slot's four.

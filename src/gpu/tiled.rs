@@ -146,6 +146,21 @@ pub struct TileWork {
     pub later: u64,
 }
 
+impl TileWork {
+    /// `total` steps of `pixels` pixels, all active at the start, each step costing `cost`
+    /// plain steps, no other bound on a dispatch's steps, `later` pixels still to come.
+    pub fn new(total: u32, pixels: u32, cost: u64, later: u64) -> Self {
+        TileWork {
+            total,
+            pixels,
+            active: pixels,
+            cost,
+            max_steps: None,
+            later,
+        }
+    }
+}
+
 /// A tile's time loop: `dispatch(step0, steps, active)` advances the `active` pixels by
 /// `steps` steps from `step0` and returns how many are still active, until `work.total` steps
 /// are done or none is. Each dispatch holds at most STEPS_PER_DISPATCH / `cost` pendulum-steps,

@@ -12,12 +12,12 @@ pub type Bobs = (f64, f64, f64, f64);
 /// Maps positions (m; pivot at the origin, y up) to pixels of a square picture that shows
 /// radius `reach` (m) around the pivot.
 #[derive(Clone, Copy, Debug)]
-pub struct View {
+pub struct Canvas {
     pub size: u32,
     pub reach: f64,
 }
 
-impl View {
+impl Canvas {
     pub fn to_px(&self, x: f64, y: f64) -> (f64, f64) {
         let s = self.size as f64 / (2.0 * self.reach);
         (
@@ -34,15 +34,15 @@ impl View {
 
 /// Accumulated light (linear RGB) of a picture.
 pub struct Film {
-    pub view: View,
+    pub canvas: Canvas,
     light: Vec<[f32; 3]>,
 }
 
 impl Film {
-    pub fn new(view: View) -> Self {
+    pub fn new(canvas: Canvas) -> Self {
         Film {
-            view,
-            light: vec![[0.0; 3]; (view.size * view.size) as usize],
+            canvas,
+            light: vec![[0.0; 3]; (canvas.size * canvas.size) as usize],
         }
     }
 
@@ -52,7 +52,7 @@ impl Film {
         let (fx, fy) = (x - 0.5, y - 0.5);
         let (x0, y0) = (fx.floor(), fy.floor());
         let (ax, ay) = ((fx - x0) as f32, (fy - y0) as f32);
-        let n = self.view.size as i64;
+        let n = self.canvas.size as i64;
         for (dx, dy, w) in [
             (0, 0, (1.0 - ax) * (1.0 - ay)),
             (1, 0, ax * (1.0 - ay)),
@@ -72,7 +72,7 @@ impl Film {
     /// The bob moving from `a` to `b` (m) in `seconds`: light proportional to the time spent,
     /// so slow stretches (turning points) come out brighter, as on the photographs.
     pub fn expose_segment(&mut self, a: (f64, f64), b: (f64, f64), seconds: f64, color: [f32; 3]) {
-        let (pa, pb) = (self.view.to_px(a.0, a.1), self.view.to_px(b.0, b.1));
+        let (pa, pb) = (self.canvas.to_px(a.0, a.1), self.canvas.to_px(b.0, b.1));
         let length = ((pb.0 - pa.0).powi(2) + (pb.1 - pa.1).powi(2)).sqrt();
         // Samples at most half a pixel apart.
         let n = (2.0 * length).ceil().max(1.0) as usize;
@@ -88,7 +88,7 @@ impl Film {
         }
     }
 
-    /// Adds the light of `other` (a film of the same view).
+    /// Adds the light of `other` (a film of the same canvas).
     pub fn add(&mut self, other: &Film) {
         for (a, b) in self.light.iter_mut().zip(&other.light) {
             for (x, y) in a.iter_mut().zip(b) {
@@ -100,7 +100,7 @@ impl Film {
     /// 8-bit RGB: 1 - exp(-gain * light) per channel. `gain` is set so that a bob crossing a
     /// pixel at `speed` m/s gives half brightness.
     pub fn develop(&self, speed: f64) -> Vec<u8> {
-        let seconds_per_pixel = self.view.pixel() / speed;
+        let seconds_per_pixel = self.canvas.pixel() / speed;
         let gain = (std::f64::consts::LN_2 / seconds_per_pixel) as f32;
         let mut rgb = Vec::with_capacity(self.light.len() * 3);
         for cell in &self.light {
@@ -121,14 +121,14 @@ fn draw_err<E: std::fmt::Debug>(e: E) -> Error {
 /// with `alpha`, bobs as discs of `radius` px.
 pub fn draw_arms(
     rgb: &mut [u8],
-    view: View,
+    canvas: Canvas,
     arms: &[(Bobs, [u8; 3])],
     alpha: f64,
     radius: i32,
 ) -> Result<()> {
-    let root = BitMapBackend::with_buffer(rgb, (view.size, view.size)).into_drawing_area();
+    let root = BitMapBackend::with_buffer(rgb, (canvas.size, canvas.size)).into_drawing_area();
     let px = |x: f64, y: f64| {
-        let (a, b) = view.to_px(x, y);
+        let (a, b) = canvas.to_px(x, y);
         (a.round() as i32, b.round() as i32)
     };
     for ((x1, y1, x2, y2), c) in arms {

@@ -17,7 +17,7 @@ pub use colormap::{
     Colormap, FlipColors, NAN_RGB, NEVER_RGB, flip_colors, flip_kind_bar, flip_kind_colors,
     flip_kind_rgb, ftle_colors, ftle_range, ftle_table, percentile_range,
 };
-pub use exposure::{Bobs, Film, View, draw_arms};
+pub use exposure::{Bobs, Canvas, Film, draw_arms};
 pub use files::{
     Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic, write_gif,
     write_npy, write_npy_shaped, write_png,
