@@ -324,13 +324,8 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
                 stalled = true;
                 break;
             }
-            let k2 = set_rate(c, set_ahead(x, A21 * step, k1));
-            let k3 = set_rate(c, set_ahead(set_ahead(x, A31 * step, k1), A32 * step, k2));
-            let k4 = set_rate(c, set_ahead(set_ahead(set_ahead(x, A41 * step, k1), A42 * step, k2), A43 * step, k3));
-            let k5 = set_rate(c, set_ahead(set_ahead(set_ahead(set_ahead(x, A51 * step, k1), A52 * step, k2), A53 * step, k3), A54 * step, k4));
-            let k6 = set_rate(c, set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(x, A61 * step, k1), A62 * step, k2), A63 * step, k3), A64 * step, k4), A65 * step, k5));
-            let next = set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(x, B1 * step, k1), B3 * step, k3), B4 * step, k4), B5 * step, k5), B6 * step, k6);
-            let k7 = set_rate(c, next);
+            // The stages (src/gpu/shaders.rs writes them from the tableau):
+            //{{DP54_STAGES}}
             // The error estimate: sum_j E_j k_j, times the step.
             let e = set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(Set(vec4<real>(), vec4<real>(), Vectors(vec4<real>(), vec4<real>(), vec4<real>(), vec4<real>())), E1, k1), E3, k3), E4, k4), E5, k5), E6, k6), E7, k7);
             let squares = scaled_squares(step * e.y, x.y, next.y)

@@ -91,13 +91,8 @@ fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
                 stalled = true;
                 break;
             }
-            let k2 = tangent_rate(c, tangent_ahead(t, A21 * step, k1));
-            let k3 = tangent_rate(c, tangent_ahead(tangent_ahead(t, A31 * step, k1), A32 * step, k2));
-            let k4 = tangent_rate(c, tangent_ahead(tangent_ahead(tangent_ahead(t, A41 * step, k1), A42 * step, k2), A43 * step, k3));
-            let k5 = tangent_rate(c, tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(t, A51 * step, k1), A52 * step, k2), A53 * step, k3), A54 * step, k4));
-            let k6 = tangent_rate(c, tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(t, A61 * step, k1), A62 * step, k2), A63 * step, k3), A64 * step, k4), A65 * step, k5));
-            let next = tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(tangent_ahead(t, B1 * step, k1), B3 * step, k3), B4 * step, k4), B5 * step, k5), B6 * step, k6);
-            let k7 = tangent_rate(c, next);
+            // The stages (src/gpu/shaders.rs writes them from the tableau):
+            //{{DP54_STAGES}}
             let ey = step * (E1 * k1.y + E3 * k3.y + E4 * k4.y + E5 * k5.y + E6 * k6.y + E7 * k7.y);
             let ev = step * (E1 * k1.v + E3 * k3.v + E4 * k4.v + E5 * k5.v + E6 * k6.v + E7 * k7.v);
             let qy = ey / (params.atol + params.rtol * max(abs(t.y), abs(next.y)));

@@ -73,10 +73,15 @@ impl Kernel {
             Kernel::FlipKind => format!("{FLIP_TIME}\n{FLIP_KIND}"),
             Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{}\n{FLIP_DP54}", dp54()),
             Kernel::FlipDop853 => flip_dop853(),
-            Kernel::Lyapunov => format!("{}\n{TANGENT}\n{LYAPUNOV}", dp54()),
-            Kernel::Indicators => format!(
-                "{}\n{TANGENT}\n{INDICATORS}\n{}",
+            Kernel::Lyapunov => format!(
+                "{}\n{TANGENT}\n{}",
                 dp54(),
+                with_dp54_stages(LYAPUNOV, "tangent_rate", "tangent_ahead", "t")
+            ),
+            Kernel::Indicators => format!(
+                "{}\n{TANGENT}\n{}\n{}",
+                dp54(),
+                with_dp54_stages(INDICATORS, "set_rate", "set_ahead", "x"),
                 crate::measure::wgsl()
             ),
             Kernel::Trajectory => TRAJECTORY.to_string(),
@@ -111,6 +116,38 @@ pub fn all_shaders() -> Vec<(String, String)> {
             })
         })
         .collect()
+}
+
+/// `body` with DP54's stages written in at `//{{DP54_STAGES}}` from the tableau (src/tableau.rs
+/// `DP54`, nonzero weights only) for a state kind whose rate is `rate(c, y)` and whose step
+/// along a rate is `ahead(y, w, k)` (y + w k): `k2`..`k6`, `next` (the fifth-order solution)
+/// and `k7` (its rate, the next step's first), from the state `y` and its rate `k1` at step
+/// `step`, each sum nested in the tableau's order.
+fn with_dp54_stages(body: &str, rate: &str, ahead: &str, y: &str) -> String {
+    let t = &crate::tableau::DP54;
+    let along = |weights: &[f64], name: &dyn Fn(usize) -> String| {
+        let mut sum = y.to_string();
+        for (j, &w) in weights.iter().enumerate() {
+            if w != 0.0 {
+                sum = format!("{ahead}({sum}, {} * step, k{})", name(j), j + 1);
+            }
+        }
+        sum
+    };
+    let mut lines: Vec<String> = (1..6)
+        .map(|s| {
+            let stage = along(&t.a[s][..s], &|j| format!("A{}{}", s + 1, j + 1));
+            format!("let k{} = {rate}(c, {stage});", s + 1)
+        })
+        .collect();
+    lines.push(format!(
+        "let next = {};",
+        along(&t.b, &|j| format!("B{}", j + 1))
+    ));
+    lines.push(format!("let k7 = {rate}(c, next);"));
+    let out = body.replace("//{{DP54_STAGES}}", &lines.join("\n            "));
+    assert!(!out.contains("{{"), "a placeholder left in a DP54 kernel");
+    out
 }
 
 /// DP54's coefficients and controller (dp54.wgsl) with the coefficients written from the
