@@ -101,7 +101,14 @@ pub fn run(args: &BenchArgs, monitor: &Monitor, as_json: bool) -> Result<serde_j
             format!("{} holds no peer scripts (no common.py)", dir.display()),
         ));
     }
-    let r = bench::run(&job, monitor)?;
+    let mut r = bench::run(&job, monitor)?;
+    // The rows and findings name chaoscope's settings as fields: said as its flags.
+    for row in &mut r.rows {
+        row.path = super::spelt("bench", &row.path);
+    }
+    for line in &mut r.ratios {
+        *line = super::spelt("bench", line);
+    }
     say("bench", &r.notices);
     if as_json {
         return super::json(&r);

@@ -79,7 +79,7 @@ pub(super) fn accurate_samples(
             accurate_problem(args, Precision::F32, Integrator::Rk4, args.dt),
         ),
         (
-            "chaoscope --accurate (gpu f64 dp54)".to_string(),
+            "chaoscope [[accurate]] (gpu f64 dp54)".to_string(),
             accurate_problem(args, Precision::F32, Integrator::Rk4, args.dt).accurate(),
         ),
         // The higher-order pair at the same tolerance, with the longest steps RK4's
@@ -197,7 +197,7 @@ pub(super) fn ftle_accuracy_paths(args: &BenchJob) -> [(&'static str, LyapunovSp
             ftle_accuracy_spec(args, Precision::F64, Integrator::Rk4, 0.01),
         ),
         (
-            "chaoscope lyapunov --accurate (gpu f64 dp54)",
+            "chaoscope lyapunov [[accurate]] (gpu f64 dp54)",
             ftle_accuracy_spec(args, Precision::F32, Integrator::Rk4, 0.01).accurate(),
         ),
     ]

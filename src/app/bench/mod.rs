@@ -404,7 +404,7 @@ fn ratios(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     if let Some(f) = rows.iter().find(|r| r.mode == "forecast") {
         out.push(format!(
-            "forecast: the ensemble of --forecast-members over 6 s past a fit window (draws, runs with their own damping, bands, FTLE) takes {:.2} s on {} ({:.3e} pendulum-steps/s)",
+            "forecast: the ensemble of [[forecast_members]] over 6 s past a fit window (draws, runs with their own damping, bands, FTLE) takes {:.2} s on {} ({:.3e} pendulum-steps/s)",
             f.wall_s, f.path, f.steps_per_s
         ));
     }
@@ -456,8 +456,8 @@ fn ratios(rows: &[Row]) -> Vec<String> {
     };
     if let Some((a, line)) = against_f32(
         "accurate",
-        "chaoscope --accurate",
-        "accurate map: --accurate is right",
+        "chaoscope [[accurate]]",
+        "accurate map: [[accurate]] is right",
     ) {
         out.push(line);
         let right = a.right.unwrap_or(0.0);
@@ -471,7 +471,7 @@ fn ratios(rows: &[Row]) -> Vec<String> {
             .min_by(|x, y| x.wall_s.total_cmp(&y.wall_s));
         match peer {
             Some(p) => out.push(format!(
-                "accurate map: the fastest peer as right ({}, {:.2} %) takes {:.1}x --accurate's time",
+                "accurate map: the fastest peer as right ({}, {:.2} %) takes {:.1}x [[accurate]]'s time",
                 p.path,
                 100.0 * p.right.unwrap_or(f64::NAN),
                 p.wall_s / a.wall_s
@@ -481,8 +481,8 @@ fn ratios(rows: &[Row]) -> Vec<String> {
     }
     if let Some((_, line)) = against_f32(
         "accurate-ftle",
-        "chaoscope lyapunov --accurate",
-        "accurate divergence map: lyapunov --accurate agrees with the converged map",
+        "chaoscope lyapunov [[accurate]]",
+        "accurate divergence map: lyapunov [[accurate]] agrees with the converged map",
     ) {
         out.push(line);
     }
