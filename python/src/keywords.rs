@@ -4,9 +4,7 @@
 
 use chaoscope::engine::Backend;
 use chaoscope::params::{ParamSources, Preset};
-use chaoscope::spec::{
-    Angles, AxisAsked, Grid, Integrator, PlaneAsked, Precision, Range, Stepping, Var, integrator_of,
-};
+use chaoscope::spec::{Angles, AxisAsked, Grid, PlaneAsked, Precision, Range, Stepping, Var};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
@@ -198,15 +196,6 @@ impl<'py> Keywords<'py> {
         }
         .grid(self.size()?)
         .map_err(py_err)
-    }
-
-    /// `integrator` with `rtol`, `atol` (RK4 with the accurate settings, which set their own).
-    pub fn integrator(&self, accurate: bool, gpu_f32: bool) -> PyResult<Integrator> {
-        if accurate {
-            return Ok(Integrator::Rk4);
-        }
-        let name = self.or("integrator", "rk4".to_string())?;
-        integrator_of(&name, self.get("rtol")?, self.get("atol")?, gpu_f32).map_err(py_err)
     }
 
     pub fn stepping(&self, t_max: f64) -> PyResult<Stepping> {

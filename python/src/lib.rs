@@ -14,7 +14,8 @@ use chaoscope::field::Field;
 use chaoscope::model::State;
 use chaoscope::render::PictureSpec;
 use chaoscope::spec::{
-    FlipMeasure, FlipSpec, IndicatorAsked, LyapunovSpec, MapSpec, Method, Precision,
+    FlipMeasure, FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, MapSpec, Method, Precision,
+    SteppingAsked,
 };
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{
@@ -284,21 +285,25 @@ fn flip_map<'py>(
             .find(|m| m.name() == n)
             .expect("listed"),
     };
-    let integrator = k.integrator(
+    let integrator = k.or("integrator", "rk4".to_string())?;
+    let asked = SteppingAsked {
+        precision,
+        integrator: &integrator,
+        rtol: k.get("rtol")?,
+        atol: k.get("atol")?,
         accurate,
-        precision == Precision::F32 && backend != Backend::Cpu,
-    )?;
+        gpu_f32: precision == Precision::F32 && backend != Backend::Cpu,
+    };
     let grid = k.grid()?;
     let params = k.sources()?.resolve_on(&grid).map_err(py_err)?;
-    let spec = FlipSpec {
-        measure,
-        early_exit: k.or("early_exit", true)?,
-        use_symmetry: k.or("use_symmetry", true)?,
-        precision,
-        integrator,
-        ..FlipSpec::new(params, grid, k.stepping(30.0)?)
-    };
-    let spec = if accurate { spec.accurate() } else { spec };
+    let spec = asked
+        .flip(FlipSpec {
+            measure,
+            early_exit: k.or("early_exit", true)?,
+            use_symmetry: k.or("use_symmetry", true)?,
+            ..FlipSpec::new(params, grid, k.stepping(30.0)?)
+        })
+        .map_err(py_err)?;
     run_map(py, &k, spec, backend, command_line::flip, progress)
 }
 
@@ -337,9 +342,17 @@ fn lyapunov_map<'py>(
         Some("twin") => Method::Twin { eps },
         _ => Method::Tangent,
     };
-    let integrator = k.integrator(accurate, gpu_f32)?;
+    let integrator = k.or("integrator", "rk4".to_string())?;
+    let asked = SteppingAsked {
+        precision,
+        integrator: &integrator,
+        rtol: k.get("rtol")?,
+        atol: k.get("atol")?,
+        accurate,
+        gpu_f32,
+    };
     let grid = k.grid()?;
-    let spec = LyapunovSpec {
+    let spec = asked.lyapunov(LyapunovSpec {
         params: k.sources()?.resolve_on(&grid).map_err(py_err)?,
         grid,
         stepping: k.stepping(20.0)?,
@@ -348,10 +361,10 @@ fn lyapunov_map<'py>(
         use_symmetry: k.or("use_symmetry", true)?,
         precision,
         band: None,
-        integrator,
+        integrator: Integrator::Rk4,
         indicator,
-    };
-    let spec = if accurate { spec.accurate() } else { spec };
+    });
+    let spec = spec.map_err(py_err)?;
     run_map(py, &k, spec, backend, command_line::lyapunov_map, progress)
 }
 

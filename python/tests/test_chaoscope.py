@@ -214,6 +214,9 @@ def test_bad_keywords_and_types_raise_type_error():
         chaoscope.flip_map(size=16, theta1="all")
     with pytest.raises(ValueError, match="^indicator: "):
         chaoscope.lyapunov_map(size=16, t_max=1, indicator="entropy")
+    # accurate steps the tangent method with DP54, as `lyapunov --accurate` refuses a twin.
+    with pytest.raises(ValueError, match="^accurate: .*method='twin'"):
+        chaoscope.lyapunov_map(size=16, t_max=1, accurate=True, method="twin")
     with pytest.raises(TypeError, match="colour"):
         chaoscope.params(colour=3)
 

@@ -14,7 +14,7 @@ use crate::app::flip::{self, FlipJob};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
-use crate::spec::{FlipMeasure, FlipSpec, Integrator, MapSpec, Precision};
+use crate::spec::{FlipMeasure, FlipSpec, Integrator, MapSpec, Precision, SteppingAsked};
 
 #[derive(Args, Debug, Clone)]
 pub struct FlipArgs {
@@ -85,28 +85,26 @@ pub struct FlipArgs {
 impl FlipArgs {
     /// The map the flags ask for (`--accurate` expanded by the spec).
     pub fn spec(&self) -> Result<FlipSpec> {
-        let f32_gpu =
-            self.precision.unwrap_or_default() == Precision::F32 && self.backend != Backend::Cpu;
-        let integrator = match self.accurate {
-            true => Integrator::Rk4,
-            false => integrator_of(&self.integrator, self.rtol, self.atol, f32_gpu)?,
+        let precision = self.precision.unwrap_or_default();
+        let asked = SteppingAsked {
+            precision,
+            integrator: &self.integrator,
+            rtol: self.rtol,
+            atol: self.atol,
+            accurate: self.accurate,
+            gpu_f32: precision == Precision::F32 && self.backend != Backend::Cpu,
         };
-        let spec = FlipSpec {
+        let grid = self.grid.grid()?;
+        asked.flip(FlipSpec {
             measure: self.colour_by,
             early_exit: !self.full,
             use_symmetry: !(self.full || self.no_symmetry),
-            precision: self.precision.unwrap_or_default(),
-            integrator,
-            ..{
-                let grid = self.grid.grid()?;
-                FlipSpec::new(
-                    self.physical.sources().resolve_on(&grid)?,
-                    grid,
-                    self.step.stepping(),
-                )
-            }
-        };
-        Ok(if self.accurate { spec.accurate() } else { spec })
+            ..FlipSpec::new(
+                self.physical.sources().resolve_on(&grid)?,
+                grid,
+                self.step.stepping(),
+            )
+        })
     }
 
     pub fn job(&self) -> Result<FlipJob> {
@@ -131,8 +129,6 @@ impl FlipArgs {
         })
     }
 }
-
-pub use crate::spec::integrator_of;
 
 /// ", X % resolved (rule)" when the verdict was asked for.
 pub fn resolved_note(resolved: Option<f64>, rule: &str) -> String {

@@ -16,6 +16,7 @@ use crate::monitor::Monitor;
 use crate::spec::MapSpec;
 use crate::spec::{
     Grid, Indicator, IndicatorAsked, Integrator, LyapunovSpec, Method, Precision, Range, Stepping,
+    SteppingAsked,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -149,11 +150,9 @@ fn indicator_help() -> String {
 }
 
 impl LyapunovArgs {
-    /// The integrator the flags ask for (tolerances only with dp54).
-    fn integrator(&self) -> Result<Integrator> {
-        let gpu_f32 = self.precision.unwrap_or_default() == Precision::F32
-            && self.backend != Some(Backend::Cpu);
-        super::flip::integrator_of(&self.integrator, self.rtol, self.atol, gpu_f32)
+    /// Whether the flags expect an f32 GPU path (the default tolerance's and threshold's).
+    fn gpu_f32(&self) -> bool {
+        self.precision.unwrap_or_default() == Precision::F32 && self.backend != Some(Backend::Cpu)
     }
 
     /// The indicator the flags ask for ([`IndicatorAsked::indicator`]).
@@ -165,25 +164,22 @@ impl LyapunovArgs {
             threshold: self.threshold,
             ld_p: self.ld_p,
             accurate: self.accurate,
-            gpu_f32: self.precision.unwrap_or_default() == Precision::F32
-                && self.backend != Some(Backend::Cpu),
+            gpu_f32: self.gpu_f32(),
         }
         .indicator()
     }
 
     /// The map the flags ask for over `grid` (`--accurate` expanded by the spec).
     fn spec(&self, grid: Grid) -> Result<LyapunovSpec> {
-        if self.accurate && self.method == MethodArg::Twin {
-            return Err(Error::invalid(
-                "accurate",
-                "steps the tangent method with dp54; --method twin has fixed steps only",
-            ));
-        }
-        let integrator = match self.accurate {
-            true => Integrator::Rk4,
-            false => self.integrator()?,
+        let asked = SteppingAsked {
+            precision: self.precision.unwrap_or_default(),
+            integrator: &self.integrator,
+            rtol: self.rtol,
+            atol: self.atol,
+            accurate: self.accurate,
+            gpu_f32: self.gpu_f32(),
         };
-        let spec = LyapunovSpec {
+        asked.lyapunov(LyapunovSpec {
             params: self.physical.sources().resolve_on(&grid)?,
             grid,
             stepping: Stepping {
@@ -198,10 +194,9 @@ impl LyapunovArgs {
             use_symmetry: !self.no_symmetry,
             precision: self.precision.unwrap_or_default(),
             band: None,
-            integrator,
+            integrator: Integrator::Rk4,
             indicator: self.indicator()?,
-        };
-        Ok(if self.accurate { spec.accurate() } else { spec })
+        })
     }
 
     pub fn job(&self) -> Result<LyapunovJob> {

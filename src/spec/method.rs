@@ -179,3 +179,53 @@ pub fn integrator_of(
         }
     })
 }
+
+/// How a door asks for a map to be stepped: the precision, the integrator by name with any
+/// tolerances given, or `accurate`'s settings; `gpu_f32` whether the door expects an f32
+/// GPU path (the default tolerance's floor then). The CLI and Python both make their maps'
+/// stepping from it.
+#[derive(Clone, Copy, Debug)]
+pub struct SteppingAsked<'a> {
+    pub precision: Precision,
+    pub integrator: &'a str,
+    pub rtol: Option<f64>,
+    pub atol: Option<f64>,
+    pub accurate: bool,
+    pub gpu_f32: bool,
+}
+
+impl SteppingAsked<'_> {
+    /// The integrator asked for (`accurate` sets its own).
+    fn integrator(&self) -> Result<Integrator> {
+        match self.accurate {
+            true => Ok(Integrator::Rk4),
+            false => integrator_of(self.integrator, self.rtol, self.atol, self.gpu_f32),
+        }
+    }
+
+    /// `spec` stepped as asked (`accurate` expanded by the spec).
+    pub fn flip(&self, spec: super::FlipSpec) -> Result<super::FlipSpec> {
+        let spec = super::FlipSpec {
+            precision: self.precision,
+            integrator: self.integrator()?,
+            ..spec
+        };
+        Ok(if self.accurate { spec.accurate() } else { spec })
+    }
+
+    /// `spec` stepped as asked (`accurate`: the tangent method's DP54, so not a twin's).
+    pub fn lyapunov(&self, spec: super::LyapunovSpec) -> Result<super::LyapunovSpec> {
+        if self.accurate && matches!(spec.method, super::Method::Twin { .. }) {
+            return Err(Error::invalid(
+                "accurate",
+                "steps the tangent method with dp54; [[method=twin]] has fixed steps only",
+            ));
+        }
+        let spec = super::LyapunovSpec {
+            precision: self.precision,
+            integrator: self.integrator()?,
+            ..spec
+        };
+        Ok(if self.accurate { spec.accurate() } else { spec })
+    }
+}

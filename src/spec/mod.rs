@@ -24,7 +24,7 @@ pub use map::{AnyMap, FlipMeasure, FlipSpec, LyapunovSpec, MAX_STEPS, MapSpec, M
 pub use memory::{available_memory, check_memory};
 pub use method::{
     ACCURATE, ACCURATE_FTLE, Integrator, MIN_TOLERANCE_F32, MIN_TOLERANCE_F64, Precision,
-    integrator_of,
+    SteppingAsked, integrator_of,
 };
 pub use plane::{Angles, AxisAsked, PlaneAsked};
 pub use stability::{largest_stable_dt, speed_bound, validate_speeds, validate_stability};
