@@ -4,7 +4,9 @@
 
 use chaoscope::engine::Backend;
 use chaoscope::params::{ParamSources, Preset};
-use chaoscope::spec::{Angles, AxisAsked, Grid, PlaneAsked, Precision, Range, Stepping, Var};
+use chaoscope::spec::{
+    Angles, AxisAsked, Grid, PlaneAsked, Precision, Range, Stepping, SteppingAsked, Var,
+};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
@@ -196,6 +198,25 @@ impl<'py> Keywords<'py> {
         }
         .grid(self.size()?)
         .map_err(py_err)
+    }
+
+    /// How the keywords ask for a map to be stepped: `integrator` (the keyword's value) with
+    /// `rtol` and `atol`, in `precision`, or `accurate`'s settings.
+    pub fn stepping_asked<'a>(
+        &self,
+        integrator: &'a str,
+        precision: Precision,
+        accurate: bool,
+        gpu_f32: bool,
+    ) -> PyResult<SteppingAsked<'a>> {
+        Ok(SteppingAsked {
+            precision,
+            integrator,
+            rtol: self.get("rtol")?,
+            atol: self.get("atol")?,
+            accurate,
+            gpu_f32,
+        })
     }
 
     pub fn stepping(&self, t_max: f64) -> PyResult<Stepping> {

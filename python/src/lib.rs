@@ -15,7 +15,6 @@ use chaoscope::model::State;
 use chaoscope::render::PictureSpec;
 use chaoscope::spec::{
     FlipMeasure, FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, MapSpec, Method, Precision,
-    SteppingAsked,
 };
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{
@@ -286,14 +285,8 @@ fn flip_map<'py>(
             .expect("listed"),
     };
     let integrator = k.or("integrator", "rk4".to_string())?;
-    let asked = SteppingAsked {
-        precision,
-        integrator: &integrator,
-        rtol: k.get("rtol")?,
-        atol: k.get("atol")?,
-        accurate,
-        gpu_f32: precision == Precision::F32 && backend != Backend::Cpu,
-    };
+    let gpu_f32 = precision == Precision::F32 && backend != Backend::Cpu;
+    let asked = k.stepping_asked(&integrator, precision, accurate, gpu_f32)?;
     let grid = k.grid()?;
     let params = k.sources()?.resolve_on(&grid).map_err(py_err)?;
     let spec = asked
@@ -343,14 +336,7 @@ fn lyapunov_map<'py>(
         _ => Method::Tangent,
     };
     let integrator = k.or("integrator", "rk4".to_string())?;
-    let asked = SteppingAsked {
-        precision,
-        integrator: &integrator,
-        rtol: k.get("rtol")?,
-        atol: k.get("atol")?,
-        accurate,
-        gpu_f32,
-    };
+    let asked = k.stepping_asked(&integrator, precision, accurate, gpu_f32)?;
     let grid = k.grid()?;
     let spec = asked.lyapunov(LyapunovSpec {
         params: k.sources()?.resolve_on(&grid).map_err(py_err)?,
