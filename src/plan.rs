@@ -3,7 +3,7 @@
 //! else. Every door plans, then computes ([`Engine::planned_map`]) or fills a store band by
 //! band ([`MapPlan::with_band`]).
 
-use crate::engine::{Backend, Engine, MapKernels, RunInfo};
+use crate::engine::{Engine, MapKernels, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
@@ -90,13 +90,7 @@ impl Engine {
         let (precision, grid) = (spec.precision(), spec.grid());
         let info = self.map_info(grid, precision);
         let mut notices = self.notices();
-        notices.extend(precision_notices(
-            self,
-            self.asked(),
-            precision,
-            grid,
-            &info,
-        )?);
+        notices.extend(precision_notices(self, precision, grid, &info)?);
         notices.extend(spec.notices(info.path));
         spec.validate_in(info.path.precision())?;
         let checked = |map: S| {
@@ -172,14 +166,16 @@ impl Engine {
 /// What a map's precision means on this engine: f64 asked of a GPU without it is an error
 /// naming `precision` when the GPU was asked for, else a note that the CPU runs it; a grid
 /// finer than f32 resolves gets a note saying where it runs in f64 (`info`).
-pub fn precision_notices(
+fn precision_notices(
     engine: &Engine,
-    backend: Backend,
     precision: Precision,
     grid: &Grid,
     info: &RunInfo,
 ) -> Result<Vec<String>> {
-    let mut notices: Vec<String> = engine.check_f64(precision, backend)?.into_iter().collect();
+    let mut notices: Vec<String> = engine
+        .check_f64(precision, engine.asked())?
+        .into_iter()
+        .collect();
     // Today's plane says it as it always has; any other names its axes.
     let below = |step: f64, float: &str| match grid.is_angle_plane() {
         true => format!("below {step:.1e} rad, finer than {float} resolves near pi"),

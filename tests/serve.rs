@@ -1245,7 +1245,7 @@ fn a_divergence_tile_refuses_an_f32_tolerance_below_the_floor_as_the_cli_does() 
     assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
     assert_eq!(ran.as_deref(), Some("f64"));
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(assert_cmd::cargo::cargo_bin("chaoscope"))
+    let out = chaoscope()
         .args([
             "lyapunov",
             "--size",
@@ -1265,7 +1265,6 @@ fn a_divergence_tile_refuses_an_f32_tolerance_below_the_floor_as_the_cli_does() 
             "--output",
         ])
         .arg(dir.path().join("never.png"))
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
