@@ -264,6 +264,13 @@ impl Engine {
         self.gpu.as_ref().is_none_or(|k| k.ctx.has_f64())
     }
 
+    /// Whether a map asked for in `precision` runs in f32 arithmetic here (on a GPU): the
+    /// defaults that depend on the path (f32's tolerance floor, the alignment threshold's)
+    /// are read from it, by the door that lends this engine, never guessed from its flags.
+    pub fn computes_in_f32(&self, precision: Precision) -> bool {
+        self.gpu.is_some() && precision == Precision::F32
+    }
+
     /// The GPU and its kernels, if this engine has one.
     pub fn gpu(&self) -> Option<&Kernels> {
         self.gpu.as_ref()

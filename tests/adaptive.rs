@@ -395,3 +395,58 @@ fn refused(base: &[&str], args: &[&str], flag: &str) {
     assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
     assert!(stderr.contains(flag), "{args:?}: {stderr}");
 }
+
+/// The defaults that depend on the path are read from the engine the command runs on, not
+/// guessed from its flags: f32 on the GPU takes f32's floor (rtol 1e-5; an alignment
+/// threshold of 1e-5), and the same flags under `auto` on a machine without a GPU (no Vulkan
+/// driver to be found) run on the CPU in f64 with f64's (1e-9; 1e-8), as `--backend cpu`
+/// does. Before, `auto` without an adapter took f32's onto the CPU.
+#[test]
+fn the_defaults_are_the_path_the_engine_takes() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("m.png");
+    let recorded = |no_driver: bool, args: &[&str]| {
+        let mut c = chaoscope();
+        if no_driver {
+            c.env("VK_ICD_FILENAMES", dir.path().join("no-such-driver.json"));
+        }
+        let o = c
+            .args(args)
+            .args(["--size", "8", "--t-max", "1", "--output"])
+            .arg(&png)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(o.status.success(), "{stderr}");
+        if no_driver {
+            assert!(stderr.contains("no GPU adapter found"), "{stderr}");
+        }
+        common::png_text(&png, "chaoscope:command")
+    };
+    let gpu: &[&str] = &["--backend", "gpu"];
+    let cpu: &[&str] = &["--backend", "cpu"];
+    let tolerance: fn(bool) -> &'static str = |f32| match f32 {
+        true => "--rtol 0.00001 --atol 0.00001",
+        false => "--rtol 0.000000001 --atol 0.000000001",
+    };
+    let threshold: fn(bool) -> &'static str = |f32| match f32 {
+        true => "--threshold 1e-5",
+        false => "--threshold 1e-8",
+    };
+    let flip: &[&str] = &["flip", "--integrator", "dp54"];
+    let ftle: &[&str] = &["lyapunov", "--integrator", "dp54"];
+    let sali: &[&str] = &["lyapunov", "--indicator", "sali-time", "--renorm", "0.5"];
+    for (args, expected) in [(flip, tolerance), (ftle, tolerance), (sali, threshold)] {
+        for (no_driver, backend, f32) in [
+            (false, gpu, true),
+            (false, cpu, false),
+            (true, &[][..], false),
+        ] {
+            let command = recorded(no_driver, &[args, backend].concat());
+            assert!(
+                command.contains(expected(f32)),
+                "{args:?} {backend:?}: {command}"
+            );
+        }
+    }
+}

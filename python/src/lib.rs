@@ -14,7 +14,7 @@ use chaoscope::field::Field;
 use chaoscope::model::State;
 use chaoscope::render::PictureSpec;
 use chaoscope::spec::{
-    FlipMeasure, FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, MapSpec, Method, Precision,
+    FlipMeasure, FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, MapSpec, Method,
 };
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{
@@ -285,7 +285,7 @@ fn flip_map<'py>(
             .expect("listed"),
     };
     let integrator = k.or("integrator", "rk4".to_string())?;
-    let gpu_f32 = precision == Precision::F32 && backend != Backend::Cpu;
+    let gpu_f32 = engine(backend)?.computes_in_f32(precision);
     let asked = k.stepping_asked(&integrator, precision, accurate, gpu_f32)?;
     let grid = k.grid()?;
     let params = k.sources()?.resolve_on(&grid).map_err(py_err)?;
@@ -311,7 +311,7 @@ fn lyapunov_map<'py>(
     let backend = k.backend()?;
     let precision = k.precision()?;
     let accurate: bool = k.or("accurate", false)?;
-    let gpu_f32 = precision == Precision::F32 && backend != Backend::Cpu;
+    let gpu_f32 = engine(backend)?.computes_in_f32(precision);
     let indicator = IndicatorAsked {
         name: &k.or("indicator", "ftle".to_string())?,
         exponent: k.whole("exponent")?,

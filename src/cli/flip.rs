@@ -83,16 +83,16 @@ pub struct FlipArgs {
 }
 
 impl FlipArgs {
-    /// The map the flags ask for (`--accurate` expanded by the spec).
-    pub fn spec(&self) -> Result<FlipSpec> {
-        let precision = self.precision.unwrap_or_default();
+    /// The map the flags ask for (`--accurate` expanded by the spec), its defaults those of
+    /// an f32 GPU path when `gpu_f32`.
+    fn spec(&self, gpu_f32: bool) -> Result<FlipSpec> {
         let asked = SteppingAsked {
-            precision,
+            precision: self.precision.unwrap_or_default(),
             integrator: &self.integrator,
             rtol: self.rtol,
             atol: self.atol,
             accurate: self.accurate,
-            gpu_f32: precision == Precision::F32 && self.backend != Backend::Cpu,
+            gpu_f32,
         };
         let grid = self.grid.grid()?;
         asked.flip(FlipSpec {
@@ -107,8 +107,18 @@ impl FlipArgs {
         })
     }
 
+    /// The job of a command line read without running it: its defaults those of the path
+    /// the flags name (the GPU unless `--backend cpu`). A run takes [`FlipArgs::job_on`].
     pub fn job(&self) -> Result<FlipJob> {
-        let spec = self.spec()?;
+        let named_f32_gpu =
+            self.precision.unwrap_or_default() == Precision::F32 && self.backend != Backend::Cpu;
+        self.job_on(named_f32_gpu)
+    }
+
+    /// The job, its defaults that depend on the path those of an f32 GPU path when `gpu_f32`
+    /// (the lent engine's answer, [`Engine::computes_in_f32`]).
+    pub fn job_on(&self, gpu_f32: bool) -> Result<FlipJob> {
+        let spec = self.spec(gpu_f32)?;
         super::args::no_picture_with_a_store(self.data.as_deref(), self.output.as_deref())?;
         Ok(FlipJob {
             spec,
@@ -148,8 +158,8 @@ pub fn nan_note(nan: usize) -> String {
 
 pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     super::args::f32_on_the_cpu(args.precision, args.backend);
-    let job = args.job()?;
-    let engine = Engine::new(job.backend)?;
+    let engine = Engine::new(args.backend)?;
+    let job = args.job_on(engine.computes_in_f32(args.precision.unwrap_or_default()))?;
     let s = flip::run(&job, &engine, command_line::flip(&job), monitor)?;
     say("flip", &s.notices);
     eprintln!(

@@ -150,13 +150,9 @@ fn indicator_help() -> String {
 }
 
 impl LyapunovArgs {
-    /// Whether the flags expect an f32 GPU path (the default tolerance's and threshold's).
-    fn gpu_f32(&self) -> bool {
-        self.precision.unwrap_or_default() == Precision::F32 && self.backend != Some(Backend::Cpu)
-    }
-
-    /// The indicator the flags ask for ([`IndicatorAsked::indicator`]).
-    fn indicator(&self) -> Result<Indicator> {
+    /// The indicator the flags ask for ([`IndicatorAsked::indicator`]), its defaults those
+    /// of an f32 GPU path when `gpu_f32`.
+    fn indicator(&self, gpu_f32: bool) -> Result<Indicator> {
         IndicatorAsked {
             name: &self.indicator,
             exponent: self.exponent,
@@ -164,20 +160,20 @@ impl LyapunovArgs {
             threshold: self.threshold,
             ld_p: self.ld_p,
             accurate: self.accurate,
-            gpu_f32: self.gpu_f32(),
+            gpu_f32,
         }
         .indicator()
     }
 
     /// The map the flags ask for over `grid` (`--accurate` expanded by the spec).
-    fn spec(&self, grid: Grid) -> Result<LyapunovSpec> {
+    fn spec(&self, grid: Grid, gpu_f32: bool) -> Result<LyapunovSpec> {
         let asked = SteppingAsked {
             precision: self.precision.unwrap_or_default(),
             integrator: &self.integrator,
             rtol: self.rtol,
             atol: self.atol,
             accurate: self.accurate,
-            gpu_f32: self.gpu_f32(),
+            gpu_f32,
         };
         asked.lyapunov(LyapunovSpec {
             params: self.physical.sources().resolve_on(&grid)?,
@@ -195,11 +191,32 @@ impl LyapunovArgs {
             precision: self.precision.unwrap_or_default(),
             band: None,
             integrator: Integrator::Rk4,
-            indicator: self.indicator()?,
+            indicator: self.indicator(gpu_f32)?,
         })
     }
 
+    /// The backend the flags name: `--backend`, else auto for a map and the CPU for a
+    /// single start's convergence run.
+    pub fn backend(&self) -> Backend {
+        let plane = &self.plane;
+        let point = plane.x.or(plane.y).is_none()
+            && matches!(plane.theta1, Some(Angles::Point(_)))
+            && matches!(plane.theta2, Some(Angles::Point(_)));
+        self.backend
+            .unwrap_or(if point { Backend::Cpu } else { Backend::Auto })
+    }
+
+    /// The job of a command line read without running it: its defaults those of the path
+    /// the flags name ([`LyapunovArgs::backend`]). A run takes [`LyapunovArgs::job_on`].
     pub fn job(&self) -> Result<LyapunovJob> {
+        let named_f32_gpu =
+            self.precision.unwrap_or_default() == Precision::F32 && self.backend() != Backend::Cpu;
+        self.job_on(named_f32_gpu)
+    }
+
+    /// The job, its defaults that depend on the path those of an f32 GPU path when `gpu_f32`
+    /// (the lent engine's answer, [`Engine::computes_in_f32`]).
+    pub fn job_on(&self, gpu_f32: bool) -> Result<LyapunovJob> {
         let plane = &self.plane;
         let point = match (plane.x.or(plane.y), plane.theta1, plane.theta2) {
             (None, Some(Angles::Point(theta1)), Some(Angles::Point(theta2))) => {
@@ -224,8 +241,8 @@ impl LyapunovArgs {
                 super::args::no_picture_with_a_store(self.data.as_deref(), self.output.as_deref())?;
                 let grid = plane.grid(self.size)?;
                 Ok(LyapunovJob::Map(LyapunovMapJob {
-                    spec: self.spec(grid)?,
-                    backend: self.backend.unwrap_or(Backend::Auto),
+                    spec: self.spec(grid, gpu_f32)?,
+                    backend: self.backend(),
                     picture: self.picture.spec(),
                     files: MapOutputs {
                         output: self
@@ -286,9 +303,9 @@ impl LyapunovArgs {
                     start.omega2,
                 );
                 Ok(LyapunovJob::Point(LyapunovPointJob {
-                    spec: self.spec(grid)?,
+                    spec: self.spec(grid, gpu_f32)?,
                     start,
-                    backend: self.backend.unwrap_or(Backend::Cpu),
+                    backend: self.backend(),
                     output: self.output.clone(),
                 }))
             }
@@ -297,11 +314,11 @@ impl LyapunovArgs {
 }
 
 pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    match args.job()? {
+    super::args::f32_on_the_cpu(args.precision, args.backend());
+    let engine = Engine::new(args.backend())?;
+    match args.job_on(engine.computes_in_f32(args.precision.unwrap_or_default()))? {
         LyapunovJob::Map(job) => {
-            super::args::f32_on_the_cpu(args.precision, job.backend);
             let command = command_line::lyapunov_map(&job);
-            let engine = Engine::new(job.backend)?;
             let s = match &args.spectrum {
                 Some(path) => {
                     let command = format!("{command} --spectrum {}", path.display());
@@ -338,9 +355,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             json(&s)
         }
         LyapunovJob::Point(job) => {
-            super::args::f32_on_the_cpu(args.precision, job.backend);
             let command = command_line::lyapunov_point(&job);
-            let engine = Engine::new(job.backend)?;
             let s = lyapunov::run_point(
                 &job,
                 &engine,

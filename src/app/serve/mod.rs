@@ -140,6 +140,8 @@ struct Shared {
     engine: Arc<tokio::sync::Mutex<Engine>>,
     place: String,
     has_f64: bool,
+    /// Whether the engine has a GPU (a view's defaults that depend on the path).
+    on_gpu: bool,
     cache: Mutex<LruCache<String, Bytes>>,
     waiting: AtomicUsize,
     counters: Counters,
@@ -158,7 +160,7 @@ impl Shared {
 
     /// The view a query asks for (the store's, when serving one).
     fn view(&self, q: &mut Query) -> Result<View> {
-        q.view(&self.base, self.stored())
+        q.view(&self.base, self.stored(), self.on_gpu)
     }
 
     /// What a view's tiles cover: the store's region, or the view's plane.
@@ -199,6 +201,7 @@ pub fn run(
     let shared = Arc::new(Shared {
         place: info.place().to_string(),
         has_f64: engine.has_f64(),
+        on_gpu: engine.gpu().is_some(),
         engine: Arc::new(tokio::sync::Mutex::new(engine)),
         cache: Mutex::new(LruCache::new(
             NonZeroUsize::new(CACHE_ENTRIES).expect("nonzero"),

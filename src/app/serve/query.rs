@@ -77,7 +77,13 @@ impl Query {
 
     /// `precision` (f32, f64) and `integrator` (rk4, dp54, dop853; `rtol`, `atol` as the
     /// commands take them), when any is given; not with `accurate`, which sets its own.
-    pub(super) fn method(&mut self, accurate: bool) -> Result<Option<(Precision, Integrator)>> {
+    /// `on_gpu`: whether the explorer's engine has a GPU (f32's tolerance floor by default
+    /// there).
+    pub(super) fn method(
+        &mut self,
+        accurate: bool,
+        on_gpu: bool,
+    ) -> Result<Option<(Precision, Integrator)>> {
         let keys = ["precision", "integrator", "rtol", "atol"];
         let Some(given) = keys.into_iter().find(|k| self.values.contains_key(*k)) else {
             return Ok(None);
@@ -92,9 +98,7 @@ impl Query {
         };
         let name = self.take("integrator").unwrap_or_else(|| "rk4".into());
         let (rtol, atol) = (self.number("rtol")?, self.number("atol")?);
-        // f32's floor by default in f32 (on the CPU a map runs in f64, where it holds too).
-        let f32_default = precision == Precision::F32;
-        let integrator = integrator_of(&name, rtol, atol, f32_default)?;
+        let integrator = integrator_of(&name, rtol, atol, on_gpu && precision == Precision::F32)?;
         Ok(Some((precision, integrator)))
     }
 

@@ -65,7 +65,13 @@ pub struct View {
 impl Query {
     /// The view's settings; `base` gives the physics not in the query (the server's flags),
     /// or `stored`, a store's map, fixes them (and the query may not name them).
-    pub fn view(&mut self, base: &ParamSources, stored: Option<FrameMap>) -> Result<View> {
+    /// `on_gpu`: whether the explorer's engine has a GPU ([`Query::method`]'s default).
+    pub fn view(
+        &mut self,
+        base: &ParamSources,
+        stored: Option<FrameMap>,
+        on_gpu: bool,
+    ) -> Result<View> {
         let kind = self.take("kind");
         let kind = match (kind.as_deref(), stored) {
             (Some(k), _) => Kind::parse(k)?,
@@ -143,7 +149,7 @@ impl Query {
                 ),
             ));
         }
-        let method = self.method(accurate)?;
+        let method = self.method(accurate, on_gpu)?;
         let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
         let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
         if let Kind::Map(k) = kind
@@ -450,13 +456,13 @@ mod tests {
             (&[("damping", "-1")][..], "damping"),
             (&[("cmap", "nope")][..], "cmap"),
         ] {
-            match q(pairs).view(&base, None) {
+            match q(pairs).view(&base, None, true) {
                 Err(Error::InvalidSpec { field: f, .. }) => assert_eq!(f, field, "{pairs:?}"),
                 other => panic!("{pairs:?}: {other:?}"),
             }
         }
         let mut extra = q(&[("tmax", "3")]);
-        extra.view(&base, None).unwrap();
+        extra.view(&base, None, true).unwrap();
         assert!(extra.finish().is_err());
     }
 }
