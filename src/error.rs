@@ -37,6 +37,15 @@ pub enum Error {
         differences: Vec<(&'static str, String, String)>,
         command: String,
     },
+    /// A program a run needs (FFmpeg for films) is not installed.
+    #[error(
+        "{what} needs {tool}: install FFmpeg (on Debian: {})",
+        crate::video::INSTALL
+    )]
+    MissingTool {
+        tool: &'static str,
+        what: &'static str,
+    },
     /// The GPU reported an error (validation, out of memory, lost device).
     #[error("GPU error: {0}")]
     Gpu(String),

@@ -37,6 +37,7 @@ pub mod render;
 pub mod spec;
 pub mod tableau;
 pub mod verdict;
+pub mod video;
 
 pub use error::{Error, Result};
 pub use field::Field;

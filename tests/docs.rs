@@ -129,7 +129,7 @@ fn pictures_of(command: &[String], at: &Path) -> Vec<(PathBuf, PathBuf)> {
     let docs = root().join("docs");
     let mut out = Vec::new();
     for pair in command.windows(2) {
-        if !matches!(pair[0].as_str(), "--output" | "--gif") {
+        if !matches!(pair[0].as_str(), "--output" | "--film") {
             continue;
         }
         let made = at.join(&pair[1]);
@@ -138,7 +138,11 @@ fn pictures_of(command: &[String], at: &Path) -> Vec<(PathBuf, PathBuf)> {
             .unwrap()
             .to_string_lossy()
             .to_string();
-        if command[0] == "sweep" {
+        if command[0] == "sweep" && pair[0] == "--output" {
+            if command.iter().any(|w| w == "--film") {
+                // Its animation is the film, not the picture.
+                continue;
+            }
             // A sweep's folder: its animation is the picture.
             out.push((made.join("animation.png"), docs.join(format!("{name}.png"))));
         } else if docs.join(&name).exists() {

@@ -115,9 +115,11 @@ fn output_flags(store: &Path) -> Vec<(Vec<String>, &'static str, &'static str)> 
         (trajectory, "--output", "csv"),
         (boundary.clone(), "--output", "png"),
         (boundary, "--data", "csv"),
-        (sweep, "--output", ""),
+        (sweep.clone(), "--output", ""),
+        (sweep, "--film", "mp4"),
         (traces.clone(), "--output", "png"),
-        (traces.clone(), "--gif", "gif"),
+        (traces.clone(), "--film", "gif"),
+        (traces.clone(), "--film", "mp4"),
         (traces, "--data", "npy"),
         (phase, "--output", "png"),
         (fit, "--output", ""),
@@ -189,7 +191,7 @@ fn no_output_replaces_what_is_not_a_regular_file() {
         );
     }
     eprintln!("{count} command lines (commands x output flags x non-regular targets) refused");
-    assert_eq!(count, 2 * 20 + 4);
+    assert_eq!(count, 2 * 22 + 4);
 }
 
 /// Issue 35, item 2: `fit /dev/zero` read until the kernel killed it at 24 GB. Inputs that

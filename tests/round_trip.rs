@@ -26,8 +26,8 @@ fn job(args: &[String]) -> Job {
         }
         Job::Lyapunov(LyapunovJob::Point(j)) => j.output = None,
         Job::Trajectory(j) => j.output = None,
-        Job::Sweep(j) => j.output = none(),
-        Job::Traces(j) => (j.output, j.gif, j.data) = (none(), None, None),
+        Job::Sweep(j) => (j.output, j.film.path) = (none(), none()),
+        Job::Traces(j) => (j.output, j.film, j.data) = (none(), None, None),
         Job::Phase(j) => j.output = none(),
         Job::Fit(j) => j.output = none(),
         Job::Forecast(j) => j.output = none(),

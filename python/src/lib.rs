@@ -466,7 +466,7 @@ fn traces<'py>(
         backend: k.backend()?,
         precision: k.precision()?,
         output: k.or("output", std::path::PathBuf::from("out/traces.png"))?,
-        gif: None,
+        film: None,
         data: k.get("data")?,
     };
     let command = command_line::traces(&job);

@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod boundary;
 mod checks;
+pub mod film;
 pub mod fit;
 pub mod flip;
 pub mod forecast;

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::film::{FilmSpec, Format};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::field::Field;
@@ -125,8 +126,8 @@ pub struct SweepJob {
     pub vary: Option<Vary>,
     pub zoom: Option<Zoom>,
     pub frames: u32,
-    /// Frames per second of the animation.
-    pub fps: f64,
+    /// The animation: its file (APNG, MP4), rate and quality.
+    pub film: FilmSpec,
     /// The first frame's parameters and grid.
     pub params: Params,
     pub grid: Grid,
@@ -156,13 +157,6 @@ pub use crate::spec::AnyMap as FrameMap;
 pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
     if args.frames == 0 || args.frames > 100_000 {
         return Err(Error::invalid("frames", "must be between 1 and 100000"));
-    }
-    // The APNG stores a frame's delay in milliseconds, at most 65535.
-    if !(args.fps.is_finite() && (0.02..=100.0).contains(&args.fps)) {
-        return Err(Error::invalid(
-            "fps",
-            format!("{} must be in [0.02, 100]", args.fps),
-        ));
     }
     // A parameter along an axis is the pixel's own: a sweep of it would change nothing.
     if let Some(var) = args.vary.and_then(|v| v.param.var())
@@ -243,6 +237,12 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
     Ok(out)
 }
 
+/// The animation's name in the output folder when no other file is named.
+pub const ANIMATION: &str = "animation.png";
+
+/// What a sweep's animation may be: an APNG (lossless) or an MP4.
+pub const FILM_FORMATS: &[Format] = &[Format::Apng, Format::Mp4];
+
 fn frame_path(dir: &Path, k: u32) -> PathBuf {
     dir.join(frame_name(k))
 }
@@ -304,10 +304,11 @@ pub fn run(
         return Err(Error::invalid("ftle_max", "must be > 0"));
     }
     // The animation and every frame (a frame kept from an interrupted run is read back).
-    let names: Vec<String> = std::iter::once("animation.png".to_string())
+    let names: Vec<String> = std::iter::once(ANIMATION.to_string())
         .chain((0..frames.len() as u32).map(frame_name))
         .collect();
     super::checks::check_directory("output", &job.output, &names, &[])?;
+    job.film.validate("film", FILM_FORMATS)?;
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;
         if job.zoom.is_some() || job.vary.is_none() {
@@ -409,15 +410,16 @@ pub fn run(
     // The animation from the frame files (including those of an earlier, interrupted run),
     // read one at a time.
     let first = render::read_png(&frame_path(&job.output, 0))?;
-    let delay_ms = (1000.0 / job.fps).round() as u16;
-    let animation = job.output.join("animation.png");
+    let animation = job.film.path.clone();
     let meta = render::provenance(command, &engine.info());
     let mut files = render::Outputs::new();
-    files.apng(
-        &animation,
+    monitor.start("film", frames.len() as u64);
+    super::film::write(
+        &mut files,
+        &job.film,
+        job.film.format("film", FILM_FORMATS)?,
         (first.width, first.height),
         frames.len(),
-        delay_ms,
         &meta,
         |k| {
             monitor.check()?;
@@ -428,9 +430,11 @@ pub fn run(
                     "a frame of another size than frame 0",
                 ));
             }
+            monitor.advance(1);
             Ok(png.rgb)
         },
     )?;
+    monitor.finish();
     files.commit(monitor)?;
     Ok(SweepSummary {
         frames: frames.len(),

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use super::film::{self, FilmSpec, Format};
 use super::{check_count, check_output};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
@@ -26,8 +27,8 @@ pub struct TracesJob {
     /// The GPU's precision (the CPU is always f64).
     pub precision: Precision,
     pub output: PathBuf,
-    /// An animated GIF of the pendulums.
-    pub gif: Option<PathBuf>,
+    /// The film of the trails growing and the pendulums swinging (GIF, APNG or MP4).
+    pub film: Option<FilmSpec>,
     /// Lower-bob positions as float32 .npy, shape (runs, samples, 4): x1, y1, x2, y2 (m).
     pub data: Option<PathBuf>,
 }
@@ -44,15 +45,15 @@ impl TracesJob {
         check_count("size", self.size as u64, 16, 8192)?;
         self.spread.validate()?;
         check_output("output", &self.output, "png")?;
-        if let Some(g) = &self.gif {
-            check_output("gif", g, "gif")?;
+        if let Some(film) = &self.film {
+            film.validate("film", FILM_FORMATS)?;
         }
         if let Some(d) = &self.data {
             check_output("data", d, "npy")?;
         }
         let named = [
             Some(("output", self.output.as_path())),
-            self.gif.as_deref().map(|p| ("gif", p)),
+            self.film.as_ref().map(|f| ("film", f.path.as_path())),
             self.data.as_deref().map(|p| ("data", p)),
         ];
         super::checks::check_distinct(&named.into_iter().flatten().collect::<Vec<_>>(), &[])
@@ -105,10 +106,14 @@ pub fn run(
         exposure: job.stepping.t_max,
         place: info.place().to_string(),
         output: job.output.clone(),
-        files: [Some(job.output.clone()), job.data.clone(), job.gif.clone()]
-            .into_iter()
-            .flatten()
-            .collect(),
+        files: [
+            Some(job.output.clone()),
+            job.data.clone(),
+            job.film.as_ref().map(|f| f.path.clone()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
         notices,
     })
 }
@@ -132,11 +137,23 @@ fn canvas(job: &TracesJob, size: u32) -> Canvas {
     }
 }
 
-/// The GIF's frames: 25 a second; frame f (from 1) shows the samples before `upto(f)`.
-const FPS: f64 = 25.0;
+/// What the film may be.
+pub const FILM_FORMATS: &[Format] = &[Format::Gif, Format::Apng, Format::Mp4];
 
-fn gif_frames(job: &TracesJob) -> usize {
-    ((job.stepping.t_max * FPS).round() as usize).max(1)
+/// The film's frames: the exposure in real time; frame f (from 1) shows the samples before
+/// `upto(f)`.
+fn film_frames(job: &TracesJob, film: &FilmSpec) -> usize {
+    ((job.stepping.t_max * film.fps).round() as usize).max(1)
+}
+
+/// The film's canvas: the picture's, at most 480 pixels a side in a GIF or an APNG (their
+/// size grows with every pixel of every frame) and 720 in an MP4.
+fn film_canvas(job: &TracesJob, film: &FilmSpec) -> Canvas {
+    let most = match film.format("film", FILM_FORMATS) {
+        Ok(Format::Mp4) => 720,
+        _ => 480,
+    };
+    canvas(job, job.size.min(most))
 }
 
 fn upto(f: usize, frames: usize, samples: usize) -> usize {
@@ -170,18 +187,20 @@ fn all_at_once(
         let data: Vec<f32> = positions.iter().flat_map(|run| flat(run)).collect();
         files.npy_shaped(path, &[n as u64, samples as u64, 4], &data)?;
     }
-    if let Some(path) = &job.gif {
-        let gcanvas = canvas(job, job.size.min(480));
-        let (frames, samples) = (gif_frames(job), positions[0].len());
-        monitor.start("gif", frames as u64);
+    if let Some(spec) = &job.film {
+        let gcanvas = film_canvas(job, spec);
+        let (frames, samples) = (film_frames(job, spec), positions[0].len());
+        monitor.start("film", frames as u64);
         // One film, exposed a frame's worth further each time, each frame encoded as made.
         let mut film = Film::new(gcanvas);
         let mut exposed = 0;
-        files.gif_from(
-            path,
+        film::write(
+            files,
+            spec,
+            spec.format("film", FILM_FORMATS)?,
             (gcanvas.size, gcanvas.size),
             frames,
-            delay_cs(),
+            meta,
             |k| {
                 monitor.check()?;
                 let upto = upto(k + 1, frames, samples);
@@ -195,10 +214,6 @@ fn all_at_once(
         monitor.finish();
     }
     Ok(())
-}
-
-fn delay_cs() -> u16 {
-    (100.0 / FPS).round() as u16
 }
 
 /// Runs in chunks, none kept: memory holds one chunk, the films and the GIF's per-frame
@@ -217,11 +232,13 @@ fn streamed(
 ) -> Result<()> {
     let (p, dt, steps) = (&ensemble.params, ensemble.dt, ensemble.steps);
     let (n, samples) = (ensemble.starts.len(), steps as usize + 1);
-    let gcanvas = canvas(job, job.size.min(480));
-    let frames = gif_frames(job);
-    if job.gif.is_some() {
+    let (gcanvas, frames) = match &job.film {
+        Some(f) => (film_canvas(job, f), film_frames(job, f)),
+        None => (canvas(job, 16), 0),
+    };
+    if job.film.is_some() {
         let film_bytes = (gcanvas.size as u64).pow(2) * 12;
-        spec::check_memory("gif", frames as u64 * film_bytes, "the GIF's films")?;
+        spec::check_memory("film", frames as u64 * film_bytes, "the film's exposures")?;
     }
     // Log-spaced speed bins over 1e-9 .. 1e9 m/s.
     const BINS: usize = 1 << 16;
@@ -260,7 +277,7 @@ fn streamed(
         before += count;
     }
     let mut film = Film::new(canvas(job, job.size));
-    let mut increments: Vec<Film> = match job.gif {
+    let mut increments: Vec<Film> = match job.film {
         Some(_) => (0..frames).map(|_| Film::new(gcanvas)).collect(),
         None => Vec::new(),
     };
@@ -321,14 +338,16 @@ fn streamed(
     let released: Vec<Vec<Bobs>> = ensemble.starts.iter().map(|s| vec![bobs(p, s)]).collect();
     let rgb = develop(&film, speed, &released, colors, None, n)?;
     files.png(&job.output, job.size, job.size, &rgb, meta)?;
-    if let Some(path) = &job.gif {
-        monitor.start("gif", frames as u64);
+    if let Some(spec) = &job.film {
+        monitor.start("film", frames as u64);
         let mut shown = Film::new(gcanvas);
-        files.gif_from(
-            path,
+        film::write(
+            files,
+            spec,
+            spec.format("film", FILM_FORMATS)?,
             (gcanvas.size, gcanvas.size),
             frames,
-            delay_cs(),
+            meta,
             |f| {
                 monitor.check()?;
                 shown.add(&increments[f]);

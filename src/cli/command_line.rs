@@ -304,7 +304,19 @@ pub fn traces(job: &TracesJob) -> String {
     if job.backend != Backend::Auto {
         out += &format!(" --backend {}", job.backend.name());
     }
+    if let Some(f) = &job.film {
+        out += &film(f, crate::app::traces::FILM_FORMATS);
+    }
     out + &precision(job.precision)
+}
+
+/// ` --fps F`, and ` --crf Q` for an MP4: how a film plays (its file is the run's output,
+/// named by the user as any other).
+fn film(f: &crate::app::film::FilmSpec, formats: &[crate::app::film::Format]) -> String {
+    match f.format("film", formats) {
+        Ok(crate::app::film::Format::Mp4) => format!(" --fps {} --crf {}", f.fps, f.crf),
+        _ => format!(" --fps {}", f.fps),
+    }
 }
 
 /// ` --precision P` when not the default.
@@ -374,7 +386,7 @@ pub fn sweep(job: &SweepJob) -> String {
     out += &format!(
         " --frames {} --fps {} {} {} --renorm {} --ftle-max {} {} --backend {}",
         job.frames,
-        job.fps,
+        job.film.fps,
         grid(&job.grid),
         steps(&job.stepping),
         job.renorm,
@@ -382,6 +394,12 @@ pub fn sweep(job: &SweepJob) -> String {
         params_on(&job.params, &along),
         job.backend.name()
     );
+    if matches!(
+        job.film.format("film", crate::app::sweep::FILM_FORMATS),
+        Ok(crate::app::film::Format::Mp4)
+    ) {
+        out += &format!(" --crf {}", job.film.crf);
+    }
     out + &picture(&job.picture)
 }
 

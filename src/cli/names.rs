@@ -84,7 +84,7 @@ mod tests {
             (
                 "traces",
                 &[
-                    "t_max", "dt", "runs", "spread", "size", "output", "gif", "data",
+                    "t_max", "dt", "runs", "spread", "size", "output", "film", "fps", "crf", "data",
                 ],
             ),
             (
@@ -95,7 +95,7 @@ mod tests {
                 "sweep",
                 &[
                     "frames", "fps", "vary", "zoom", "zoom_to", "ftle_max", "size", "t_max",
-                    "output",
+                    "output", "film", "crf",
                 ],
             ),
             (

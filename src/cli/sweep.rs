@@ -7,6 +7,7 @@ use clap::Args;
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
 use super::parse::{one_of, parse_number, parse_point, parse_u32, parse_vary};
 use super::{command_line, json, say};
+use crate::app::film::FilmSpec;
 use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
@@ -36,6 +37,14 @@ pub struct SweepArgs {
     /// Frames per second of the animation.
     #[arg(long, default_value = "8", value_parser = parse_number, allow_hyphen_values = true)]
     pub fps: f64,
+    /// The animation's file, its format by its extension: .png (APNG, lossless) or .mp4
+    /// (H.264, through FFmpeg) [default: OUTPUT/animation.png].
+    #[arg(long)]
+    pub film: Option<PathBuf>,
+    /// An MP4's quality: H.264's constant rate factor, 0 (lossless) to 51 (18 looks
+    /// lossless; each 6 more halves the file).
+    #[arg(long, default_value = "18", value_parser = parse_u32, allow_hyphen_values = true)]
+    pub crf: u32,
     #[command(flatten)]
     pub grid: GridArgs,
     #[command(flatten)]
@@ -53,7 +62,7 @@ pub struct SweepArgs {
     pub backend: Backend,
     #[command(flatten)]
     pub picture: PictureArgs,
-    /// Directory for frame_0000.png ... and animation.png (APNG).
+    /// Directory for frame_0000.png ... and animation.png (APNG) unless --film names another.
     #[arg(long, default_value = "out/sweep")]
     pub output: PathBuf,
     /// The frames' maps also as one Zarr v3 store SWEEP.zarr: an array (frame, theta2,
@@ -91,7 +100,14 @@ impl SweepArgs {
                 .zip(self.zoom)
                 .map(|(to, factor)| Zoom { to, factor }),
             frames: self.frames,
-            fps: self.fps,
+            film: FilmSpec {
+                path: self
+                    .film
+                    .clone()
+                    .unwrap_or_else(|| self.output.join(sweep::ANIMATION)),
+                fps: self.fps,
+                crf: self.crf,
+            },
             params: sources.resolve_on(&grid)?,
             grid,
             stepping: self.step.stepping(),

@@ -1,4 +1,4 @@
-//! Atomic writes of PNG, .npy, GIF and text files, one file or a set: each is written to a
+//! Atomic writes of PNG, .npy, GIF, MP4 and text files, one file or a set: each is written to a
 //! temporary file beside its destination (created with the user's umask) and renamed into
 //! place only when every file of the set is complete, so no half-written or half-updated
 //! output is left behind, not even on a second Ctrl-C ([`remove_pending`]).
@@ -99,6 +99,20 @@ impl Outputs {
         path: &Path,
         write: impl FnOnce(&mut BufWriter<&std::fs::File>) -> Result<()>,
     ) -> Result<()> {
+        self.stage(path, |staged| {
+            let mut w = BufWriter::new(staged.tmp.as_file());
+            write(&mut w)?;
+            w.flush().map_err(|e| file_error(path, e))
+        })
+    }
+
+    /// Stages `path`, written by another program: `write` is given the temporary file's
+    /// path (created empty, with the user's umask), which the program overwrites in place.
+    pub fn write_by(&mut self, path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+        self.stage(path, |staged| write(&staged.path))
+    }
+
+    fn stage(&mut self, path: &Path, write: impl FnOnce(&Staged) -> Result<()>) -> Result<()> {
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
@@ -111,14 +125,10 @@ impl Outputs {
         })?;
         std::fs::create_dir_all(dir).map_err(|e| file_error(dir, e))?;
         let staged = Staged::new(dir).map_err(|e| file_error(dir, e))?;
-        {
-            let mut w = BufWriter::new(staged.tmp.as_file());
-            write(&mut w).map_err(|e| match e {
-                Error::Io(e) => file_error(path, e),
-                e => e,
-            })?;
-            w.flush().map_err(|e| file_error(path, e))?;
-        }
+        write(&staged).map_err(|e| match e {
+            Error::Io(e) => file_error(path, e),
+            e => e,
+        })?;
         self.staged.push((staged, path.to_path_buf()));
         Ok(())
     }

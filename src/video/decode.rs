@@ -1,0 +1,261 @@
+//! Frames out of any film FFmpeg reads (MP4 and MOV from phones and cameras, H.264, HEVC,
+//! AV1), one at a time over a pipe, each with its time from the container: phones record at a
+//! variable frame rate, so a frame's time is its timestamp, never its index over a rate.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Stdio};
+
+use crate::error::{Error, Result};
+
+/// The most of ffprobe's report read: about 200 bytes a frame, so some 300,000 frames
+/// (almost three hours at 30 frames a second).
+const PROBE_CAP: u64 = 64 << 20;
+
+/// What a film holds: its picture size as shown (a phone's rotation applied) and the time
+/// of every frame (s, from the first), in the order shown.
+#[derive(Clone, Debug)]
+pub struct Probe {
+    pub codec: String,
+    pub width: u32,
+    pub height: u32,
+    pub times: Vec<f64>,
+}
+
+/// The film at `path` as [`Probe`] tells it (ffprobe reads the container, decoding nothing).
+pub fn probe(path: &Path) -> Result<Probe> {
+    let (_, _) = crate::input::open_regular(path).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let args = super::args(
+        &[
+            "-v",
+            "error",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=codec_name,width,height:stream_side_data=rotation:packet=pts_time",
+            "-of",
+            "json=c=1",
+        ],
+        Some(path),
+    );
+    let mut child = super::spawn(
+        "ffprobe",
+        "reading a film",
+        &args,
+        Stdio::null(),
+        Stdio::piped(),
+    )?;
+    let stderr = super::drain_stderr(&mut child);
+    let mut text = String::new();
+    child
+        .stdout
+        .take()
+        .expect("piped")
+        .take(PROBE_CAP)
+        .read_to_string(&mut text)
+        .map_err(|e| Error::format(path, e))?;
+    let status = child.wait()?;
+    let stderr = stderr.join().unwrap_or_default();
+    if !status.success() {
+        return Err(super::failed("ffprobe", path, &stderr));
+    }
+    parse_probe(path, &text)
+}
+
+fn parse_probe(path: &Path, text: &str) -> Result<Probe> {
+    let bad = |why: &str| Error::format(path, format!("not a film FFmpeg can read: {why}"));
+    let v: serde_json::Value =
+        serde_json::from_str(text).map_err(|_| bad("ffprobe's report was cut or unreadable"))?;
+    let stream = v["streams"]
+        .as_array()
+        .and_then(|s| s.first())
+        .ok_or_else(|| bad("no video stream"))?;
+    let dim = |key: &str| {
+        stream[key]
+            .as_u64()
+            .and_then(|d| u32::try_from(d).ok())
+            .filter(|&d| d > 0)
+            .ok_or_else(|| bad("no picture size"))
+    };
+    let (mut width, mut height) = (dim("width")?, dim("height")?);
+    let rotation = stream["side_data_list"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .find_map(|d| d["rotation"].as_f64())
+        .unwrap_or(0.0);
+    // FFmpeg turns the frames upright as it decodes them (its autorotate).
+    if (rotation.abs() - 90.0).abs() < 1.0 {
+        (width, height) = (height, width);
+    }
+    let mut times: Vec<f64> = v["packets"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|p| p["pts_time"].as_str()?.parse().ok())
+        .collect();
+    // Packets come in decoding order; frames are shown in the order of their timestamps.
+    times.sort_by(f64::total_cmp);
+    let first = *times.first().ok_or_else(|| bad("no frames"))?;
+    for t in &mut times {
+        *t -= first;
+    }
+    Ok(Probe {
+        codec: stream["codec_name"].as_str().unwrap_or("?").to_string(),
+        width,
+        height,
+        times,
+    })
+}
+
+/// The pixels each frame is handed over as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pixels {
+    /// One byte a pixel (luma).
+    Gray,
+    /// Three bytes a pixel.
+    Rgb,
+}
+
+impl Pixels {
+    fn bytes(self) -> usize {
+        match self {
+            Pixels::Gray => 1,
+            Pixels::Rgb => 3,
+        }
+    }
+    fn ffmpeg(self) -> &'static str {
+        match self {
+            Pixels::Gray => "gray",
+            Pixels::Rgb => "rgb24",
+        }
+    }
+}
+
+/// A film's frames in the order shown, one at a time.
+pub struct Decoder {
+    child: Child,
+    stderr: Option<std::thread::JoinHandle<String>>,
+    path: PathBuf,
+    pub probe: Probe,
+    pub pixels: Pixels,
+    next: usize,
+}
+
+impl Decoder {
+    pub fn open(path: &Path, pixels: Pixels) -> Result<Decoder> {
+        let probe = probe(path)?;
+        let mut args = super::args(
+            &["-hide_banner", "-v", "error", "-nostdin", "-i"],
+            Some(path),
+        );
+        args.extend(super::args(
+            &[
+                "-map",
+                "0:v:0",
+                "-fps_mode",
+                "passthrough",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                pixels.ffmpeg(),
+                "pipe:1",
+            ],
+            None,
+        ));
+        let mut child = super::spawn(
+            "ffmpeg",
+            "reading a film",
+            &args,
+            Stdio::null(),
+            Stdio::piped(),
+        )?;
+        let stderr = Some(super::drain_stderr(&mut child));
+        Ok(Decoder {
+            child,
+            stderr,
+            path: path.to_path_buf(),
+            probe,
+            pixels,
+            next: 0,
+        })
+    }
+
+    /// The next frame's time (s) and pixels into `frame` (row after row from the top), or
+    /// None after the last.
+    pub fn next_frame(&mut self, frame: &mut Vec<u8>) -> Result<Option<f64>> {
+        let bytes = self.probe.width as usize * self.probe.height as usize * self.pixels.bytes();
+        frame.resize(bytes, 0);
+        let stdout = self.child.stdout.as_mut().expect("piped");
+        let mut got = 0;
+        while got < bytes {
+            match stdout.read(&mut frame[got..]) {
+                Ok(0) => break,
+                Ok(n) => got += n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(Error::format(&self.path, e)),
+            }
+        }
+        if got == 0 {
+            let status = self.child.wait()?;
+            let stderr = self
+                .stderr
+                .take()
+                .and_then(|h| h.join().ok())
+                .unwrap_or_default();
+            if !status.success() {
+                return Err(super::failed("ffmpeg", &self.path, &stderr));
+            }
+            return Ok(None);
+        }
+        if got < bytes {
+            return Err(Error::format(&self.path, "its last frame was cut short"));
+        }
+        let k = self.next;
+        self.next += 1;
+        // A decoder that gives more frames than the container's timestamps (it should not):
+        // the last step again.
+        let times = &self.probe.times;
+        Ok(Some(match times.get(k) {
+            Some(&t) => t,
+            None => {
+                let n = times.len();
+                let step = if n >= 2 {
+                    times[n - 1] - times[n - 2]
+                } else {
+                    1.0 / 30.0
+                };
+                times[n - 1] + (k + 1 - n) as f64 * step
+            }
+        }))
+    }
+}
+
+impl Drop for Decoder {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_probe_turns_a_phones_portrait_film_upright_and_sorts_its_times() {
+        let text = r#"{"packets":[{"pts_time":"1.000000"},{"pts_time":"1.066667"},{"pts_time":"1.033333"}],
+            "streams":[{"codec_name":"hevc","width":1920,"height":1080,
+            "side_data_list":[{"rotation":-90}]}]}"#;
+        let p = parse_probe(Path::new("x.mov"), text).unwrap();
+        assert_eq!((p.codec.as_str(), p.width, p.height), ("hevc", 1080, 1920));
+        let expected = [0.0, 0.033333, 0.066667];
+        for (t, e) in p.times.iter().zip(expected) {
+            assert!((t - e).abs() < 1e-9, "{:?}", p.times);
+        }
+        assert!(parse_probe(Path::new("x"), r#"{"streams":[]}"#).is_err());
+    }
+}
