@@ -36,6 +36,7 @@ pub mod quantity;
 pub mod render;
 pub mod spec;
 pub mod tableau;
+pub mod track;
 pub mod verdict;
 pub mod video;
 

@@ -33,13 +33,14 @@ fn documents() -> Vec<PathBuf> {
     docs
 }
 
-const COMMANDS: [&str; 16] = [
+const COMMANDS: [&str; 17] = [
     "flip",
     "lyapunov",
     "trajectory",
     "boundary",
     "sweep",
     "traces",
+    "track",
     "phase",
     "fit",
     "forecast",

@@ -9,23 +9,6 @@ use chaoscope::render::read_png;
 use chaoscope::video::{Decoder, Pixels, probe};
 use common::chaoscope;
 
-/// FFmpeg is what films need; without it these tests cannot say anything, and under CI
-/// (where scripts/test installs it) its absence is a failure, never a skip.
-fn ffmpeg() -> bool {
-    let found = std::process::Command::new("ffmpeg")
-        .arg("-version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !found {
-        assert!(
-            std::env::var("CI").is_err(),
-            "ffmpeg is missing (scripts/test installs it)"
-        );
-        eprintln!("SKIPPED: no ffmpeg");
-    }
-    found
-}
-
 /// ffprobe's view of a film's first video stream: codec, pixel format, width, height,
 /// frames counted by decoding, duration (s), and the container's comment.
 fn ffprobe(path: &Path) -> (String, String, u32, u32, u64, f64, String) {
@@ -63,7 +46,7 @@ fn ffprobe(path: &Path) -> (String, String, u32, u32, u64, f64, String) {
 /// that makes it in its comment, and its frames the maps' PNGs after the colour conversion.
 #[test]
 fn a_sweep_films_its_frames_as_an_mp4() {
-    if !ffmpeg() {
+    if !common::ffmpeg() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -162,7 +145,7 @@ fn through_yuv420p(path: &Path) -> Vec<u8> {
 /// `--gif` still makes a GIF.
 #[test]
 fn traces_film_the_trails_growing() {
-    if !ffmpeg() {
+    if !common::ffmpeg() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

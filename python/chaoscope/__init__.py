@@ -20,7 +20,7 @@ import io
 import json
 import warnings
 from pathlib import Path
-from typing import Any, Callable, Optional, Tuple, Union
+from typing import Any, Optional, Tuple, Union
 
 import numpy as np
 import pandas as pd
@@ -28,6 +28,8 @@ import xarray as xr
 
 from . import _chaoscope as _native
 from ._picture import Picture, picture
+from ._run import Progress, _call
+from ._track import track
 
 __version__: str = _native.__version__
 __all__ = [
@@ -37,6 +39,7 @@ __all__ = [
     "fit",
     "forecast",
     "traces",
+    "track",
     "params",
     "picture",
     "open_store",
@@ -48,55 +51,6 @@ __all__ = [
 INDICATORS: Tuple[str, ...] = tuple(_native.INDICATORS)
 
 Pair = Tuple[float, float]
-Progress = Union[None, bool, Callable[[str, int, Optional[int]], Any]]
-
-
-def _reporter(progress: Progress):
-    """A callback (phase, done, total) for the engine, and a function that closes it.
-
-    None: a tqdm bar when tqdm is installed, silent otherwise; False: silent; a callable is
-    called as it is.
-    """
-    if progress is False:
-        return None, lambda: None
-    if callable(progress):
-        return progress, lambda: None
-    if progress is not None and progress is not True:
-        raise TypeError(
-            f"progress: None, True, False or a callable (phase, done, total), not {type(progress).__name__}"
-        )
-    try:
-        from tqdm.auto import tqdm
-    except ImportError:
-        if progress is True:
-            raise
-        return None, lambda: None
-    bar: dict = {}
-
-    def report(phase: str, done: int, total: Optional[int]) -> None:
-        if bar.get("phase") != phase:
-            if "bar" in bar:
-                bar["bar"].close()
-            bar["bar"] = tqdm(total=total, desc=phase or "chaoscope", leave=False)
-            bar["phase"] = phase
-        b = bar["bar"]
-        if total is not None and b.total != total:
-            b.total = total
-        b.update(done - b.n)
-
-    def close() -> None:
-        if "bar" in bar:
-            bar["bar"].close()
-
-    return report, close
-
-
-def _call(native, keywords: dict, progress: Progress):
-    report, close = _reporter(progress)
-    try:
-        return native(keywords, report)
-    finally:
-        close()
 
 
 def _as_xarray(answer: dict) -> Union[xr.DataArray, xr.Dataset]:

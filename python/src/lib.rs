@@ -26,6 +26,7 @@ use pyo3::types::PyDict;
 mod keywords;
 mod picture;
 mod run;
+mod track;
 use keywords::Keywords;
 use run::{engine, engine_in, watched};
 
@@ -571,6 +572,7 @@ fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(forecast, m)?)?;
     m.add_function(wrap_pyfunction!(traces, m)?)?;
+    m.add_function(wrap_pyfunction!(track::track, m)?)?;
     m.add_function(wrap_pyfunction!(main, m)?)?;
     Ok(())
 }

@@ -18,6 +18,7 @@ pub mod store;
 pub mod supersample;
 pub mod sweep;
 pub mod traces;
+pub mod track;
 pub mod trajectory;
 pub mod twin;
 

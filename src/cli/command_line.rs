@@ -488,3 +488,19 @@ pub fn twin(job: &TwinJob) -> String {
         job.backend.name()
     ) + &precision(job.precision)
 }
+
+/// The command that reproduces a track (the CSV's first line).
+pub fn track(job: &crate::app::track::TrackJob) -> String {
+    let mut out = format!("chaoscope track {}", job.video.display());
+    match job.scale {
+        crate::track::Scale::UpperArm(l1) => out += &format!(" --l1 {l1}"),
+        crate::track::Scale::PixelsPerMetre(p) => out += &format!(" --pixels-per-metre {p}"),
+    }
+    if let crate::track::Markers::Colour([r, g, b]) = job.markers {
+        out += &format!(" --markers {r:02x}{g:02x}{b:02x}");
+    }
+    if let Some((x0, y0, x1, y1)) = job.region {
+        out += &format!(" --region {x0},{y0},{x1},{y1}");
+    }
+    out
+}

@@ -18,6 +18,7 @@ mod serve;
 mod store;
 mod sweep;
 mod traces;
+mod track;
 mod trajectory;
 mod twin;
 
@@ -67,6 +68,10 @@ pub enum Command {
     /// Phase portraits, omega against theta of each arm, as time-density images; --single for
     /// the single pendulum with its separatrix.
     Phase(phase::PhaseArgs),
+    /// The positions of both masses in every frame of a film of the pendulum (bright or
+    /// coloured markers), as the CSV fit and forecast read: the pivot and scale from the
+    /// markers' own geometry, each row measured or not seen, with its uncertainty.
+    Track(track::TrackArgs),
     /// Fit the model to a camera's tracked positions: pivot, arm lengths, energies and their
     /// decay, the state and damping by a GPU ensemble search; plots and summary.json.
     Fit(fit::FitArgs),
@@ -152,6 +157,7 @@ impl Command {
             Command::Sweep(_) => "sweep",
             Command::Boundary(_) => "boundary",
             Command::Traces(_) => "traces",
+            Command::Track(_) => "track",
             Command::Phase(_) => "phase",
             Command::Fit(_) => "fit",
             Command::Forecast(_) => "forecast",
@@ -182,6 +188,7 @@ impl Command {
             | Command::Bench(_)
             | Command::Completions { .. }
             | Command::Serve(_)
+            | Command::Track(_)
             | Command::Status(_)
             | Command::Render(_) => return Ok(None),
         }))
@@ -338,6 +345,7 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
         Command::Sweep(args) => sweep::run(args, monitor),
         Command::Boundary(args) => boundary::run(args, monitor),
         Command::Traces(args) => traces::run(args, monitor),
+        Command::Track(args) => track::run(args, monitor),
         Command::Phase(args) => phase::run(args, monitor),
         Command::Fit(args) => fit::run(args, monitor),
         Command::Forecast(args) => forecast::run(args, monitor),

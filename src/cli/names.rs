@@ -7,6 +7,7 @@ pub fn flag(command: &str, field: &str) -> String {
         ("traces", "t_max") => "--exposure".into(),
         ("fit", "t_max") => "--window".into(),
         ("fit" | "forecast", "file") => "FILE".into(),
+        ("track", "video") => "VIDEO".into(),
         (_, field) => format!("--{}", field.replace('_', "-")),
     }
 }
@@ -81,6 +82,17 @@ mod tests {
                 ],
             ),
             ("trajectory", &["theta1", "t_max", "dt", "every", "output"]),
+            (
+                "track",
+                &[
+                    "video",
+                    "output",
+                    "l1",
+                    "pixels_per_metre",
+                    "markers",
+                    "region",
+                ],
+            ),
             (
                 "traces",
                 &[

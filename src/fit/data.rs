@@ -34,7 +34,9 @@ fn bad(path: &Path, line: usize, what: String) -> Error {
 }
 
 /// Reads a CSV with a header naming t, x1, y1, x2, y2 (any order, other columns ignored);
-/// lines starting with # are comments. Errors name the line.
+/// lines starting with # are comments. Where the header names `seen1` and `seen2` (as
+/// `track` writes them), only the rows in which both masses were `measured` are read: a
+/// mass hidden in a frame has no position to fit. Errors name the line.
 pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
     let text = crate::input::read_text("file", path, crate::input::CSV_CAP)?;
     // A byte-order mark (as some spreadsheets write) is not part of the first column's name.
@@ -80,6 +82,10 @@ pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
         column("x2")?,
         column("y2")?,
     ];
+    let seen: Vec<usize> = ["seen1", "seen2"]
+        .iter()
+        .filter_map(|s| names.iter().position(|n| n == s))
+        .collect();
     let mut frames = Vec::new();
     for (n, line) in lines {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
@@ -95,6 +101,9 @@ pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
                     names.len()
                 ),
             ));
+        }
+        if seen.iter().any(|&c| cells[c] != "measured") {
+            continue;
         }
         let mut v = [0.0; 5];
         for (k, &c) in cols.iter().enumerate() {

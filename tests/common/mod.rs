@@ -236,3 +236,20 @@ pub fn summary(out: std::process::Output) -> serde_json::Value {
     );
     serde_json::from_slice(&out.stdout).unwrap()
 }
+
+/// Whether FFmpeg is here: films need it; without it a film's test cannot say anything, and
+/// under CI (where scripts/test installs it) its absence is a failure, never a skip.
+pub fn ffmpeg() -> bool {
+    let found = std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            std::env::var("CI").is_err(),
+            "ffmpeg is missing (scripts/test installs it)"
+        );
+        eprintln!("SKIPPED: no ffmpeg");
+    }
+    found
+}

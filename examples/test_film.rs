@@ -1,0 +1,97 @@
+//! A test film with a known truth (src/track/synth.rs): the lab pendulum's two LEDs rendered
+//! from the model's trajectory, encoded as H.264 by FFmpeg, and the truth as CSV beside it
+//! (t, the markers' mean positions over each exposure in px and in m, whether each was in
+//! view). `scripts/test-films` makes the repository's film and the tracker's benchmark.
+//!
+//!     cargo run --release --example test_film -- OUT.mp4 [WIDTHxHEIGHT] [FRAMES] [options]
+//!
+//! options: --shutter S (s, default 1/2000), --lamp X,Y, --reflection X (a pane's column),
+//! --table Y (the table's edge, px row), --seed N, --crf Q, --theta1 A --theta2 B.
+
+use std::io::Write;
+
+use chaoscope::model::State;
+use chaoscope::params::Preset;
+use chaoscope::track::synth::{Scene, film};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let out = std::path::PathBuf::from(
+        args.first()
+            .ok_or("usage: test_film OUT.mp4 [WxH] [FRAMES] [options]")?,
+    );
+    let positional: Vec<&String> = args[1..]
+        .iter()
+        .take_while(|a| !a.starts_with("--"))
+        .collect();
+    let (w, h) = match positional.first() {
+        Some(s) => {
+            let (w, h) = s.split_once('x').ok_or("size as WIDTHxHEIGHT")?;
+            (w.parse()?, h.parse()?)
+        }
+        None => (1280, 720),
+    };
+    let frames: usize = positional.get(1).map_or(Ok(300), |s| s.parse())?;
+    let option = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|k| args.get(k + 1))
+            .cloned()
+    };
+    let number = |name: &str| option(name).map(|v| v.parse::<f64>()).transpose();
+    let p = Preset::Lab.params();
+    let mut scene = Scene::lab(w, h, p.l1 + p.l2);
+    if let Some(s) = number("--shutter")? {
+        scene.shutter = s;
+    }
+    if let Some(v) = option("--lamp") {
+        let (x, y) = v.split_once(',').ok_or("--lamp X,Y")?;
+        scene.lamp = Some((x.parse()?, y.parse()?));
+    }
+    scene.reflection = number("--reflection")?;
+    scene.table = number("--table")?;
+    if let Some(s) = number("--seed")? {
+        scene.seed = s as u64;
+    }
+    let crf = number("--crf")?.map_or(18, |c| c as u32);
+    let start = State {
+        theta1: number("--theta1")?.unwrap_or(2.0),
+        omega1: 0.0,
+        theta2: number("--theta2")?.unwrap_or(2.6),
+        omega2: 0.0,
+    };
+    let truth = film(&scene, &p, start, frames, crf, &out)?;
+    let mut csv = std::io::BufWriter::new(std::fs::File::create(out.with_extension("truth.csv"))?);
+    writeln!(
+        csv,
+        "# the truth of {}: the markers' mean positions over each exposure",
+        out.display()
+    )?;
+    writeln!(csv, "t,px1,py1,px2,py2,x1,y1,x2,y2,seen1,seen2")?;
+    let seen = |s: Option<bool>| match s {
+        Some(true) => "in_view",
+        Some(false) => "hidden",
+        None => "partly",
+    };
+    for r in &truth {
+        let m = r.metres;
+        writeln!(
+            csv,
+            "{:.6},{:.4},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.6},{},{}",
+            r.t,
+            r.m1.0,
+            r.m1.1,
+            r.m2.0,
+            r.m2.1,
+            m[0],
+            m[1],
+            m[2],
+            m[3],
+            seen(r.seen1),
+            seen(r.seen2)
+        )?;
+    }
+    csv.flush()?;
+    eprintln!("{} frames of {w}x{h} -> {}", truth.len(), out.display());
+    Ok(())
+}

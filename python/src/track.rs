@@ -1,0 +1,56 @@
+//! `chaoscope.track`: a film of the pendulum to the positions of both masses
+//! (`chaoscope track`'s job); the CSV written to `output`, the summary returned as JSON.
+
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use chaoscope::app::track::TrackJob;
+use chaoscope::track::{Markers, Scale};
+
+use super::keywords::Keywords;
+use super::run::watched;
+
+#[pyfunction]
+#[pyo3(signature = (keywords, progress=None))]
+pub fn track<'py>(
+    py: Python<'py>,
+    keywords: Bound<'py, PyDict>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<String> {
+    let k = Keywords { dict: keywords };
+    let markers = match k.get::<String>("markers")? {
+        None => Markers::Bright,
+        Some(s) => {
+            Markers::parse(&s).map_err(|e| PyValueError::new_err(format!("markers: {e}")))?
+        }
+    };
+    let scale = match (k.get::<f64>("l1")?, k.get::<f64>("pixels_per_metre")?) {
+        (Some(l1), None) => Scale::UpperArm(l1),
+        (None, Some(p)) => Scale::PixelsPerMetre(p),
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(
+                "pixels_per_metre: give the scale once, by l1 or by pixels_per_metre",
+            ));
+        }
+        (None, None) => {
+            return Err(PyValueError::new_err(
+                "l1: the scale is needed: the upper arm's length (m), or pixels_per_metre",
+            ));
+        }
+    };
+    let job = TrackJob {
+        video: k
+            .get("video")?
+            .ok_or_else(|| PyTypeError::new_err("video: the film to track is needed"))?,
+        output: k.or("output", std::path::PathBuf::from("out/track.csv"))?,
+        markers,
+        scale,
+        region: k.get::<(u32, u32, u32, u32)>("region")?,
+    };
+    let command = chaoscope::cli::command_line::track(&job);
+    let summary = watched(py, progress, move |monitor| {
+        chaoscope::app::track::run(&job, &command, monitor)
+    })?;
+    serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}

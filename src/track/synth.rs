@@ -1,0 +1,302 @@
+//! Test films with a known truth: the two markers rendered from the model's own trajectory,
+//! as the lab's camera saw its LEDs (bright on dark, 30 frames a second), with the exposure's
+//! blur, sensor noise, a static lamp, a moving reflection and a table edge that hides the
+//! lower mass, so that the tracker can be measured against where the markers really were.
+
+use rand::{Rng, SeedableRng};
+use rand_distr::{Distribution, Normal};
+
+use crate::model::{Params, State};
+
+/// What the camera sees and how.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub width: u32,
+    pub height: u32,
+    /// Frames a second.
+    pub fps: f64,
+    /// Exposure of each frame (s), centred on the frame's time.
+    pub shutter: f64,
+    /// The pivot's place in the picture (px, x right, y down).
+    pub pivot: (f64, f64),
+    pub pixels_per_metre: f64,
+    /// A marker's brightness profile: a Gaussian of this width (px).
+    pub marker_sigma: f64,
+    /// A still marker's peak above the background (levels of 255).
+    pub marker_peak: f64,
+    /// The dark background's level and the sensor noise's standard deviation (levels).
+    pub background: f64,
+    pub noise: f64,
+    /// A static lamp (px), as bright and as large as a marker.
+    pub lamp: Option<(f64, f64)>,
+    /// A reflection of the lower marker in a pane at this column (px), at 40 % brightness:
+    /// marker-sized and moving, but off the pendulum's geometry.
+    pub reflection: Option<f64>,
+    /// The table's top edge (px row): below it the table hides what is behind it.
+    pub table: Option<f64>,
+    pub seed: u64,
+}
+
+impl Scene {
+    /// The lab's camera on a 1280 x 720 (or any) frame: LEDs of 2.5 px, the pivot a fifth
+    /// down the middle, the whole pendulum's reach within the frame.
+    pub fn lab(width: u32, height: u32, reach: f64) -> Scene {
+        Scene {
+            width,
+            height,
+            fps: 30.0,
+            shutter: 1.0 / 2000.0,
+            pivot: (width as f64 / 2.0, height as f64 * 0.45),
+            pixels_per_metre: 0.5 * height as f64 / reach,
+            marker_sigma: 2.5,
+            marker_peak: 200.0,
+            background: 12.0,
+            noise: 2.0,
+            lamp: None,
+            reflection: None,
+            table: None,
+            seed: 1,
+        }
+    }
+
+    /// Metres (origin at the pivot, y up) to pixels (x right, y down).
+    pub fn to_pixels(&self, x: f64, y: f64) -> (f64, f64) {
+        (
+            self.pivot.0 + x * self.pixels_per_metre,
+            self.pivot.1 - y * self.pixels_per_metre,
+        )
+    }
+}
+
+/// Where the markers really were in one frame: the mean position over its exposure (px),
+/// and whether each was in view (wholly above the table's edge, `Some(true)`), hidden
+/// (wholly below, `Some(false)`) or partly covered (`None`).
+#[derive(Clone, Copy, Debug)]
+pub struct TruthRow {
+    pub t: f64,
+    pub m1: (f64, f64),
+    pub m2: (f64, f64),
+    pub seen1: Option<bool>,
+    pub seen2: Option<bool>,
+    /// The markers' mean positions (m, origin at the pivot, y up).
+    pub metres: [f64; 4],
+}
+
+/// Renders gray frames of the pendulum `params` released from `start` (the first frame at
+/// t = 0), one at a time, with the truth of each.
+pub struct Renderer {
+    scene: Scene,
+    samples: usize,
+    positions: Vec<crate::model::Positions>,
+    rng: rand_pcg::Pcg64,
+    noise: Vec<f32>,
+    light: Vec<f32>,
+}
+
+impl Renderer {
+    pub fn new(scene: &Scene, params: &Params, start: State, frames: usize) -> Renderer {
+        let (w, h) = (scene.width as usize, scene.height as usize);
+        // Sub-exposure samples: neighbouring ones 0.2 px apart at the pendulum's fastest
+        // (the lower bob at most (l1 + l2) * 20 rad/s).
+        let fastest = (params.l1 + params.l2) * 20.0 * scene.pixels_per_metre;
+        let samples = ((fastest * scene.shutter / 0.2).ceil() as usize).clamp(1, 400);
+        let dt = 1e-3_f64.min(1.0 / scene.fps / 4.0);
+        let times: Vec<f64> = (0..frames)
+            .flat_map(|f| {
+                let t = f as f64 / scene.fps;
+                (0..samples).map(move |s| {
+                    t - scene.shutter / 2.0 + scene.shutter * (s as f64 + 0.5) / samples as f64
+                })
+            })
+            .map(|t| t.max(0.0))
+            .collect();
+        let t_end = (frames as f64 + 1.0) / scene.fps;
+        let steps = (t_end / dt).ceil() as u32 + 1;
+        let positions = crate::cpu::positions(params, start, dt, steps, &times);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(scene.seed);
+        // Sensor noise from a table of deviates read at a random offset each frame: as
+        // random as the tests need, at a fraction of a normal deviate's cost per pixel.
+        let normal = Normal::new(0.0, scene.noise).expect("finite");
+        let noise: Vec<f32> = (0..(1 << 20) + w * h)
+            .map(|_| normal.sample(&mut rng) as f32)
+            .collect();
+        Renderer {
+            scene: scene.clone(),
+            samples,
+            positions,
+            rng,
+            noise,
+            light: vec![0.0; w * h],
+        }
+    }
+
+    /// Frame `f` (frames in order: the noise's stream follows them) and its truth.
+    pub fn frame(&mut self, f: usize) -> (Vec<u8>, TruthRow) {
+        let scene = &self.scene;
+        let (w, h) = (scene.width as usize, scene.height as usize);
+        let samples = self.samples;
+        let sigma = scene.marker_sigma;
+        let reach = (4.0 * sigma).ceil() as i64;
+        let splat = |light: &mut [f32], (cx, cy): (f64, f64), amplitude: f64| {
+            let (x0, y0) = (cx.round() as i64, cy.round() as i64);
+            for y in (y0 - reach).max(0)..=(y0 + reach).min(h as i64 - 1) {
+                for x in (x0 - reach).max(0)..=(x0 + reach).min(w as i64 - 1) {
+                    let r2 = (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2);
+                    light[y as usize * w + x as usize] +=
+                        (amplitude * (-r2 / (2.0 * sigma * sigma)).exp()) as f32;
+                }
+            }
+        };
+        let light = &mut self.light;
+        light.iter_mut().for_each(|v| *v = scene.background as f32);
+        let mut mean = [0.0f64; 4];
+        let mut mean_m = [0.0f64; 4];
+        // Each marker's highest and lowest row over the exposure.
+        let mut rows = [(f64::INFINITY, f64::NEG_INFINITY); 2];
+        for s in 0..samples {
+            let q = self.positions[f * samples + s];
+            let (p1, p2) = (scene.to_pixels(q.x1, q.y1), scene.to_pixels(q.x2, q.y2));
+            let a = scene.marker_peak / samples as f64;
+            splat(light, p1, a);
+            splat(light, p2, a);
+            if let Some(pane) = scene.reflection {
+                splat(light, (2.0 * pane - p2.0, p2.1), 0.4 * a);
+            }
+            for (r, y) in rows.iter_mut().zip([p1.1, p2.1]) {
+                *r = (r.0.min(y), r.1.max(y));
+            }
+            for (k, v) in [p1.0, p1.1, p2.0, p2.1].into_iter().enumerate() {
+                mean[k] += v / samples as f64;
+            }
+            for (k, v) in [q.x1, q.y1, q.x2, q.y2].into_iter().enumerate() {
+                mean_m[k] += v / samples as f64;
+            }
+        }
+        if let Some(lamp) = scene.lamp {
+            splat(light, lamp, scene.marker_peak);
+        }
+        let offset = self.rng.random_range(0..1 << 20);
+        let edge = scene.table.unwrap_or(f64::INFINITY);
+        let frame: Vec<u8> = light
+            .iter()
+            .enumerate()
+            .map(|(k, &l)| {
+                // The table: a dark surface in front of everything below its edge.
+                let l = if (k / w) as f64 >= edge {
+                    scene.background as f32
+                } else {
+                    l
+                };
+                (l + self.noise[offset + k]).round().clamp(0.0, 255.0) as u8
+            })
+            .collect();
+        // In view when all of the marker's light (to 3 sigma, over the whole streak) is
+        // above the edge, hidden when all of it is below.
+        let clear = 3.0 * sigma;
+        let seen = |(top, bottom): (f64, f64)| match scene.table {
+            None => Some(true),
+            Some(e) if bottom + clear < e => Some(true),
+            Some(e) if top - clear >= e => Some(false),
+            Some(_) => None,
+        };
+        let truth = TruthRow {
+            t: f as f64 / scene.fps,
+            m1: (mean[0], mean[1]),
+            m2: (mean[2], mean[3]),
+            seen1: seen(rows[0]),
+            seen2: seen(rows[1]),
+            metres: mean_m,
+        };
+        (frame, truth)
+    }
+}
+
+/// A test film: `frames` frames rendered by [`Renderer`] and encoded as an H.264 MP4 at
+/// `crf` into `path`; returns the truth of every frame.
+pub fn film(
+    scene: &Scene,
+    params: &Params,
+    start: State,
+    frames: usize,
+    crf: u32,
+    path: &std::path::Path,
+) -> crate::Result<Vec<TruthRow>> {
+    let mut renderer = Renderer::new(scene, params, start, frames);
+    let mut truth = Vec::with_capacity(frames);
+    let mut files = crate::render::Outputs::new();
+    crate::video::write_mp4(
+        &mut files,
+        path,
+        (scene.width, scene.height),
+        crate::video::Mp4 {
+            fps: scene.fps,
+            crf,
+        },
+        "chaoscope test film",
+        frames,
+        |f| {
+            let (grey, row) = renderer.frame(f);
+            truth.push(row);
+            Ok(grey.iter().flat_map(|&v| [v, v, v]).collect())
+        },
+    )?;
+    files.commit(&crate::monitor::Monitor::hidden())?;
+    Ok(truth)
+}
+
+/// How a tracker did against the truth.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Score {
+    /// RMS distance (px) of the measured positions from the exposure's mean positions.
+    pub rms: f64,
+    /// The share of the masses wholly in view that were measured.
+    pub found: f64,
+    /// Positions given where the mass was wholly hidden.
+    pub invented: usize,
+    /// Positions nearer to the other mass than to the one named (the names swapped).
+    pub swaps: usize,
+    /// Positions more than 3 px from the named mass (a distractor followed).
+    pub astray: usize,
+    /// Masses partly hidden (by the table's edge), left out of the score.
+    pub partial: usize,
+}
+
+/// Scores `found` (each frame's two positions in px, None where not seen) against `truth`.
+pub fn score(found: &[[Option<(f64, f64)>; 2]], truth: &[TruthRow]) -> Score {
+    assert_eq!(found.len(), truth.len(), "a row for every frame");
+    let (mut sq, mut n, mut visible, mut measured) = (0.0, 0usize, 0usize, 0usize);
+    let (mut invented, mut swaps, mut astray, mut partial) = (0, 0, 0, 0);
+    let d = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).hypot(a.1 - b.1);
+    for (r, t) in found.iter().zip(truth) {
+        let true_at = [t.m1, t.m2];
+        for (k, seen) in [t.seen1, t.seen2].into_iter().enumerate() {
+            match (seen, r[k]) {
+                (Some(true), Some(p)) => {
+                    visible += 1;
+                    measured += 1;
+                    let e = d(p, true_at[k]);
+                    if d(p, true_at[1 - k]) < e {
+                        swaps += 1;
+                    } else if e > 3.0 {
+                        astray += 1;
+                    } else {
+                        sq += e * e;
+                        n += 1;
+                    }
+                }
+                (Some(true), None) => visible += 1,
+                (Some(false), Some(_)) => invented += 1,
+                (Some(false), None) => {}
+                (None, _) => partial += 1,
+            }
+        }
+    }
+    Score {
+        rms: (sq / n.max(1) as f64).sqrt(),
+        found: measured as f64 / visible.max(1) as f64,
+        invented,
+        swaps,
+        astray,
+        partial,
+    }
+}
