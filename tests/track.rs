@@ -247,3 +247,79 @@ fn a_tracked_film_is_fitted_back_to_its_truth() {
     let agrees_until = s["model"]["agrees_until"].as_f64().unwrap();
     assert!(agrees_until > 3.9, "{}", s["model"]);
 }
+
+/// From the camera to the forecast and back onto the footage: the repository's test film
+/// tracked, forecast from a window of its track, and the forecast drawn on the film: an MP4
+/// of the film's every frame, the fitted model's arms (blue) over the window and the 90 %
+/// bands (orange) after it, nothing drawn before the window but the markers' rings.
+#[test]
+fn the_forecast_is_drawn_back_onto_the_film() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let film = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/test_film.mp4");
+    let csv = dir.path().join("track.csv");
+    chaoscope()
+        .arg("track")
+        .arg(&film)
+        .args(["--l1", "0.30", "--output"])
+        .arg(&csv)
+        .assert()
+        .success();
+    let out = dir.path().join("forecast");
+    chaoscope()
+        .arg("forecast")
+        .arg(&csv)
+        .args([
+            "--window",
+            "0.8:2.3",
+            "--members",
+            "300",
+            "--candidates",
+            "1024",
+        ])
+        .args(["--backend", "cpu", "--video"])
+        .arg(&film)
+        .arg("--output")
+        .arg(&out)
+        .assert()
+        .success();
+    let overlay = out.join("overlay.mp4");
+    let mut decoder =
+        chaoscope::video::Decoder::open(&overlay, chaoscope::video::Pixels::Rgb).unwrap();
+    assert_eq!(
+        (
+            decoder.probe.codec.as_str(),
+            decoder.probe.width,
+            decoder.probe.height
+        ),
+        ("h264", 1280, 720)
+    );
+    assert_eq!(decoder.probe.times.len(), 300);
+    // Pixels of the model's colours (within the film's compression of them).
+    let near = |rgb: &[u8], c: [i32; 3]| {
+        rgb.chunks_exact(3)
+            .filter(|p| (0..3).all(|k| (p[k] as i32 - c[k]).abs() < 40))
+            .count()
+    };
+    let (mut frame, mut k) = (Vec::new(), 0);
+    while let Some(t) = decoder.next_frame(&mut frame).unwrap() {
+        let (fitted, band) = (near(&frame, [60, 200, 255]), near(&frame, [255, 150, 40]));
+        if t < 0.7 {
+            assert!(fitted + band < 50, "frame {k} at {t} s: {fitted} {band}");
+        } else if (0.9..2.2).contains(&t) {
+            assert!(
+                fitted > 300 && band < 50,
+                "frame {k} at {t} s: {fitted} {band}"
+            );
+        } else if t > 2.4 {
+            assert!(
+                band > 300 && fitted < 50,
+                "frame {k} at {t} s: {fitted} {band}"
+            );
+        }
+        k += 1;
+    }
+    assert_eq!(k, 300);
+}

@@ -441,6 +441,7 @@ def forecast(
     tolerance: float = 0.03,
     tracking_error: Optional[float] = None,
     candidates: int = 65536,
+    video: Optional[str] = None,
     m1: Optional[float] = None,
     m2: Optional[float] = None,
     l1: Optional[float] = None,
@@ -469,11 +470,14 @@ def forecast(
     ``spread_lower`` (m, the lower bob's RMS spread) and ``ftle`` (1/s, along the fitted
     orbit); ``attrs`` hold the horizons (the spread past ``tolerance`` m; the data leaving
     the 90 % band), the summary.json and the reproducing command. forecast.png, bands.csv and
-    summary.json go to ``output``. The physics (``preset="lab"``...) as :func:`params`; the
-    joint damping is what the fit finds.
+    summary.json go to ``output``, and with ``video`` (the film :func:`track` read) the
+    forecast drawn on its frames, overlay.mp4. The physics (``preset="lab"``...) as
+    :func:`params`; the joint damping is what the fit finds.
     """
     keywords = dict(locals())
     keywords.pop("progress")
+    if video is None:
+        keywords.pop("video")
     short = json.loads(_call(_native.forecast, keywords, progress))
     return _bands(Path(short["output"]))
 

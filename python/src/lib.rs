@@ -510,6 +510,7 @@ fn forecast<'py>(
         params: k.sources()?,
         backend: k.backend()?,
         precision: k.precision()?,
+        video: k.get("video")?,
     };
     let command = command_line::forecast(&job);
     let engine = engine_in(job.backend, job.precision)?;

@@ -32,6 +32,8 @@ pub struct ForecastJob {
     pub params: ParamSources,
     pub backend: Backend,
     pub precision: Precision,
+    /// The film the track came from: the forecast is drawn on it, into overlay.mp4.
+    pub video: Option<PathBuf>,
 }
 
 /// What a fit and forecast of one track found.
@@ -181,11 +183,22 @@ pub fn run(
 ) -> Result<ForecastSummary> {
     job.settings.validate()?;
     super::checks::check_damping_not_given(&job.params)?;
+    let mut inputs = super::checks::tracked_inputs(&job.file, &job.params);
+    if let Some(video) = &job.video {
+        if !video.exists() {
+            return Err(Error::Missing {
+                field: "video",
+                path: video.clone(),
+            });
+        }
+        inputs.push(("video", video.as_path()));
+        crate::video::require("ffmpeg", "drawing on a film")?;
+    }
     super::checks::check_directory(
         "output",
         &job.output,
-        &["forecast.png", "bands.csv", "summary.json"],
-        &super::checks::tracked_inputs(&job.file, &job.params),
+        &["forecast.png", "bands.csv", "summary.json", OVERLAY],
+        &inputs,
     )?;
     let frames = read_frames(&job.file)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
@@ -274,6 +287,30 @@ pub fn run(
         "report": "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s",
     });
     super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
+    if let Some(video) = &job.video {
+        let times = crate::video::probe(video)?.times;
+        // The film plays at its own rate: the median step between its frames.
+        let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+        let mid = steps.len() / 2;
+        let step = match steps.is_empty() {
+            true => 1.0 / 30.0,
+            false => *steps.select_nth_unstable_by(mid, f64::total_cmp).1,
+        };
+        let film = super::film::FilmSpec {
+            path: out.join(OVERLAY),
+            fps: (1.0 / step).clamp(1.0, 240.0),
+            crf: 18,
+        };
+        let csv = crate::input::read_text("file", &job.file, crate::input::CSV_CAP)?;
+        let overlay = super::overlay::Overlay {
+            rows: &frames,
+            pivot: (pivot.x, pivot.y),
+            outcome: &o,
+            tolerance: settings.tolerance,
+        };
+        let meta = crate::render::provenance(command.clone(), &engine.info());
+        super::overlay::write(&mut files, &film, video, &csv, &overlay, &meta, monitor)?;
+    }
     files.commit(monitor)?;
     Ok(ForecastSummary {
         window: settings.window,
@@ -289,10 +326,14 @@ pub fn run(
         files: ["forecast.png", "bands.csv", "summary.json"]
             .iter()
             .map(|n| out.join(n))
+            .chain(job.video.as_ref().map(|_| out.join(OVERLAY)))
             .collect(),
         notices,
     })
 }
+
+/// The forecast drawn on the film (`--video`), in the output folder.
+pub const OVERLAY: &str = "overlay.mp4";
 
 /// "at 2.31 s", or "never (to the data's end)".
 pub fn fmt_time(t: Option<f64>) -> String {

@@ -12,6 +12,7 @@ pub mod flip;
 pub mod forecast;
 pub mod lyapunov;
 pub mod map;
+pub mod overlay;
 pub mod phase;
 pub mod serve;
 pub mod store;

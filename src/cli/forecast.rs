@@ -22,9 +22,14 @@ use crate::spec::Precision;
 pub struct ForecastArgs {
     /// CSV of tracked positions: header with t, x1, y1, x2, y2 (s, m; y up); # comments.
     pub file: PathBuf,
-    /// Directory for forecast.png, bands.csv and summary.json.
+    /// Directory for forecast.png, bands.csv and summary.json (and overlay.mp4).
     #[arg(long, default_value = "out/forecast")]
     pub output: PathBuf,
+    /// The film FILE was tracked from (`chaoscope track`): the forecast drawn on its frames
+    /// as OUTPUT/overlay.mp4 (the tracked markers ringed, the fitted model's arms over the
+    /// window, then each mass's 90 % band and the horizon).
+    #[arg(long)]
+    pub video: Option<PathBuf>,
     /// The fit window START:END (s): the state at its first row and the joint damping are
     /// fitted to the rows within it (the default: the lab data's rows 0.667 to 2.002 s, near
     /// the report's start at 0.8 s); the forecast runs from its end to the data's end.
@@ -70,6 +75,7 @@ impl ForecastArgs {
                 candidates: self.candidates,
             },
             params: self.physical.sources(),
+            video: self.video.clone(),
             backend: self.backend,
             precision: self.precision.unwrap_or_default(),
         }

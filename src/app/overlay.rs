@@ -1,0 +1,210 @@
+//! The forecast drawn on the footage (`forecast --video`): the film's own frames with the
+//! tracked markers ringed, the fitted model's arms over its window, then the ensemble's
+//! 90 % band of each mass and its median arms, and the horizon named: where the model loses
+//! the real pendulum, to be seen. Frames are decoded, drawn on and encoded one at a time.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::film::{self, FilmSpec, Format};
+use super::forecast::Outcome;
+use crate::error::{Error, Result};
+use crate::fit::TrackedRow;
+use crate::monitor::Monitor;
+use crate::render::Outputs;
+use crate::video::{Decoder, Pixels};
+
+/// Where the tracked positions are in the film's picture: the pivot (px) and the scale, as
+/// `track` wrote them into the CSV's comment ("# pivot at (X, Y) px, ..., P px per metre").
+pub fn geometry_of(text: &str) -> Option<((f64, f64), f64)> {
+    let line = text.lines().find(|l| l.starts_with("# pivot at ("))?;
+    let numbers: Vec<f64> = line
+        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e'))
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    match numbers[..] {
+        [x, y, _, _, ppm, ..] if ppm > 0.0 => Some(((x, y), ppm)),
+        _ => None,
+    }
+}
+
+/// What to draw: the tracked rows (m, from the fitted `pivot`), the forecast, the horizon.
+pub struct Overlay<'a> {
+    pub rows: &'a [TrackedRow],
+    /// The fitted pivot (m, in the CSV's frame) the forecast's positions are relative to.
+    pub pivot: (f64, f64),
+    pub outcome: &'a Outcome,
+    /// The lower bob's spread (m) that ends the forecast's horizon.
+    pub tolerance: f64,
+}
+
+/// Writes `film` (an MP4): the frames of `video` with `overlay` drawn on them; `csv` is the
+/// tracked file's text (its geometry).
+pub fn write(
+    files: &mut Outputs,
+    film: &FilmSpec,
+    video: &Path,
+    csv: &str,
+    overlay: &Overlay,
+    meta: &[(String, String)],
+    monitor: &Monitor,
+) -> Result<()> {
+    let ((cx, cy), ppm) = geometry_of(csv).ok_or_else(|| {
+        Error::invalid(
+            "video",
+            "the tracked file says nothing of where it lies in the film: draw on the film a CSV that `track` wrote",
+        )
+    })?;
+    let mut decoder = Decoder::open(video, Pixels::Rgb)?;
+    let (w, h) = (decoder.probe.width, decoder.probe.height);
+    let count = decoder.probe.times.len();
+    // Metres in the forecast's frame to the picture's pixels.
+    let (px, py) = overlay.pivot;
+    let at = move |x: f64, y: f64| -> (i32, i32) {
+        (
+            (cx + (x + px) * ppm).round() as i32,
+            (cy - (y + py) * ppm).round() as i32,
+        )
+    };
+    crate::render::register_font();
+    monitor.start("overlay", count as u64);
+    let mut frame = Vec::new();
+    let result = film::write(files, film, Format::Mp4, (w, h), count, meta, |_| {
+        monitor.check()?;
+        let t = decoder
+            .next_frame(&mut frame)?
+            .ok_or_else(|| Error::format(video, "fewer frames than its timestamps"))?;
+        draw(&mut frame, (w, h), t, overlay, &at).map_err(Error::plot)?;
+        monitor.advance(1);
+        Ok(std::mem::take(&mut frame))
+    });
+    monitor.finish();
+    result
+}
+
+const TRACKED: RGBColor = RGBColor(255, 255, 255);
+const FITTED: RGBColor = RGBColor(60, 200, 255);
+const FORECAST: RGBColor = RGBColor(255, 150, 40);
+const LOST: RGBColor = RGBColor(255, 70, 70);
+
+fn draw(
+    rgb: &mut [u8],
+    (w, h): (u32, u32),
+    t: f64,
+    o: &Overlay,
+    at: &dyn Fn(f64, f64) -> (i32, i32),
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    let f = &o.outcome.forecast;
+    let root = BitMapBackend::with_buffer(rgb, (w, h)).into_drawing_area();
+    let scale = h as f64 / 720.0;
+    let px = |v: f64| (v * scale).round().max(1.0) as i32;
+    // The model's band at the frame's time (the bands hold every tracked row's time).
+    let k = f.times.partition_point(|&x| x < t - 1e-6);
+    let band = (t >= f.t0 - 1e-6 && k < f.times.len() && (f.times[k] - t).abs() < 0.011)
+        .then(|| &f.model[k]);
+    if let Some(b) = band {
+        let median = |c: usize| b[c][2];
+        let forecasting = t > f.window_end;
+        let colour = if forecasting { FORECAST } else { FITTED };
+        if forecasting {
+            // The 90 % band of each mass: the box between its 5 % and 95 % quantiles.
+            for m in 0..2 {
+                let (a, z) = (
+                    at(b[2 * m][0], b[2 * m + 1][0]),
+                    at(b[2 * m][4], b[2 * m + 1][4]),
+                );
+                root.draw(&Rectangle::new([a, z], colour.mix(0.35).filled()))?;
+                root.draw(&Rectangle::new([a, z], colour.stroke_width(px(1.0) as u32)))?;
+            }
+        }
+        let arm = [
+            at(0.0, 0.0),
+            at(median(0), median(1)),
+            at(median(2), median(3)),
+        ];
+        root.draw(&PathElement::new(
+            arm.to_vec(),
+            colour.stroke_width(px(3.0) as u32),
+        ))?;
+        for p in &arm[1..] {
+            root.draw(&Circle::new(*p, px(6.0), colour.filled()))?;
+        }
+    }
+    // The tracked markers at this time, ringed.
+    let row = o.rows.iter().find(|r| (r.t - t).abs() < 1e-6);
+    if let Some(r) = row {
+        for (x, y) in [(r.x1, r.y1), (r.x2, r.y2)] {
+            let (x, y) = (x - o.pivot.0, y - o.pivot.1);
+            root.draw(&Circle::new(
+                at(x, y),
+                px(11.0),
+                TRACKED.stroke_width(px(2.0) as u32),
+            ))?;
+        }
+    }
+    let size = 22.0 * scale;
+    let text = |s: String, line: i32, colour: RGBColor| {
+        root.draw(&Text::new(
+            s,
+            (px(16.0), px(14.0) + line * px(28.0)),
+            ("sans-serif", size).into_font().color(&colour),
+        ))
+    };
+    text(format!("t = {t:.2} s"), 0, TRACKED)?;
+    let stage = if t < f.t0 {
+        ("tracked".to_string(), TRACKED)
+    } else if t <= f.window_end {
+        (
+            format!("model fitted to {:.2}..{:.2} s", f.t0, f.window_end),
+            FITTED,
+        )
+    } else {
+        (
+            format!(
+                "forecast: 90 % band of each mass, from {:.2} s",
+                f.window_end
+            ),
+            FORECAST,
+        )
+    };
+    text(stage.0, 1, stage.1)?;
+    // The two horizons, each from its moment on: where the track leaves the band (the
+    // model no longer follows the pendulum to the tracking's precision), and where the
+    // members spread past the tolerance (the model has lost it whatever the tracking).
+    let mut line = 2;
+    if let Some(hz) = o.outcome.data_horizon
+        && t >= hz
+    {
+        text(
+            format!("from {hz:.2} s the track is out of the 90 % band"),
+            line,
+            FORECAST,
+        )?;
+        line += 1;
+    }
+    if let Some(hz) = f.spread_horizon
+        && t >= hz
+    {
+        text(
+            format!(
+                "past the horizon ({hz:.2} s): the members spread over {} m: the model has lost the pendulum",
+                o.tolerance
+            ),
+            line,
+            LOST,
+        )?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_geometry_is_read_from_tracks_comment() {
+        let text = "# chaoscope track x.mp4 --l1 0.3\n# pivot at (640.012, 323.950) px, upper arm 218.160 px, lower arm 141.810 px, 727.2000 px per metre; t from the film's first frame\nt,x1\n";
+        assert_eq!(super::geometry_of(text), Some(((640.012, 323.95), 727.2)));
+        assert_eq!(super::geometry_of("t,x1\n"), None);
+    }
+}
