@@ -267,3 +267,78 @@ fn film_settings_are_checked_and_a_missing_ffmpeg_is_named() {
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert!(left.is_empty(), "{left:?}");
 }
+
+/// A phone's film: HEVC in a QuickTime (.mov) container at a variable frame rate. The
+/// decoder hands over every frame once, each at its own timestamp (a phone's rotation
+/// metadata is read by `probe`, checked in src/video/decode.rs), and `track` reads it as it
+/// reads an MP4.
+#[test]
+fn a_phones_hevc_mov_decodes_upright_with_its_own_times() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let film = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/test_film.mp4");
+    let mov = dir.path().join("phone.mov");
+    // Frames 0-89 re-timed to a variable rate (every third step 1/20 s, else 1/30 s), HEVC.
+    let o = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-i"])
+        .arg(&film)
+        .args([
+            "-frames:v",
+            "90",
+            "-vf",
+            "settb=1/600,setpts='(N/30+floor(N/3)/60)/TB'",
+            "-fps_mode",
+            "passthrough",
+            "-c:v",
+            "libx265",
+            "-x265-params",
+            "log-level=error",
+            "-crf",
+            "22",
+            "-video_track_timescale",
+            "600",
+        ])
+        .arg(&mov)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let p = probe(&mov).unwrap();
+    assert_eq!(p.codec, "hevc");
+    assert_eq!(p.times.len(), 90);
+    // The steps between frames vary (FFmpeg's muxer rounds the ones written, so only their
+    // variety is checked): frame times are the container's, not an index over a rate.
+    let steps: Vec<f64> = p.times.windows(2).map(|w| w[1] - w[0]).collect();
+    let odd = steps
+        .iter()
+        .filter(|&&s| (s - 1.0 / 30.0).abs() > 0.01)
+        .count();
+    assert!(
+        odd >= 10,
+        "{odd} of {} steps other than 1/30 s",
+        steps.len()
+    );
+    let mut decoder = Decoder::open(&mov, Pixels::Gray).unwrap();
+    assert_eq!((decoder.probe.width, decoder.probe.height), (1280, 720));
+    let mut frame = Vec::new();
+    let mut times = Vec::new();
+    while let Some(t) = decoder.next_frame(&mut frame).unwrap() {
+        assert_eq!(frame.len(), 1280 * 720);
+        times.push(t);
+    }
+    // Each frame once (no frame repeated to fill a constant rate), at its own time.
+    assert_eq!(times, p.times);
+    let csv = dir.path().join("phone.csv");
+    let o = chaoscope()
+        .arg("track")
+        .arg(&mov)
+        .args(["--l1", "0.30", "--json", "--output"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = common::summary(o);
+    assert_eq!(s["frames"], 90);
+    assert!(s["both"].as_f64().unwrap() >= 0.99, "{s}");
+}

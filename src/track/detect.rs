@@ -331,4 +331,38 @@ mod tests {
         assert!((b.streak() - 20.0).abs() < 1.0, "{}", b.streak());
         assert!((b.angle - 0.6f64.atan2(0.8)).abs() < 0.02, "{}", b.angle);
     }
+
+    /// A red marker on a light grey background (the documented option): its colour's score
+    /// makes it a bright blob, found where it is; the grey background and a grey blob of the
+    /// same contrast score nothing.
+    #[test]
+    fn a_coloured_marker_on_a_light_background_is_found() {
+        let (w, h) = (64usize, 48usize);
+        let mut rgb = vec![200u8; w * h * 3];
+        let paint = |rgb: &mut [u8], cx: f64, cy: f64, colour: [f64; 3]| {
+            for y in 0..h {
+                for x in 0..w {
+                    let r2 = (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2);
+                    let a = (-r2 / (2.0 * 3.0 * 3.0)).exp();
+                    for c in 0..3 {
+                        let k = (y * w + x) * 3 + c;
+                        rgb[k] = ((1.0 - a) * rgb[k] as f64 + a * colour[c]).round() as u8;
+                    }
+                }
+            }
+        };
+        paint(&mut rgb, 40.4, 20.7, [230.0, 30.0, 30.0]);
+        paint(&mut rgb, 15.0, 30.0, [60.0, 60.0, 60.0]);
+        let mut score = Vec::new();
+        Markers::parse("e01e1e").unwrap().score(&rgb, &mut score);
+        let found = blobs(&score, w, None, &mut Scratch::default());
+        assert_eq!(found.len(), 1, "{found:?}");
+        // Within 0.05 px: the picture is quantised to whole levels.
+        assert!(
+            (found[0].x - 40.4).abs() < 0.05 && (found[0].y - 20.7).abs() < 0.05,
+            "{:?}",
+            found[0]
+        );
+        assert!(Markers::parse("red").is_err() && Markers::parse("#ff2020").is_ok());
+    }
 }
