@@ -344,9 +344,9 @@ mod tests {
                 for x in 0..w {
                     let r2 = (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2);
                     let a = (-r2 / (2.0 * 3.0 * 3.0)).exp();
-                    for c in 0..3 {
+                    for (c, v) in colour.iter().enumerate() {
                         let k = (y * w + x) * 3 + c;
-                        rgb[k] = ((1.0 - a) * rgb[k] as f64 + a * colour[c]).round() as u8;
+                        rgb[k] = ((1.0 - a) * rgb[k] as f64 + a * v).round() as u8;
                     }
                 }
             }
