@@ -190,28 +190,16 @@ fn all_at_once(
     if let Some(spec) = &job.film {
         let gcanvas = film_canvas(job, spec);
         let (frames, samples) = (film_frames(job, spec), positions[0].len());
-        monitor.start("film", frames as u64);
         // One film, exposed a frame's worth further each time, each frame encoded as made.
         let mut film = Film::new(gcanvas);
         let mut exposed = 0;
-        film::write(
-            files,
-            spec,
-            spec.format("film", FILM_FORMATS)?,
-            (gcanvas.size, gcanvas.size),
-            frames,
-            meta,
-            |k| {
-                monitor.check()?;
-                let upto = upto(k + 1, frames, samples);
-                expose(&mut film, &positions, colors, dt, exposed, upto);
-                exposed = upto - 1;
-                monitor.advance(1);
-                // Arms of at most 50 runs, or the picture is all arms.
-                develop(&film, speed, &positions, colors, Some(upto - 1), n.min(50))
-            },
-        )?;
-        monitor.finish();
+        write_film(files, spec, gcanvas, frames, meta, monitor, |k| {
+            let upto = upto(k + 1, frames, samples);
+            expose(&mut film, &positions, colors, dt, exposed, upto);
+            exposed = upto - 1;
+            // Arms of at most 50 runs, or the picture is all arms.
+            develop(&film, speed, &positions, colors, Some(upto - 1), n.min(50))
+        })?;
     }
     Ok(())
 }
@@ -339,24 +327,43 @@ fn streamed(
     let rgb = develop(&film, speed, &released, colors, None, n)?;
     files.png(&job.output, job.size, job.size, &rgb, meta)?;
     if let Some(spec) = &job.film {
-        monitor.start("film", frames as u64);
         let mut shown = Film::new(gcanvas);
-        film::write(
-            files,
-            spec,
-            spec.format("film", FILM_FORMATS)?,
-            (gcanvas.size, gcanvas.size),
-            frames,
-            meta,
-            |f| {
-                monitor.check()?;
-                shown.add(&increments[f]);
-                monitor.advance(1);
-                develop(&shown, speed, &arms, colors, Some(f), arms_shown)
-            },
-        )?;
-        monitor.finish();
+        write_film(files, spec, gcanvas, frames, meta, monitor, |f| {
+            shown.add(&increments[f]);
+            develop(&shown, speed, &arms, colors, Some(f), arms_shown)
+        })?;
     }
+    Ok(())
+}
+
+/// Stages the film `spec` asks for: `frames` frames of `canvas`, each made by `frame(k)`,
+/// with progress and Ctrl-C between frames.
+fn write_film(
+    files: &mut Outputs,
+    spec: &FilmSpec,
+    canvas: Canvas,
+    frames: usize,
+    meta: &[(String, String)],
+    monitor: &Monitor,
+    mut frame: impl FnMut(usize) -> Result<Vec<u8>>,
+) -> Result<()> {
+    monitor.start("film", frames as u64);
+    let format = spec.format("film", FILM_FORMATS)?;
+    film::write(
+        files,
+        spec,
+        format,
+        (canvas.size, canvas.size),
+        frames,
+        meta,
+        |k| {
+            monitor.check()?;
+            let rgb = frame(k)?;
+            monitor.advance(1);
+            Ok(rgb)
+        },
+    )?;
+    monitor.finish();
     Ok(())
 }
 
