@@ -81,7 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let (cx, cy) = summary.pivot_px;
             let px = |m: Option<(f64, f64)>| m.map(|(x, y)| (cx + x * ppm, cy - y * ppm));
             let found: Vec<[Option<(f64, f64)>; 2]> =
-                rows.iter().map(|r| [px(r.0), px(r.1)]).collect();
+                rows.iter().map(|r| [px(r.1), px(r.2)]).collect();
             let sc = score(&found, &truth);
             println!(
                 "| {w} x {h}, {name} | {mbits:.0} | {:.3} | {:.2} % | {} | {} | {} | {:.0} |",

@@ -185,7 +185,7 @@ fn precision_notices(
             grid.y.var.name()
         ),
     };
-    if engine.gpu().is_some() && precision == Precision::F32 && grid.needs_f64() {
+    if engine.computes_in_f32(precision) && grid.needs_f64() {
         notices.push(format!(
             "note: the pixel step is {}; the map runs on the {} in f64",
             below(crate::spec::F32_MIN_PIXEL_STEP, "f32"),

@@ -43,28 +43,13 @@ fn tracked(video: &Path, extra: &[&str]) -> (Vec<Row>, serde_json::Value) {
         s["pivot_px"][0].as_f64().unwrap(),
         s["pivot_px"][1].as_f64().unwrap(),
     );
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    assert_eq!(
-        lines.next(),
-        Some("t,x1,y1,x2,y2,seen1,seen2,sx1,sy1,sx2,sy2,streak1,streak2")
-    );
-    let rows = lines
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            let at = |k: usize, seen: &str| match seen {
-                "measured" => {
-                    let (x, y): (f64, f64) = (c[k].parse().unwrap(), c[k + 1].parse().unwrap());
-                    Some((pivot.0 + x * ppm, pivot.1 - y * ppm))
-                }
-                "hidden" => {
-                    assert!(c[k].is_empty() && c[k + 1].is_empty(), "{l}");
-                    None
-                }
-                other => panic!("{other}"),
-            };
-            (c[0].parse().unwrap(), [at(1, c[5]), at(3, c[6])])
-        })
+    // Read back by the library's reader of track's CSV (it checks the header, and that a
+    // hidden mass has no position).
+    let px = |m: Option<(f64, f64)>| m.map(|(x, y)| (pivot.0 + x * ppm, pivot.1 - y * ppm));
+    let rows = chaoscope::track::read_rows(&csv)
+        .unwrap()
+        .into_iter()
+        .map(|(t, a, b)| (t, [px(a), px(b)]))
         .collect();
     (rows, s)
 }
@@ -297,9 +282,13 @@ fn the_forecast_is_drawn_back_onto_the_film() {
         ("h264", 1280, 720)
     );
     assert_eq!(decoder.probe.times.len(), 300);
-    // Pixels of the model's colours (within the film's compression of them).
+    // Pixels of the model's colours (within the film's compression of them), below the
+    // caption's lines (written in the same colours, they end 120 px down). The arms alone
+    // are some 360 px long and 3 px wide with two dots of 6 px: over 1,000 pixels, so more
+    // than 300 is a drawn model and fewer than 50 none (a ring's or a glyph's fringe).
     let near = |rgb: &[u8], c: [i32; 3]| {
-        rgb.chunks_exact(3)
+        rgb[130 * 1280 * 3..]
+            .chunks_exact(3)
             .filter(|p| (0..3).all(|k| (p[k] as i32 - c[k]).abs() < 40))
             .count()
     };

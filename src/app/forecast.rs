@@ -201,6 +201,11 @@ pub fn run(
         &inputs,
     )?;
     let frames = read_frames(&job.file)?;
+    // Where the track lies in the film, before any work: only a CSV `track` wrote says.
+    let geometry = match job.video {
+        Some(_) => Some(super::overlay::geometry_in(&job.file)?),
+        None => None,
+    };
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     // The pivot, arm lengths and model as `fit` finds them.
     let super::fit::Tracked {
@@ -287,29 +292,23 @@ pub fn run(
         "report": "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s",
     });
     super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
-    if let Some(video) = &job.video {
-        let times = crate::video::probe(video)?.times;
-        // The film plays at its own rate: the median step between its frames.
-        let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-        let mid = steps.len() / 2;
-        let step = match steps.is_empty() {
-            true => 1.0 / 30.0,
-            false => *steps.select_nth_unstable_by(mid, f64::total_cmp).1,
-        };
-        let film = super::film::FilmSpec {
-            path: out.join(OVERLAY),
-            fps: (1.0 / step).clamp(1.0, 240.0),
-            crf: 18,
-        };
-        let csv = crate::input::read_text("file", &job.file, crate::input::CSV_CAP)?;
+    if let (Some(video), Some(geometry)) = (&job.video, geometry) {
         let overlay = super::overlay::Overlay {
             rows: &frames,
+            geometry,
             pivot: (pivot.x, pivot.y),
             outcome: &o,
             tolerance: settings.tolerance,
         };
         let meta = crate::render::provenance(command.clone(), &engine.info());
-        super::overlay::write(&mut files, &film, video, &csv, &overlay, &meta, monitor)?;
+        super::overlay::write(
+            &mut files,
+            &out.join(OVERLAY),
+            video,
+            &overlay,
+            &meta,
+            monitor,
+        )?;
     }
     files.commit(monitor)?;
     Ok(ForecastSummary {

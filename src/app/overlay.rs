@@ -15,9 +15,21 @@ use crate::monitor::Monitor;
 use crate::render::Outputs;
 use crate::video::{Decoder, Pixels};
 
-/// Where the tracked positions are in the film's picture: the pivot (px) and the scale, as
-/// `track` wrote them into the CSV's comment ("# pivot at (X, Y) px, ..., P px per metre").
-pub fn geometry_of(text: &str) -> Option<((f64, f64), f64)> {
+/// Where a tracked file's positions are in its film's picture: the pivot (px) and the scale
+/// (px per metre), read from the comment `track` writes; an error naming `video` where the
+/// file has none.
+pub fn geometry_in(csv: &Path) -> Result<((f64, f64), f64)> {
+    let text = crate::input::read_text("file", csv, crate::input::CSV_CAP)?;
+    geometry_of(&text).ok_or_else(|| {
+        Error::invalid(
+            "video",
+            "the tracked file says nothing of where it lies in the film: draw on the film a CSV that `track` wrote",
+        )
+    })
+}
+
+/// The pivot and scale in `track`'s comment ("# pivot at (X, Y) px, ..., P px per metre").
+fn geometry_of(text: &str) -> Option<((f64, f64), f64)> {
     let line = text.lines().find(|l| l.starts_with("# pivot at ("))?;
     let numbers: Vec<f64> = line
         .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e'))
@@ -32,6 +44,8 @@ pub fn geometry_of(text: &str) -> Option<((f64, f64), f64)> {
 /// What to draw: the tracked rows (m, from the fitted `pivot`), the forecast, the horizon.
 pub struct Overlay<'a> {
     pub rows: &'a [TrackedRow],
+    /// The track's pivot (px) and scale (px per metre) in the film ([`geometry_in`]).
+    pub geometry: ((f64, f64), f64),
     /// The fitted pivot (m, in the CSV's frame) the forecast's positions are relative to.
     pub pivot: (f64, f64),
     pub outcome: &'a Outcome,
@@ -39,26 +53,31 @@ pub struct Overlay<'a> {
     pub tolerance: f64,
 }
 
-/// Writes `film` (an MP4): the frames of `video` with `overlay` drawn on them; `csv` is the
-/// tracked file's text (its geometry).
+/// Stages `path`, an MP4 of the frames of `video` with `overlay` drawn on them, at the
+/// film's own rate (the median step between its frames).
 pub fn write(
     files: &mut Outputs,
-    film: &FilmSpec,
+    path: &Path,
     video: &Path,
-    csv: &str,
     overlay: &Overlay,
     meta: &[(String, String)],
     monitor: &Monitor,
 ) -> Result<()> {
-    let ((cx, cy), ppm) = geometry_of(csv).ok_or_else(|| {
-        Error::invalid(
-            "video",
-            "the tracked file says nothing of where it lies in the film: draw on the film a CSV that `track` wrote",
-        )
-    })?;
+    let ((cx, cy), ppm) = overlay.geometry;
     let mut decoder = Decoder::open(video, Pixels::Rgb)?;
     let (w, h) = (decoder.probe.width, decoder.probe.height);
-    let count = decoder.probe.times.len();
+    let times = &decoder.probe.times;
+    let count = times.len();
+    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    let step = match steps.len() / 2 {
+        _ if steps.is_empty() => 1.0 / 30.0,
+        mid => *steps.select_nth_unstable_by(mid, f64::total_cmp).1,
+    };
+    let film = FilmSpec {
+        path: path.to_path_buf(),
+        fps: (1.0 / step).clamp(1.0, 240.0),
+        crf: 18,
+    };
     // Metres in the forecast's frame to the picture's pixels.
     let (px, py) = overlay.pivot;
     let at = move |x: f64, y: f64| -> (i32, i32) {
@@ -70,7 +89,7 @@ pub fn write(
     crate::render::register_font();
     monitor.start("overlay", count as u64);
     let mut frame = Vec::new();
-    let result = film::write(files, film, Format::Mp4, (w, h), count, meta, |_| {
+    let result = film::write(files, &film, Format::Mp4, (w, h), count, meta, |_| {
         monitor.check()?;
         let t = decoder
             .next_frame(&mut frame)?
@@ -203,7 +222,7 @@ fn draw(
 mod tests {
     #[test]
     fn the_geometry_is_read_from_tracks_comment() {
-        let text = "# chaoscope track x.mp4 --l1 0.3\n# pivot at (640.012, 323.950) px, upper arm 218.160 px, lower arm 141.810 px, 727.2000 px per metre; t from the film's first frame\nt,x1\n";
+        let text = "# chaoscope track x.mp4\n# pivot at (640.012, 323.950) px, upper arm 218.160 px, lower arm 141.810 px, 727.2000 px per metre; t from the film's first frame\nt,x1\n";
         assert_eq!(super::geometry_of(text), Some(((640.012, 323.95), 727.2)));
         assert_eq!(super::geometry_of("t,x1\n"), None);
     }

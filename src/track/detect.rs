@@ -104,11 +104,12 @@ pub fn background(score: &[f32]) -> (f32, f32) {
 /// `score` averaged over 5 x 5 pixels (the edges over what lies inside), into `out`: a
 /// marker's light stands out of the noise five times as far there, which finds a marker
 /// smeared thin by a long exposure.
-fn box5(score: &[f32], width: usize, out: &mut Vec<f32>) {
+fn box5(score: &[f32], width: usize, rows: &mut Vec<f32>, out: &mut Vec<f32>) {
     let height = score.len() / width;
     // Rows first, by a running sum along each row; then columns, by a running sum of whole
     // rows (memory read in order both times).
-    let mut rows = vec![0.0f32; score.len()];
+    rows.clear();
+    rows.resize(score.len(), 0.0);
     for y in 0..height {
         let (row, sums) = (
             &score[y * width..(y + 1) * width],
@@ -156,6 +157,7 @@ fn box5(score: &[f32], width: usize, out: &mut Vec<f32>) {
 #[derive(Default)]
 pub struct Scratch {
     visited: Vec<bool>,
+    rows: Vec<f32>,
     smooth: Vec<f32>,
 }
 
@@ -171,7 +173,7 @@ pub fn blobs(
 ) -> Vec<Blob> {
     let height = score.len() / width;
     let (level, noise) = background(score);
-    box5(score, width, &mut scratch.smooth);
+    box5(score, width, &mut scratch.rows, &mut scratch.smooth);
     let smooth = &scratch.smooth;
     let (level_s, noise_s) = background(smooth);
     let seed = level_s + (6.0 * noise_s).max(4.0);

@@ -149,9 +149,9 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     })
 }
 
-/// The positions (m) in a CSV that `track` wrote: each row's upper and lower mass, None
-/// where it was not measured.
-pub type CsvRow = (Option<(f64, f64)>, Option<(f64, f64)>);
+/// A row of a CSV that `track` wrote: its time (s) and the upper and lower mass's position
+/// (m), None where it was not measured.
+pub type CsvRow = (f64, Option<(f64, f64)>, Option<(f64, f64)>);
 
 /// Reads back the positions of a CSV that `track` wrote (its header and `seen` columns).
 pub fn read_rows(path: &std::path::Path) -> Result<Vec<CsvRow>> {
@@ -173,11 +173,13 @@ pub fn read_rows(path: &std::path::Path) -> Result<Vec<CsvRow>> {
                         let v = |s: &str| s.parse::<f64>().map_err(|_| bad("a position"));
                         Ok(Some((v(c[k])?, v(c[k + 1])?)))
                     }
-                    "hidden" => Ok(None),
-                    _ => Err(bad("a seen cell")),
+                    // Not seen: no position, not even a guessed one.
+                    "hidden" if c[k].is_empty() && c[k + 1].is_empty() => Ok(None),
+                    _ => Err(bad("a seen cell, or a hidden mass's position")),
                 }
             };
-            Ok((at(1, c[5])?, at(3, c[6])?))
+            let t = c[0].parse::<f64>().map_err(|_| bad("a time"))?;
+            Ok((t, at(1, c[5])?, at(3, c[6])?))
         })
         .collect()
 }
