@@ -33,8 +33,9 @@ fn documents() -> Vec<PathBuf> {
     docs
 }
 
-const COMMANDS: [&str; 17] = [
+const COMMANDS: [&str; 18] = [
     "flip",
+    "zoom",
     "lyapunov",
     "trajectory",
     "boundary",

@@ -342,3 +342,217 @@ fn a_phones_hevc_mov_decodes_upright_with_its_own_times() {
     assert_eq!(s["frames"], 90);
     assert!(s["both"].as_f64().unwrap() >= 0.99, "{s}");
 }
+
+/// A point on the flip-time map's boundary (found by zooming on the steepest pixel near the
+/// centre, level by level, to 2e-8 wide): a zoom there keeps detail to the end.
+const EDGE: &str = "-1.6892315177083337,0.7416354402083335";
+
+/// The flags of a small zoom's map: 16:9 pixels over a 16:9 window of the angle plane.
+const SMALL_MAP: [&str; 7] = [
+    "flip",
+    "--size",
+    "96x54",
+    "--theta2=-1.7671458676442586:1.7671458676442586",
+    "--t-max",
+    "8",
+    "--json",
+];
+
+/// A zoom from the whole plane to 1e-7: its first frame is the `flip` map its PNG names (bit
+/// for bit, and in the film after the colour conversion); frames run in f32 exactly while the
+/// step between starts is at least 16 f32 ulps of pi, then in f64; ffprobe sees the film.
+#[test]
+fn a_zoom_starts_at_the_flip_map_and_turns_to_f64_where_f32_stops_resolving() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("zoom");
+    let s = common::summary(
+        chaoscope()
+            .args([
+                "zoom",
+                &format!("--to={EDGE},1e-7"),
+                "--frames",
+                "10",
+                "--crf",
+                "10",
+            ])
+            .arg("--output")
+            .arg(&out)
+            .args(SMALL_MAP)
+            .output()
+            .unwrap(),
+    );
+    assert_eq!(
+        (s["frames"].as_u64(), s["made"].as_u64()),
+        (Some(10), Some(10))
+    );
+    // The first frame's own command, run as it stands, makes the same picture.
+    let first = out.join("frame_0000.png");
+    let command = common::png_text(&first, "chaoscope:command");
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(&words[..2], ["chaoscope", "flip"], "{command}");
+    let flip = dir.path().join("flip.png");
+    chaoscope()
+        .args(&words[1..])
+        .arg("--output")
+        .arg(&flip)
+        .assert()
+        .success();
+    assert_eq!(read_png(&first).unwrap().rgb, read_png(&flip).unwrap().rgb);
+    let (codec, pix, w, h, frames, duration, comment) = ffprobe(&out.join("zoom.mp4"));
+    assert_eq!(
+        (codec.as_str(), pix.as_str(), w, h, frames),
+        ("h264", "yuv420p", 96, 54, 10)
+    );
+    assert!((duration - 10.0 / 30.0).abs() < 1e-3, "{duration}");
+    assert!(
+        comment.starts_with("chaoscope zoom --to -1.6892315177083337"),
+        "{comment}"
+    );
+    // The film's first frame is the flip map after yuv420p: H.264 at crf 10 costs a flip
+    // map's detail about 1.2 levels on average (tests above); 2 levels at most.
+    let mut decoder = Decoder::open(&out.join("zoom.mp4"), Pixels::Rgb).unwrap();
+    let mut frame = Vec::new();
+    decoder.next_frame(&mut frame).unwrap().unwrap();
+    let flat = through_yuv420p(&flip);
+    let mean = flat
+        .iter()
+        .zip(&frame)
+        .map(|(&a, &b)| (a as i32 - b as i32).unsigned_abs() as f64)
+        .sum::<f64>()
+        / flat.len() as f64;
+    assert!(mean <= 2.0, "mean difference {mean:.2} levels");
+    // f32 resolves a step between starts down to 16 of its ulps of the largest angle, pi
+    // (where the arms flip): ulp(pi) = 2 f32::EPSILON.
+    let f32_finest = 16.0 * 2.0 * f32::EPSILON as f64;
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut precisions = Vec::new();
+    for line in csv.lines().skip(2) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let step: f64 = cells[5].parse().unwrap();
+        let expected = if step >= f32_finest { "f32" } else { "f64" };
+        assert_eq!(cells[6], expected, "{line}");
+        precisions.push(cells[6].to_string());
+        let frame = out.join(format!("frame_{:04}.png", cells[0].parse::<u32>().unwrap()));
+        assert_eq!(common::png_text(&frame, "chaoscope:precision"), expected);
+    }
+    let switch = precisions.iter().position(|p| p == "f64").unwrap();
+    assert!(switch > 0 && precisions.len() == 10);
+    assert_eq!(s["switch"]["frame"].as_u64(), Some(switch as u64));
+}
+
+/// A zoom killed mid-run and run again, and a zoom made in three tiles then encoded, give
+/// the frames of a zoom run once, byte for byte (each frame its own pure function of the
+/// command: nothing of the run that made it is in it).
+#[test]
+fn a_killed_zoom_resumes_to_the_same_frames_and_tiles_add_up() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let zoom = |out: &Path| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_chaoscope"));
+        c.args(["zoom", &format!("--to={EDGE},1e-5"), "--frames", "12"])
+            .arg("--output")
+            .arg(out)
+            .env("XDG_RUNTIME_DIR", std::env::temp_dir());
+        c
+    };
+    let map = ["flip", "--size", "128x72", "--t-max", "12", "--json"];
+    let whole = dir.path().join("whole");
+    common::summary(zoom(&whole).args(map).output().unwrap());
+    let frames = |d: &Path| -> Vec<Vec<u8>> {
+        (0..12)
+            .map(|k| std::fs::read(d.join(format!("frame_{k:04}.png"))).unwrap())
+            .collect()
+    };
+    let expected = frames(&whole);
+    let table = std::fs::read(whole.join("frames.csv")).unwrap();
+
+    let killed = dir.path().join("killed");
+    let mut child = zoom(&killed)
+        .args(map)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    while !killed.join("frame_0002.png").exists() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the zoom ended before it was killed"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left = (0..12)
+        .filter(|k| killed.join(format!("frame_{k:04}.png")).exists())
+        .count();
+    assert!(left < 12, "the kill came after the last frame");
+    let s = common::summary(zoom(&killed).args(map).output().unwrap());
+    assert_eq!(s["kept"].as_u64(), Some(left as u64));
+    assert_eq!(frames(&killed), expected);
+    assert_eq!(std::fs::read(killed.join("frames.csv")).unwrap(), table);
+
+    let tiles = dir.path().join("tiles");
+    for tile in ["0/3", "1/3", "2/3"] {
+        let s = common::summary(
+            zoom(&tiles)
+                .args(["--tile", tile])
+                .args(map)
+                .output()
+                .unwrap(),
+        );
+        assert_eq!((s["made"].as_u64(), s["film"].as_str()), (Some(4), None));
+    }
+    assert!(!tiles.join("zoom.mp4").exists());
+    let s = common::summary(zoom(&tiles).args(map).output().unwrap());
+    assert_eq!(
+        (s["made"].as_u64(), s["kept"].as_u64()),
+        (Some(0), Some(12))
+    );
+    assert_eq!(frames(&tiles), expected);
+    assert!(tiles.join("zoom.mp4").exists());
+}
+
+/// What a zoom cannot do exits 2 naming the flag, and writes nothing: past f64's resolution
+/// (naming the end width), a view without its width, one frame, a GIF, a tile out of range,
+/// the map's own files, a single start instead of a plane.
+#[test]
+fn a_zoom_refuses_what_it_cannot_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("zoom");
+    let to = format!("--to={EDGE},1e-6");
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--to=0.5,0.5,1e-15", "flip", "--size", "64"],
+            "--to: a width of 1e-15",
+        ),
+        (&["--to=0.5,0.5", "flip"], "--to"),
+        (&[&to, "--frames", "1", "flip"], "--frames"),
+        (&[&to, "--film", "x.gif", "flip"], "--film"),
+        (&[&to, "--tile", "3/3", "flip"], "--tile"),
+        (&[&to, "flip", "--data", "x.npy"], "--data"),
+        (&[&to, "flip", "--output", "x.png"], "--output"),
+        (
+            &[&to, "lyapunov", "--theta1", "0.5", "--theta2", "0.5"],
+            "--theta1",
+        ),
+        (&[&to, "lyapunov", "--spectrum", "s.csv"], "--spectrum"),
+    ];
+    for (args, flag) in cases {
+        let o = chaoscope()
+            .arg("zoom")
+            .arg("--output")
+            .arg(&out)
+            .args(*args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(flag), "{args:?} should name {flag}: {err}");
+    }
+    assert!(!out.exists(), "nothing written");
+}

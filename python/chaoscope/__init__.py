@@ -30,6 +30,7 @@ from . import _chaoscope as _native
 from ._picture import Picture, picture
 from ._run import Progress, _call
 from ._track import track
+from ._zoom import zoom
 
 __version__: str = _native.__version__
 __all__ = [
@@ -40,6 +41,7 @@ __all__ = [
     "forecast",
     "traces",
     "track",
+    "zoom",
     "params",
     "picture",
     "open_store",

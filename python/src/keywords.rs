@@ -91,6 +91,19 @@ impl<'py> Keywords<'py> {
 
     /// A whole number that fits `T`; a negative or huge one is a ValueError naming the
     /// keyword (the library checks the allowed range after).
+    /// `tile=(index, count)`: whole numbers >= 0 (their range is the job's to check).
+    pub fn tile(&self) -> PyResult<Option<(u32, u32)>> {
+        match self.get::<(i64, i64)>("tile")? {
+            None => Ok(None),
+            Some((i, n)) => match (u32::try_from(i), u32::try_from(n)) {
+                (Ok(i), Ok(n)) => Ok(Some((i, n))),
+                _ => Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "tile: ({i}, {n}) must be (index, count), whole numbers >= 0"
+                ))),
+            },
+        }
+    }
+
     pub fn whole<T: TryFrom<i64>>(&self, key: &str) -> PyResult<Option<T>> {
         let Some(n) = self.get::<i64>(key)? else {
             return Ok(None);

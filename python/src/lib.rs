@@ -27,6 +27,7 @@ mod keywords;
 mod picture;
 mod run;
 mod track;
+mod zoom;
 use keywords::Keywords;
 use run::{engine, engine_in, watched};
 
@@ -162,7 +163,7 @@ use pyo3::types::IntoPyDict;
 
 /// A map job run in memory (`samples`, `resolved` from the keywords): checked as the command
 /// line checks it, computed as it computes it; `command_of` writes its command line.
-fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
+fn run_map<'py, S: MapKernels + chaoscope::render::MapPicture + Copy + Send + Sync + 'static>(
     py: Python<'py>,
     k: &Keywords<'py>,
     spec: S,
@@ -181,6 +182,33 @@ fn run_map<'py, S: MapKernels + Copy + Send + Sync + 'static>(
         colour_range: None,
         samples,
     };
+    if let Some(settings) = k.get::<Bound<'py, PyDict>>("zoom")? {
+        // The map is a zoom's first frame: its picture's settings count, its files do not.
+        for (given, key) in [
+            (resolved, "resolved"),
+            (k.get::<std::path::PathBuf>("store")?.is_some(), "store"),
+        ] {
+            if given {
+                return Err(PyValueError::new_err(format!(
+                    "{key}: is a map's own; a zoom judges its frames with verdict=True and writes them to output"
+                )));
+            }
+        }
+        let colour_range = k
+            .pair("colour_range")?
+            .map(|(lo, hi)| (lo as f32, hi as f32));
+        let job = MapJob {
+            colour_range,
+            files: MapOutputs {
+                show_unresolved: k.or("show_unresolved", false)?,
+                ..no_files()
+            },
+            ..job
+        };
+        let out = PyDict::new(py);
+        out.set_item("zoom", zoom::run(py, settings, job, command_of, progress)?)?;
+        return Ok(out);
+    }
     let command = command_of(&job);
     if let Some(path) = k.get::<std::path::PathBuf>("store")? {
         return fill_store(py, k, &job, path, resolved, command, progress);
@@ -225,17 +253,7 @@ fn fill_store<'py, S: MapKernels + Copy + Send + Sync + 'static>(
             "samples: is for maps made in memory; a store is filled band by band at one start a pixel",
         ));
     }
-    let tile = match k.get::<(i64, i64)>("tile")? {
-        None => None,
-        Some((i, n)) => match (u32::try_from(i), u32::try_from(n)) {
-            (Ok(i), Ok(n)) => Some((i, n)),
-            _ => {
-                return Err(PyValueError::new_err(format!(
-                    "tile: ({i}, {n}) must be (index, count), whole numbers >= 0"
-                )));
-            }
-        },
-    };
+    let tile = k.tile()?;
     let files = MapOutputs {
         output: std::path::PathBuf::from("out.png"),
         data: Some(path.clone()),
@@ -574,6 +592,7 @@ fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(forecast, m)?)?;
     m.add_function(wrap_pyfunction!(traces, m)?)?;
     m.add_function(wrap_pyfunction!(track::track, m)?)?;
+    m.add_function(wrap_pyfunction!(zoom::png_rgb, m)?)?;
     m.add_function(wrap_pyfunction!(main, m)?)?;
     Ok(())
 }

@@ -541,3 +541,33 @@ def test_track_equals_its_command_as_a_dataset(tmp_path):
         chaoscope.track(str(film), l1=0.3, markers="red", progress=False)
     with pytest.raises(ValueError, match="^region: "):
         chaoscope.track(str(film), l1=0.3, region=(0, 0, 5000, 10), progress=False)
+
+
+def test_zoom_is_its_command_with_frames_read_lazily(tmp_path):
+    edge = (-1.68923151770833, 0.74163544020833)
+    window = dict(size=(96, 54), theta2=(-1.7671458676442586, 1.7671458676442586), t_max=6)
+    ds = chaoscope.zoom((*edge, 1e-7), frames=6, output=str(tmp_path / "py"), progress=False, **window)
+    # The frames are read when asked for, not before.
+    assert isinstance(ds.image.variable._data, xr.core.indexing.LazilyIndexedArray)
+    assert ds.image.dims == ("frame", "y", "x", "channel") and ds.image.shape == (6, 54, 96, 3)
+    # Each frame the PNG the command makes, byte for byte in its pixels.
+    out = tmp_path / "cli"
+    cli("zoom", f"--to={edge[0]},{edge[1]},1e-7", "--frames", "6", "--output", str(out),
+        "flip", "--size", "96x54", "--theta2=-1.7671458676442586:1.7671458676442586", "--t-max", "6")
+    for k in (0, 3, 5):
+        w, h, rgb = chaoscope._chaoscope.png_rgb(str(out / f"frame_{k:04d}.png"))
+        assert ds.image.isel(frame=k).values.tobytes() == rgb
+    assert (out / "frames.csv").read_text() == (tmp_path / "py" / "frames.csv").read_text()
+    # f32 while the step between starts is >= 16 f32 ulps of pi, f64 after.
+    f32 = ds.step.values >= 16 * 2 * float(np.finfo(np.float32).eps)
+    assert list(ds.precision.values) == ["f32" if s else "f64" for s in f32]
+    assert json.loads(ds.attrs["switch"])["frame"] == int(np.argmin(f32))
+    with pytest.raises(ValueError, match="^to: a width of 1e-15"):
+        chaoscope.zoom((0.5, 0.5, 1e-15), output=str(tmp_path / "x"), size=64, progress=False)
+    with pytest.raises(ValueError, match="^store: "):
+        chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), store="m.zarr", progress=False)
+    with pytest.raises(ValueError, match="^map: "):
+        chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), map="phase", progress=False)
+    with pytest.raises(TypeError, match="sizes"):
+        chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), sizes=64, progress=False)
+    assert not (tmp_path / "x").exists()

@@ -22,6 +22,7 @@ pub mod traces;
 pub mod track;
 pub mod trajectory;
 pub mod twin;
+pub mod zoom;
 
 pub use checks::{check_count, check_extension, check_output, check_within, write_text};
 pub use map::{MapOutputs, check_tile, write_map};

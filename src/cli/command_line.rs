@@ -13,6 +13,7 @@ use crate::app::sweep::{FrameMap, SweepJob};
 use crate::app::traces::TracesJob;
 use crate::app::trajectory::TrajectoryJob;
 use crate::app::twin::TwinJob;
+use crate::app::zoom::ZoomJob;
 use crate::engine::Backend;
 use crate::model::{Params, State};
 use crate::params::ParamSources;
@@ -368,6 +369,25 @@ pub fn frame(map: &FrameMap, backend: Backend, pic: &PictureSpec) -> String {
         FrameMap::Flip(spec) => flip_map(spec, backend, pic),
         FrameMap::Lyapunov(spec) => lyapunov_map_of(spec, backend, pic),
     }
+}
+
+/// A zoom: its own flags, then `map` (the first frame's command, `chaoscope flip ...`).
+pub fn zoom<S>(job: &ZoomJob<S>, map: &str) -> String {
+    let mut out = String::from("chaoscope zoom");
+    for v in &job.to {
+        out += &format!(" --to {},{},{}", v.x, v.y, v.width);
+    }
+    out += &format!(" --frames {} --fps {}", job.frames, job.film.fps);
+    if matches!(
+        job.film.format("film", crate::app::zoom::FILM_FORMATS),
+        Ok(crate::app::film::Format::Mp4)
+    ) {
+        out += &format!(" --crf {}", job.film.crf);
+    }
+    if job.verdict {
+        out += " --verdict";
+    }
+    out + " " + map.strip_prefix("chaoscope ").unwrap_or(map)
 }
 
 pub fn sweep(job: &SweepJob) -> String {

@@ -21,6 +21,7 @@ mod traces;
 mod track;
 mod trajectory;
 mod twin;
+mod zoom;
 
 use std::process::ExitCode;
 
@@ -63,6 +64,10 @@ pub enum Command {
     /// Frames of a map while a parameter changes (--vary) or zooming into a point (--zoom-to),
     /// as numbered PNGs and an animated PNG; an interrupted sweep resumes where it stopped.
     Sweep(sweep::SweepArgs),
+    /// A film zooming from a map's plane into a view of it (or through several): every frame
+    /// the map of its view in the precision its pixel step needs (f32, then f64, refused past
+    /// f64), numbered PNGs that resume and split over tasks (--tile), then an MP4.
+    Zoom(zoom::ZoomArgs),
     /// Long-exposure light trails of the lower bob for releases from "the same" start.
     Traces(traces::TracesArgs),
     /// Phase portraits, omega against theta of each arm, as time-density images; --single for
@@ -155,6 +160,7 @@ impl Command {
             Command::Lyapunov(_) => "lyapunov",
             Command::Trajectory(_) => "trajectory",
             Command::Sweep(_) => "sweep",
+            Command::Zoom(_) => "zoom",
             Command::Boundary(_) => "boundary",
             Command::Traces(_) => "traces",
             Command::Track(_) => "track",
@@ -189,6 +195,7 @@ impl Command {
             | Command::Completions { .. }
             | Command::Serve(_)
             | Command::Track(_)
+            | Command::Zoom(_)
             | Command::Status(_)
             | Command::Render(_) => return Ok(None),
         }))
@@ -210,14 +217,17 @@ impl Cli {
     {
         use clap::CommandFactory;
         let args: Vec<std::ffi::OsString> = args.into_iter().map(Into::into).collect();
+        let hyphens = |a: clap::Arg| {
+            let one_value = a.get_num_args().is_none_or(|n| n.max_values() == 1);
+            match a.get_long().is_some() && a.get_action().takes_values() && one_value {
+                true => a.allow_hyphen_values(true),
+                false => a,
+            }
+        };
+        // A zoom's map (`zoom ... flip ...`) is a command of its own one level down.
         let mut command = Cli::command().mut_subcommands(|sub| {
-            sub.mut_args(|a| {
-                let one_value = a.get_num_args().is_none_or(|n| n.max_values() == 1);
-                match a.get_long().is_some() && a.get_action().takes_values() && one_value {
-                    true => a.allow_hyphen_values(true),
-                    false => a,
-                }
-            })
+            sub.mut_args(hyphens)
+                .mut_subcommands(|map| map.mut_args(hyphens))
         });
         let words: Vec<String> = args
             .iter()
@@ -343,6 +353,7 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
         Command::Lyapunov(args) => lyapunov::run(args, monitor),
         Command::Trajectory(args) => trajectory::run(args, monitor),
         Command::Sweep(args) => sweep::run(args, monitor),
+        Command::Zoom(args) => zoom::run(args, monitor),
         Command::Boundary(args) => boundary::run(args, monitor),
         Command::Traces(args) => traces::run(args, monitor),
         Command::Track(args) => track::run(args, monitor),

@@ -7,7 +7,7 @@ use crate::app::sweep::{Param, Vary};
 use crate::spec::{Range, Spread};
 
 /// A value that is really the next flag: its own value was left out (`--l1 --cw 2`).
-fn not_a_flag(s: &str) -> Result<(), String> {
+pub fn not_a_flag(s: &str) -> Result<(), String> {
     if s.trim_start().starts_with("--") {
         Err(format!(
             "the value is missing (found the flag `{s}` instead)"
