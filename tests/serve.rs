@@ -504,6 +504,10 @@ fn bad_queries_get_400_naming_the_key() {
             "width",
         ),
         ("/api/save?x_min=1&x_max=0&y_min=0&y_max=1", "x_max"),
+        ("/api/zoom?cx=0.5&cy=0.5", "w"),
+        // Past f64's resolution: the zoom's own refusal, naming the width.
+        ("/api/zoom?cx=0.5&cy=0.5&w=1e-15", "w"),
+        ("/api/zoom?cx=0.5&cy=0.5&w=1e-3&frames=1", "frames"),
     ] {
         server.refuses(path, key);
     }
@@ -891,6 +895,37 @@ fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
     assert!(
         (omega1 - after(start, "ω1 ")).abs() < 1e-6 * omega1.abs(),
         "{command}"
+    );
+    // "Zoom film to here" on the (theta1, theta2) view at (1.2, 0.9), zoom 2: a zoom command
+    // that parses, from the whole plane to the view on the screen (2 pi a 256 px tile at zoom
+    // 0) kept square and inside the plane: no wider than it, its centre moved in.
+    let zoom = report["zoom_command"].as_str().unwrap();
+    let words = std::iter::once("chaoscope").chain(zoom.split_whitespace().skip(1));
+    chaoscope::cli::Cli::parse_args(words).unwrap_or_else(|e| panic!("{zoom}: {e}"));
+    let to: Vec<f64> = zoom["chaoscope zoom --to ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let [px, z] = [0, 1].map(|k| report["zoom_view"][k].as_f64().unwrap());
+    let tau = 2.0 * std::f64::consts::PI;
+    let w = (px / (256.0 * z.exp2()) * tau).min(tau);
+    let inside = |c: f64| c.clamp(-0.5 * tau + 0.5 * w, 0.5 * tau - 0.5 * w);
+    // Within a pixel of the screen's view.
+    let pixel = tau / (256.0 * z.exp2());
+    assert!(
+        (to[2] - w).abs() < pixel
+            && (to[0] - inside(1.2)).abs() < pixel
+            && (to[1] - inside(0.9)).abs() < pixel,
+        "{zoom}: expected about {},{},{w}",
+        inside(1.2),
+        inside(0.9)
+    );
+    assert!(
+        zoom.contains(" flip --size 1080x1080 --theta1 -3.14"),
+        "{zoom}"
     );
     let colours = colours_in("plane.png");
     assert!(colours > 200, "{colours} colours in the plane");

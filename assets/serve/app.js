@@ -241,6 +241,8 @@ async function start() {
   map.on("click", (e) => pick(e.latlng, e.originalEvent.shiftKey));
   form.addEventListener("change", onChange);
   document.getElementById("save-button").addEventListener("click", saveView);
+  document.getElementById("zoom-button").addEventListener("click", () =>
+    zoomFilm().catch((err) => { page.zoomCommand = null; showZoom(String(err)); }));
   legend();
 }
 
@@ -478,6 +480,32 @@ function saveView() {
   link.download = `chaoscope-${state.kind}.png`;
   document.getElementById("save-status").textContent = "computing… (the download starts when done)";
   link.click();
+}
+
+// "Zoom film to here": the command of a film from the whole plane to the view on the screen
+// (its centre, its width along x; the film's frames square, as the plane is on the screen).
+async function zoomFilm() {
+  const b = map.getBounds();
+  const c = map.getCenter();
+  const { x, y } = world();
+  const [xw, yw] = [x.range[1] - x.range[0], y.range[1] - y.range[0]];
+  // The end view is square on the screen, as the plane is, and inside the plane: as wide
+  // as the screen's view at most the plane, its centre moved in where the view would reach out.
+  const w = Math.min(xOf(b.getEast()) - xOf(b.getWest()), xw);
+  const h = w * yw / xw;
+  const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));
+  const cx = clamp(xOf(c.lng), x.range[0] + w / 2, x.range[1] - w / 2);
+  const cy = clamp(yOf(c.lat), y.range[0] + h / 2, y.range[1] - h / 2);
+  showZoom("planning…");
+  const r = await fetch("/api/zoom?" + query({ cx, cy, w, width: 1080, height: 1080 }));
+  if (!r.ok) throw new Error(await r.text());
+  page.zoomCommand = (await r.json()).command;
+  showZoom(page.zoomCommand);
+}
+function showZoom(text) {
+  const el = document.getElementById("zoom-command");
+  el.hidden = false;
+  el.textContent = text;
 }
 
 start().catch((err) => { statusLine.className = "error"; statusLine.textContent = String(err); });

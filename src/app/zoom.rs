@@ -176,19 +176,7 @@ pub fn grids(start: &Grid, to: &[View], frames: u32) -> Result<Vec<Grid>> {
             "is the view the film starts from: give a view to zoom to",
         ));
     }
-    let grid_of = |v: View| {
-        let h = v.width * aspect;
-        let mut g = *start;
-        g.x.range = Range {
-            min: v.x - 0.5 * v.width,
-            max: v.x + 0.5 * v.width,
-        };
-        g.y.range = Range {
-            min: v.y - 0.5 * h,
-            max: v.y + 0.5 * h,
-        };
-        g
-    };
+    let grid_of = |v: View| grid_of_view(start, v);
     let last = frames - 1;
     Ok((0..frames)
         .map(|k| {
@@ -223,6 +211,22 @@ pub fn grids(start: &Grid, to: &[View], frames: u32) -> Result<Vec<Grid>> {
         .collect())
 }
 
+/// The grid of view `v` on `start`'s plane and pixels, its height in `start`'s proportions.
+fn grid_of_view(start: &Grid, v: View) -> Grid {
+    let aspect = (start.y.range.max - start.y.range.min) / View::of(start).width;
+    let h = v.width * aspect;
+    let mut g = *start;
+    g.x.range = Range {
+        min: v.x - 0.5 * v.width,
+        max: v.x + 0.5 * v.width,
+    };
+    g.y.range = Range {
+        min: v.y - 0.5 * h,
+        max: v.y + 0.5 * h,
+    };
+    g
+}
+
 /// The grid a frame's map is computed on: `samples` x `samples` starts a pixel.
 fn computed_grid(grid: &Grid, samples: u32) -> Grid {
     Grid {
@@ -245,6 +249,21 @@ pub fn plan<S: MapKernels + MapPicture>(
         .spec
         .check_picture(&job.map.picture, job.map.colour_range)?;
     let grids = grids(spec.grid(), &job.to, job.frames)?;
+    // Each view the film passes through within what the map allows, named by its own values
+    // (the frames between views then lie within the first view and these).
+    for v in &job.to {
+        let at = grid_of_view(spec.grid(), *v);
+        check_in_memory(&spec.on_grid(at), false, 1).map_err(|e| match e {
+            Error::InvalidSpec { field, reason } => Error::invalid(
+                "to",
+                format!(
+                    "{},{},{} reaches past what the map allows ({field}): {reason}",
+                    v.x, v.y, v.width
+                ),
+            ),
+            e => e,
+        })?;
+    }
     let end = job.to.last().expect("checked: a view to go to");
     let aspect = (spec.grid().y.range.max - spec.grid().y.range.min) / View::of(spec.grid()).width;
     grids

@@ -68,6 +68,8 @@ pub const COMMANDS: Commands = Commands {
     flip: command_line::flip,
     lyapunov: command_line::lyapunov_map,
     trajectory: command_line::trajectory,
+    zoom_flip: |job| command_line::zoom(job, &command_line::flip(&job.map)),
+    zoom_lyapunov: |job| command_line::zoom(job, &command_line::lyapunov_map(&job.map)),
 };
 
 /// Serves until Ctrl-C. Standard output holds the URL once listening (scripts and tests read

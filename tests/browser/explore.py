@@ -105,6 +105,15 @@ try:
     report["hash"] = driver.execute_script("return location.hash")
     driver.save_screenshot(out + "/pendulum.png")
 
+    # "Zoom film to here": the command of a zoom from the whole plane to this view.
+    driver.find_element(By.ID, "zoom-button").click()
+    wait.until(lambda d: d.find_element(By.ID, "zoom-command").text.startswith("chaoscope zoom"))
+    report["zoom_command"] = driver.find_element(By.ID, "zoom-command").text
+    report["zoom_view"] = driver.execute_script("""const m = window.chaoscope.map;
+        return [m.getSize().x, m.getZoom()];""")
+    driver.execute_script("document.getElementById('zoom-command').scrollIntoView()")
+    driver.save_screenshot(out + "/zoom.png")
+
     # Another plane through the axis menus: y becomes omega1 (its default range), theta2
     # fixed at 0.4; then a click at (theta1, omega1) = (2.0, 3.0).
     Select(driver.find_element(By.NAME, "y")).select_by_value("omega1")

@@ -5,9 +5,11 @@ use super::answers::{busy, cached, json, on_engine, remember, reply};
 use super::tiles::planned;
 use super::{Kind, Params, Query, REQUEST_LIMIT, S, View, World, view};
 use crate::app::MapOutputs;
+use crate::app::film::FilmSpec;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::LyapunovMapJob;
 use crate::app::trajectory::TrajectoryJob;
+use crate::app::zoom::{View as ZoomView, ZoomJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
@@ -283,6 +285,116 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
             bytes,
         )
             .into_response(),
+        Err(r) => r,
+    }
+}
+
+/// "Zoom film to here": the command of a zoom from the whole plane (`width` x `height`
+/// pixels) to the view centred at (`cx`, `cy`), `w` wide along x, over `frames` frames,
+/// planned as `chaoscope zoom` plans it (a view past f64 is refused as it refuses it).
+pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
+    let parsed = (|| -> Result<(View, Grid, ZoomView, u32)> {
+        let mut q = Query::new(q)?;
+        let view = shared.view(&mut q)?;
+        if view.stored.is_some() {
+            return Err(Error::invalid(
+                "kind",
+                "a zoom computes every frame: it starts from a plane, not a store",
+            ));
+        }
+        let grid = view::region_grid(&mut q, &view)?;
+        let mut value = |key| {
+            q.within(key, -1e6, 1e6)?
+                .ok_or_else(|| Error::invalid(key, "is needed (the view to zoom to)"))
+        };
+        let (x, y) = (value("cx")?, value("cy")?);
+        let width = q
+            .within("w", 1e-300, 1e6)?
+            .ok_or_else(|| Error::invalid("w", "is needed (the width to zoom to)"))?;
+        let frames = q.count("frames", 2, 100_000)?.unwrap_or(120);
+        q.finish()?;
+        Ok((view, grid, ZoomView { x, y, width }, frames))
+    })();
+    let (view, grid, to, frames) = match parsed {
+        Ok(p) => p,
+        Err(e) => return reply(e),
+    };
+    let (backend, commands) = (shared.backend, shared.commands);
+    let result = on_engine(&shared, move |engine, _| {
+        let output = std::path::PathBuf::from("out/zoom");
+        let film = FilmSpec {
+            path: output.join(crate::app::zoom::FILM),
+            fps: 30.0,
+            crf: 18,
+        };
+        let files = MapOutputs {
+            output: output.join("frame.png"),
+            data: None,
+            resolved: None,
+            show_unresolved: view.unresolved || view.kind == Kind::Resolved,
+        };
+        fn of<M>(
+            map: crate::app::map::MapJob<M>,
+            to: ZoomView,
+            frames: u32,
+            film: &FilmSpec,
+        ) -> ZoomJob<M> {
+            ZoomJob {
+                map,
+                to: vec![to],
+                frames,
+                film: film.clone(),
+                output: std::path::PathBuf::from("out/zoom"),
+                tile: None,
+                verdict: false,
+            }
+        }
+        let picture = PictureSpec {
+            annotate: false,
+            colormap: view.colormap,
+        };
+        match view.kind {
+            Kind::FLIP | Kind::FLIP_KIND | Kind::Resolved => {
+                let job = of(
+                    FlipJob {
+                        spec: view.flip_spec(grid),
+                        backend,
+                        picture,
+                        files,
+                        tile: None,
+                        colour_range: None,
+                        samples: 1,
+                    },
+                    to,
+                    frames,
+                    &film,
+                );
+                crate::app::zoom::plan(&job, engine).map_err(|e| e.renamed("to", "w"))?;
+                Ok((commands.zoom_flip)(&job))
+            }
+            Kind::Map(_) => {
+                let job = of(
+                    LyapunovMapJob {
+                        spec: view.lyapunov_spec(grid),
+                        backend,
+                        picture,
+                        files,
+                        tile: None,
+                        colour_range: Some(view.range),
+                        samples: 1,
+                    },
+                    to,
+                    frames,
+                    &film,
+                );
+                crate::app::zoom::plan(&job, engine).map_err(|e| e.renamed("to", "w"))?;
+                Ok((commands.zoom_lyapunov)(&job))
+            }
+        }
+    })
+    .await;
+    match result {
+        Ok(command) => json(serde_json::json!({ "command": command })),
         Err(r) => r,
     }
 }

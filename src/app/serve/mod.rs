@@ -13,7 +13,7 @@ mod tiles;
 pub mod view;
 pub mod world;
 
-use self::api::{info, point, range, save, stats, trajectory};
+use self::api::{info, point, range, save, stats, trajectory, zoom};
 use self::tiles::{legend, tile};
 pub use self::tiles::{mask_rgb, tile_rgb};
 
@@ -106,6 +106,8 @@ pub struct Commands {
     pub flip: fn(&FlipJob) -> String,
     pub lyapunov: fn(&LyapunovMapJob) -> String,
     pub trajectory: fn(&TrajectoryJob) -> String,
+    pub zoom_flip: fn(&crate::app::zoom::ZoomJob<crate::spec::FlipSpec>) -> String,
+    pub zoom_lyapunov: fn(&crate::app::zoom::ZoomJob<crate::spec::LyapunovSpec>) -> String,
 }
 
 /// What the server says once it listens.
@@ -321,6 +323,7 @@ fn router(shared: S) -> Router {
         .route("/api/trajectory", get(trajectory))
         .route("/api/range", get(range))
         .route("/api/save", get(save))
+        .route("/api/zoom", get(zoom))
         .route("/api/legend", get(legend))
         .route("/api/stats", get(stats))
         .fallback(|| async { (StatusCode::NOT_FOUND, "not found\n") })
