@@ -39,7 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let video = dir.join(format!("film{k}.mp4"));
         film(&scene, &p, start, 300, 18, &video)?;
         let csv = video.with_extension("csv");
-        track(
+        let tracked = track(
             &TrackJob {
                 video: video.clone(),
                 output: csv.clone(),
@@ -94,16 +94,48 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let times: Vec<f64> = rows.iter().map(|r| r[0]).collect();
         let dt = 1e-4;
         let truth = chaoscope::cpu::positions(&p, start, dt, (end / dt).ceil() as u32 + 1, &times);
+        // The truth where the track puts it: the tracker's own pivot and scale (its origin
+        // is its estimate of the pivot, which is off the scene's by a fraction of a pixel).
+        let ppm = tracked.pixels_per_metre;
+        let in_track = |x: f64, y: f64| {
+            let (px, py) = scene.to_pixels(x, y);
+            (
+                (px - tracked.pivot_px.0) / ppm,
+                (tracked.pivot_px.1 - py) / ppm,
+            )
+        };
+        let offset = in_track(0.0, 0.0);
         let (mut n_in, mut n) = (0, 0);
+        let mut dump = String::from("t,c,truth,p05,median,p95\n");
+        for (r, q) in rows.iter().zip(&truth) {
+            let (m1, m2) = (in_track(q.x1, q.y1), in_track(q.x2, q.y2));
+            let at = [
+                m1.0 - pivot.0,
+                m1.1 - pivot.1,
+                m2.0 - pivot.0,
+                m2.1 - pivot.1,
+            ];
+            for (c, x) in at.iter().enumerate() {
+                dump += &format!(
+                    "{},{c},{x},{},{},{}\n",
+                    r[0],
+                    r[1 + 10 * c],
+                    r[1 + 10 * c + 2],
+                    r[1 + 10 * c + 4]
+                );
+            }
+        }
+        std::fs::write(dir.join(format!("truth{k}.csv")), dump)?;
         for (r, q) in rows.iter().zip(&truth) {
             if r[0] <= s.window.1 + 1e-9 || r[0] >= until {
                 continue;
             }
+            let (m1, m2) = (in_track(q.x1, q.y1), in_track(q.x2, q.y2));
             let true_at = [
-                q.x1 - pivot.0,
-                q.y1 - pivot.1,
-                q.x2 - pivot.0,
-                q.y2 - pivot.1,
+                m1.0 - pivot.0,
+                m1.1 - pivot.1,
+                m2.0 - pivot.0,
+                m2.1 - pivot.1,
             ];
             for (c, x) in true_at.iter().enumerate() {
                 let (lo, hi) = (r[1 + 10 * c], r[1 + 10 * c + 4]);
@@ -116,9 +148,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         inside += n_in;
         counted += n;
         println!(
-            "film {k}: release ({:.2}, {:.2}); spread horizon {}; coverage {:.1} % of {n}",
+            "film {k}: release ({:.2}, {:.2}); the tracker's pivot off by ({:.3}, {:.3}) mm, its scale by {:.1e}; spread horizon {}; coverage {:.1} % of {n}",
             start.theta1,
             start.theta2,
+            1e3 * offset.0,
+            1e3 * offset.1,
+            scene.pixels_per_metre / ppm - 1.0,
             s.spread_horizon
                 .map_or("beyond the film".into(), |h| format!("{h:.2} s")),
             100.0 * n_in as f64 / n.max(1) as f64
