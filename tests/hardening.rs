@@ -140,6 +140,24 @@ fn ctrl_c_and_sigterm_stop_long_commands_without_leaving_files() {
         (
             "INT",
             vec![
+                "zoom",
+                "--to",
+                "-1.689,0.742,1e-3",
+                "--frames",
+                "50",
+                "--output",
+                "@/z",
+                "flip",
+                "--size",
+                "128",
+                "--backend",
+                "cpu",
+            ],
+            true,
+        ),
+        (
+            "INT",
+            vec![
                 "phase",
                 "--runs",
                 "100000",

@@ -525,6 +525,7 @@ fn a_zoom_refuses_what_it_cannot_do() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("zoom");
     let to = format!("--to={EDGE},1e-6");
+    let frame0 = out.join("frame_0000.png").display().to_string();
     let cases: &[(&[&str], &str)] = &[
         (
             &["--to=0.5,0.5,1e-15", "flip", "--size", "64"],
@@ -534,6 +535,7 @@ fn a_zoom_refuses_what_it_cannot_do() {
         (&[&to, "--frames", "1", "flip"], "--frames"),
         (&[&to, "--film", "x.gif", "flip"], "--film"),
         (&[&to, "--tile", "3/3", "flip"], "--tile"),
+        (&[&to, "--film", &frame0, "flip"], "--film"),
         (&[&to, "flip", "--data", "x.npy"], "--data"),
         (&[&to, "flip", "--output", "x.png"], "--output"),
         (

@@ -380,6 +380,15 @@ pub fn run<S: MapKernels + MapPicture>(
     super::checks::check_directory("output", &job.output, &names, &[])?;
     if job.tile.is_none() {
         job.film.validate("film", FILM_FORMATS)?;
+        if names.iter().any(|n| job.output.join(n) == job.film.path) {
+            return Err(Error::invalid(
+                "film",
+                format!(
+                    "{} is a file of the frames' folder: give the film a name of its own",
+                    job.film.path.display()
+                ),
+            ));
+        }
     }
     let mut notices = engine.notices();
     let switch = switch(&plans);
