@@ -27,7 +27,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t_max = args.get(2).map_or("10", String::as_str).to_string();
     let bin = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/release/chaoscope");
     let dir = std::path::PathBuf::from("out/zoom-bench");
-    let _ = std::fs::remove_dir_all(&dir);
+    // ZOOM_BENCH_KEEP=1: keep the frames of an earlier run (the zoom then only encodes).
+    if std::env::var_os("ZOOM_BENCH_KEEP").is_none() {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
     std::fs::create_dir_all(&dir)?;
     let end = 2.0 * std::f64::consts::PI * 1e-6;
     let zoom_args = [
@@ -54,6 +57,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .spawn()?;
     // chaoscope's own high-water mark, read while it runs (the last read is within 50 ms of
     // its end, and the mark only rises).
+    // The summary (every frame's plan) outgrows a pipe's buffer: read it as it comes.
+    let mut stdout = child.stdout.take().ok_or("no stdout")?;
+    let reader = std::thread::spawn(move || {
+        let mut text = Vec::new();
+        std::io::Read::read_to_end(&mut stdout, &mut text).map(|_| text)
+    });
     let status = format!("/proc/{}/status", child.id());
     let mut peak_kb = 0u64;
     while child.try_wait()?.is_none() {
@@ -65,9 +74,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    let out = child.wait_with_output()?;
+    let exit = child.wait()?;
     let wall = started.elapsed().as_secs_f64();
-    if !out.status.success() {
+    let stdout = reader.join().map_err(|_| "the reader panicked")??;
+    if !exit.success() {
         return Err("the zoom failed".into());
     }
     // The largest of the children waited for: chaoscope or the ffmpeg it ran.
@@ -76,7 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage);
         usage.ru_maxrss as u64
     };
-    let s: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    let s: serde_json::Value = serde_json::from_slice(&stdout)?;
     let compute = s["compute_seconds"].as_f64().unwrap_or(f64::NAN);
     let encode = s["encode_seconds"].as_f64().unwrap_or(f64::NAN);
 
