@@ -115,36 +115,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 m2.0 - pivot.0,
                 m2.1 - pivot.1,
             ];
+            // Scored after the window and before the spread horizon; written throughout.
+            let scored = r[0] > s.window.1 + 1e-9 && r[0] < until;
             for (c, x) in at.iter().enumerate() {
-                dump += &format!(
-                    "{},{c},{x},{},{},{}\n",
-                    r[0],
-                    r[1 + 10 * c],
-                    r[1 + 10 * c + 2],
-                    r[1 + 10 * c + 4]
-                );
-            }
-        }
-        std::fs::write(dir.join(format!("truth{k}.csv")), dump)?;
-        for (r, q) in rows.iter().zip(&truth) {
-            if r[0] <= s.window.1 + 1e-9 || r[0] >= until {
-                continue;
-            }
-            let (m1, m2) = (in_track(q.x1, q.y1), in_track(q.x2, q.y2));
-            let true_at = [
-                m1.0 - pivot.0,
-                m1.1 - pivot.1,
-                m2.0 - pivot.0,
-                m2.1 - pivot.1,
-            ];
-            for (c, x) in true_at.iter().enumerate() {
-                let (lo, hi) = (r[1 + 10 * c], r[1 + 10 * c + 4]);
-                n += 1;
-                if (lo..=hi).contains(x) {
-                    n_in += 1;
+                let (lo, median, hi) = (r[1 + 10 * c], r[1 + 10 * c + 2], r[1 + 10 * c + 4]);
+                dump += &format!("{},{c},{x},{lo},{median},{hi}\n", r[0]);
+                if scored {
+                    n += 1;
+                    n_in += (lo..=hi).contains(x) as usize;
                 }
             }
         }
+        std::fs::write(dir.join(format!("truth{k}.csv")), dump)?;
         inside += n_in;
         counted += n;
         println!(
