@@ -9,7 +9,7 @@
 //! there, with `frames.csv` (each frame's view, precision, place and unresolved share).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use super::film::{FilmSpec, Format};
@@ -512,9 +512,4 @@ fn encode<S>(
     })?;
     files.commit(monitor)?;
     Ok(unresolved.into_iter().flatten().collect())
-}
-
-/// The path of frame `k` in `dir`.
-pub fn frame_path(dir: &Path, k: u32) -> PathBuf {
-    dir.join(frame_name(k))
 }
