@@ -2,7 +2,10 @@
 //! the lab pendulum from nearby releases (src/track/synth.rs, 640 x 360, 10 s at 30 frames a
 //! second), each tracked, fitted on a window and forecast as `chaoscope forecast` does; the
 //! truth's share inside the model's 90 % band after the window and before the spread
-//! horizon. Prints one line per film and the pooled share.
+//! horizon. Prints one line per film and the pooled share; writes into DIR each film
+//! (filmK.mp4), its track (filmK.csv), the exposures' mean positions (film_truthK.csv: t, x1,
+//! y1, x2, y2 in px), the forecast (forecastK/) and the truth beside its band (truthK.csv: t,
+//! coordinate, truth, p05, median, p95; m).
 //!
 //!     cargo run --release --example track_coverage -- [FILMS] [DIR]
 
@@ -37,8 +40,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..Scene::lab(640, 360, p.l1 + p.l2)
         };
         let video = dir.join(format!("film{k}.mp4"));
-        film(&scene, &p, start, 300, 18, &video)?;
+        let truth_rows = film(&scene, &p, start, 300, 18, &video)?;
         let csv = video.with_extension("csv");
+        // The exposures' mean positions (px) beside the tracked ones, as the films' tests
+        // compare them: the tracker's own error, apart from the forecast's.
+        std::fs::write(
+            dir.join(format!("film_truth{k}.csv")),
+            truth_rows
+                .iter()
+                .map(|r| format!("{},{},{},{},{}\n", r.t, r.m1.0, r.m1.1, r.m2.0, r.m2.1))
+                .collect::<String>(),
+        )?;
         let tracked = track(
             &TrackJob {
                 video: video.clone(),

@@ -463,9 +463,9 @@ def forecast(
     precision: Optional[str] = None,
     progress: Progress = None,
 ) -> xr.Dataset:
-    """An ensemble forecast of a camera-tracked run (``chaoscope forecast``): the model's state
-    and joint damping fitted on ``window`` = (start, end) in s, then ``members`` drawn from the
-    fit's covariance (``seed``) and integrated to the data's end. Returns an
+    """An ensemble forecast of a camera-tracked run (``chaoscope forecast``): the model's state,
+    joint damping, pivot and scale fitted on ``window`` = (start, end) in s, then ``members``
+    drawn from the fit's covariance (``seed``) and integrated to the data's end. Returns an
     ``xarray.Dataset`` over ``time`` (s): ``model`` and ``measurement`` (the model's band with
     the tracking error, ``tracking_error`` m or the fit's residuals) quantiles of the
     positions (m) by ``coordinate`` (x1, y1, x2, y2) and ``quantile`` (0.05 .. 0.95),

@@ -343,12 +343,13 @@ pub fn fmt_time(t: Option<f64>) -> String {
 
 /// The fit as JSON: values, errors, covariance in [`FITTED`]'s order.
 pub fn fit_json(fit: &WindowFit) -> serde_json::Value {
-    let cov: Vec<Vec<f64>> = (0..6)
-        .map(|i| (0..6).map(|j| fit.covariance[(i, j)]).collect())
+    let cov: Vec<Vec<f64>> = (0..FITTED.len())
+        .map(|i| (0..FITTED.len()).map(|j| fit.covariance[(i, j)]).collect())
         .collect();
     json!({
         "t0": fit.t0, "rows": fit.rows, "first_row": fit.row0,
         "names": FITTED, "values": fit.values, "errors": fit.errors, "covariance": cov,
+        "tracking_error_correlation": fit.correlation,
         "chi2": fit.chi2, "dof": fit.dof, "rms_residual": (fit.chi2 / (4 * fit.rows) as f64).sqrt(),
         "candidates": fit.candidates, "searched_on": fit.backend,
     })

@@ -35,7 +35,7 @@ pub struct ForecastArgs {
     /// the report's start at 0.8 s); the forecast runs from its end to the data's end.
     #[arg(long, default_value = "0.6:2.1", value_parser = parse_window, allow_hyphen_values = true)]
     pub window: (f64, f64),
-    /// Ensemble members drawn from the fit's uncertainty (state, damping).
+    /// Ensemble members drawn from the fit's uncertainty (state, damping, pivot).
     #[arg(long, default_value = "10000", value_parser = parse_usize, allow_hyphen_values = true)]
     pub members: usize,
     /// Seed of the draws: the same seed, the same forecast.

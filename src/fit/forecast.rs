@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 pub use super::quantiles::QUANTILES;
 use super::quantiles::quantiles;
-use super::window::{STEPS_PER_SECOND, WindowFit};
+use super::window::{PARAMETERS, STEPS_PER_SECOND, WindowFit};
 use crate::cpu;
 use crate::engine::Engine;
 use crate::error::Result;
@@ -111,25 +111,61 @@ pub struct Slope {
     pub ratio_error: f64,
 }
 
-/// Draws `n` members (state and joint damping) from the fit's normal distribution; a damping
-/// drawn below zero takes zero (no measurement allows a joint that pushes), and the members
-/// that did are counted.
-pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> (Vec<State>, Vec<(f64, f64)>, usize) {
-    let eigen = SymmetricEigen::new(fit.covariance.clone());
+/// A forecast's members: where each starts, its joint damping and its pivot.
+pub struct Members {
+    pub starts: Vec<State>,
+    pub damping: Vec<(f64, f64)>,
+    /// Where each puts the pivot in the data's frame (m): its positions move by it.
+    pub pivots: Vec<(f64, f64)>,
+    /// Members drawn with a negative damping, which took zero instead.
+    pub clamped: usize,
+}
+
+/// Draws `n` members (state, joint damping and pivot) from the fit's normal distribution.
+/// No measurement allows a joint that pushes: a damping drawn below zero takes zero, and the
+/// member's other parameters move with it as the fit's covariance says they go together
+/// (by their regression on the damping, Sigma_od Sigma_dd^-1), so that its state is one the
+/// data allow with that damping (clamping alone would keep a state that only suits a
+/// pushing joint). The members that did are counted. The scale is drawn with the rest (its
+/// correlation widens the others' spread) but every member keeps the fitted one: the engine
+/// integrates members under one gravity.
+pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
+    let sigma = &fit.covariance;
+    let eigen = SymmetricEigen::new(sigma.clone());
     // Sigma = V diag(l) V^T: a draw is the fit plus V sqrt(l) z (l < 0 from rounding: 0).
     let root = &eigen.eigenvectors
         * nalgebra::DMatrix::from_diagonal(&eigen.eigenvalues.map(|l| l.max(0.0).sqrt()));
+    const DAMPING: [usize; 2] = [4, 5];
+    let dd = nalgebra::Matrix2::from_fn(|i, j| sigma[(DAMPING[i], DAMPING[j])]);
+    let regression = dd.try_inverse().map(|inverse| {
+        nalgebra::DMatrix::from_fn(PARAMETERS, 2, |i, j| sigma[(i, DAMPING[j])]) * inverse
+    });
     let mut rng = Pcg64::seed_from_u64(seed);
-    let (mut starts, mut damping, mut clamped) = (Vec::with_capacity(n), Vec::with_capacity(n), 0);
+    let mut members = Members {
+        starts: Vec::with_capacity(n),
+        damping: Vec::with_capacity(n),
+        pivots: Vec::with_capacity(n),
+        clamped: 0,
+    };
     for _ in 0..n {
-        let z = nalgebra::DVector::from_fn(6, |_, _| StandardNormal.sample(&mut rng));
-        let d = &root * z;
-        let v: [f64; 6] = std::array::from_fn(|k| fit.values[k] + d[k]);
-        clamped += (v[4] < 0.0 || v[5] < 0.0) as usize;
-        starts.push(State::from_array([v[0], v[1], v[2], v[3]]));
-        damping.push((v[4].max(0.0), v[5].max(0.0)));
+        let z = nalgebra::DVector::from_fn(PARAMETERS, |_, _| StandardNormal.sample(&mut rng));
+        let mut v = nalgebra::DVector::from_fn(PARAMETERS, |k, _| fit.values[k]) + &root * z;
+        let lift = nalgebra::Vector2::new((-v[4]).max(0.0), (-v[5]).max(0.0));
+        if lift != nalgebra::Vector2::zeros() {
+            members.clamped += 1;
+            if let Some(k) = &regression {
+                v += k * lift;
+            }
+            // Exactly zero where the regression left a rounding error below it.
+            (v[4], v[5]) = (v[4].max(0.0), v[5].max(0.0));
+        }
+        members
+            .starts
+            .push(State::from_array([v[0], v[1], v[2], v[3]]));
+        members.damping.push((v[4], v[5]));
+        members.pivots.push((v[6], v[7]));
     }
-    (starts, damping, clamped)
+    members
 }
 
 /// The bands' times: every [`BAND_STEP`] from `t0` to `end`, and the data's times between.
@@ -161,7 +197,12 @@ pub fn forecast(
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<Forecast> {
-    let (starts, damping, clamped) = draw_members(fit, spec.members, spec.seed);
+    let Members {
+        starts,
+        damping,
+        pivots,
+        clamped,
+    } = draw_members(fit, spec.members, spec.seed);
     let times = band_times(fit.t0, spec.end, &spec.data_times);
     let m = spec.members;
     let (dt, steps) = stepping(fit.t0, spec.end);
@@ -178,7 +219,7 @@ pub fn forecast(
         let v = chunk.positions();
         let n = v.len() / (4 * times.len());
         if n == m {
-            stats = bands(v, m, spec);
+            stats = bands(v, &pivots, spec);
             return Ok(());
         }
         let values = gathered.get_or_insert_with(|| vec![0f32; times.len() * 4 * m]);
@@ -189,7 +230,7 @@ pub fn forecast(
     })?;
     monitor.check()?;
     if let Some(values) = gathered {
-        stats = bands(&values, m, spec);
+        stats = bands(&values, &pivots, spec);
     }
     let model: Vec<Band> = stats.iter().map(|s| s.0).collect();
     let observed: Vec<Band> = stats.iter().map(|s| s.1).collect();
@@ -212,8 +253,10 @@ pub fn forecast(
 }
 
 /// The model's and a measurement's bands and the lower bob's spread at each time of
-/// `values` (positions by time, coordinate, then member of `m`).
-fn bands(values: &[f32], m: usize, spec: &ForecastSpec) -> Vec<(Band, Band, f64)> {
+/// `values` (positions by time, coordinate, then member), each member's positions moved by
+/// where it puts the pivot.
+fn bands(values: &[f32], pivots: &[(f64, f64)], spec: &ForecastSpec) -> Vec<(Band, Band, f64)> {
+    let m = pivots.len();
     // A measurement: the model's position and a tracking error, one a member and coordinate
     // drawn once for all times (a band at one time needs only the errors' distribution
     // there, and drawing 4 m errors a time cost more than the quantiles).
@@ -224,31 +267,40 @@ fn bands(values: &[f32], m: usize, spec: &ForecastSpec) -> Vec<(Band, Band, f64)
             (spec.tracking_error * z) as f32
         })
         .collect();
+    let shifts: [Vec<f32>; 2] = [
+        pivots.iter().map(|p| p.0 as f32).collect(),
+        pivots.iter().map(|p| p.1 as f32).collect(),
+    ];
+    let variance = |a: &[f32]| {
+        let mean = a.iter().map(|&x| x as f64).sum::<f64>() / m as f64;
+        a.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / m as f64
+    };
     values
         .par_chunks(4 * m)
         .map_init(
             || (vec![0f32; m], vec![0f32; m]),
             |(scratch, noisy), v| {
-                let spread = {
-                    let (x, y) = (&v[2 * m..3 * m], &v[3 * m..]);
-                    let var = |a: &[f32]| {
-                        let mean = a.iter().map(|&x| x as f64).sum::<f64>() / m as f64;
-                        a.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / m as f64
-                    };
-                    (var(x) + var(y)).sqrt()
-                };
                 let mut model = [[0.0; 5]; 4];
                 let mut observed = [[0.0; 5]; 4];
+                let mut spread = 0.0;
                 for c in 0..4 {
                     let coord = &v[c * m..(c + 1) * m];
-                    for ((o, &x), &e) in noisy.iter_mut().zip(coord).zip(&errors[c * m..]) {
-                        *o = x + e;
+                    for (((s, o), &x), (&e, &d)) in scratch
+                        .iter_mut()
+                        .zip(noisy.iter_mut())
+                        .zip(coord)
+                        .zip(errors[c * m..].iter().zip(&shifts[c % 2]))
+                    {
+                        *s = x + d;
+                        *o = *s + e;
                     }
-                    scratch.copy_from_slice(coord);
+                    if c >= 2 {
+                        spread += variance(scratch);
+                    }
                     model[c] = quantiles(scratch);
                     observed[c] = quantiles(noisy);
                 }
-                (model, observed, spread)
+                (model, observed, spread.sqrt())
             },
         )
         .collect()

@@ -13,11 +13,29 @@ use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{EnsembleSpec, Keep};
 
-/// Fitted parameters: the state (theta1, omega1, theta2, omega2) and the joint damping at
-/// the pivot and the middle joint (N m s).
-pub const FITTED: [&str; 6] = [
-    "theta1", "omega1", "theta2", "omega2", "damping1", "damping2",
+/// Fitted parameters: the state (theta1, omega1, theta2, omega2), the joint damping at the
+/// pivot and the middle joint (N m s), where the pivot lies in the data's frame (m) and the
+/// data's scale against gravity. The data's origin is the pivot a circle through the whole
+/// track puts there, off by a fraction of a pixel where the tracker's errors lean one way
+/// (its prior: a coordinate's tracking error). A camera's
+/// metres are the rod length the user gave over the arm's length in pixels, off by parts in
+/// ten thousand or more, and a pendulum whose every length is (1 + s) times as long swings
+/// as it would under gravity g (1 + s): the model's g takes (1 + s) so that its angles
+/// follow the data's (a scale off by 4e-4 moved a forecast by more than its band).
+pub const FITTED: [&str; 9] = [
+    "theta1", "omega1", "theta2", "omega2", "damping1", "damping2", "pivot_x", "pivot_y", "scale",
 ];
+
+/// The scale's prior standard deviation: a rod measured to half a millimetre in 0.3 m, a
+/// pixel scale to a part in a thousand. Data that say more (a film's hundreds of frames fix
+/// it to 1e-4) override it; a sparse table's few rows leave it near zero.
+pub const SCALE_PRIOR: f64 = 2e-3;
+
+/// Fitted parameters, the length of [`FITTED`].
+pub const PARAMETERS: usize = FITTED.len();
+
+/// Fitted parameters with a prior (the pivot's two and the scale): one residual each.
+const PRIORS: usize = 3;
 
 /// Integration steps per second of simulated time (RK4): a step of 1/300 s moves these
 /// pendulums (|omega| up to ~20 rad/s) by 0.07 rad at most, where RK4's error per second
@@ -37,12 +55,19 @@ pub struct WindowFit {
     /// The model with the fitted damping.
     pub params: Params,
     pub start: State,
-    /// The six parameters in [`FITTED`]'s order, their covariance (s^2 (J^T J)^-1) and
-    /// standard errors.
-    pub values: [f64; 6],
+    /// Where the pivot lies in the data's frame (m): the model's positions plus this are the
+    /// data's.
+    pub pivot: (f64, f64),
+    /// The parameters in [`FITTED`]'s order, their covariance (s^2 (J^T J)^-1 widened by the
+    /// tracking errors' correlation, see [`rod_correlation`]) and standard errors.
+    pub values: [f64; PARAMETERS],
     pub covariance: DMatrix<f64>,
-    pub errors: [f64; 6],
-    /// Residual sum of squares (m^2) and its degrees of freedom (4 rows - 6).
+    pub errors: [f64; PARAMETERS],
+    /// How the tracking errors are correlated from row to row, by which the covariance is
+    /// widened.
+    pub correlation: Correlation,
+    /// Residual sum of squares (m^2, the priors' terms included) and its degrees of
+    /// freedom (4 rows + 3 - 9).
     pub chi2: f64,
     pub dof: usize,
     /// The tracking error the residuals imply (m per coordinate): sqrt(chi^2 / dof).
@@ -84,6 +109,87 @@ fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
     q
 }
 
+/// `p` with the joint damping `c1`, `c2` and gravity scaled by 1 + `scale`.
+fn fitted_params(p: &Params, c1: f64, c2: f64, scale: f64) -> Params {
+    let mut q = with_damping(p, c1, c2);
+    q.g *= 1.0 + scale;
+    q
+}
+
+/// The tracking errors' correlation from one row to the next, measured on the rigid rods.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Correlation {
+    /// The rods' length residuals' RMS (m): the tracking error along them, a coordinate's
+    /// (the lower rod's divided by sqrt 2, its two ends' errors adding).
+    pub rms: f64,
+    /// The lag-one autocorrelation of the rods' length residuals.
+    pub lag_one: f64,
+    /// The lags summed (Andrews' rule for an AR(1) series, 1991).
+    pub lags: usize,
+    /// The long-run variance over the variance, 1 + 2 sum (1 - l/(L+1)) rho_l, at least 1:
+    /// by how much correlated errors widen a least-squares covariance that took them for
+    /// independent (exactly so for a mean, closely for smooth regressors).
+    pub inflation: f64,
+}
+
+/// The correlation of the tracking errors along the whole of `data` (positions relative to
+/// the pivot): each mass's distance from where its rigid rod holds it (|m1| - l1 and
+/// |m2 - m1| - l2, both lengths their mean) is tracking error alone, whatever the motion.
+/// It sees the errors along the rods; those across them (along the motion) are taken to
+/// be alike.
+pub fn rod_correlation(data: &[[f64; 4]]) -> Correlation {
+    let series: [Vec<f64>; 2] = [
+        data.iter().map(|d| d[0].hypot(d[1])).collect(),
+        data.iter()
+            .map(|d| (d[2] - d[0]).hypot(d[3] - d[1]))
+            .collect(),
+    ];
+    let centred: Vec<Vec<f64>> = series
+        .iter()
+        .map(|s| {
+            let s: Vec<f64> = s.iter().copied().filter(|x| x.is_finite()).collect();
+            let mean = s.iter().sum::<f64>() / s.len().max(1) as f64;
+            s.iter().map(|x| x - mean).collect()
+        })
+        .collect();
+    // The autocorrelation at lag l, both rods pooled.
+    let rho = |l: usize| {
+        let (mut lagged, mut square) = (0.0, 0.0);
+        for e in &centred {
+            lagged += (l..e.len()).map(|i| e[i] * e[i - l]).sum::<f64>();
+            square += e.iter().map(|x| x * x).sum::<f64>();
+        }
+        lagged / square.max(1e-300)
+    };
+    let n = centred.iter().map(Vec::len).min().unwrap_or(0);
+    let rms = {
+        let square = |e: &Vec<f64>| e.iter().map(|x| x * x).sum::<f64>();
+        ((square(&centred[0]) + square(&centred[1]) / 2.0)
+            / (centred[0].len() + centred[1].len()).max(1) as f64)
+            .sqrt()
+    };
+    if n < 8 {
+        return Correlation {
+            rms,
+            lag_one: f64::NAN,
+            lags: 0,
+            inflation: 1.0,
+        };
+    }
+    let lag_one = rho(1).clamp(-0.97, 0.97);
+    let alpha = 4.0 * lag_one.powi(2) / ((1.0 - lag_one).powi(2) * (1.0 + lag_one).powi(2));
+    let lags = ((1.1447 * (alpha * n as f64).cbrt()).floor() as usize).min(n / 4);
+    let sum: f64 = (1..=lags)
+        .map(|l| (1.0 - l as f64 / (lags + 1) as f64) * rho(l))
+        .sum();
+    Correlation {
+        rms,
+        lag_one,
+        lags,
+        inflation: (1.0 + 2.0 * sum).max(1.0),
+    }
+}
+
 /// The rows of `t` within `window` (s; ends included to a microsecond).
 pub fn window_rows(t: &[f64], window: (f64, f64)) -> (usize, usize) {
     let inside = |x: f64| x >= window.0 - 1e-6 && x <= window.1 + 1e-6;
@@ -101,8 +207,8 @@ pub struct TrackRows<'a> {
     pub angles: &'a [(f64, f64)],
 }
 
-/// Fits `p`'s state and joint damping to the `track`'s measured positions within `window`;
-/// `candidates` states and dampings are searched on `engine` first.
+/// Fits `p`'s state, joint damping, pivot and scale to the `track`'s measured positions
+/// within `window`; `candidates` states and dampings are searched on `engine` first.
 pub fn fit_window(
     rows: &TrackRows,
     p: &Params,
@@ -112,14 +218,20 @@ pub fn fit_window(
     monitor: &Monitor,
 ) -> Result<WindowFit> {
     let (t, data, angles) = (rows.t, rows.data, rows.angles);
+    // A camera's errors are correlated from frame to frame (the marker's pixels, the
+    // encoder's blocks), and s^2 (J^T J)^-1 counts every row as new evidence. The fit's own
+    // residuals cannot say by how much (the orbit bends to follow slow errors), the rigid
+    // rods can: over the whole track, how far each mass lies from its rod's length is
+    // tracking error alone.
+    let correlation = rod_correlation(data);
     let (row0, rows) = window_rows(t, window);
-    // Four coordinates a row against six parameters, and one degree of freedom to estimate
-    // the tracking error from.
-    if 4 * rows < FITTED.len() + 1 {
+    // Four coordinates a row and the three priors against the parameters, and one degree
+    // of freedom to estimate the tracking error from.
+    if 4 * rows + PRIORS < FITTED.len() + 1 {
         return Err(Error::invalid(
             "window",
             format!(
-                "{}:{} s holds {rows} tracked row(s) ({} coordinates), fewer than the {} fitted parameters and one more to estimate the tracking error: widen it",
+                "{}:{} s holds {rows} tracked row(s) ({} coordinates), fewer than the {} fitted parameters less the {PRIORS} with priors, and one more to estimate the tracking error: widen it",
                 window.0,
                 window.1,
                 4 * rows,
@@ -190,55 +302,132 @@ pub fn fit_window(
         }
         Ok(())
     })?;
-    // Refine the state and both dampings together in f64, at the data's own times. The
-    // damping is fitted as it is (not squared to keep it positive) so that its covariance is
-    // that of the quantity itself; a forecast keeps members' damping >= 0.
-    let residuals = |q: &DVector<f64>| -> DVector<f64> {
-        let model = with_damping(p, q[4], q[5]);
+    // Refine the state, both dampings, the pivot and the scale together in f64, at the
+    // data's own times. The damping is fitted as it is (not squared to keep it positive) so
+    // that its covariance is that of the quantity itself; a forecast keeps members' damping
+    // >= 0. The priors are three more residuals, in metres as a coordinate's: each parameter
+    // over its prior deviation, times the tracking error (first the rods', then the fit's).
+    let pivot_prior = correlation.rms.max(1e-9);
+    let residuals = |q: &DVector<f64>, error: f64| -> DVector<f64> {
+        let model = fitted_params(p, q[4], q[5], q[8]);
         let sim = track(&model, State::from_array([q[0], q[1], q[2], q[3]]), times);
+        let pivot = [q[6], q[7], q[6], q[7]];
+        let priors: [f64; PRIORS] = [q[6] / pivot_prior, q[7] / pivot_prior, q[8] / SCALE_PRIOR];
         DVector::from_iterator(
-            rows * 4,
+            rows * 4 + priors.len(),
             sim.iter()
                 .zip(data)
-                .flat_map(|(a, b)| (0..4).map(move |k| a[k] - b[k])),
+                .flat_map(|(a, b)| (0..4).map(move |k| a[k] + pivot[k] - b[k]))
+                .chain(priors.map(|z| z * error)),
         )
     };
-    let steps = [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5];
+    let steps = [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5, 1e-6, 1e-6, 1e-6];
+    let solve = |q0: DVector<f64>, error: f64| {
+        let r = |q: &DVector<f64>| residuals(q, error);
+        least_squares(|q| (r(q), numeric_jacobian(&r, q, &steps)), q0, 100)
+    };
     let mut refined: Option<crate::fit::Fit> = None;
     for &(_, i) in &best {
         monitor.check()?;
         let b = starts[i].to_array();
         let c = pairs[i].0;
-        let fit = least_squares(
-            |q| (residuals(q), numeric_jacobian(&residuals, q, &steps)),
-            DVector::from_vec(vec![b[0], b[1], b[2], b[3], c, c]),
-            100,
-        );
+        let start = DVector::from_vec(vec![b[0], b[1], b[2], b[3], c, c, 0.0, 0.0, 0.0]);
+        let fit = solve(start, correlation.rms);
         if refined.as_ref().is_none_or(|r| fit.chi2 < r.chi2) {
             refined = Some(fit);
         }
     }
-    let refined = refined.expect("at least one candidate");
-    let values: [f64; 6] = std::array::from_fn(|k| refined.params[k]);
+    // Again from the best, the priors weighed against the fit's own tracking error (a
+    // table tracked by hand strays from the model by more than from its rods).
+    let first = refined.expect("at least one candidate");
+    let error = (first.chi2 / first.dof.max(1) as f64).sqrt();
+    let refined = solve(DVector::from_vec(first.params), error);
+    let values: [f64; PARAMETERS] = std::array::from_fn(|k| refined.params[k]);
     let covariance = refined.covariance.clone().ok_or_else(|| {
         Error::invalid(
             "window",
-            "the data in it do not determine all six parameters (the fit's normal matrix is singular): widen it",
+            "the data in it do not determine all the fitted parameters (the fit's normal matrix is singular): widen it",
         )
-    })?;
+    })? * correlation.inflation;
     Ok(WindowFit {
         row0,
         rows,
         t0: times[0],
-        params: with_damping(p, values[4], values[5]),
+        params: fitted_params(p, values[4], values[5], values[8]),
         start: State::from_array([values[0], values[1], values[2], values[3]]),
+        pivot: (values[6], values[7]),
         values,
-        errors: std::array::from_fn(|k| refined.errors[k]),
+        errors: std::array::from_fn(|k| covariance[(k, k)].sqrt()),
         covariance,
+        correlation,
         chi2: refined.chi2,
         dof: refined.dof,
         tracking_error: (refined.chi2 / refined.dof.max(1) as f64).sqrt(),
         candidates: starts.len(),
         backend: engine.info().backend(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    /// Both masses on their rods at angles that wander, each rod's length read with errors
+    /// following x_i = rho x_(i-1) + e_i (rho = 0.6): the inflation is Bartlett's sum at the
+    /// lags chosen, 1 + 2 sum (1 - l/(L+1)) rho^l (3.6 at L near 21; (1 + rho)/(1 - rho) = 4
+    /// untruncated), to three of its estimate's standard deviations, sqrt(4 L / 3 n) of it
+    /// for n = 4000 pooled rows; and 1 for independent errors (at most 1.15: the sum's
+    /// scatter over a few lags).
+    #[test]
+    fn the_rods_measure_the_tracking_errors_correlation() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let mut errors = |rho: f64, n: usize| -> Vec<f64> {
+            let mut x = 0.0;
+            (0..n)
+                .map(|_| {
+                    let e: f64 = StandardNormal.sample(&mut rng);
+                    x = rho * x + (1.0 - rho * rho).sqrt() * 1e-4 * e;
+                    x
+                })
+                .collect()
+        };
+        let rods = |r1: &[f64], r2: &[f64]| -> Vec<[f64; 4]> {
+            r1.iter()
+                .zip(r2)
+                .enumerate()
+                .map(|(i, (a, b))| {
+                    let (t1, t2) = (0.01 * i as f64, 0.023 * i as f64);
+                    let (l1, l2) = (0.3 + a, 0.2 + b);
+                    let (x1, y1) = (l1 * t1.sin(), -l1 * t1.cos());
+                    [x1, y1, x1 + l2 * t2.sin(), y1 - l2 * t2.cos()]
+                })
+                .collect()
+        };
+        let (a, b) = (errors(0.6, 2000), errors(0.6, 2000));
+        let correlated = rod_correlation(&rods(&a, &b));
+        let (a, b) = (errors(0.0, 2000), errors(0.0, 2000));
+        let independent = rod_correlation(&rods(&a, &b));
+        eprintln!("{correlated:?} {independent:?}");
+        let lags = correlated.lags;
+        let expected = 1.0
+            + 2.0
+                * (1..=lags)
+                    .map(|l| (1.0 - l as f64 / (lags + 1) as f64) * 0.6f64.powi(l as i32))
+                    .sum::<f64>();
+        let scatter = (4.0 * lags as f64 / (3.0 * 4000.0)).sqrt() * expected;
+        assert!(
+            (correlated.inflation - expected).abs() < 3.0 * scatter,
+            "{correlated:?} against {expected:.2} +- {scatter:.2}"
+        );
+        assert!(independent.inflation <= 1.15, "{independent:?}");
+        // The RMS: 1e-4 m along each rod, the lower's counted at 1/sqrt 2 (a track's errors
+        // at both its ends add; here one error moves the lower mass): sqrt(3/4) 1e-4, to
+        // the scatter of 2000 rows' correlated errors.
+        assert!(
+            (correlated.rms / (0.75f64.sqrt() * 1e-4) - 1.0).abs() < 0.1,
+            "{correlated:?}"
+        );
+    }
 }
