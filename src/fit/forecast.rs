@@ -126,9 +126,9 @@ pub struct Members {
 /// member's other parameters move with it as the fit's covariance says they go together
 /// (by their regression on the damping, Sigma_od Sigma_dd^-1), so that its state is one the
 /// data allow with that damping (clamping alone would keep a state that only suits a
-/// pushing joint). The members that did are counted. The scale is drawn with the rest (its
-/// correlation widens the others' spread) but every member keeps the fitted one: the engine
-/// integrates members under one gravity.
+/// pushing joint). The members that did are counted. The scale and the lower arm are drawn
+/// with the rest (their correlations widen the others' spread) but every member keeps the
+/// fitted ones: the engine integrates members under one gravity and one pair of arms.
 pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
     let sigma = &fit.covariance;
     let eigen = SymmetricEigen::new(sigma.clone());
