@@ -464,11 +464,12 @@ def forecast(
     progress: Progress = None,
 ) -> xr.Dataset:
     """An ensemble forecast of a camera-tracked run (``chaoscope forecast``): the model's state,
-    joint damping, pivot and scale fitted on ``window`` = (start, end) in s, then ``members``
-    drawn from the fit's covariance (``seed``) and integrated to the data's end. Returns an
-    ``xarray.Dataset`` over ``time`` (s): ``model`` and ``measurement`` (the model's band with
-    the tracking error, ``tracking_error`` m or the fit's residuals) quantiles of the
-    positions (m) by ``coordinate`` (x1, y1, x2, y2) and ``quantile`` (0.05 .. 0.95),
+    joint damping, pivot, scale and lower arm fitted on ``window`` = (start, end) in s, then
+    ``members`` drawn from the fit's covariance (``seed``) and integrated to the data's end.
+    Returns an ``xarray.Dataset`` over ``time`` (s): ``model`` and ``measurement`` (the
+    model's band with the tracking error, ``tracking_error`` m or the fit's residuals)
+    quantiles of the positions (m) by ``coordinate`` (x1, y1, x2, y2) and ``quantile``
+    (0.05 .. 0.95),
     ``spread_lower`` (m, the lower bob's RMS spread) and ``ftle`` (1/s, along the fitted
     orbit); ``attrs`` hold the horizons (the spread past ``tolerance`` m; the data leaving
     the 90 % band), the summary.json and the reproducing command. forecast.png, bands.csv and

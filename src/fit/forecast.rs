@@ -140,6 +140,7 @@ pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
     let regression = dd.try_inverse().map(|inverse| {
         nalgebra::DMatrix::from_fn(PARAMETERS, 2, |i, j| sigma[(i, DAMPING[j])]) * inverse
     });
+    let fitted = nalgebra::DVector::from_row_slice(&fit.values);
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut members = Members {
         starts: Vec::with_capacity(n),
@@ -149,7 +150,7 @@ pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
     };
     for _ in 0..n {
         let z = nalgebra::DVector::from_fn(PARAMETERS, |_, _| StandardNormal.sample(&mut rng));
-        let mut v = nalgebra::DVector::from_fn(PARAMETERS, |k, _| fit.values[k]) + &root * z;
+        let mut v = &fitted + &root * z;
         let lift = nalgebra::Vector2::new((-v[4]).max(0.0), (-v[5]).max(0.0));
         if lift != nalgebra::Vector2::zeros() {
             members.clamped += 1;
