@@ -6,7 +6,8 @@
 //!     cargo run --release --example test_film -- OUT.mp4 [WIDTHxHEIGHT] [FRAMES] [options]
 //!
 //! options: --shutter S (s, default 1/2000), --lamp X,Y, --reflection X (a pane's column),
-//! --table Y (the table's edge, px row), --seed N, --crf Q, --theta1 A --theta2 B.
+//! --table Y (the table's edge, px row), --roll A (the camera's roll, rad), --rest S (s
+//! hanging still before the release), --seed N, --crf Q, --theta1 A --theta2 B.
 
 use std::io::Write;
 
@@ -50,6 +51,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     scene.reflection = number("--reflection")?;
     scene.table = number("--table")?;
+    scene.roll = number("--roll")?.unwrap_or(0.0);
+    scene.rest = number("--rest")?.unwrap_or(0.0);
     if let Some(s) = number("--seed")? {
         scene.seed = s as u64;
     }

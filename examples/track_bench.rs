@@ -72,9 +72,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 markers: Markers::Bright,
                 scale: Scale::UpperArm(p.l1),
                 region: None,
+                bridge: None,
             };
             let started = Instant::now();
-            let summary = run(&job, "track_bench", &Monitor::hidden())?;
+            let summary = run(&job, None, "track_bench", &Monitor::hidden())?;
             let fps = summary.frames as f64 / started.elapsed().as_secs_f64();
             let rows = chaoscope::track::read_rows(&job.output)?;
             let ppm = summary.pixels_per_metre;

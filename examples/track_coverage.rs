@@ -58,7 +58,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 markers: Markers::Bright,
                 scale: Scale::UpperArm(p.l1),
                 region: None,
+                bridge: None,
             },
+            None,
             "track_coverage",
             &quiet,
         )?;

@@ -22,24 +22,32 @@ def track(
     pixels_per_metre: Optional[float] = None,
     markers: str = "bright",
     region: Optional[Tuple[int, int, int, int]] = None,
+    bridge: bool = False,
+    preset: Optional[str] = None,
+    params_file: Optional[str] = None,
     progress: Progress = None,
 ) -> xr.Dataset:
     """The positions of both masses in every frame of a film of the pendulum (``chaoscope
     track``): bright markers on a dark background, or ``markers="ff2020"`` of a colour; the
     scale from the upper arm's length ``l1`` (m) or ``pixels_per_metre``; ``region`` (x0, y0,
-    x1, y1 in pixels) to look in part of the picture. The CSV that ``fit`` and ``forecast``
-    read is written to ``output``.
+    x1, y1 in pixels) to look in part of the picture. ``bridge=True`` fills gaps where a mass
+    is hidden (up to 1 s, with 5 measured rows on each side) with the model fitted to the
+    half second measured on each side (``preset`` or ``params_file`` for its masses and
+    losses, the lab's by default), marked as bridged. The CSV that ``fit`` and ``forecast``
+    read (the measured rows only) is written to ``output``.
 
     Returns a Dataset over ``time`` (s, the film's timestamps), ``mass`` (upper, lower) and
     ``coordinate`` (x, y; m from the pivot, y up): ``position`` (NaN where a mass was not
-    seen), ``error`` (its standard error from the sensor's noise), ``measured`` (bool) and
-    ``streak`` (how far the marker moved while the shutter was open, m); the summary (pivot,
-    scale, frames/s...) in ``attrs``.
+    seen), ``error`` (its standard error: the sensor's noise's, or the model's where
+    bridged), ``measured`` and ``bridged`` (bool) and ``streak`` (how far the marker moved
+    while the shutter was open, m); the summary (pivot, scale, up, frames/s...) in ``attrs``.
     """
     keywords = dict(locals())
     keywords.pop("progress")
     keywords["video"] = str(video)
     keywords["output"] = str(output)
+    if params_file is not None:
+        keywords["params_file"] = str(params_file)
     summary = json.loads(_call(_native.track, keywords, progress))
     return _dataset(Path(summary["output"]), summary)
 
@@ -53,12 +61,16 @@ def _dataset(path: Path, summary: dict) -> xr.Dataset:
     error = np.full((n, 2, 2), np.nan)
     streak = np.full((n, 2), np.nan)
     measured = np.zeros((n, 2), dtype=bool)
+    bridged = np.zeros((n, 2), dtype=bool)
     for k, r in enumerate(rows):
         for m in range(2):
-            if r[f"seen{m + 1}"] == "measured":
-                measured[k, m] = True
+            seen = r[f"seen{m + 1}"]
+            if seen in ("measured", "bridged"):
+                measured[k, m] = seen == "measured"
+                bridged[k, m] = seen == "bridged"
                 position[k, m] = (float(r[f"x{m + 1}"]), float(r[f"y{m + 1}"]))
                 error[k, m] = (float(r[f"sx{m + 1}"]), float(r[f"sy{m + 1}"]))
+            if seen == "measured":
                 streak[k, m] = float(r[f"streak{m + 1}"])
     dims = ("time", "mass", "coordinate")
     coords = {
@@ -74,8 +86,9 @@ def _dataset(path: Path, summary: dict) -> xr.Dataset:
     return xr.Dataset(
         {
             "position": (dims, position, {"units": "m", "long_name": "mean position over the exposure, from the pivot, y up"}),
-            "error": (dims, error, {"units": "m", "long_name": "standard error from the sensor's noise"}),
+            "error": (dims, error, {"units": "m", "long_name": "standard error: the sensor's noise's, or the model's where bridged"}),
             "measured": (("time", "mass"), measured),
+            "bridged": (("time", "mass"), bridged),
             "streak": (("time", "mass"), streak, {"units": "m", "long_name": "distance moved during the exposure"}),
         },
         coords=coords,

@@ -6,10 +6,13 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use chaoscope::app::track::TrackJob;
+use chaoscope::engine::Backend;
+use chaoscope::params::ParamSources;
+use chaoscope::spec::Precision;
 use chaoscope::track::{Markers, Scale};
 
 use super::keywords::Keywords;
-use super::run::watched;
+use super::run::{engine_in, watched};
 
 #[pyfunction]
 #[pyo3(signature = (keywords, progress=None))]
@@ -47,10 +50,28 @@ pub fn track<'py>(
         markers,
         scale,
         region: k.get::<(u32, u32, u32, u32)>("region")?,
+        bridge: match k.or("bridge", false)? {
+            // The bridging model's masses and losses; its arms are the track's (l1 here
+            // is the scale).
+            true => {
+                let given = k.sources()?;
+                Some(ParamSources {
+                    preset: given.preset,
+                    params: given.params,
+                    ..ParamSources::default()
+                })
+            }
+            false => None,
+        },
     };
     let command = chaoscope::cli::command_line::track(&job);
+    // Only bridging integrates the model.
+    let engine = match job.bridge {
+        Some(_) => Some(engine_in(Backend::Auto, Precision::F32)?),
+        None => None,
+    };
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::track::run(&job, &command, monitor)
+        chaoscope::app::track::run(&job, engine.as_deref(), &command, monitor)
     })?;
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }

@@ -541,6 +541,13 @@ def test_track_equals_its_command_as_a_dataset(tmp_path):
         chaoscope.track(str(film), l1=0.3, markers="red", progress=False)
     with pytest.raises(ValueError, match="^region: "):
         chaoscope.track(str(film), l1=0.3, region=(0, 0, 5000, 10), progress=False)
+    # Nothing hidden, nothing bridged: the same positions, each marked measured.
+    bridged = chaoscope.track(str(film), output=str(tmp_path / "b.csv"), l1=0.30, bridge=True,
+                              progress=False)
+    assert json.loads(bridged.attrs["bridged"])["gaps"] == 0 and not bool(bridged.bridged.any())
+    assert np.array_equal(bridged.position.values, tracked.position.values)
+    with pytest.raises(ValueError, match="^preset: "):
+        chaoscope.track(str(film), l1=0.3, bridge=True, preset="moon", progress=False)
 
 
 def test_zoom_is_its_command_with_frames_read_lazily(tmp_path):

@@ -41,7 +41,7 @@ pub fn colormap_parser() -> impl clap::builder::TypedValueParser<Value = Colorma
     one_of(&Colormap::ALL, Colormap::name)
 }
 
-fn preset_parser() -> impl clap::builder::TypedValueParser<Value = Preset> {
+pub(super) fn preset_parser() -> impl clap::builder::TypedValueParser<Value = Preset> {
     one_of(&Preset::ALL, Preset::name)
 }
 

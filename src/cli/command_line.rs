@@ -522,5 +522,14 @@ pub fn track(job: &crate::app::track::TrackJob) -> String {
     if let Some((x0, y0, x1, y1)) = job.region {
         out += &format!(" --region {x0},{y0},{x1},{y1}");
     }
+    if let Some(model) = &job.bridge {
+        out += " --bridge";
+        if let Some(preset) = model.preset {
+            out += &format!(" --preset {}", preset.name());
+        }
+        if let Some(file) = &model.params {
+            out += &format!(" --params {}", file.display());
+        }
+    }
     out
 }

@@ -4,11 +4,14 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::args::preset_parser;
 use super::parse::parse_number;
 use super::{command_line, json, say};
 use crate::app::track::{self, TrackJob};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
+use crate::params::{ParamSources, Preset};
 use crate::track::{Markers, Scale};
 
 #[derive(Args, Debug, Clone)]
@@ -32,6 +35,19 @@ pub struct TrackArgs {
     /// Look only within X0,Y0,X1,Y1 (pixels from the top left corner).
     #[arg(long, value_parser = parse_region)]
     pub region: Option<(u32, u32, u32, u32)>,
+    /// Bridge gaps where a mass is hidden (up to 1 s, with 5 rows measured on each side) by
+    /// the model fitted to the half second of measured rows on each side: those places
+    /// are marked `bridged` with the model's standard errors, and `fit` and `forecast` read
+    /// only the measured rows.
+    #[arg(long)]
+    pub bridge: bool,
+    /// The model that bridges: a named set of parameters [default: lab, unless --params is
+    /// given]; the arms' lengths come from the track.
+    #[arg(long, value_parser = preset_parser(), requires = "bridge")]
+    pub preset: Option<Preset>,
+    /// The model that bridges, from a TOML parameter file (as `--params` elsewhere).
+    #[arg(long, requires = "bridge")]
+    pub params: Option<PathBuf>,
 }
 
 fn parse_region(s: &str) -> std::result::Result<(u32, u32, u32, u32), String> {
@@ -59,16 +75,26 @@ impl TrackArgs {
                 (None, None) => Scale::UpperArm(f64::NAN),
             },
             region: self.region,
+            bridge: self.bridge.then(|| ParamSources {
+                preset: self.preset,
+                params: self.params.clone(),
+                ..ParamSources::default()
+            }),
         }
     }
 }
 
 pub fn run(args: &TrackArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
-    let s = track::run(&job, &command_line::track(&job), monitor)?;
+    // Only bridging integrates the model.
+    let engine = match job.bridge {
+        Some(_) => Some(super::args::lent_engine(None, Backend::Auto)?),
+        None => None,
+    };
+    let s = track::run(&job, engine.as_ref(), &command_line::track(&job), monitor)?;
     say("track", &s.notices);
     eprintln!(
-        "{} frames ({} {}x{}, {:.1} s) at {:.0} frames/s: upper mass measured in {:.1} %, lower in {:.1} %; pivot ({:.1}, {:.1}) px, {:.1} px per metre, lower arm {:.4} m; {} still blobs set aside -> {}",
+        "{} frames ({} {}x{}, {:.1} s) at {:.0} frames/s: upper mass measured in {:.1} %, lower in {:.1} %; pivot ({:.1}, {:.1}) px, {:.1} px per metre, lower arm {:.4} m; up {}; {} still blobs set aside -> {}",
         s.frames,
         s.codec,
         s.width,
@@ -81,8 +107,27 @@ pub fn run(args: &TrackArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         s.pivot_px.1,
         s.pixels_per_metre,
         s.l2,
+        match s.up.rest {
+            Some((a, b)) => format!(
+                "from the rest at {a:.1}..{b:.1} s ({:+.2} degrees from the picture's)",
+                s.up.tilt_degrees
+            ),
+            None => "the picture's (no rest seen)".into(),
+        },
         s.still.len(),
         s.output.display()
     );
+    if let Some(b) = &s.bridged {
+        eprintln!(
+            "bridged {} gap(s) by the model ({} places), {} left open{}",
+            b.gaps,
+            b.places,
+            b.left_open.len(),
+            b.left_open
+                .iter()
+                .map(|(a, b, why)| format!("\n  {a:.3}..{b:.3} s: {why}"))
+                .collect::<String>()
+        );
+    }
     json(&s)
 }

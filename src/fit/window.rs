@@ -56,6 +56,11 @@ const PRIORS: usize = 4;
 /// stays below 1e-5 rad (tests/forecast.rs measures it against a step ten times finer).
 pub const STEPS_PER_SECOND: f64 = 300.0;
 
+/// The parameters' steps (FITTED's order) of the central differences for the Jacobian:
+/// near the square root of f64's rounding times each parameter's size.
+const DIFFERENCE_STEPS: [f64; PARAMETERS] =
+    [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5, 1e-6, 1e-6, 1e-6, 1e-6];
+
 /// Candidates of the search refined by least squares, the least result kept.
 const REFINED: usize = 4;
 
@@ -89,6 +94,54 @@ pub struct WindowFit {
     /// Candidates of the ensemble search, and on what.
     pub candidates: usize,
     pub backend: &'static str,
+}
+
+impl WindowFit {
+    /// The model's positions in the data's frame (the fitted pivot added) at `times` (s,
+    /// ascending, none before the fit's first row) for the parameters `v` ([`FITTED`]'s order).
+    fn positions_for(&self, v: &[f64], times: &[f64]) -> Vec<[f64; 4]> {
+        // The unfitted model: the fitted gravity and lower arm undone.
+        let mut base = self.params;
+        base.g /= 1.0 + self.values[8];
+        base.l2 /= 1.0 + self.values[9];
+        let q = fitted_params(&base, v[4], v[5], v[8], v[9]);
+        let t: Vec<f64> = std::iter::once(self.t0)
+            .chain(times.iter().copied())
+            .collect();
+        track(&q, State::from_array([v[0], v[1], v[2], v[3]]), &t)[1..]
+            .iter()
+            .map(|p| [p[0] + v[6], p[1] + v[7], p[2] + v[6], p[3] + v[7]])
+            .collect()
+    }
+
+    /// The fitted model's positions in the data's frame at `times` (s, from the fit's first
+    /// row on).
+    pub fn positions(&self, times: &[f64]) -> Vec<[f64; 4]> {
+        self.positions_for(&self.values, times)
+    }
+
+    /// The standard errors of [`WindowFit::positions`] from the fit's covariance, to first
+    /// order (the Jacobian J of the positions in the parameters: the diagonal of J Sigma J^T).
+    /// Where the parameters' spread stretches along an unstable direction faster than
+    /// linearly (past a forecast's horizon) this understates it; between measured rows it
+    /// holds.
+    pub fn position_errors(&self, times: &[f64]) -> Vec<[f64; 4]> {
+        let flat = |v: &DVector<f64>| {
+            let rows = self.positions_for(v.as_slice(), times);
+            DVector::from_iterator(4 * rows.len(), rows.into_iter().flatten())
+        };
+        let values = DVector::from_row_slice(&self.values);
+        let j = numeric_jacobian(&flat, &values, &DIFFERENCE_STEPS);
+        let spread = &j * &self.covariance;
+        (0..times.len())
+            .map(|k| {
+                std::array::from_fn(|c| {
+                    let r = 4 * k + c;
+                    spread.row(r).dot(&j.row(r)).max(0.0).sqrt()
+                })
+            })
+            .collect()
+    }
 }
 
 /// Positions (x1, y1, x2, y2; m, pivot at the origin) of `p` from `start` at the data times
@@ -286,28 +339,30 @@ pub fn fit_window(
             pairs.push((c, c));
         }
     }
-    // The search integrates the mean data interval in equal steps, a row every `stride`.
-    let stride = ((times[rows - 1] - times[0]) / (rows - 1) as f64 * STEPS_PER_SECOND)
-        .round()
-        .max(1.0) as u32;
-    let steps = (rows as u32 - 1) * stride;
-    let dt = (times[rows - 1] - times[0]) / steps as f64;
+    // The search integrates the window in equal steps near the fit's and reads each run's
+    // positions at the rows' own times (a track with gaps, as `track --bridge` fits, has
+    // rows at uneven times).
+    let since: Vec<f64> = times.iter().map(|x| x - times[0]).collect();
+    let steps = (since[rows - 1] * STEPS_PER_SECOND).ceil().max(1.0) as u32;
+    let dt = since[rows - 1] / steps as f64;
     // The best few candidates (cost, index), each refined below: in a chaotic window the
     // least-squares valley of the best one need not hold the least minimum.
     let mut best: Vec<(f64, usize)> = Vec::with_capacity(REFINED + 1);
     let ensemble = EnsembleSpec::new(*p, &starts, dt, steps)
         .damped(&pairs)
-        .keeping(Keep::Every(stride));
-    engine.ensemble(&ensemble, monitor, |first, runs| {
-        for (k, run) in runs.into_states().iter().enumerate() {
-            let q = with_damping(p, pairs[first + k].0, pairs[first + k].1);
-            let cost: f64 = run
+        .keeping(Keep::At(&since));
+    engine.ensemble(&ensemble, monitor, |first, chunk| {
+        // Positions by row, coordinate, then run.
+        let v = chunk.positions();
+        let n = v.len() / (4 * rows);
+        for k in 0..n {
+            let cost: f64 = data
                 .iter()
-                .zip(data)
-                .map(|(y, d)| {
-                    let s = q.positions(y);
-                    let e = [s.x1 - d[0], s.y1 - d[1], s.x2 - d[2], s.y2 - d[3]];
-                    e.iter().map(|e| e * e).sum::<f64>()
+                .enumerate()
+                .map(|(r, d)| {
+                    (0..4)
+                        .map(|c| (v[(4 * r + c) * n + k] as f64 - d[c]).powi(2))
+                        .sum::<f64>()
                 })
                 .sum();
             if best.len() < REFINED || cost < best[REFINED - 1].0 {
@@ -342,10 +397,13 @@ pub fn fit_window(
                 .chain(priors.map(|z| z * error)),
         )
     };
-    let steps = [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5, 1e-6, 1e-6, 1e-6, 1e-6];
     let solve = |q0: DVector<f64>, error: f64| {
         let r = |q: &DVector<f64>| residuals(q, error);
-        least_squares(|q| (r(q), numeric_jacobian(&r, q, &steps)), q0, 100)
+        least_squares(
+            |q| (r(q), numeric_jacobian(&r, q, &DIFFERENCE_STEPS)),
+            q0,
+            100,
+        )
     };
     let mut refined: Option<crate::fit::Fit> = None;
     for &(_, i) in &best {

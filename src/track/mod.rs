@@ -33,6 +33,9 @@ pub struct Mark {
     pub streak: f64,
     /// Where in the picture (px, x right, y down).
     pub px: (f64, f64),
+    /// Not measured: placed by the model fitted to the measured rows around a gap
+    /// (`--bridge`); its errors are the model's, its streak NaN.
+    pub bridged: bool,
 }
 
 /// One frame's row: its time from the film's first (s) and each mass, if seen.
@@ -43,14 +46,130 @@ pub struct TrackRow {
     pub m2: Option<Mark>,
 }
 
-/// What the tracker found: every frame's row, the geometry (px), the scale (px per metre)
-/// and the still blobs it set aside.
+/// What the tracker found: every frame's row, the geometry (px), the scale (px per metre),
+/// the up direction and the still blobs it set aside.
 #[derive(Clone, Debug)]
 pub struct Tracked {
     pub rows: Vec<TrackRow>,
     pub geometry: Geometry,
     pub pixels_per_metre: f64,
+    pub up: Up,
     pub still: Vec<(f64, f64)>,
+}
+
+/// Which way is up: from the pendulum hanging at rest (the pivot straight above both
+/// markers), or, where the film never shows it at rest, the picture's.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Up {
+    /// The world's up in the picture (a unit vector, px axes: x right, y down).
+    pub direction: (f64, f64),
+    /// How far it is turned from the picture's up (degrees, counter-clockwise as seen).
+    pub tilt_degrees: f64,
+    /// The stretch of the film (s) in which the pendulum hung at rest, where it did.
+    pub rest: Option<(f64, f64)>,
+}
+
+impl Up {
+    pub const PICTURE: Up = Up {
+        direction: (0.0, -1.0),
+        tilt_degrees: 0.0,
+        rest: None,
+    };
+
+    /// Standard errors along the picture's axes (independent) as those along the world's.
+    fn turned(&self, sx: f64, sy: f64) -> (f64, f64) {
+        let (ux, uy) = self.direction;
+        ((uy * sx).hypot(ux * sy), (ux * sx).hypot(uy * sy))
+    }
+
+    /// Pixels from the pivot to metres (x along the world's right, y up).
+    fn metres(&self, d: (f64, f64), ppm: f64) -> (f64, f64) {
+        let (ux, uy) = self.direction;
+        // The world's right in the picture: up turned a quarter clockwise as seen.
+        let (rx, ry) = (-uy, ux);
+        ((d.0 * rx + d.1 * ry) / ppm, (d.0 * ux + d.1 * uy) / ppm)
+    }
+}
+
+/// The least a rest lasts (s): a swing's turning point stands still for a frame or two.
+const REST: f64 = 1.0;
+/// How far (px) a marker at rest may move from one frame to the next: the centroid's noise.
+const STILL_STEP: f64 = 0.3;
+/// The most a hanging pendulum's arms may bend from one line (rad), and the most its line
+/// may lean from the picture's down (a camera held near level): a pendulum held still for
+/// its release bends at the middle joint, or leans further.
+const HANGING_BEND: f64 = 0.03;
+const LEVEL: f64 = 0.5;
+
+/// Whether markers at `m1` and `m2` (px) hang from `pivot`: both arms in one line, leaning
+/// from the picture's down by less than [`LEVEL`].
+fn hangs(pivot: (f64, f64), m1: (f64, f64), m2: (f64, f64)) -> bool {
+    let (a, b) = ((m1.0 - pivot.0, m1.1 - pivot.1), (m2.0 - m1.0, m2.1 - m1.1));
+    let bend = (a.0 * b.1 - a.1 * b.0).atan2(a.0 * b.0 + a.1 * b.1).abs();
+    let lean = a.0.atan2(a.1).abs();
+    bend < HANGING_BEND && lean < LEVEL
+}
+
+/// Two of the `still` places that are the pendulum hanging at rest: one on the upper
+/// marker's circle, one an arm's length below it, in line with the pivot.
+fn hanging_pair(still: &[(f64, f64)], g: &Geometry) -> Option<((f64, f64), (f64, f64))> {
+    let d = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).hypot(a.1 - b.1);
+    still
+        .iter()
+        .filter(|&&a| (d(a, g.pivot) - g.r1).abs() < OFF_GEOMETRY)
+        .flat_map(|&a| still.iter().map(move |&b| (a, b)))
+        .find(|&(a, b)| (d(a, b) - g.r2).abs() < OFF_GEOMETRY && hangs(g.pivot, a, b))
+}
+
+/// The up direction from the longest stretch of `rows` (px places) in which both markers
+/// stand still, hanging in one line below the `pivot` (None: no such stretch).
+fn up_from_rest(
+    named: &[(geometry::Named, geometry::Named)],
+    times: &[f64],
+    pivot: (f64, f64),
+) -> Option<Up> {
+    let step = |a: Option<Blob>, b: Option<Blob>| match (a, b) {
+        (Some(a), Some(b)) => (a.x - b.x).hypot(a.y - b.y) < STILL_STEP,
+        _ => false,
+    };
+    let hanging = |m1: Blob, m2: Blob| hangs(pivot, (m1.x, m1.y), (m2.x, m2.y));
+    let mut best: Option<(usize, usize)> = None;
+    let mut k = 1;
+    while k < named.len() {
+        let still = |k: usize| {
+            step(named[k].0, named[k - 1].0)
+                && step(named[k].1, named[k - 1].1)
+                && hanging(named[k].0.unwrap(), named[k].1.unwrap())
+        };
+        if !still(k) {
+            k += 1;
+            continue;
+        }
+        let first = k - 1;
+        while k < named.len() && still(k) {
+            k += 1;
+        }
+        if best.is_none_or(|(a, b)| times[k - 1] - times[first] > times[b] - times[a]) {
+            best = Some((first, k - 1));
+        }
+    }
+    let (a, b) = best.filter(|&(a, b)| times[b] - times[a] >= REST - 1e-9)?;
+    // Down: from the pivot to the lower marker's mean place at rest (the longer lever).
+    let n = (b - a + 1) as f64;
+    let (mut dx, mut dy) = (0.0, 0.0);
+    for (_, m2) in &named[a..=b] {
+        let m2 = m2.expect("named at rest");
+        dx += (m2.x - pivot.0) / n;
+        dy += (m2.y - pivot.1) / n;
+    }
+    let norm = dx.hypot(dy);
+    let direction = (-dx / norm, -dy / norm);
+    Some(Up {
+        direction,
+        // Picture's up (0, -1) to `direction`, counter-clockwise as seen (y down).
+        tilt_degrees: (-direction.0).atan2(-direction.1).to_degrees(),
+        rest: Some((times[a], times[b])),
+    })
 }
 
 /// How far (px) a blob may lie off the geometry and still be named by it: two pixels, a
@@ -60,12 +179,15 @@ const OFF_GEOMETRY: f64 = 3.0;
 
 /// Names every frame's blobs and turns them into rows (times from `times`).
 pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracked> {
-    let still = geometry::still(frames);
-    let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
-    let moving: Vec<Vec<Blob>> = frames
-        .iter()
-        .map(|f| f.iter().filter(|b| !is_still(b)).copied().collect())
-        .collect();
+    let mut still = geometry::still(frames);
+    let without = |still: &[(f64, f64)]| -> Vec<Vec<Blob>> {
+        let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
+        frames
+            .iter()
+            .map(|f| f.iter().filter(|b| !is_still(b)).copied().collect())
+            .collect()
+    };
+    let mut moving = without(&still);
     let not_found = || {
         Error::invalid(
             "video",
@@ -73,6 +195,12 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         )
     };
     let g = geometry::find(&moving, OFF_GEOMETRY, 1).ok_or_else(not_found)?;
+    // A pendulum hanging still through much of the film looks like two lamps: a still pair
+    // in line below the pivot, an arm and an arm apart, is the pendulum at rest.
+    if let Some((a, b)) = hanging_pair(&still, &g) {
+        still.retain(|&s| s != a && s != b);
+        moving = without(&still);
+    }
     // Markers are as bright as each other, give or take: a blob with much less light than
     // the named ones is a reflection or a marker partly hidden (its centroid off), and one
     // with much more is two blobs merged or a lamp.
@@ -120,17 +248,22 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         })
         .collect();
     let named = geometry::name(&plausible, &g, OFF_GEOMETRY);
+    let up = up_from_rest(&named, times, g.pivot).unwrap_or(Up::PICTURE);
     let ppm = match scale {
         Scale::UpperArm(l1) => g.r1 / l1,
         Scale::PixelsPerMetre(p) => p,
     };
-    let mark = |b: Blob| Mark {
-        x: (b.x - g.pivot.0) / ppm,
-        y: -(b.y - g.pivot.1) / ppm,
-        sx: b.sx / ppm,
-        sy: b.sy / ppm,
-        streak: b.streak() / ppm,
-        px: (b.x, b.y),
+    let mark = |b: Blob| {
+        let (x, y) = up.metres((b.x - g.pivot.0, b.y - g.pivot.1), ppm);
+        Mark {
+            x,
+            y,
+            sx: up.turned(b.sx, b.sy).0 / ppm,
+            sy: up.turned(b.sx, b.sy).1 / ppm,
+            streak: b.streak() / ppm,
+            px: (b.x, b.y),
+            bridged: false,
+        }
     };
     let rows = named
         .iter()
@@ -145,6 +278,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         rows,
         geometry: g,
         pixels_per_metre: ppm,
+        up,
         still,
     })
 }
@@ -153,7 +287,8 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
 /// (m), None where it was not measured.
 pub type CsvRow = (f64, Option<(f64, f64)>, Option<(f64, f64)>);
 
-/// Reads back the positions of a CSV that `track` wrote (its header and `seen` columns).
+/// Reads back the measured positions of a CSV that `track` wrote (its header and `seen`
+/// columns): a mass hidden, or placed by the model (`bridged`), is None.
 pub fn read_rows(path: &std::path::Path) -> Result<Vec<CsvRow>> {
     let text = crate::input::read_text("file", path, crate::input::CSV_CAP)?;
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
@@ -175,6 +310,7 @@ pub fn read_rows(path: &std::path::Path) -> Result<Vec<CsvRow>> {
                     }
                     // Not seen: no position, not even a guessed one.
                     "hidden" if c[k].is_empty() && c[k + 1].is_empty() => Ok(None),
+                    "bridged" => Ok(None),
                     _ => Err(bad("a seen cell, or a hidden mass's position")),
                 }
             };

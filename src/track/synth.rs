@@ -34,6 +34,12 @@ pub struct Scene {
     pub reflection: Option<f64>,
     /// The table's top edge (px row): below it the table hides what is behind it.
     pub table: Option<f64>,
+    /// The camera's roll (rad): the picture shows the world turned by this much
+    /// counter-clockwise about the pivot, so that the picture's up is not the world's.
+    pub roll: f64,
+    /// Seconds the pendulum hangs still before its release (the release at `rest`, from the
+    /// film's start).
+    pub rest: f64,
     pub seed: u64,
 }
 
@@ -55,12 +61,17 @@ impl Scene {
             lamp: None,
             reflection: None,
             table: None,
+            roll: 0.0,
+            rest: 0.0,
             seed: 1,
         }
     }
 
-    /// Metres (origin at the pivot, y up) to pixels (x right, y down).
+    /// Metres (origin at the pivot, y up) to pixels (x right, y down), through the camera's
+    /// roll.
     pub fn to_pixels(&self, x: f64, y: f64) -> (f64, f64) {
+        let (s, c) = self.roll.sin_cos();
+        let (x, y) = (c * x - s * y, s * x + c * y);
         (
             self.pivot.0 + x * self.pixels_per_metre,
             self.pivot.1 - y * self.pixels_per_metre,
@@ -112,7 +123,20 @@ impl Renderer {
             .collect();
         let t_end = (frames as f64 + 1.0) / scene.fps;
         let steps = (t_end / dt).ceil() as u32 + 1;
-        let positions = crate::cpu::positions(params, start, dt, steps, &times);
+        // Hanging still until the release at `rest`, then swinging from `start`.
+        let swing: Vec<f64> = times.iter().map(|t| (t - scene.rest).max(0.0)).collect();
+        let mut positions = crate::cpu::positions(params, start, dt, steps, &swing);
+        let hanging = params.positions(&State {
+            theta1: 0.0,
+            omega1: 0.0,
+            theta2: 0.0,
+            omega2: 0.0,
+        });
+        for (p, t) in positions.iter_mut().zip(&times) {
+            if *t < scene.rest {
+                *p = hanging;
+            }
+        }
         let mut rng = rand_pcg::Pcg64::seed_from_u64(scene.seed);
         // Sensor noise from a table of deviates read at a random offset each frame: as
         // random as the tests need, at a fraction of a normal deviate's cost per pixel.
