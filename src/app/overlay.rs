@@ -15,10 +15,28 @@ use crate::monitor::Monitor;
 use crate::render::Outputs;
 use crate::video::{Decoder, Pixels};
 
-/// Where a tracked file's positions are in its film's picture: the pivot (px) and the scale
-/// (px per metre), read from the comment `track` writes; an error naming `video` where the
-/// file has none.
-pub fn geometry_in(csv: &Path) -> Result<((f64, f64), f64)> {
+/// Where a tracked file's positions lie in its film's picture, from the comments `track`
+/// writes: the pivot (px), the scale (px per metre) and the world's up in the picture (a
+/// unit vector, px axes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub pivot: (f64, f64),
+    pub pixels_per_metre: f64,
+    pub up: (f64, f64),
+}
+
+impl Placement {
+    /// Metres (x along the world's right, y up, from the pivot) to the picture's pixels.
+    fn pixels(&self, x: f64, y: f64) -> (f64, f64) {
+        let ((cx, cy), ppm, (ux, uy)) = (self.pivot, self.pixels_per_metre, self.up);
+        // The world's right in the picture: up turned a quarter clockwise as seen.
+        (cx + ppm * (-x * uy + y * ux), cy + ppm * (x * ux + y * uy))
+    }
+}
+
+/// The [`Placement`] of a tracked file's positions; an error naming `video` where the file
+/// does not say.
+pub fn geometry_in(csv: &Path) -> Result<Placement> {
     let text = crate::input::read_text("file", csv, crate::input::CSV_CAP)?;
     geometry_of(&text).ok_or_else(|| {
         Error::invalid(
@@ -28,15 +46,29 @@ pub fn geometry_in(csv: &Path) -> Result<((f64, f64), f64)> {
     })
 }
 
-/// The pivot and scale in `track`'s comment ("# pivot at (X, Y) px, ..., P px per metre").
-fn geometry_of(text: &str) -> Option<((f64, f64), f64)> {
-    let line = text.lines().find(|l| l.starts_with("# pivot at ("))?;
-    let numbers: Vec<f64> = line
-        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e'))
-        .filter_map(|w| w.parse().ok())
-        .collect();
-    match numbers[..] {
-        [x, y, _, _, ppm, ..] if ppm > 0.0 => Some(((x, y), ppm)),
+/// The placement in `track`'s comments ("# pivot at (X, Y) px, ..., P px per metre" and
+/// "# up in the picture (X, Y): ..."; without the second, the picture's up).
+fn geometry_of(text: &str) -> Option<Placement> {
+    let numbers = |start: &str| -> Option<Vec<f64>> {
+        let line = text.lines().find(|l| l.starts_with(start))?;
+        Some(
+            line[start.len()..]
+                .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e'))
+                .filter_map(|w| w.parse().ok())
+                .collect(),
+        )
+    };
+    let up = match numbers("# up in the picture (").as_deref() {
+        Some(&[x, y, ..]) if (x.hypot(y) - 1.0).abs() < 1e-6 => (x, y),
+        Some(_) => return None,
+        None => (0.0, -1.0),
+    };
+    match numbers("# pivot at (")?[..] {
+        [x, y, _, _, ppm, ..] if ppm > 0.0 => Some(Placement {
+            pivot: (x, y),
+            pixels_per_metre: ppm,
+            up,
+        }),
         _ => None,
     }
 }
@@ -44,8 +76,8 @@ fn geometry_of(text: &str) -> Option<((f64, f64), f64)> {
 /// What to draw: the tracked rows (m, from the fitted `pivot`), the forecast, the horizon.
 pub struct Overlay<'a> {
     pub rows: &'a [TrackedRow],
-    /// The track's pivot (px) and scale (px per metre) in the film ([`geometry_in`]).
-    pub geometry: ((f64, f64), f64),
+    /// Where the track lies in the film ([`geometry_in`]).
+    pub geometry: Placement,
     /// The fitted pivot (m, in the CSV's frame) the forecast's positions are relative to.
     pub pivot: (f64, f64),
     pub outcome: &'a Outcome,
@@ -63,7 +95,7 @@ pub fn write(
     meta: &[(String, String)],
     monitor: &Monitor,
 ) -> Result<()> {
-    let ((cx, cy), ppm) = overlay.geometry;
+    let placement = overlay.geometry;
     let mut decoder = Decoder::open(video, Pixels::Rgb)?;
     let (w, h) = (decoder.probe.width, decoder.probe.height);
     let times = &decoder.probe.times;
@@ -81,10 +113,8 @@ pub fn write(
     // Metres in the forecast's frame to the picture's pixels.
     let (px, py) = overlay.pivot;
     let at = move |x: f64, y: f64| -> (i32, i32) {
-        (
-            (cx + (x + px) * ppm).round() as i32,
-            (cy - (y + py) * ppm).round() as i32,
-        )
+        let (u, v) = placement.pixels(x + px, y + py);
+        (u.round() as i32, v.round() as i32)
     };
     crate::render::register_font();
     monitor.start("overlay", count as u64);
@@ -223,7 +253,21 @@ mod tests {
     #[test]
     fn the_geometry_is_read_from_tracks_comment() {
         let text = "# chaoscope track x.mp4\n# pivot at (640.012, 323.950) px, upper arm 218.160 px, lower arm 141.810 px, 727.2000 px per metre; t from the film's first frame\nt,x1\n";
-        assert_eq!(super::geometry_of(text), Some(((640.012, 323.95), 727.2)));
+        let placed = super::geometry_of(text).unwrap();
+        assert_eq!(
+            (placed.pivot, placed.pixels_per_metre, placed.up),
+            ((640.012, 323.95), 727.2, (0.0, -1.0))
+        );
+        // One metre right of the pivot and one up, in the picture's frame.
+        assert_eq!(placed.pixels(1.0, 1.0), (640.012 + 727.2, 323.95 - 727.2));
         assert_eq!(super::geometry_of("t,x1\n"), None);
+        // A camera turned a quarter counter-clockwise: the world's up points left in the
+        // picture, and its right points up.
+        let turned =
+            format!("{text}# up in the picture (-1.000000000, 0.000000000): from the rest\n");
+        let placed = super::geometry_of(&turned).unwrap();
+        assert_eq!(placed.up, (-1.0, 0.0));
+        assert_eq!(placed.pixels(1.0, 0.0), (640.012, 323.95 - 727.2));
+        assert_eq!(placed.pixels(0.0, 1.0), (640.012 - 727.2, 323.95));
     }
 }

@@ -386,7 +386,9 @@ fn write_csv(w: &mut impl Write, t: &track::Tracked, command: &str) -> Result<()
     )?;
     writeln!(
         w,
-        "# up: {}",
+        "# up in the picture ({:.9}, {:.9}): {}",
+        t.up.direction.0,
+        t.up.direction.1,
         match t.up.rest {
             Some((a, b)) => format!(
                 "from the pendulum at rest {a:.3}..{b:.3} s, {:.3} degrees counter-clockwise from the picture's",

@@ -110,15 +110,21 @@ fn hangs(pivot: (f64, f64), m1: (f64, f64), m2: (f64, f64)) -> bool {
     bend < HANGING_BEND && lean < LEVEL
 }
 
-/// Two of the `still` places that are the pendulum hanging at rest: one on the upper
-/// marker's circle, one an arm's length below it, in line with the pivot.
-fn hanging_pair(still: &[(f64, f64)], g: &Geometry) -> Option<((f64, f64), (f64, f64))> {
-    let d = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).hypot(a.1 - b.1);
+/// The `still` places where the pendulum may hang at rest: on the upper marker's circle, or
+/// both arms' length from the pivot, below it within [`LEVEL`] of the picture's down. A rest
+/// of a fifth of the film looks like a lamp in one place or both; the rest itself is told by
+/// both markers standing in line below the pivot ([`up_from_rest`]).
+fn hanging_places(still: &[(f64, f64)], g: &Geometry) -> Vec<(f64, f64)> {
     still
         .iter()
-        .filter(|&&a| (d(a, g.pivot) - g.r1).abs() < OFF_GEOMETRY)
-        .flat_map(|&a| still.iter().map(move |&b| (a, b)))
-        .find(|&(a, b)| (d(a, b) - g.r2).abs() < OFF_GEOMETRY && hangs(g.pivot, a, b))
+        .copied()
+        .filter(|&(x, y)| {
+            let (dx, dy) = (x - g.pivot.0, y - g.pivot.1);
+            let r = dx.hypot(dy);
+            let on_arm = (r - g.r1).abs() < OFF_GEOMETRY || (r - g.r1 - g.r2).abs() < OFF_GEOMETRY;
+            on_arm && dx.atan2(dy).abs() < LEVEL
+        })
+        .collect()
 }
 
 /// The up direction from the longest stretch of `rows` (px places) in which both markers
@@ -195,10 +201,10 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         )
     };
     let g = geometry::find(&moving, OFF_GEOMETRY, 1).ok_or_else(not_found)?;
-    // A pendulum hanging still through much of the film looks like two lamps: a still pair
-    // in line below the pivot, an arm and an arm apart, is the pendulum at rest.
-    if let Some((a, b)) = hanging_pair(&still, &g) {
-        still.retain(|&s| s != a && s != b);
+    // A pendulum hanging still through much of the film looks like lamps where it hangs.
+    let hanging = hanging_places(&still, &g);
+    if !hanging.is_empty() {
+        still.retain(|s| !hanging.contains(s));
         moving = without(&still);
     }
     // Markers are as bright as each other, give or take: a blob with much less light than
