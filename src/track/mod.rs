@@ -127,8 +127,9 @@ fn hanging_places(still: &[(f64, f64)], g: &Geometry) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// The up direction from the longest stretch of `rows` (px places) in which both markers
-/// stand still, hanging in one line below the `pivot` (None: no such stretch).
+/// The up direction from the longest stretch of the `named` markers (px places, at `times`)
+/// in which both stand still, hanging in one line below the `pivot` (None: no stretch of
+/// [`REST`] or more).
 fn up_from_rest(
     named: &[(geometry::Named, geometry::Named)],
     times: &[f64],
@@ -261,11 +262,12 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     };
     let mark = |b: Blob| {
         let (x, y) = up.metres((b.x - g.pivot.0, b.y - g.pivot.1), ppm);
+        let (sx, sy) = up.turned(b.sx, b.sy);
         Mark {
             x,
             y,
-            sx: up.turned(b.sx, b.sy).0 / ppm,
-            sy: up.turned(b.sx, b.sy).1 / ppm,
+            sx: sx / ppm,
+            sy: sy / ppm,
             streak: b.streak() / ppm,
             px: (b.x, b.y),
             bridged: false,
