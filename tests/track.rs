@@ -200,12 +200,7 @@ fn hidden_masses_are_bridged_by_the_model_when_asked() {
         table: Some(262.0),
         ..Scene::lab(640, 360, p.l1 + p.l2)
     };
-    let start = State {
-        theta1: -1.4,
-        omega1: 0.0,
-        theta2: 1.2,
-        omega2: 0.0,
-    };
+    let start = State::at_rest(-1.4, 1.2);
     let truth = film(&scene, &p, start, 150, 18, &video).unwrap();
     let (plain, before) = tracked(&video, &[]);
     let csv = video.with_extension("csv");
@@ -295,12 +290,7 @@ fn up_is_found_from_the_pendulum_at_rest() {
     }
     let dir = tempfile::tempdir().unwrap();
     let p = Preset::Lab.params();
-    let start = State {
-        theta1: -1.4,
-        omega1: 0.0,
-        theta2: 1.2,
-        omega2: 0.0,
-    };
+    let start = State::at_rest(-1.4, 1.2);
     for rest in [1.5, 0.0] {
         let scene = Scene {
             roll: 0.05,
@@ -351,12 +341,7 @@ fn a_tracked_film_is_fitted_back_to_its_truth() {
     let video = dir.path().join("fit.mp4");
     let p = Preset::Lab.params();
     let scene = Scene::lab(640, 360, p.l1 + p.l2);
-    let start = State {
-        theta1: -1.4,
-        omega1: 0.0,
-        theta2: 1.2,
-        omega2: 0.0,
-    };
+    let start = State::at_rest(-1.4, 1.2);
     film(&scene, &p, start, 120, 14, &video).unwrap();
     tracked(&video, &[]);
     let out = dir.path().join("fit");

@@ -126,12 +126,7 @@ impl Renderer {
         // Hanging still until the release at `rest`, then swinging from `start`.
         let swing: Vec<f64> = times.iter().map(|t| (t - scene.rest).max(0.0)).collect();
         let mut positions = crate::cpu::positions(params, start, dt, steps, &swing);
-        let hanging = params.positions(&State {
-            theta1: 0.0,
-            omega1: 0.0,
-            theta2: 0.0,
-            omega2: 0.0,
-        });
+        let hanging = params.positions(&State::at_rest(0.0, 0.0));
         for (p, t) in positions.iter_mut().zip(&times) {
             if *t < scene.rest {
                 *p = hanging;
