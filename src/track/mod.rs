@@ -255,6 +255,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         })
         .collect();
     let named = geometry::name(&plausible, &g, OFF_GEOMETRY);
+    let g = geometry::refined(&named, g);
     let up = up_from_rest(&named, times, g.pivot).unwrap_or(Up::PICTURE);
     let ppm = match scale {
         Scale::UpperArm(l1) => g.r1 / l1,
