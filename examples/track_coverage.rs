@@ -9,7 +9,7 @@
 //! its band (truthK.csv: t, coordinate, truth, p05, median, p95, the truth in the picture;
 //! m).
 //!
-//!     cargo run --release --example track_coverage -- [FILMS] [DIR]
+//!     cargo run --release --example track_coverage -- [FILMS] [DIR] [FIRST] [CRF]
 
 use chaoscope::app::forecast::{ForecastJob, ForecastSettings, run as forecast};
 use chaoscope::app::track::{TrackJob, run as track};
@@ -25,17 +25,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let films: usize = args.first().map_or(Ok(16), |s| s.parse())?;
     let dir = std::path::PathBuf::from(args.get(1).map_or("out/track-coverage", String::as_str));
+    // Another set of films (FIRST .. FIRST + FILMS: the same releases, other noise), and the encoder's
+    // quality (CRF 0 is lossless: the tracker's errors without the codec's).
+    let first: usize = args.get(2).map_or(Ok(0), |s| s.parse())?;
+    let crf: u32 = args.get(3).map_or(Ok(18), |s| s.parse())?;
     std::fs::create_dir_all(&dir)?;
     let p = Preset::Lab.params();
     let engine = Engine::in_precision(Backend::Auto, Precision::F32)?;
     let quiet = Monitor::hidden();
     let (mut inside, mut inside_picture, mut counted) = (0usize, 0usize, 0usize);
     let mut shares = Vec::new();
-    for k in 0..films {
+    for k in first..first + films {
+        // Sixteen releases; films past the sixteenth repeat them under other noise.
+        let release = (k % 16) as f64;
         let start = State {
-            theta1: -1.4 - 0.02 * k as f64,
+            theta1: -1.4 - 0.02 * release,
             omega1: 0.0,
-            theta2: 1.2 + 0.03 * k as f64,
+            theta2: 1.2 + 0.03 * release,
             omega2: 0.0,
         };
         let scene = Scene {
@@ -43,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..Scene::lab(640, 360, p.l1 + p.l2)
         };
         let video = dir.join(format!("film{k}.mp4"));
-        let truth_rows = film(&scene, &p, start, 300, 18, &video)?;
+        let truth_rows = film(&scene, &p, start, 300, crf, &video)?;
         let csv = video.with_extension("csv");
         // The exposures' mean positions (px) beside the tracked ones, as the films' tests
         // compare them: the tracker's own error, apart from the forecast's.
