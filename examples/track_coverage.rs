@@ -25,8 +25,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let films: usize = args.first().map_or(Ok(16), |s| s.parse())?;
     let dir = std::path::PathBuf::from(args.get(1).map_or("out/track-coverage", String::as_str));
-    // Another set of films (FIRST .. FIRST + FILMS: the same releases, other noise), and the encoder's
-    // quality (CRF 0 is lossless: the tracker's errors without the codec's).
+    // Another set of films (FIRST .. FIRST + FILMS: the same releases, other noise), and
+    // the encoder's quality (CRF 0 is lossless: the tracker's errors without the codec's).
     let first: usize = args.get(2).map_or(Ok(0), |s| s.parse())?;
     let crf: u32 = args.get(3).map_or(Ok(18), |s| s.parse())?;
     std::fs::create_dir_all(&dir)?;
