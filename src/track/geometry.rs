@@ -182,12 +182,7 @@ pub fn refined(named: &[(Named, Named)], g: Geometry) -> Geometry {
         .collect();
     let mut arms: Vec<f64> = named
         .iter()
-        .filter_map(|(a, b)| {
-            Some(dist(
-                (a.as_ref()?.x, a.as_ref()?.y),
-                (b.as_ref()?.x, b.as_ref()?.y),
-            ))
-        })
+        .filter_map(|&(a, b)| Some(dist((a?.x, a?.y), (b?.x, b?.y))))
         .collect();
     if upper.len() < 3 || arms.is_empty() {
         return g;
