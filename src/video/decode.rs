@@ -28,19 +28,17 @@ pub fn probe(path: &Path) -> Result<Probe> {
         path: path.to_path_buf(),
         source: e,
     })?;
-    let args = super::args(
-        &[
-            "-v",
-            "error",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=codec_name,width,height:stream_side_data=rotation:packet=pts_time",
-            "-of",
-            "json=c=1",
-        ],
-        Some(path),
-    );
+    let mut args = super::args(&["-v", "error"]);
+    args.extend(super::input_options());
+    args.extend(super::args(&[
+        "-select_streams",
+        "v:0",
+        "-show_entries",
+        "stream=codec_name,width,height:stream_side_data=rotation:packet=pts_time",
+        "-of",
+        "json=c=1",
+    ]));
+    args.push(super::file_url(path)?);
     let mut child = super::spawn(
         "ffprobe",
         "reading a film",
@@ -148,24 +146,21 @@ pub struct Decoder {
 impl Decoder {
     pub fn open(path: &Path, pixels: Pixels) -> Result<Decoder> {
         let probe = probe(path)?;
-        let mut args = super::args(
-            &["-hide_banner", "-v", "error", "-nostdin", "-i"],
-            Some(path),
-        );
-        args.extend(super::args(
-            &[
-                "-map",
-                "0:v:0",
-                "-fps_mode",
-                "passthrough",
-                "-f",
-                "rawvideo",
-                "-pix_fmt",
-                pixels.ffmpeg(),
-                "pipe:1",
-            ],
-            None,
-        ));
+        let mut args = super::args(&["-hide_banner", "-v", "error", "-nostdin"]);
+        args.extend(super::input_options());
+        args.push("-i".into());
+        args.push(super::file_url(path)?);
+        args.extend(super::args(&[
+            "-map",
+            "0:v:0",
+            "-fps_mode",
+            "passthrough",
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            pixels.ffmpeg(),
+            "pipe:1",
+        ]));
         let mut child = super::spawn(
             "ffmpeg",
             "reading a film",

@@ -50,13 +50,42 @@ fn spawn(
     })
 }
 
-/// `words` as a program's arguments, then `path`.
-fn args(words: &[&str], path: Option<&std::path::Path>) -> Vec<std::ffi::OsString> {
-    words
-        .iter()
-        .map(std::ffi::OsString::from)
-        .chain(path.map(|p| p.as_os_str().to_owned()))
-        .collect()
+/// `words` as a program's arguments.
+fn args(words: &[&str]) -> Vec<std::ffi::OsString> {
+    words.iter().map(std::ffi::OsString::from).collect()
+}
+
+/// The containers a film is read from: phones' and cameras' (MP4, MOV), MKV and WebM, AVI,
+/// MPEG (program and transport streams), FLV, Ogg, ASF, MXF, NUT, DV, elementary H.264 and
+/// HEVC, IVF (AV1, VP9), Y4M and GIF. Playlists and scripts (HLS, DASH, concat, image
+/// sequences) are left out: they name other files, which FFmpeg would then read.
+const CONTAINERS: &str =
+    "mov,matroska,avi,mpegts,mpeg,flv,ogg,asf,mxf,nut,dv,h264,hevc,m4v,ivf,yuv4mpegpipe,gif";
+
+/// FFmpeg's input options that let it read the named file alone: local files only (no
+/// network, pipe or nested protocol), through [`CONTAINERS`] only.
+fn input_options() -> Vec<std::ffi::OsString> {
+    args(&[
+        "-protocol_whitelist",
+        "file",
+        "-format_whitelist",
+        CONTAINERS,
+    ])
+}
+
+/// `path` as FFmpeg's programs must be handed it to read or write that file and no other: an
+/// absolute `file:` URL. Given as written, a name that begins with a protocol (`concat:`,
+/// `subfile,,...:`, `data:`, `pipe:`, `tee:`) is read as a URL naming other files, one
+/// that begins with `-` as an option; `file:` followed by an absolute path is taken as the
+/// path, byte for byte (FFmpeg decodes no `%` escapes in it and ends it at no `?` or `#`).
+fn file_url(path: &std::path::Path) -> Result<std::ffi::OsString> {
+    let absolute = std::path::absolute(path).map_err(|e| Error::File {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let mut url = std::ffi::OsString::from("file:");
+    url.push(absolute.as_os_str());
+    Ok(url)
 }
 
 /// That `program` (ffmpeg, ffprobe) runs here, checked before the work that needs it:
@@ -65,7 +94,7 @@ pub fn require(program: &'static str, what: &'static str) -> Result<()> {
     let status = spawn(
         program,
         what,
-        &args(&["-hide_banner", "-version"], None),
+        &args(&["-hide_banner", "-version"]),
         Stdio::null(),
         Stdio::null(),
     )?

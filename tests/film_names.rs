@@ -1,0 +1,267 @@
+//! Film names reach FFmpeg as those files and nothing else: every command that reads or
+//! writes a film, given names that FFmpeg would otherwise take for a URL (`concat:`, `file:`,
+//! `subfile`, `data:`, `pipe:`, `tee:`) or an option (a leading `-`), and legal names with
+//! `:`, spaces, a newline and letters beyond ASCII. Each run must succeed on the named file
+//! and leave its folder as it was but for its own outputs: the files a URL would have read
+//! hold no film (reading them fails the run), and every file there keeps its bytes.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+
+use chaoscope::model::State;
+use chaoscope::params::Preset;
+use chaoscope::track::synth::{Scene, film};
+use common::chaoscope;
+
+/// Names as a user may type them, each with what FFmpeg would make of it as written.
+const NAMES: [&str; 13] = [
+    "concat:decoy.mp4",                   // the concat protocol: reads decoy.mp4
+    "file:decoy.mp4",                     // the file protocol: decoy.mp4
+    "subfile,,start,0,end,0,,:decoy.mp4", // a part of decoy.mp4
+    "data:,decoy.mp4",                    // a data URL: the text after the comma
+    "pipe:0.mp4",                         // standard input
+    "tee:decoy.mp4|other.mp4",            // writes both
+    "-report",                            // an option: writes ffprobe-*.log
+    "-film.mp4",                          // an option FFmpeg does not know
+    "a:b.mp4",                            // protocol `a`, unknown
+    "with space.mp4",
+    "new\nline.mp4",
+    "ünïcödé 映画.mp4",
+    "frame%03d.mp4", // an image sequence's pattern
+];
+
+/// The files a crafted name's URL would read, present in every folder, holding no film.
+const DECOYS: [&str; 2] = ["decoy.mp4", "other.mp4"];
+
+/// Every file under `dir` (relative path) with its bytes.
+fn contents(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let bytes = std::fs::read(&p).unwrap();
+                out.insert(p.strip_prefix(dir).unwrap().to_path_buf(), bytes);
+            }
+        }
+    }
+    out
+}
+
+/// A folder holding the decoys, and `film` at `name` when given.
+fn folder(name: Option<&str>, film: &[u8]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for d in DECOYS {
+        std::fs::write(dir.path().join(d), "no film here\n").unwrap();
+    }
+    if let Some(name) = name {
+        std::fs::write(dir.path().join(name), film).unwrap();
+    }
+    dir
+}
+
+/// Asserts that `after` is `before` with `made` (paths under the folder) added, no other
+/// file added, changed or removed.
+fn only_made(
+    name: &str,
+    before: &BTreeMap<PathBuf, Vec<u8>>,
+    after: &BTreeMap<PathBuf, Vec<u8>>,
+    made: &[&Path],
+) {
+    for (p, bytes) in before {
+        assert!(
+            after.get(p) == Some(bytes),
+            "{name:?}: {} changed or went",
+            p.display()
+        );
+    }
+    let added: Vec<&PathBuf> = after.keys().filter(|p| !before.contains_key(*p)).collect();
+    for m in made {
+        assert!(
+            added.iter().any(|p| p.starts_with(m)),
+            "{name:?}: {} was not made ({added:?})",
+            m.display()
+        );
+    }
+    for p in &added {
+        assert!(
+            made.iter().any(|m| p.starts_with(m)),
+            "{name:?}: {} was made besides the outputs",
+            p.display()
+        );
+    }
+}
+
+/// A small film of the lab's pendulum (320 x 180, 3 s at 30 frames a second) and its bytes.
+fn small_film() -> Vec<u8> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("film.mp4");
+    let start = State::at_rest(2.0, 2.6);
+    film(
+        &Scene::lab(320, 180, 0.5),
+        &Preset::Lab.params(),
+        start,
+        90,
+        14,
+        &path,
+    )
+    .unwrap();
+    std::fs::read(&path).unwrap()
+}
+
+/// `chaoscope` in `dir`, standard input holding bytes that are no film (a `pipe:` reading
+/// it would fail).
+fn chaoscope_in(dir: &Path) -> assert_cmd::Command {
+    let mut c = chaoscope();
+    c.current_dir(dir)
+        .write_stdin(&b"no film on standard input\n"[..]);
+    c
+}
+
+/// `--flag=value` as one argument (so that a value with a leading `-` stays a value).
+fn flag(flag: &str, value: &str) -> OsString {
+    let mut s = OsString::from(format!("--{flag}="));
+    s.push(value);
+    s
+}
+
+/// The pixel size of the film at `path`, as the library's prober reads it.
+fn size(path: &Path) -> (u32, u32) {
+    let p = chaoscope::video::probe(path).unwrap();
+    (p.width, p.height)
+}
+
+/// A name as the written film's: an MP4's extension where it has none.
+fn as_mp4(name: &str) -> String {
+    match name.ends_with(".mp4") {
+        true => name.to_string(),
+        false => format!("{name}.mp4"),
+    }
+}
+
+/// `track` and `forecast --video` read each name's film (and no decoy), and the forecast's
+/// overlay goes into a folder of that name.
+#[test]
+fn films_are_read_by_their_names_alone() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let bytes = small_film();
+    for name in NAMES {
+        let dir = folder(Some(name), &bytes);
+        let before = contents(dir.path());
+        chaoscope_in(dir.path())
+            .args(["track", "--l1", "0.30", "--output", "track.csv", "--"])
+            .arg(name)
+            .assert()
+            .success();
+        let out = format!("{}.out", name.trim_end_matches(".mp4"));
+        chaoscope_in(dir.path())
+            .args([
+                "forecast",
+                "track.csv",
+                "--window",
+                "0.5:1.5",
+                "--members",
+                "100",
+            ])
+            .args(["--candidates", "256", "--backend", "cpu"])
+            .arg(flag("video", name))
+            .arg(flag("output", &out))
+            .assert()
+            .success();
+        let overlay = Path::new(&out).join("overlay.mp4");
+        assert_eq!(size(&dir.path().join(&overlay)), (320, 180), "{name:?}");
+        let after = contents(dir.path());
+        only_made(
+            name,
+            &before,
+            &after,
+            &[Path::new("track.csv"), Path::new(&out)],
+        );
+    }
+}
+
+/// A writing command: its name, its words, its output (beside the film), the film's size.
+type Run<'a> = (&'a str, Vec<&'a str>, &'a str, (u32, u32));
+
+/// `sweep`, `traces` and `zoom` write their films to each name and into a folder of each
+/// name (an MP4 there, nothing else made or changed).
+#[test]
+fn films_are_written_to_their_names_alone() {
+    if !common::ffmpeg() {
+        return;
+    }
+    // The name as the film's, and as the folder it goes into: FFmpeg writes a staged file
+    // beside the film, so the folder's name is what it is handed.
+    let names = NAMES
+        .iter()
+        .flat_map(|n| [as_mp4(n), format!("{n}.d/film.mp4")]);
+    for name in names {
+        let runs: [Run; 3] = [
+            (
+                "sweep",
+                vec![
+                    "sweep", "--vary", "g=5:10", "--frames", "2", "--size", "16x12",
+                ],
+                "sweep",
+                (16, 12),
+            ),
+            (
+                "traces",
+                vec![
+                    "traces",
+                    "--theta1",
+                    "1",
+                    "--theta2",
+                    "1",
+                    "--exposure",
+                    "0.2",
+                    "--size",
+                    "32",
+                    "--output",
+                    "traces.png",
+                ],
+                "traces.png",
+                (32, 32),
+            ),
+            (
+                "zoom",
+                vec!["zoom", "--to=0,0,1", "--frames", "2", "--output", "zoom"],
+                "zoom",
+                (16, 12),
+            ),
+        ];
+        for (command, words, output, expected) in runs {
+            let dir = folder(None, &[]);
+            let before = contents(dir.path());
+            let mut c = chaoscope_in(dir.path());
+            c.args(&words).arg(flag("film", &name));
+            match command {
+                "zoom" => c.args(["flip", "--size", "16x12", "--t-max", "1"]),
+                "sweep" => c.args(["--output", output]),
+                _ => &mut c,
+            };
+            c.args(["--backend", "cpu"]);
+            c.assert().success();
+            assert_eq!(
+                size(&dir.path().join(&name)),
+                expected,
+                "{command} {name:?}"
+            );
+            let after = contents(dir.path());
+            only_made(
+                &format!("{command} {name}"),
+                &before,
+                &after,
+                &[Path::new(&name), Path::new(output)],
+            );
+        }
+    }
+}
