@@ -189,6 +189,35 @@ impl Params {
         }
     }
 
+    /// Bobs and rods whose moments are `moments` = [A, B, C, P] (kg m^2, kg m^2, kg m^2,
+    /// J) at arm lengths l1, l2 (m) and gravity g (m/s^2); Q follows as C g / l1, as for any
+    /// rigid lower arm. Any pendulum of rigid arms has such an equivalent: a rod's mass sits
+    /// at a third of its arm's inertia, a bar's may sit nearer the joint, and then a bob or a
+    /// rod comes out negative (a uniform bar from joint to marker is a rod and no bob). The
+    /// moments must be a real pendulum's ([`crate::params::validate`] checks them).
+    pub fn from_moments(
+        [a, b, c, p]: [f64; 4],
+        (l1, l2, g): (f64, f64, f64),
+        losses: Losses,
+    ) -> crate::Result<Params> {
+        let rod2 = 6.0 * (c / (l1 * l2) - b / (l2 * l2));
+        let m2 = b / (l2 * l2) - rod2 / 3.0;
+        let rod1 = 6.0 * (p / (g * l1) - a / (l1 * l1));
+        let m1 = p / (g * l1) - (m2 + rod2) - rod1 / 2.0;
+        let params = Params {
+            m1,
+            m2,
+            l1,
+            l2,
+            g,
+            rod1,
+            rod2,
+            losses,
+        };
+        crate::params::validate(&params)?;
+        Ok(params)
+    }
+
     pub fn kinetic_energy(&self, s: &State) -> f64 {
         let k = self.inertia();
         let c = (s.theta1 - s.theta2).cos();

@@ -185,12 +185,27 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
             *slot = v;
         }
     };
+    for (field, v) in [("m1", file.m1), ("m2", file.m2)] {
+        v.map(|v| in_range(field, v))
+            .transpose()
+            .map_err(|e| match e {
+                Error::InvalidSpec { field, reason } => {
+                    in_file(format!("key {}: {reason}", key_of(field)))
+                }
+                e => e,
+            })?;
+    }
     set(&mut p.m1, file.m1);
     set(&mut p.m2, file.m2);
     set(&mut p.l1, file.l1);
     set(&mut p.l2, file.l2);
     set(&mut p.g, file.g);
     if let Some([a, b]) = pair("rod_mass", &file.rod_mass)? {
+        if a < 0.0 || b < 0.0 {
+            return Err(in_file(
+                "key rod_mass: a rod's mass must be >= 0 (kg)".to_string(),
+            ));
+        }
         (p.rod1, p.rod2) = (a, b);
     }
     if let Some([a, b]) = pair("joint_damping", &file.joint_damping)? {
@@ -295,18 +310,22 @@ fn short(x: f64) -> String {
 
 /// Every parameter in its allowed range ([`RANGES`]); the error names the field of
 /// [`ParamSources`].
+///
+/// A pendulum stated by its moments (a model identified from data, [`Params::from_moments`])
+/// may have a negative bob or rod: it is accepted where its moments are a real pendulum's
+/// (A, B, P, Q > 0, A B > C^2, each within the masses' range), without air drag or bearing
+/// friction (which act on the masses themselves). Masses given one by one are checked
+/// against their ranges by [`check_masses`] first.
 pub fn validate(p: &Params) -> Result<()> {
-    for (field, v) in [
-        ("m1", p.m1),
-        ("m2", p.m2),
-        ("l1", p.l1),
-        ("l2", p.l2),
-        ("g", p.g),
-    ] {
+    for (field, v) in [("l1", p.l1), ("l2", p.l2), ("g", p.g)] {
         in_range(field, v)?;
     }
-    in_range("rod_mass", p.rod1)?;
-    in_range("rod_mass", p.rod2)?;
+    let masses = [p.m1, p.m2, p.rod1, p.rod2];
+    if masses.iter().all(|&m| m >= 0.0) || masses.iter().any(|m| !m.is_finite()) {
+        check_masses(p)?;
+    } else {
+        equivalent(p)?;
+    }
     let l = &p.losses;
     in_range("joint_damping", l.joint1)?;
     in_range("joint_damping", l.joint2)?;
@@ -327,6 +346,50 @@ pub fn validate(p: &Params) -> Result<()> {
     Ok(())
 }
 
+/// The bobs' and rods' masses within their ranges ([`RANGES`]).
+pub fn check_masses(p: &Params) -> Result<()> {
+    in_range("m1", p.m1)?;
+    in_range("m2", p.m2)?;
+    in_range("rod_mass", p.rod1)?;
+    in_range("rod_mass", p.rod2)
+}
+
+/// A pendulum with a negative bob or rod: an equivalent one, accepted where its moments are
+/// a real pendulum's and nothing acts on its masses one by one.
+fn equivalent(p: &Params) -> Result<()> {
+    let k = p.inertia();
+    let (_, hi) = (RANGES[0].1, RANGES[0].2);
+    let real = [k.a, k.b, k.p, k.q]
+        .iter()
+        .all(|&x| x > 0.0 && x < hi * 1e8)
+        && k.a * k.b > k.c * k.c
+        && [p.m1, p.m2, p.rod1, p.rod2].iter().all(|m| m.abs() < hi);
+    if !real {
+        return Err(Error::invalid(
+            "m1",
+            format!(
+                "bobs {} and {} kg with rods {} and {} kg are no pendulum: a negative mass is allowed only in a model stated by its moments, and those must be a real pendulum's (inertias and gravity's moments > 0, A B > C^2; here A {:e}, B {:e}, C {:e}, P {:e}, Q {:e})",
+                short(p.m1),
+                short(p.m2),
+                short(p.rod1),
+                short(p.rod2),
+                k.a,
+                k.b,
+                k.c,
+                k.p,
+                k.q
+            ),
+        ));
+    }
+    if p.losses.has_drag() || p.losses.has_bearings() {
+        return Err(Error::invalid(
+            "air_drag",
+            "a pendulum stated by its moments (with a negative bob or rod) takes joint damping only: air drag and bearing friction act on the masses themselves",
+        ));
+    }
+    Ok(())
+}
+
 impl ParamSources {
     /// Defaults, then the preset, then the file, then the single values; validated.
     pub fn resolve(&self) -> Result<Params> {
@@ -339,6 +402,15 @@ impl ParamSources {
                 *slot = v;
             }
         };
+        // Masses given one by one are each in their range (only a model stated by its
+        // moments may hold a negative one).
+        for (field, v) in [("m1", self.m1), ("m2", self.m2)] {
+            v.map(|v| in_range(field, v)).transpose()?;
+        }
+        if let Some((a, b)) = self.rod_mass {
+            in_range("rod_mass", a)?;
+            in_range("rod_mass", b)?;
+        }
         set(&mut p.m1, self.m1);
         set(&mut p.m2, self.m2);
         set(&mut p.l1, self.l1);

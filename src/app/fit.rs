@@ -136,7 +136,27 @@ pub fn run(
         tolerance: job.tolerance,
         candidates: job.candidates,
     };
-    let notices: Vec<String> = engine.notices();
+    let mut notices: Vec<String> = engine.notices();
+    // Which pendulum is fitted is said, never assumed: the lab's preset stands in only where
+    // no model was given, and the data's own moments are found beside it.
+    let given = job.params.preset.is_some()
+        || job.params.params.is_some()
+        || job.params.m1.is_some()
+        || job.params.m2.is_some()
+        || job.params.rod_mass.is_some();
+    let source = match given {
+        true => "the model given",
+        false => "the lab preset (no preset or params given)",
+    };
+    notices.push(format!(
+        "the model fitted: {source}: bobs {} and {} kg, rods {} and {} kg, arms {:.4} and {:.4} m, g {} m/s^2",
+        params.m1, params.m2, params.rod1, params.rod2, params.l1, params.l2, params.g
+    ));
+    let identified = crate::fit::identify::identify(&t, &measured, params.g);
+    notices.push(match &identified {
+        Ok(id) => describe_identified(id),
+        Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
+    });
     let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, engine, monitor)?;
 
     // Plots, derived quantities and summary, written as a set.
@@ -234,7 +254,12 @@ pub fn run(
             "inverse_square_note": "E = a (b t + d)^-2 with d = 1: a, b, d are degenerate (only a/d^2 and b/d matter)",
             "better_fit": better,
         },
+        "identified": match &identified {
+            Ok(id) => identified_json(id),
+            Err(e) => json!({ "error": e.to_string() }),
+        },
         "model": {
+            "source": source,
             "parameters": params_json(&params),
             "start_row": fit.row, "t0": fit.t0,
             "state": fit.start.to_array(),
@@ -339,5 +364,59 @@ pub(crate) fn params_json(p: &crate::model::Params) -> serde_json::Value {
         "air_drag": { "rho": l.rho, "cw": l.cw, "bob_area": [l.bob_area1, l.bob_area2],
                       "rod_area": [l.rod_area1, l.rod_area2] },
         "bearing_friction": l.bearing, "bearing_radius": l.bearing_radius,
+    })
+}
+
+/// One line on what the motion says of the pendulum.
+fn describe_identified(id: &crate::fit::identify::Identified) -> String {
+    let v = |k: usize| format!("{:.4e} ± {:.1e}", id.values[k], id.errors[k]);
+    let ts = &id.time_scale;
+    let scale = match ts.disagrees() {
+        true => format!(
+            "the motion implies g = {:.3} ± {:.3} m/s^2 at these metres and seconds, not {}: the upper arm would be {:.4} m at this frame rate, or the frame rate {:.4} times the file's at this length",
+            ts.g_implied, ts.g_implied_error, ts.g, ts.l1_implied, ts.rate_factor
+        ),
+        false => format!(
+            "the time scale agrees with g (the motion implies {:.3} ± {:.3} m/s^2)",
+            ts.g_implied, ts.g_implied_error
+        ),
+    };
+    let damping = match id.values[4] < 0.0 || id.values[5] < 0.0 {
+        true => {
+            " (a negative damping: the data gain energy, from a drive or from tracking errors that lean one way)"
+        }
+        false => "",
+    };
+    format!(
+        "the pendulum's own moments from its motion, over P (the upper arm's gravity moment): a = A/P {} s^2, b = B/P {} s^2, c = C/P {} s^2, q = Q/P {}, damping k1 {} s, k2 {} s{damping}; {scale}; misfit {:.3} and {:.3} of the equations' size",
+        v(0),
+        v(1),
+        v(2),
+        v(3),
+        v(4),
+        v(5),
+        id.misfit[0],
+        id.misfit[1]
+    )
+}
+
+/// The identified moments as JSON: each value and error, the stretches, the misfit, the
+/// time-scale check and the equivalent parameters (SI, P from a 1 kg mass at the joint).
+fn identified_json(id: &crate::fit::identify::Identified) -> serde_json::Value {
+    let mut moments = serde_json::Map::new();
+    for (k, name) in crate::fit::identify::MOMENTS.iter().enumerate() {
+        moments.insert(name.to_string(), json!(id.values[k]));
+        moments.insert(format!("{name}_error"), json!(id.errors[k]));
+    }
+    json!({
+        "over_p": moments,
+        "units": "a, b, c in s^2; q none; k1, k2 in s (each moment over the upper arm's gravity moment P)",
+        "physical": id.physical(),
+        "stretches": id.stretches,
+        "stretch_s": id.stretch,
+        "misfit": id.misfit,
+        "marker_radii": [id.l1, id.l2],
+        "time_scale": id.time_scale,
+        "equivalent_parameters": id.params().ok().map(|p| params_json(&p)),
     })
 }

@@ -5,6 +5,7 @@
 pub mod data;
 pub mod forecast;
 pub mod forecast_plot;
+pub mod identify;
 mod lsq;
 mod model;
 pub mod plots;
