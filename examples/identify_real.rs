@@ -12,7 +12,7 @@ fn main() {
     let first: f64 = args.get(3).map_or(0.0, |a| a.parse().unwrap());
     let seconds: f64 = args.get(4).map_or(f64::INFINITY, |a| a.parse().unwrap());
     let text = std::fs::read_to_string(file).unwrap();
-    let (mut t, mut data) = (Vec::new(), Vec::new());
+    let (mut frames, mut data) = (Vec::new(), Vec::new());
     for (k, line) in text.lines().enumerate() {
         let v: Vec<f64> = line
             .split(',')
@@ -25,10 +25,23 @@ fn main() {
         // (down, right) pairs: x right, y up, relative to the pivot marker.
         let at = |i: usize| (v[2 * i + 1] - v[1], -(v[2 * i] - v[0]));
         let ((x1, y1), (x2, y2)) = (at(1), at(2));
-        t.push(time);
+        frames.push(chaoscope::fit::TrackedRow {
+            t: time,
+            x1,
+            y1,
+            x2,
+            y2,
+        });
         data.push([x1, y1, x2, y2]);
     }
-    let id = chaoscope::fit::identify::identify(&t, &data, 9.81).unwrap();
+    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    let angles = chaoscope::fit::angles(&frames, (0.0, 0.0));
+    let rows = chaoscope::fit::window::TrackRows {
+        t: &t,
+        data: &data,
+        angles: &angles,
+    };
+    let id = chaoscope::fit::identify::identify(&rows, 9.81).unwrap();
     let ts = id.time_scale;
     println!("rows {} from {first} s at {fps} frames/s", t.len());
     for (k, name) in chaoscope::fit::identify::MOMENTS.iter().enumerate() {

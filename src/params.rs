@@ -185,27 +185,26 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
             *slot = v;
         }
     };
-    for (field, v) in [("m1", file.m1), ("m2", file.m2)] {
-        v.map(|v| in_range(field, v))
-            .transpose()
-            .map_err(|e| match e {
-                Error::InvalidSpec { field, reason } => {
-                    in_file(format!("key {}: {reason}", key_of(field)))
-                }
-                e => e,
-            })?;
+    // Impossible values name the key and the file.
+    let as_key = |e: Error| match e {
+        Error::InvalidSpec { field, reason } => in_file(format!("key {}: {reason}", key_of(field))),
+        e => e,
+    };
+    // Masses given one by one are each in their range (only a model stated by its moments
+    // may hold a negative one).
+    let rods = pair("rod_mass", &file.rod_mass)?;
+    let given = [("m1", file.m1), ("m2", file.m2)]
+        .into_iter()
+        .chain(rods.into_iter().flatten().map(|r| ("rod_mass", Some(r))));
+    for (field, v) in given {
+        v.map(|v| in_range(field, v)).transpose().map_err(as_key)?;
     }
     set(&mut p.m1, file.m1);
     set(&mut p.m2, file.m2);
     set(&mut p.l1, file.l1);
     set(&mut p.l2, file.l2);
     set(&mut p.g, file.g);
-    if let Some([a, b]) = pair("rod_mass", &file.rod_mass)? {
-        if a < 0.0 || b < 0.0 {
-            return Err(in_file(
-                "key rod_mass: a rod's mass must be >= 0 (kg)".to_string(),
-            ));
-        }
+    if let Some([a, b]) = rods {
         (p.rod1, p.rod2) = (a, b);
     }
     if let Some([a, b]) = pair("joint_damping", &file.joint_damping)? {
@@ -228,14 +227,7 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
         (p.losses.bob_area1, p.losses.bob_area2) = (a1, a2);
         (p.losses.rod_area1, p.losses.rod_area2) = (r1, r2);
     }
-    // Impossible values name the key and the file.
-    validate(&p).map_err(|e| match e {
-        Error::InvalidSpec { field, reason } => Error::invalid(
-            "params",
-            format!("{}: key {}: {reason}", path.display(), key_of(field)),
-        ),
-        e => e,
-    })?;
+    validate(&p).map_err(as_key)?;
     if no_area {
         return Err(in_file(
             "table [air_drag] needs bob_area or rod_area (m^2): without an area there is no drag"
@@ -358,7 +350,8 @@ pub fn check_masses(p: &Params) -> Result<()> {
 /// a real pendulum's and nothing acts on its masses one by one.
 fn equivalent(p: &Params) -> Result<()> {
     let k = p.inertia();
-    let (_, hi) = (RANGES[0].1, RANGES[0].2);
+    // The masses' own bound, and that of a moment formed from them (up to M l^2 and M g l).
+    let hi = RANGES[0].2;
     let real = [k.a, k.b, k.p, k.q]
         .iter()
         .all(|&x| x > 0.0 && x < hi * 1e8)

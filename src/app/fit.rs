@@ -109,6 +109,7 @@ pub fn run(
         angles: angle,
         measured,
         params,
+        lab_default,
     } = tracked_model(&frames, &job.params)?;
     // The report's grid: whole millimetres within 5 cm of the data's origin.
     let grid = grid_pivot(&frames, (0.0, 0.0), 0.05, 0.001);
@@ -139,20 +140,20 @@ pub fn run(
     let mut notices: Vec<String> = engine.notices();
     // Which pendulum is fitted is said, never assumed: the lab's preset stands in only where
     // no model was given, and the data's own moments are found beside it.
-    let given = job.params.preset.is_some()
-        || job.params.params.is_some()
-        || job.params.m1.is_some()
-        || job.params.m2.is_some()
-        || job.params.rod_mass.is_some();
-    let source = match given {
-        true => "the model given",
-        false => "the lab preset (no preset or params given)",
+    let source = match lab_default {
+        true => "the lab preset (no preset or params given)",
+        false => "the model given",
     };
     notices.push(format!(
         "the model fitted: {source}: bobs {} and {} kg, rods {} and {} kg, arms {:.4} and {:.4} m, g {} m/s^2",
         params.m1, params.m2, params.rod1, params.rod2, params.l1, params.l2, params.g
     ));
-    let identified = crate::fit::identify::identify(&t, &measured, params.g);
+    let rows = crate::fit::window::TrackRows {
+        t: &t,
+        data: &measured,
+        angles: &angle,
+    };
+    let identified = crate::fit::identify::identify(&rows, params.g);
     notices.push(match &identified {
         Ok(id) => describe_identified(id),
         Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
@@ -311,6 +312,8 @@ pub(crate) struct Tracked {
     /// The lab preset unless a preset or file is given, the arm lengths from the data unless
     /// given.
     pub params: crate::model::Params,
+    /// Whether the lab preset stood in for a model not given.
+    pub lab_default: bool,
 }
 
 /// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
@@ -322,10 +325,9 @@ pub(crate) fn tracked_model(
     let pivot = fit_pivot(frames)?;
     let (l1, l2) = arm_lengths(frames, (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));
+    let lab_default = given.preset.is_none() && given.params.is_none();
     let sources = ParamSources {
-        preset: given
-            .preset
-            .or((given.params.is_none()).then_some(Preset::Lab)),
+        preset: given.preset.or(lab_default.then_some(Preset::Lab)),
         l1: given.l1.or(Some(l1.value)),
         l2: given.l2.or(Some(l2.value)),
         ..given.clone()
@@ -337,6 +339,7 @@ pub(crate) fn tracked_model(
         l1,
         l2,
         angles,
+        lab_default,
     })
 }
 

@@ -15,6 +15,7 @@ mod names;
 pub mod parse;
 mod phase;
 mod serve;
+mod shell;
 mod store;
 mod sweep;
 mod traces;

@@ -20,6 +20,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::window::TrackRows;
 use crate::error::{Error, Result};
 use crate::model::{Losses, Params};
 
@@ -108,10 +109,11 @@ fn velocities(t: &[f64], theta: &[f64], half: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Identifies the pendulum from `t` (s, increasing) and the markers' positions relative to
-/// the pivot (x1, y1, x2, y2; m, y up): the upper marker at the middle joint, the lower one
-/// anywhere along the lower arm. `g` is the stated gravity.
-pub fn identify(t: &[f64], data: &[[f64; 4]], g: f64) -> Result<Identified> {
+/// Identifies the pendulum from a track's rows (times, positions relative to the pivot and
+/// the arms' unwrapped angles, [`crate::fit::data::angles`]): the upper marker at the middle
+/// joint, the lower one anywhere along the lower arm. `g` is the stated gravity.
+pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
+    let (t, data) = (track.t, track.data);
     let n = t.len();
     let finite = |d: &[f64; 4]| d.iter().all(|x| x.is_finite());
     let radii = |f: &dyn Fn(&[f64; 4]) -> f64| {
@@ -121,25 +123,8 @@ pub fn identify(t: &[f64], data: &[[f64; 4]], g: f64) -> Result<Identified> {
     };
     let l1 = radii(&|d| d[0].hypot(d[1]));
     let l2 = radii(&|d| (d[2] - d[0]).hypot(d[3] - d[1]));
-    // Angles from the downward vertical, unwrapped.
-    let unwrap = |raw: Vec<f64>| -> Vec<f64> {
-        let mut out = Vec::with_capacity(raw.len());
-        let mut turns = 0.0;
-        for (k, &a) in raw.iter().enumerate() {
-            if k > 0 && a.is_finite() && raw[k - 1].is_finite() {
-                let step = a - raw[k - 1];
-                turns -= (step / std::f64::consts::TAU).round() * std::f64::consts::TAU;
-            }
-            out.push(a + turns);
-        }
-        out
-    };
-    let th1 = unwrap(data.iter().map(|d| d[0].atan2(-d[1])).collect());
-    let th2 = unwrap(
-        data.iter()
-            .map(|d| (d[2] - d[0]).atan2(-(d[3] - d[1])))
-            .collect(),
-    );
+    let th1: Vec<f64> = track.angles.iter().map(|a| a.0).collect();
+    let th2: Vec<f64> = track.angles.iter().map(|a| a.1).collect();
     // The motion's own time, 1 / RMS(omega1) from differences (whatever units the file's
     // lengths are in), sets the stretch: long enough to average the tracking noise and keep
     // the quadrature accurate, at least [`ROWS`]; the velocities' fits span a tenth of it.
@@ -154,9 +139,10 @@ pub fn identify(t: &[f64], data: &[[f64; 4]], g: f64) -> Result<Identified> {
     let rows = ((natural * rate).round() as usize).max(ROWS);
     let half = ((0.1 * natural * rate).round() as usize).clamp(2, 8);
     let (w1, w2) = (velocities(t, &th1, half), velocities(t, &th2, half));
-    // Two equations a stretch: the regressors of (a, b, c, q, k1, k2) and the right side.
+    // Two equations a stretch: the regressors of (a, b, c, q, k1, k2), and the first's right
+    // side (the second's is 0: gravity's moment P, the unit, acts on the upper arm alone).
     let mut rows1: Vec<([f64; 6], f64)> = Vec::new();
-    let mut rows2: Vec<([f64; 6], f64)> = Vec::new();
+    let mut rows2: Vec<[f64; 6]> = Vec::new();
     let mut start = 0;
     while start + rows <= n {
         let range = start..start + rows;
@@ -195,7 +181,7 @@ pub fn identify(t: &[f64], data: &[[f64; 4]], g: f64) -> Result<Identified> {
             e2[5] += dt * (-f1 * rel);
         }
         rows1.push((e1, rhs1));
-        rows2.push((e2, 0.0));
+        rows2.push(e2);
     }
     if rows1.len() < 8 {
         return Err(Error::invalid(
@@ -214,7 +200,7 @@ pub fn identify(t: &[f64], data: &[[f64; 4]], g: f64) -> Result<Identified> {
         let m = rows1.len() + rows2.len();
         let x = DMatrix::from_fn(m, 6, |r, k| match r < rows1.len() {
             true => rows1[r].0[k] * w[0],
-            false => rows2[r - rows1.len()].0[k] * w[1],
+            false => rows2[r - rows1.len()][k] * w[1],
         });
         let y = DVector::from_fn(m, |r, _| match r < rows1.len() {
             true => rows1[r].1 * w[0],
@@ -253,7 +239,7 @@ pub fn identify(t: &[f64], data: &[[f64; 4]], g: f64) -> Result<Identified> {
     let size1 = (rows1.iter().map(|r| r.1 * r.1).sum::<f64>() / m1 as f64).sqrt();
     let size2 = (rows2
         .iter()
-        .map(|r| (values[3] * r.0[3]).powi(2))
+        .map(|r| (values[3] * r[3]).powi(2))
         .sum::<f64>()
         / m1 as f64)
         .sqrt();
@@ -360,6 +346,22 @@ mod tests {
         (t, data)
     }
 
+    /// A track's angles as `fit` reads them.
+    fn angles(t: &[f64], data: &[[f64; 4]]) -> Vec<(f64, f64)> {
+        let frames: Vec<crate::fit::TrackedRow> = t
+            .iter()
+            .zip(data)
+            .map(|(&t, d)| crate::fit::TrackedRow {
+                t,
+                x1: d[0],
+                y1: d[1],
+                x2: d[2],
+                y2: d[3],
+            })
+            .collect();
+        crate::fit::angles(&frames, (0.0, 0.0))
+    }
+
     fn bars(scale: f64) -> Params {
         Params {
             m1: 0.01 * scale,
@@ -401,7 +403,13 @@ mod tests {
         for (scale, fps, seed) in [(0.2, 400.0, 3), (20.0, 100.0, 4), (1.0, 30.0, 5)] {
             let p = bars(scale);
             let (t, data) = filmed(&p, start, fps, 20.0, 1e-4, seed);
-            let id = identify(&t, &data, 9.81).unwrap();
+            let angles = angles(&t, &data);
+            let rows = TrackRows {
+                t: &t,
+                data: &data,
+                angles: &angles,
+            };
+            let id = identify(&rows, 9.81).unwrap();
             let want = truth(&p);
             eprintln!(
                 "{scale} kg, {fps} fps: {:?}\n{:?}\n{want:?}\n{:?}",
