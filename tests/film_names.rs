@@ -265,3 +265,65 @@ fn films_are_written_to_their_names_alone() {
         }
     }
 }
+
+/// A film named as one of its run's own frames (through `./`, `..`, an absolute path or a
+/// link) is refused before any work, naming `--film`, and the frames already there keep
+/// their bytes: `zoom` and `sweep`, each after a first run that made the frames.
+#[test]
+fn a_film_is_none_of_its_runs_frames() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let runs: [(&str, Vec<&str>, &str); 2] = [
+        (
+            "zoom",
+            vec!["zoom", "--to=0,0,1", "--frames", "2", "--output", "z"],
+            "z",
+        ),
+        (
+            "sweep",
+            vec![
+                "sweep", "--vary", "g=5:10", "--frames", "2", "--size", "16x12",
+            ],
+            "z",
+        ),
+    ];
+    for (command, words, folder) in runs {
+        let dir = folder_with_link(folder);
+        let made = |c: &mut assert_cmd::Command| {
+            match command {
+                "zoom" => c.args(["flip", "--size", "16x12", "--t-max", "1"]),
+                _ => c.args(["--output", folder]),
+            };
+            c.args(["--backend", "cpu"]);
+        };
+        let mut c = chaoscope_in(dir.path());
+        c.args(&words).arg(flag("film", "film.mp4"));
+        made(&mut c);
+        c.assert().success();
+        let before = contents(dir.path());
+        let absolute = dir.path().join("z/frame_0001.png");
+        for film in [
+            "./z/frame_0001.png",
+            "z/../z/frame_0001.png",
+            absolute.to_str().unwrap(),
+            "link/frame_0001.png",
+        ] {
+            let mut c = chaoscope_in(dir.path());
+            c.args(&words).arg(flag("film", film));
+            made(&mut c);
+            let o = c.output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{command} {film}: {err}");
+            assert!(err.contains("--film"), "{command} {film}: {err}");
+            assert_eq!(contents(dir.path()), before, "{command} {film}");
+        }
+    }
+}
+
+/// A folder with the decoys and `link`, a link to `target` (made by the run).
+fn folder_with_link(target: &str) -> tempfile::TempDir {
+    let dir = folder(None, &[]);
+    std::os::unix::fs::symlink(target, dir.path().join("link")).unwrap();
+    dir
+}

@@ -48,44 +48,44 @@ fn identity(path: &Path) -> std::path::PathBuf {
 
 /// No two of a run's `outputs`, and no output and one of its `inputs`, are one file (by
 /// name, through links): the later write would replace the earlier, or the input. The error
-/// names the later output's field and the other's.
+/// names the later output's field and the other's. Each path is resolved once and looked up
+/// in a set, so a film's 100,001 files are checked in linear time.
 pub fn check_distinct(
     outputs: &[(&'static str, &Path)],
     inputs: &[(&'static str, &Path)],
 ) -> Result<()> {
-    let named: Vec<_> = outputs.iter().map(|(f, p)| (*f, identity(p))).collect();
-    for (k, (field, path)) in named.iter().enumerate() {
-        for (other, seen) in &named[..k] {
-            if path == seen {
-                return Err(Error::SameFile {
-                    field,
-                    other,
-                    path: outputs[k].1.to_path_buf(),
-                    input: false,
-                });
-            }
+    let mut read = std::collections::HashMap::with_capacity(inputs.len());
+    for (field, path) in inputs {
+        read.entry(identity(path)).or_insert(*field);
+    }
+    let mut written = std::collections::HashMap::with_capacity(outputs.len());
+    for (field, path) in outputs {
+        let name = identity(path);
+        let same = |other: &'static str, input| Error::SameFile {
+            field,
+            other,
+            path: path.to_path_buf(),
+            input,
+        };
+        if let Some(&other) = written.get(&name) {
+            return Err(same(other, false));
         }
-        for (input, read) in inputs {
-            if *path == identity(read) {
-                return Err(Error::SameFile {
-                    field,
-                    other: input,
-                    path: outputs[k].1.to_path_buf(),
-                    input: true,
-                });
-            }
+        if let Some(&other) = read.get(&name) {
+            return Err(same(other, true));
         }
+        written.insert(name, *field);
     }
     Ok(())
 }
 
 /// The files `names` a run writes into the directory `dir` (given as `field`): the folder
-/// one that takes files (probed once), each file one that may be replaced, and none of them
-/// one of the run's `inputs`.
+/// one that takes files (probed once), each file one that may be replaced, none of them one
+/// of the run's `inputs`, and none one of its outputs elsewhere, `also` (a film).
 pub fn check_directory(
     field: &'static str,
     dir: &Path,
     names: &[impl AsRef<Path>],
+    also: &[(&'static str, &Path)],
     inputs: &[(&'static str, &Path)],
 ) -> Result<()> {
     let paths: Vec<_> = names.iter().map(|n| dir.join(n)).collect();
@@ -96,7 +96,11 @@ pub fn check_directory(
         crate::render::files::replaceable(path)
             .map_err(|why| Error::invalid(field, format!("{}: {why}", path.display())))?;
     }
-    let named: Vec<_> = paths.iter().map(|p| (field, p.as_path())).collect();
+    let named: Vec<_> = paths
+        .iter()
+        .map(|p| (field, p.as_path()))
+        .chain(also.iter().copied())
+        .collect();
     check_distinct(&named, inputs)
 }
 

@@ -85,6 +85,7 @@ pub fn run(
             "derived.csv",
             "summary.json",
         ],
+        &[],
         &super::checks::tracked_inputs(&job.file, &job.params),
     )?;
     let frames = read_frames(&job.file)?;

@@ -198,6 +198,7 @@ pub fn run(
         "output",
         &job.output,
         &["forecast.png", "bands.csv", "summary.json", OVERLAY],
+        &[],
         &inputs,
     )?;
     let frames = read_frames(&job.file)?;

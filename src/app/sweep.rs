@@ -304,10 +304,18 @@ pub fn run(
         return Err(Error::invalid("ftle_max", "must be > 0"));
     }
     // The animation and every frame (a frame kept from an interrupted run is read back).
-    let names: Vec<String> = std::iter::once(ANIMATION.to_string())
-        .chain((0..frames.len() as u32).map(frame_name))
-        .collect();
-    super::checks::check_directory("output", &job.output, &names, &[])?;
+    // The film, where it is not the folder's own animation, is no frame (through `./`, `..`
+    // and links alike).
+    let mut names: Vec<String> = (0..frames.len() as u32).map(frame_name).collect();
+    let film = [("film", job.film.path.as_path())];
+    let also: &[_] = match job.film.path == job.output.join(ANIMATION) {
+        true => {
+            names.push(ANIMATION.into());
+            &[]
+        }
+        false => &film,
+    };
+    super::checks::check_directory("output", &job.output, &names, also, &[])?;
     job.film.validate("film", FILM_FORMATS)?;
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;

@@ -294,6 +294,7 @@ pub fn run(
         "output",
         &job.output,
         &["twin.csv", "twin.png", "twin_forecast.png", "summary.json"],
+        &[],
         &inputs,
     )?;
     let truth = job.params.resolve()?;

@@ -320,7 +320,8 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
         Err(e) => return reply(e),
     };
     let (backend, commands) = (shared.backend, shared.commands);
-    let result = on_engine(&shared, move |engine, _| {
+    // Checked by its views alone, off the engine: a plan never holds the engine a tile needs.
+    let result = tokio::task::spawn_blocking(move || -> Result<String> {
         let output = std::path::PathBuf::from("out/zoom");
         let film = FilmSpec {
             path: output.join(crate::app::zoom::FILM),
@@ -369,7 +370,7 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     frames,
                     &film,
                 );
-                crate::app::zoom::plan(&job, engine).map_err(|e| e.renamed("to", "w"))?;
+                crate::app::zoom::check(&job).map_err(|e| e.renamed("to", "w"))?;
                 Ok((commands.zoom_flip)(&job))
             }
             Kind::Map(_) => {
@@ -387,15 +388,16 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     frames,
                     &film,
                 );
-                crate::app::zoom::plan(&job, engine).map_err(|e| e.renamed("to", "w"))?;
+                crate::app::zoom::check(&job).map_err(|e| e.renamed("to", "w"))?;
                 Ok((commands.zoom_lyapunov)(&job))
             }
         }
     })
     .await;
     match result {
-        Ok(command) => json(serde_json::json!({ "command": command })),
-        Err(r) => r,
+        Ok(Ok(command)) => json(serde_json::json!({ "command": command })),
+        Ok(Err(e)) => reply(e),
+        Err(e) => reply(Error::Gpu(format!("the work failed: {e}"))),
     }
 }
 

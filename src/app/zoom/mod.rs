@@ -125,15 +125,14 @@ fn computed_grid(grid: &Grid, samples: u32) -> Grid {
     }
 }
 
-/// Every frame planned on `engine`, checked as its map would be, before any work: a frame
-/// whose starts even f64 cannot tell apart is refused, naming the film's end width.
-pub fn plan<S: MapKernels + MapPicture>(
-    job: &ZoomJob<S>,
-    engine: &Engine,
-) -> Result<Vec<FramePlan>> {
+/// A zoom's checks that need neither an engine nor every frame's map: the first map, each
+/// view it goes to within what the map allows, and every frame's starts told apart by f64.
+/// A frame between two views lies within the box of both (its corners move on straight
+/// lines from one view's to the other's), so the views decide where the map's limits hold;
+/// the explorer checks its zooms by this alone. Returns the frames' grids.
+pub fn check<S: MapKernels + MapPicture>(job: &ZoomJob<S>) -> Result<Vec<Grid>> {
     let spec = &job.map.spec;
-    let verdict = job.wants_verdict();
-    check_in_memory(spec, verdict, job.map.samples)?;
+    check_in_memory(spec, job.wants_verdict(), job.map.samples)?;
     job.map
         .spec
         .check_picture(&job.map.picture, job.map.colour_range)?;
@@ -155,35 +154,50 @@ pub fn plan<S: MapKernels + MapPicture>(
     }
     let end = job.to.last().expect("checked: a view to go to");
     let aspect = (spec.grid().y.range.max - spec.grid().y.range.min) / View::of(spec.grid()).width;
+    for (k, g) in grids.iter().enumerate() {
+        let fine = computed_grid(g, job.map.samples);
+        if fine.beyond_f64() {
+            // The widest the last view may be: each axis's f64 step limit, in widths.
+            let x = fine.x.finest_step(f64::EPSILON) * fine.width as f64;
+            let y = fine.y.finest_step(f64::EPSILON) * fine.height as f64 / aspect;
+            return Err(Error::invalid(
+                "to",
+                format!(
+                    "a width of {:e} is deeper than f64 resolves: from frame {k} on, neighbouring starts ({:.1e} apart) would share their numbers; on this grid a zoom ends at a width of {:.1e} or more",
+                    end.width,
+                    fine.x_step(),
+                    x.max(y) * 1.01
+                ),
+            ));
+        }
+    }
+    Ok(grids)
+}
+
+/// Every frame planned on `engine`, checked as its map would be, before any work ([`check`],
+/// then each frame's map against the map's limits and the path it runs on).
+pub fn plan<S: MapKernels + MapPicture>(
+    job: &ZoomJob<S>,
+    engine: &Engine,
+) -> Result<Vec<FramePlan>> {
+    let spec = &job.map.spec;
+    let verdict = job.wants_verdict();
+    let grids = check(job)?;
     grids
         .iter()
         .enumerate()
         .map(|(k, g)| {
             let fine = computed_grid(g, job.map.samples);
-            if fine.beyond_f64() {
-                // The widest the last view may be: each axis's f64 step limit, in widths.
-                let x = fine.x.finest_step(f64::EPSILON) * fine.width as f64;
-                let y = fine.y.finest_step(f64::EPSILON) * fine.height as f64 / aspect;
-                return Err(Error::invalid(
-                    "to",
-                    format!(
-                        "a width of {:e} is deeper than f64 resolves: from frame {k} on, neighbouring starts ({:.1e} apart) would share their numbers; on this grid a zoom ends at a width of {:.1e} or more",
-                        end.width,
-                        fine.x_step(),
-                        x.max(y) * 1.01
-                    ),
-                ));
-            }
             if k > 0 {
-                check_in_memory(&spec.on_grid(*g), verdict, job.map.samples).map_err(|e| {
-                    match e {
+                check_in_memory(&spec.on_grid(*g), verdict, job.map.samples).map_err(
+                    |e| match e {
                         Error::InvalidSpec { field, reason } => Error::invalid(
                             "to",
                             format!("frame {k} leaves what the map allows ({field}): {reason}"),
                         ),
                         e => e,
-                    }
-                })?;
+                    },
+                )?;
             }
             let path = engine.map_info(&fine, spec.precision()).path;
             Ok(FramePlan {
@@ -266,18 +280,15 @@ pub fn run<S: MapKernels + MapPicture>(
     let n = plans.len() as u32;
     let mut names: Vec<String> = (0..n).map(frame_name).collect();
     names.push(TABLE.into());
-    super::checks::check_directory("output", &job.output, &names, &[])?;
+    // A tile writes frames alone; the whole zoom its film too, which is none of them.
+    let film = [("film", job.film.path.as_path())];
+    let also: &[_] = match job.tile {
+        None => &film,
+        Some(_) => &[],
+    };
+    super::checks::check_directory("output", &job.output, &names, also, &[])?;
     if job.tile.is_none() {
         job.film.validate("film", FILM_FORMATS)?;
-        if names.iter().any(|n| job.output.join(n) == job.film.path) {
-            return Err(Error::invalid(
-                "film",
-                format!(
-                    "{} is a file of the frames' folder: give the film a name of its own",
-                    job.film.path.display()
-                ),
-            ));
-        }
     }
     let mut notices = engine.notices();
     let switch = switch(&plans);
