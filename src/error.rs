@@ -99,6 +99,20 @@ impl Error {
         }
     }
 
+    /// The same error as the fault of the input file that `field` names: one that is not
+    /// there is [`Error::Missing`], one that cannot be read as what it should be (a folder, a
+    /// FIFO, text for a film, a film cut short) an invalid value of `field`; any other error
+    /// (a missing program, an interruption) as it is.
+    pub fn as_input(self, field: &'static str) -> Self {
+        match self {
+            Error::File { path, source } if source.kind() == std::io::ErrorKind::NotFound => {
+                Error::Missing { field, path }
+            }
+            e @ (Error::File { .. } | Error::Format(_)) => Error::invalid(field, e.to_string()),
+            e => e,
+        }
+    }
+
     /// A plotting error (plotters' errors carry the backend's error type).
     pub fn plot(e: impl std::fmt::Debug) -> Self {
         Error::Plot(format!("{e:?}"))

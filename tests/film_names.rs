@@ -327,3 +327,59 @@ fn folder_with_link(target: &str) -> tempfile::TempDir {
     std::os::unix::fs::symlink(target, dir.path().join("link")).unwrap();
     dir
 }
+
+/// What is no film (a folder, a FIFO, text, an empty file) given to `track` or to
+/// `forecast --video` is refused as a bad value of the film's argument (exit 2, its name in
+/// the message), before any work and without waiting on the FIFO.
+#[test]
+fn what_is_no_film_is_refused_naming_the_film() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = folder(Some("film.mp4"), &small_film());
+    let d = dir.path();
+    chaoscope_in(d)
+        .args(["track", "film.mp4", "--l1", "0.30", "--output", "track.csv"])
+        .assert()
+        .success();
+    std::fs::create_dir(d.join("folder.mp4")).unwrap();
+    let fifo = std::process::Command::new("mkfifo")
+        .arg(d.join("fifo.mp4"))
+        .status()
+        .unwrap();
+    assert!(fifo.success());
+    std::fs::write(d.join("text.mp4"), "no film here\n").unwrap();
+    std::fs::write(d.join("empty.mp4"), "").unwrap();
+    for bad in ["folder.mp4", "fifo.mp4", "text.mp4", "empty.mp4"] {
+        let runs: [Vec<&str>; 2] = [
+            vec!["track", bad, "--l1", "0.30", "--output", "again.csv"],
+            vec![
+                "forecast",
+                "track.csv",
+                "--window",
+                "0.5:1.5",
+                "--members",
+                "100",
+            ],
+        ];
+        for (k, words) in runs.iter().enumerate() {
+            let mut c = chaoscope_in(d);
+            c.args(words).timeout(std::time::Duration::from_secs(60));
+            if k == 1 {
+                c.args(["--backend", "cpu", "--output", "fc"])
+                    .arg(flag("video", bad));
+            }
+            let o = c.output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr).to_lowercase();
+            assert_eq!(o.status.code(), Some(2), "{words:?} {bad}: {err}");
+            assert!(
+                err.contains("video") && err.contains(bad),
+                "{words:?} {bad}: {err}"
+            );
+            assert!(
+                !d.join("again.csv").exists() && !d.join("fc").exists(),
+                "{bad}"
+            );
+        }
+    }
+}

@@ -541,6 +541,10 @@ def test_track_equals_its_command_as_a_dataset(tmp_path):
         chaoscope.track(str(film), l1=0.3, markers="red", progress=False)
     with pytest.raises(ValueError, match="^region: "):
         chaoscope.track(str(film), l1=0.3, region=(0, 0, 5000, 10), progress=False)
+    # What is no film is a bad value of ``video``, as the command line's exit 2.
+    (tmp_path / "text.mp4").write_text("no film here\n")
+    with pytest.raises(ValueError, match="^video: "):
+        chaoscope.track(str(tmp_path / "text.mp4"), l1=0.3, progress=False)
     # Nothing hidden, nothing bridged: the same positions, each marked measured.
     bridged = chaoscope.track(str(film), output=str(tmp_path / "b.csv"), l1=0.30, bridge=True,
                               progress=False)

@@ -193,6 +193,8 @@ pub fn run(
         }
         inputs.push(("video", video.as_path()));
         crate::video::require("ffmpeg", "drawing on a film")?;
+        // A film FFmpeg cannot read (or no ffprobe to read it) is refused before the work.
+        crate::video::probe(video).map_err(|e| e.as_input("video"))?;
     }
     super::checks::check_directory(
         "output",

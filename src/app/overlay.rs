@@ -96,7 +96,7 @@ pub fn write(
     monitor: &Monitor,
 ) -> Result<()> {
     let placement = overlay.geometry;
-    let mut decoder = Decoder::open(video, Pixels::Rgb)?;
+    let mut decoder = Decoder::open(video, Pixels::Rgb).map_err(|e| e.as_input("video"))?;
     let (w, h) = (decoder.probe.width, decoder.probe.height);
     let times = &decoder.probe.times;
     let count = times.len();
@@ -122,7 +122,8 @@ pub fn write(
     let result = film::write(files, &film, Format::Mp4, (w, h), count, meta, |_| {
         monitor.check()?;
         let t = decoder
-            .next_frame(&mut frame)?
+            .next_frame(&mut frame)
+            .map_err(|e| e.as_input("video"))?
             .ok_or_else(|| Error::format(video, "fewer frames than its timestamps"))?;
         draw(&mut frame, (w, h), t, overlay, &at).map_err(Error::plot)?;
         monitor.advance(1);

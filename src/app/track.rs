@@ -119,7 +119,8 @@ pub fn run(
             1 => Pixels::Gray,
             _ => Pixels::Rgb,
         },
-    )?;
+    )
+    .map_err(|e| e.as_input("video"))?;
     let (width, height) = (decoder.probe.width, decoder.probe.height);
     let region = match job.region {
         Some((x0, y0, x1, y1)) => {
@@ -140,7 +141,10 @@ pub fn run(
     let (mut frame, mut score) = (Vec::new(), Vec::new());
     let mut scratch = track::detect::Scratch::default();
     let (mut blobs, mut times) = (Vec::with_capacity(total), Vec::with_capacity(total));
-    while let Some(t) = decoder.next_frame(&mut frame)? {
+    while let Some(t) = decoder
+        .next_frame(&mut frame)
+        .map_err(|e| e.as_input("video"))?
+    {
         monitor.check()?;
         job.markers.score(&frame, &mut score);
         blobs.push(track::detect::blobs(
