@@ -48,14 +48,15 @@ fn main() {
         println!("{name} = {:.5e} ± {:.1e}", id.values[k], id.errors[k]);
     }
     println!(
-        "marker radii {:.2} and {:.2} px; physical {}; misfit {:.4} {:.4}; {} stretches of {:.3} s",
+        "marker radii {:.2} and {:.2} px; physical {}; misfit {:.1e} {:.1e}; {} stretches of {:.3} s ({} left out)",
         id.l1,
         id.l2,
         id.physical(),
         id.misfit[0],
         id.misfit[1],
         id.stretches,
-        id.stretch
+        id.stretch,
+        id.rejected
     );
     let ppm = ts.g_implied / 9.81;
     println!(

@@ -150,6 +150,21 @@ struct ParamsFile {
     bearing_friction: Option<f64>,
     bearing_radius: Option<f64>,
     air_drag: Option<AirDragFile>,
+    moments: Option<MomentsFile>,
+}
+
+/// A pendulum stated by its moments over the upper arm's gravity moment P, as `fit` writes
+/// a model found from the motion (the motion cannot see P itself: a 1 kg scale is taken).
+#[derive(Deserialize, Debug, Default)]
+#[serde(deny_unknown_fields)]
+struct MomentsFile {
+    /// A/P, B/P, C/P (s^2): the arms' inertias about their joints and their coupling.
+    a: f64,
+    b: f64,
+    c: f64,
+    /// The joints' damping over P (s).
+    k1: Option<f64>,
+    k2: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Default)]
@@ -216,7 +231,7 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
     } else if let Some(r) = file.bearing_radius {
         p.losses.bearing_radius = r;
     }
-    if let Some(air) = file.air_drag {
+    if let Some(air) = &file.air_drag {
         p.losses.rho = air.rho.unwrap_or(RHO);
         p.losses.cw = air.cw.unwrap_or(CW);
         let bob = pair("air_drag.bob_area", &air.bob_area)?;
@@ -226,6 +241,51 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
         let [r1, r2] = rod.unwrap_or([0.0; 2]);
         (p.losses.bob_area1, p.losses.bob_area2) = (a1, a2);
         (p.losses.rod_area1, p.losses.rod_area2) = (r1, r2);
+    }
+    if let Some(m) = &file.moments {
+        let stated = [
+            ("m1", file.m1.is_some()),
+            ("m2", file.m2.is_some()),
+            ("rod_mass", file.rod_mass.is_some()),
+            ("joint_damping", file.joint_damping.is_some()),
+            ("air_drag", file.air_drag.is_some()),
+            ("bearing_friction", file.bearing_friction.is_some()),
+        ];
+        if let Some((key, _)) = stated.iter().find(|k| k.1) {
+            return Err(in_file(format!(
+                "key {key} beside the table [moments]: the moments state the whole pendulum (its masses and damping as k1, k2); give one or the other"
+            )));
+        }
+        for (key, v) in [("a", m.a), ("b", m.b), ("c", m.c)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(in_file(format!(
+                    "key moments.{key}: {v} is not allowed; a moment over P must be > 0 (s^2)"
+                )));
+            }
+        }
+        let (k1, k2) = (m.k1.unwrap_or(0.0), m.k2.unwrap_or(0.0));
+        for (key, v) in [("k1", k1), ("k2", k2)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(in_file(format!(
+                    "key moments.{key}: {v} is not allowed; a damping over P must be >= 0 (s)"
+                )));
+            }
+        }
+        // One kilogram's scale: P = 1 kg g l1.
+        let unit = p.g * p.l1;
+        p = Params::from_moments(
+            [m.a * unit, m.b * unit, m.c * unit, unit],
+            (p.l1, p.l2, p.g),
+            Losses {
+                joint1: k1 * unit,
+                joint2: k2 * unit,
+                ..Losses::default()
+            },
+        )
+        .map_err(|e| match e {
+            Error::InvalidSpec { reason, .. } => in_file(format!("table [moments]: {reason}")),
+            e => e,
+        })?;
     }
     validate(&p).map_err(as_key)?;
     if no_area {

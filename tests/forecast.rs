@@ -499,7 +499,15 @@ fn forecast_refuses_bad_input() {
             .arg("forecast")
             .arg(&csv)
             .args(*args)
-            .args(["--backend", "cpu", "--candidates", "64", "--output"])
+            .args([
+                "--preset",
+                "lab",
+                "--backend",
+                "cpu",
+                "--candidates",
+                "64",
+                "--output",
+            ])
             .arg(&out)
             .assert()
             .code(2);
@@ -531,6 +539,8 @@ fn forecast_of_the_lab_run() {
         .arg("forecast")
         .arg(lab_csv())
         .args([
+            "--preset",
+            "lab",
             "--members",
             "500",
             "--candidates",

@@ -220,6 +220,8 @@ fn ctrl_c_and_sigterm_stop_long_commands_without_leaving_files() {
             vec![
                 "fit",
                 data,
+                "--preset",
+                "lab",
                 "--candidates",
                 "4000000",
                 "--backend",
@@ -605,7 +607,15 @@ fn bad_inputs_are_refused_naming_their_flag() {
     chaoscope()
         .arg("fit")
         .arg(&bom)
-        .args(["--candidates", "64", "--backend", "cpu", "--output"])
+        .args([
+            "--preset",
+            "lab",
+            "--candidates",
+            "64",
+            "--backend",
+            "cpu",
+            "--output",
+        ])
         .arg(&out)
         .assert()
         .success();

@@ -355,12 +355,34 @@ def fit(
     t, x1, y1, x2, y2 (s, m; y up). Returns the summary: the pivot and arm lengths (m, with
     errors), the energy's exponential and inverse-square decay fits, and how long the model
     released at ``start`` (s) agrees with the data within ``tolerance`` (m), its ``candidates``
-    fitted over ``window`` s; plots, derived.csv and summary.json go to ``output``. The physics
-    (``preset="lab"``...) as :func:`params`; the joint damping is what the fit finds.
+    fitted over ``window`` s; plots, derived.csv, summary.json and model.toml (the model as a
+    parameter file, ``params_file=`` reads it back) go to ``output``. The model: a
+    ``preset`` or ``params_file`` where given, else the pendulum's own moments found from its
+    motion; the joint damping is what the fit finds. ``summary["verdict"]`` says whether the
+    model follows the data in the window; where it does not, :class:`ModelWarning` is raised
+    as a warning and the figures are no findings.
     """
     keywords = dict(locals())
     keywords.pop("progress")
-    return json.loads(_call(_native.fit, keywords, progress))
+    summary = json.loads(_call(_native.fit, keywords, progress))
+    _warn_unfollowed(summary.get("verdict"))
+    return summary
+
+
+class ModelWarning(UserWarning):
+    """The fitted model does not follow the tracked data in its window: its horizons and
+    agreement are no findings (the command line exits 3)."""
+
+
+def _warn_unfollowed(verdict: Optional[dict]) -> None:
+    if verdict is not None and not verdict["follows"]:
+        warnings.warn(
+            f"the fitted model does not follow the data: it strays by {1e3 * verdict['rms']:.3f} mm "
+            f"RMS, {verdict['ratio']:.1f} times the tracking error (at most {verdict['limit']:g}); "
+            "state the pendulum's model (preset= or params_file=) or try another window",
+            ModelWarning,
+            stacklevel=3,
+        )
 
 
 def traces(
@@ -474,14 +496,16 @@ def forecast(
     orbit); ``attrs`` hold the horizons (the spread past ``tolerance`` m; the data leaving
     the 90 % band), the summary.json and the reproducing command. forecast.png, bands.csv and
     summary.json go to ``output``, and with ``video`` (the film :func:`track` read) the
-    forecast drawn on its frames, overlay.mp4. The physics (``preset="lab"``...) as
-    :func:`params`; the joint damping is what the fit finds.
+    forecast drawn on its frames, overlay.mp4. The model as :func:`fit` finds it; where it
+    does not follow the data in the window, :class:`ModelWarning` is raised as a warning,
+    ``attrs["model_follows"]`` is 0 and the horizons are NaN (no findings).
     """
     keywords = dict(locals())
     keywords.pop("progress")
     if video is None:
         keywords.pop("video")
     short = json.loads(_call(_native.forecast, keywords, progress))
+    _warn_unfollowed(short.get("verdict"))
     return _bands(Path(short["output"]))
 
 
@@ -500,6 +524,7 @@ def _bands(out: Path) -> xr.Dataset:
 
     dims = ("time", "coordinate", "quantile")
     horizon = summary["horizon"]
+    follows = bool(summary["verdict"]["follows"])
     return xr.Dataset(
         {
             "model": (dims, block(""), {"units": "m", "long_name": "members' positions"}),
@@ -526,8 +551,9 @@ def _bands(out: Path) -> xr.Dataset:
         },
         attrs={
             "command": summary["command"],
-            "spread_horizon": _nan(horizon["spread"]),
-            "data_horizon": _nan(horizon["data"]),
+            "model_follows": int(follows),
+            "spread_horizon": _nan(horizon["spread"] if follows else None),
+            "data_horizon": _nan(horizon["data"] if follows else None),
             "lyapunov_exponent": summary["lyapunov"]["exponent"],
             "tracking_error": summary["ensemble"]["tracking_error"],
             "summary": json.dumps(summary),

@@ -384,9 +384,10 @@ def test_fit_equals_its_command(tmp_path):
 def test_forecast_equals_its_command(tmp_path):
     data = Path(__file__).parents[2] / "data" / "lab_table1.csv"
     bands = chaoscope.forecast(str(data), output=str(tmp_path / "py"), window=(0.6, 1.7),
-                               members=300, candidates=512, backend="cpu", progress=False)
+                               members=300, candidates=512, backend="cpu", preset="lab",
+                               progress=False)
     cli("forecast", str(data), "--output", str(tmp_path / "cli"), "--window", "0.6:1.7",
-        "--members", "300", "--candidates", "512", "--backend", "cpu")
+        "--members", "300", "--candidates", "512", "--backend", "cpu", "--preset", "lab")
     # The same job: its bands byte for byte, and the command that makes them.
     assert (tmp_path / "py" / "bands.csv").read_bytes() == (
         tmp_path / "cli" / "bands.csv").read_bytes()
@@ -406,9 +407,10 @@ def test_forecast_equals_its_command(tmp_path):
     assert (o[..., 4] - o[..., 0]).mean() > (m[..., 4] - m[..., 0]).mean()
     with pytest.raises(ValueError, match="^window: "):
         chaoscope.forecast(str(data), output=str(tmp_path / "bad"), window=(25.0, 30.0),
-                           progress=False)
+                           preset="lab", progress=False)
     with pytest.raises(ValueError, match="^members: "):
-        chaoscope.forecast(str(data), output=str(tmp_path / "bad"), members=0, progress=False)
+        chaoscope.forecast(str(data), output=str(tmp_path / "bad"), members=0, preset="lab",
+                           progress=False)
 
 
 def test_traces_equal_their_command(tmp_path):

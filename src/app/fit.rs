@@ -8,12 +8,14 @@ use serde_json::json;
 use super::{check_count, check_within};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
+use crate::fit::pendulum::{
+    ModelSource, Tracked, Verdict, model_energies, model_file, tracked_model,
+};
 use crate::fit::{
-    Fit, ModelFitSpec, angles, arm_lengths, data, energies, fit_decay, fit_model, fit_pivot,
-    grid_pivot, plots, read_frames,
+    Fit, ModelFitSpec, data, energies, fit_decay, fit_model, grid_pivot, plots, read_frames,
 };
 use crate::monitor::Monitor;
-use crate::params::{ParamSources, Preset};
+use crate::params::ParamSources;
 use crate::render::Outputs;
 use crate::spec::Precision;
 
@@ -54,11 +56,19 @@ pub struct FitSummary {
     pub t0: f64,
     pub agrees_until: f64,
     pub tolerance: f64,
+    /// Whether the fitted model follows the data in the window.
+    pub verdict: Verdict,
+    /// The energy's unit: J, or P (the upper arm's gravity moment) for a model found from
+    /// the motion.
+    pub energy_unit: &'static str,
     pub output: PathBuf,
     /// Every file written.
     pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
 }
+
+/// The fitted model as a parameter file, in the output folder.
+pub const MODEL_FILE: &str = "model.toml";
 
 /// Runs the fit; `command` reproduces it and goes into summary.json.
 pub fn run(
@@ -84,6 +94,7 @@ pub fn run(
             "phase.png",
             "derived.csv",
             "summary.json",
+            MODEL_FILE,
         ],
         &[],
         &super::checks::tracked_inputs(&job.file, &job.params),
@@ -103,26 +114,40 @@ pub fn run(
         ));
     }
 
+    let tracked = tracked_model(&frames, &job.params)?;
     let Tracked {
         pivot,
         l1,
         l2,
-        angles: angle,
-        measured,
+        angles: ref angle,
+        ref measured,
         params,
-        lab_default,
-    } = tracked_model(&frames, &job.params)?;
+        ref source,
+        ref identified,
+        ..
+    } = tracked;
     // The report's grid: whole millimetres within 5 cm of the data's origin.
     let grid = grid_pivot(&frames, (0.0, 0.0), 0.05, 0.001);
 
-    let en = energies(
-        &frames,
-        (pivot.x, pivot.y),
-        (params.m1, params.m2),
-        (l1.value, l2.value),
-        params.g,
-        job.velocity_error,
-    );
+    // A model found from the motion cannot see the masses' scale: its energy is in units of
+    // its gravity moment P, and counts the arms' own inertia as the model does.
+    let (en, unit) = match source {
+        ModelSource::Given => (
+            energies(
+                &frames,
+                (pivot.x, pivot.y),
+                (params.m1, params.m2),
+                (l1.value, l2.value),
+                params.g,
+                job.velocity_error,
+            ),
+            plots::EnergyUnit::Joule,
+        ),
+        ModelSource::Identified => (
+            model_energies(&t, angle, &params, job.velocity_error),
+            plots::EnergyUnit::GravityMoment,
+        ),
+    };
     let decay = fit_decay(&en);
     let (ex, inv) = (&decay.exponential, &decay.inverse_square);
     let better = if ex.reduced_chi2() <= inv.reduced_chi2() {
@@ -139,27 +164,16 @@ pub fn run(
         candidates: job.candidates,
     };
     let mut notices: Vec<String> = engine.notices();
-    // Which pendulum is fitted is said, never assumed: the lab's preset stands in only where
-    // no model was given, and the data's own moments are found beside it.
-    let source = match lab_default {
-        true => "the lab preset (no preset or params given)",
-        false => "the model given",
-    };
-    notices.push(format!(
-        "the model fitted: {source}: bobs {} and {} kg, rods {} and {} kg, arms {:.4} and {:.4} m, g {} m/s^2",
-        params.m1, params.m2, params.rod1, params.rod2, params.l1, params.l2, params.g
-    ));
-    let rows = crate::fit::window::TrackRows {
-        t: &t,
-        data: &measured,
-        angles: &angle,
-    };
-    let identified = crate::fit::identify::identify(&rows, params.g);
-    notices.push(match &identified {
+    // Which pendulum is fitted is said, never assumed.
+    notices.push(describe_model(source, &params));
+    notices.push(match identified {
         Ok(id) => describe_identified(id),
         Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
     });
-    let fit = fit_model(&frames, (pivot.x, pivot.y), &angle, &spec, engine, monitor)?;
+    notices.extend(tracked.notices.iter().cloned());
+    let fit = fit_model(&frames, (pivot.x, pivot.y), angle, &spec, engine, monitor)?;
+    let verdict = Verdict::judge(fit.rms, &t, measured, params.l1 + params.l2);
+    notices.push(verdict.describe());
 
     // Plots, derived quantities and summary, written as a set.
     let out = &job.output;
@@ -170,7 +184,7 @@ pub fn run(
         &mut files,
         &out.join("positions.png"),
         &t,
-        &measured,
+        measured,
         &fit.simulated,
         fit.t0,
         t_end,
@@ -178,11 +192,10 @@ pub fn run(
     plots::energy(
         &mut files,
         &out.join("energy.png"),
-        &en.t,
-        &en.e,
-        &en.de,
+        &en,
         (ex.params[0], ex.params[1]),
         (inv.params[0], inv.params[1]),
+        unit,
     )?;
     // Angular velocities at the interior rows (central differences), once for both uses.
     let arm = |k: usize| -> Vec<f64> {
@@ -206,13 +219,22 @@ pub fn run(
             .collect()
     };
     let (w1, w2) = (portrait(0, &wa), portrait(1, &wb));
-    plots::phase(&mut files, &out.join("phase.png"), [&w1, &w2])?;
+    plots::phase(
+        &mut files,
+        &out.join("phase.png"),
+        [&w1, &w2],
+        &plots::cadence(&t),
+    )?;
     // The derived quantities row by row (interior rows: central differences need neighbours).
     files.write(&out.join("derived.csv"), |f| {
         use std::io::Write;
         writeln!(
             f,
-            "# chaoscope fit: angles (rad, unwrapped), angular velocities (rad/s, central differences), energy and its error (J)"
+            "# chaoscope fit: angles (rad, unwrapped), angular velocities (rad/s, central differences), energy and its error ({})",
+            match unit {
+                plots::EnergyUnit::Joule => "J",
+                plots::EnergyUnit::GravityMoment => "over the upper arm's gravity moment P",
+            }
         )?;
         writeln!(f, "t,theta1,theta2,omega1,omega2,energy,energy_error")?;
         for i in 1..frames.len() - 1 {
@@ -256,16 +278,19 @@ pub fn run(
             "inverse_square_note": "E = a (b t + d)^-2 with d = 1: a, b, d are degenerate (only a/d^2 and b/d matter)",
             "better_fit": better,
         },
-        "identified": match &identified {
+        "identified": match identified {
             Ok(id) => identified_json(id),
             Err(e) => json!({ "error": e.to_string() }),
         },
+        "verdict": verdict,
         "model": {
-            "source": source,
+            "source": source.key(),
+            "source_text": source.describe(),
             "parameters": params_json(&params),
             "start_row": fit.row, "t0": fit.t0,
             "state": fit.start.to_array(),
             "joint_damping": [fit.damping.0, fit.damping.1],
+            "energy_unit": match unit { plots::EnergyUnit::Joule => "J", plots::EnergyUnit::GravityMoment => "P" },
             "rms_position_error_in_window": fit.rms,
             "window": job.window,
             "candidates": fit.candidates, "searched_on": fit.backend,
@@ -275,6 +300,17 @@ pub fn run(
         },
     });
     write_json(&mut files, &out.join("summary.json"), &summary)?;
+    let mut fitted = params;
+    (fitted.losses.joint1, fitted.losses.joint2) = fit.damping;
+    let heading = format!(
+        "The pendulum `chaoscope fit` fitted ({}), its joint damping from the fit:\n{command}\nRead it back with --params (trajectory, the maps, forecast).",
+        source.describe()
+    );
+    files.write(&out.join(MODEL_FILE), |w| {
+        use std::io::Write;
+        write!(w, "{}", model_file(&fitted, source, &heading))?;
+        Ok(())
+    })?;
     files.commit(monitor)?;
     Ok(FitSummary {
         pivot: (pivot.x, pivot.y),
@@ -286,6 +322,11 @@ pub fn run(
         t0: fit.t0,
         agrees_until: fit.agrees_until,
         tolerance: job.tolerance,
+        verdict,
+        energy_unit: match unit {
+            plots::EnergyUnit::Joule => "J",
+            plots::EnergyUnit::GravityMoment => "P",
+        },
         output: out.clone(),
         files: [
             "positions.png",
@@ -293,54 +334,12 @@ pub fn run(
             "phase.png",
             "derived.csv",
             "summary.json",
+            MODEL_FILE,
         ]
         .iter()
         .map(|f| out.join(f))
         .collect(),
         notices,
-    })
-}
-
-/// What tracked data say about the apparatus, and the model to fit to them.
-pub(crate) struct Tracked {
-    pub pivot: crate::fit::data::Pivot,
-    pub l1: crate::fit::data::Estimate,
-    pub l2: crate::fit::data::Estimate,
-    /// The arms' angles at every row (rad, unwrapped), and the positions relative to the
-    /// pivot (x1, y1, x2, y2; m).
-    pub angles: Vec<(f64, f64)>,
-    pub measured: Vec<[f64; 4]>,
-    /// The lab preset unless a preset or file is given, the arm lengths from the data unless
-    /// given.
-    pub params: crate::model::Params,
-    /// Whether the lab preset stood in for a model not given.
-    pub lab_default: bool,
-}
-
-/// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
-/// `frames`, and the model of `given`.
-pub(crate) fn tracked_model(
-    frames: &[crate::fit::TrackedRow],
-    given: &ParamSources,
-) -> Result<Tracked> {
-    let pivot = fit_pivot(frames)?;
-    let (l1, l2) = arm_lengths(frames, (pivot.x, pivot.y));
-    let angles = angles(frames, (pivot.x, pivot.y));
-    let lab_default = given.preset.is_none() && given.params.is_none();
-    let sources = ParamSources {
-        preset: given.preset.or(lab_default.then_some(Preset::Lab)),
-        l1: given.l1.or(Some(l1.value)),
-        l2: given.l2.or(Some(l2.value)),
-        ..given.clone()
-    };
-    Ok(Tracked {
-        params: sources.resolve()?,
-        measured: crate::fit::measured(frames, (pivot.x, pivot.y)),
-        pivot,
-        l1,
-        l2,
-        angles,
-        lab_default,
     })
 }
 
@@ -371,6 +370,39 @@ pub(crate) fn params_json(p: &crate::model::Params) -> serde_json::Value {
     })
 }
 
+/// One line on the model fitted: where it came from and what it is.
+pub(crate) fn describe_model(source: &ModelSource, p: &crate::model::Params) -> String {
+    let k = p.inertia();
+    match source {
+        ModelSource::Given => format!(
+            "the model fitted: {}: bobs {} and {} kg, rods {} and {} kg, arms {:.4} and {:.4} m, g {} m/s^2",
+            source.describe(),
+            p.m1,
+            p.m2,
+            p.rod1,
+            p.rod2,
+            p.l1,
+            p.l2,
+            p.g
+        ),
+        ModelSource::Identified => format!(
+            "the model fitted: {} (no preset or params given): A/P {:.4e}, B/P {:.4e}, C/P {:.4e} s^2, Q/P {:.4}, markers at {:.4} and {:.4} m, g {:.4} m/s^2 (the motion's); an equivalent pendulum of bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg (a 1 kg scale: the motion cannot see the masses')",
+            source.describe(),
+            k.a / k.p,
+            k.b / k.p,
+            k.c / k.p,
+            k.q / k.p,
+            p.l1,
+            p.l2,
+            p.g,
+            p.m1,
+            p.m2,
+            p.rod1,
+            p.rod2
+        ),
+    }
+}
+
 /// One line on what the motion says of the pendulum.
 fn describe_identified(id: &crate::fit::identify::Identified) -> String {
     let v = |k: usize| format!("{:.4e} ± {:.1e}", id.values[k], id.errors[k]);
@@ -392,7 +424,7 @@ fn describe_identified(id: &crate::fit::identify::Identified) -> String {
         false => "",
     };
     format!(
-        "the pendulum's own moments from its motion, over P (the upper arm's gravity moment): a = A/P {} s^2, b = B/P {} s^2, c = C/P {} s^2, q = Q/P {}, damping k1 {} s, k2 {} s{damping}; {scale}; misfit {:.3} and {:.3} of the equations' size",
+        "the pendulum's own moments from its motion, over P (the upper arm's gravity moment): a = A/P {} s^2, b = B/P {} s^2, c = C/P {} s^2, q = Q/P {}, damping k1 {} s, k2 {} s{damping}; {scale}; misfit {:.1e} and {:.1e} of the equations' size",
         v(0),
         v(1),
         v(2),

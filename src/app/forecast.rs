@@ -11,6 +11,7 @@ use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::fit::forecast::{self, Forecast, ForecastSpec, QUANTILES, band_times, most_members};
 use crate::fit::forecast_plot::{self, Marks};
+use crate::fit::pendulum::Verdict;
 use crate::fit::read_frames;
 use crate::fit::window::{FITTED, TrackRows, WindowFit, fit_window};
 use crate::model::Params;
@@ -46,6 +47,9 @@ pub struct Outcome {
     pub data_horizon: Option<f64>,
     pub run: usize,
     pub data_coverage: Option<f64>,
+    /// Whether the fit follows the data in its window: where it does not, the horizons are
+    /// no findings.
+    pub verdict: Verdict,
 }
 
 impl Outcome {
@@ -147,7 +151,10 @@ pub fn fit_and_forecast(
     let window_end = t[fit.row0 + fit.rows - 1];
     let forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
     let (data_horizon, run, data_coverage) = forecast::data_horizon(&forecast, t, data);
+    let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();
+    let verdict = Verdict::judge(rms, t, data, p.l1 + p.l2);
     Ok(Outcome {
+        verdict,
         fit,
         forecast,
         tracking_error,
@@ -169,6 +176,7 @@ pub struct ForecastSummary {
     pub data_horizon_lyapunov_times: Option<f64>,
     pub lyapunov_exponent: f64,
     pub data_coverage: Option<f64>,
+    pub verdict: Verdict,
     pub output: PathBuf,
     pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
@@ -211,14 +219,17 @@ pub fn run(
     };
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     // The pivot, arm lengths and model as `fit` finds them.
-    let super::fit::Tracked {
+    let tracked = crate::fit::pendulum::tracked_model(&frames, &job.params)?;
+    let mut notices = engine.notices();
+    notices.push(super::fit::describe_model(&tracked.source, &tracked.params));
+    notices.extend(tracked.notices.iter().cloned());
+    let crate::fit::pendulum::Tracked {
         pivot,
         angles: angle,
         measured: data,
         params,
         ..
-    } = super::fit::tracked_model(&frames, &job.params)?;
-    let notices = engine.notices();
+    } = tracked;
     let (settings, end) = (job.settings, t[t.len() - 1]);
     let track = TrackRows {
         t: &t,
@@ -226,6 +237,7 @@ pub fn run(
         angles: &angle,
     };
     let o = fit_and_forecast(&track, &params, &settings, end, engine, monitor)?;
+    notices.push(o.verdict.describe());
     let f = &o.forecast;
     let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
     let (data_after, data_lt) = o.after_window(o.data_horizon);
@@ -271,6 +283,7 @@ pub fn run(
         "pivot": [pivot.x, pivot.y],
         "parameters": super::fit::params_json(&o.fit.params),
         "fit": fit_json(&o.fit),
+        "verdict": o.verdict,
         "ensemble": {
             "members": settings.members, "seed": settings.seed, "clamped_negative_damping": f.clamped,
             "tracking_error": o.tracking_error,
@@ -324,6 +337,7 @@ pub fn run(
         data_horizon_lyapunov_times: data_lt,
         lyapunov_exponent: f.lyapunov,
         data_coverage: o.data_coverage,
+        verdict: o.verdict,
         output: out.clone(),
         files: ["forecast.png", "bands.csv", "summary.json"]
             .iter()

@@ -74,8 +74,18 @@ pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let engine = super::args::lent_engine(args.precision, job.backend)?;
     let s = fit::run(&job, &engine, command_line::fit(&job), monitor)?;
     say("fit", &s.notices);
+    let agrees = match s.verdict.follows {
+        true => format!(
+            "model from t = {} s agrees within {} m until {} s ({:.2} s)",
+            s.t0,
+            s.tolerance,
+            s.agrees_until,
+            s.agrees_until - s.t0
+        ),
+        false => "the model does not follow the data: no agreement to report".to_string(),
+    };
     eprintln!(
-        "pivot ({:.4}, {:.4}) m, l1 {:.4} ± {:.4} m, l2 {:.4} ± {:.4} m; energy a exp(b t): a {:.3} J, b {:.4} 1/s (chi2/dof {:.2}); inverse square chi2/dof {:.2}: {} fits better; model from t = {} s agrees within {} m until {} s ({:.2} s) -> {}",
+        "pivot ({:.4}, {:.4}) m, l1 {:.4} ± {:.4} m, l2 {:.4} ± {:.4} m; energy a exp(b t): a {:.3} {}, b {:.4} 1/s (chi2/dof {:.2}); inverse square chi2/dof {:.2}: {} fits better; {agrees} -> {}",
         s.pivot.0,
         s.pivot.1,
         s.l1.0,
@@ -83,14 +93,11 @@ pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         s.l2.0,
         s.l2.1,
         s.exponential.0,
+        s.energy_unit,
         s.exponential.1,
         s.exponential.2,
         s.inverse_square_chi2,
         s.better,
-        s.t0,
-        s.tolerance,
-        s.agrees_until,
-        s.agrees_until - s.t0,
         s.output.display()
     );
     json(&s)

@@ -87,6 +87,14 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
     let engine = super::args::lent_engine(args.precision, job.backend)?;
     let s = forecast::run(&job, &engine, command_line::forecast(&job), monitor)?;
     say("forecast", &s.notices);
+    if !s.verdict.follows {
+        // The verdict (among the notices) says why; nothing here is a finding.
+        eprintln!(
+            "no horizons: the fitted model does not follow the data (outputs in {} for a look)",
+            s.output.display()
+        );
+        return json(&s);
+    }
     let lt = |v: Option<f64>| v.map_or(String::new(), |v| format!(" ({v:.1} Lyapunov times)"));
     eprintln!(
         "fit {}..{} s, {} members, tracking error {:.1} mm; horizon: spread > {} m {}{}, data out of the 90 % band {}{}; FTLE along the orbit {:.2} 1/s -> {}",

@@ -307,6 +307,10 @@ pub fn spelt(command: &str, text: &str) -> String {
     })
 }
 
+/// The exit status of a fit that ran but whose model does not follow its data (`fit`,
+/// `forecast`): the outputs are written, the verdict is in them.
+pub const UNFOLLOWED: u8 = 3;
+
 /// Runs a parsed command. Invalid values exit 2 (like clap's own errors) naming the flag,
 /// an interruption 130, other failures 1.
 pub fn run(cli: Cli, monitor: &Monitor) -> ExitCode {
@@ -387,6 +391,10 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
         }
     };
     let result = result.map(|mut summary| {
+        // A fit whose model does not follow its data ran to the end and wrote its outputs,
+        // but its figures are no findings: scripts learn it from the status.
+        let unfollowed =
+            summary.pointer("/verdict/follows") == Some(&serde_json::Value::Bool(false));
         if cli.json && !summary.is_null() {
             if let Some(object) = summary.as_object_mut() {
                 object.insert("command".into(), command.into());
@@ -403,9 +411,11 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
             }
             println!("{summary}");
         }
+        unfollowed
     });
     match result {
-        Ok(()) => 0,
+        Ok(false) => 0,
+        Ok(true) => UNFOLLOWED,
         Err(Error::InvalidSpec { field, reason }) => {
             eprintln!(
                 "error: invalid value for {}: {}",

@@ -34,8 +34,10 @@ pub struct Identified {
     pub values: [f64; 6],
     pub errors: [f64; 6],
     pub covariance: DMatrix<f64>,
-    /// Stretches of data used (two equations each) and their length (s).
+    /// Stretches of data used (two equations each) and their length (s), and those left out
+    /// as outliers (their residual beyond [`REJECT`] robust deviations).
     pub stretches: usize,
+    pub rejected: usize,
     pub stretch: f64,
     /// The weighted residuals' RMS in each equation (over their typical size): how well the
     /// rigid-arm model with joint damping explains the motion.
@@ -77,6 +79,11 @@ impl TimeScale {
 /// motion's fastest swings (at 100 frames a second, 12 points biased a by 25 standard
 /// errors).
 const ROWS: usize = 32;
+
+/// A stretch whose residual in either equation lies beyond this many robust standard
+/// deviations (1.4826 times the median absolute residual) is an outlier: for normal
+/// residuals one stretch in 1.7 million lies so far out.
+const REJECT: f64 = 5.0;
 
 /// A smooth bump on [-1, 1]: (1 - s^2)^4 and its first two derivatives in s.
 fn bump(s: f64) -> [f64; 3] {
@@ -126,8 +133,13 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
     let th1: Vec<f64> = track.angles.iter().map(|a| a.0).collect();
     let th2: Vec<f64> = track.angles.iter().map(|a| a.1).collect();
     // The motion's own time, 1 / RMS(omega1) from differences (whatever units the file's
-    // lengths are in), sets the stretch: long enough to average the tracking noise and keep
-    // the quadrature accurate, at least [`ROWS`]; the velocities' fits span a tenth of it.
+    // lengths are in), sets each stretch's length where it starts: long enough to average
+    // the tracking noise and keep the quadrature accurate, at least [`ROWS`]. One length for
+    // the whole recording is too short once the swing has slowed: the bump's second
+    // derivative then weighs the noise in the angles against a small acceleration, and noise
+    // in a regressor biases its moment towards zero (on the shared recording, 0.08 s
+    // stretches over its first 20 s gave a 20 % low). The velocities' fits span a tenth of
+    // the whole recording's time.
     let span = t[n - 1] - t[0];
     let rate = (n - 1) as f64 / span.max(1e-12);
     let steps: Vec<f64> = (1..n)
@@ -136,7 +148,22 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         .collect();
     let rms_omega = (steps.iter().map(|w| w * w).sum::<f64>() / steps.len().max(1) as f64).sqrt();
     let natural = 1.0 / rms_omega.max(1e-12);
-    let rows = ((natural * rate).round() as usize).max(ROWS);
+    // The rows of the stretch starting at `start`: its own motion's time, grown until it
+    // holds it.
+    let stretch_rows = |start: usize| {
+        let mut rows = ROWS;
+        for _ in 0..6 {
+            let end = (start + rows).min(n);
+            let part = &steps[start.min(steps.len())..(end - 1).min(steps.len())];
+            let rms = (part.iter().map(|w| w * w).sum::<f64>() / part.len().max(1) as f64).sqrt();
+            let want = ((rate / rms.max(1e-12)).round() as usize).clamp(ROWS, 16 * ROWS);
+            if want <= rows {
+                break;
+            }
+            rows = want;
+        }
+        rows
+    };
     let half = ((0.1 * natural * rate).round() as usize).clamp(2, 8);
     let (w1, w2) = (velocities(t, &th1, half), velocities(t, &th2, half));
     // Two equations a stretch: the regressors of (a, b, c, q, k1, k2), and the first's right
@@ -144,7 +171,12 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
     let mut rows1: Vec<([f64; 6], f64)> = Vec::new();
     let mut rows2: Vec<[f64; 6]> = Vec::new();
     let mut start = 0;
-    while start + rows <= n {
+    let mut durations = Vec::new();
+    loop {
+        let rows = stretch_rows(start);
+        if start + rows > n {
+            break;
+        }
         let range = start..start + rows;
         start += rows;
         if range
@@ -182,54 +214,95 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         }
         rows1.push((e1, rhs1));
         rows2.push(e2);
+        durations.push(tb - ta);
     }
     if rows1.len() < 8 {
         return Err(Error::invalid(
             "file",
             format!(
-                "{} s of data make {} stretches of {rows} rows ({:.3} s, about the motion's own time 1/RMS(omega1)); identifying its model takes at least 8: a longer or denser recording, or the model given as a preset or a parameter file",
+                "{} s of data make {} stretches of at least {ROWS} rows (each about the motion's own time 1/RMS(omega1), here {:.3} s over the whole); identifying its model takes at least 8: a longer or denser recording, or the model given as a preset or a parameter file",
                 span,
                 rows1.len(),
-                rows as f64 / rate
+                natural
             ),
         ));
     }
-    // Weighted least squares: each equation over its residuals' RMS (a first unweighted
-    // pass finds them), so that neither equation's units decide.
-    let solve = |w: [f64; 2]| {
-        let m = rows1.len() + rows2.len();
-        let x = DMatrix::from_fn(m, 6, |r, k| match r < rows1.len() {
-            true => rows1[r].0[k] * w[0],
-            false => rows2[r - rows1.len()][k] * w[1],
+    // Weighted least squares: each equation over its residuals' spread (a first unweighted
+    // pass finds them), so that neither equation's units decide. A stretch whose residual
+    // lies beyond REJECT robust deviations (the median's) in either equation is left out and
+    // the rest solved again, until the set holds: a hand in the frame, a marker lost for a
+    // few frames or a knock on the stand breaks the model for a stretch, and least squares
+    // would spread that one stretch over every moment (on the shared recording one such
+    // stretch in its first 20 s moved a by 20 %).
+    let m1 = rows1.len();
+    let solve = |w: [f64; 2], keep: &[bool]| {
+        let kept: Vec<usize> = (0..m1).filter(|&k| keep[k]).collect();
+        let m = 2 * kept.len();
+        let x = DMatrix::from_fn(m, 6, |r, k| match r < kept.len() {
+            true => rows1[kept[r]].0[k] * w[0],
+            false => rows2[kept[r - kept.len()]][k] * w[1],
         });
-        let y = DVector::from_fn(m, |r, _| match r < rows1.len() {
-            true => rows1[r].1 * w[0],
+        let y = DVector::from_fn(m, |r, _| match r < kept.len() {
+            true => rows1[kept[r]].1 * w[0],
             false => 0.0,
         });
         let xtx = x.transpose() * &x;
         let beta = xtx.clone().lu().solve(&(x.transpose() * &y));
         (x, y, xtx, beta)
     };
-    let (x, y, _, beta) = solve([1.0, 1.0]);
     let singular = || {
         Error::invalid(
             "file",
             "the motion does not determine the pendulum's moments (both arms must swing, each against the other): give the model as a preset or a parameter file",
         )
     };
-    let beta = beta.ok_or_else(singular)?;
+    // Each stretch's residuals in both equations (unweighted), for the moments `beta`.
+    let residuals = |beta: &DVector<f64>| -> Vec<[f64; 2]> {
+        (0..m1)
+            .map(|k| {
+                let dot = |e: &[f64; 6]| (0..6).map(|j| e[j] * beta[j]).sum::<f64>();
+                [rows1[k].1 - dot(&rows1[k].0), -dot(&rows2[k])]
+            })
+            .collect()
+    };
+    let robust = |r: &[[f64; 2]], keep: &[bool], e: usize| {
+        let mut a: Vec<f64> = (0..m1)
+            .filter(|&k| keep[k])
+            .map(|k| r[k][e].abs())
+            .collect();
+        let mid = a.len() / 2;
+        1.4826 * *a.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let mut keep = vec![true; m1];
+    let mut weights = [1.0, 1.0];
+    let mut rounds = 0;
+    loop {
+        let beta = solve(weights, &keep).3.ok_or_else(singular)?;
+        let r = residuals(&beta);
+        let spread = [robust(&r, &keep, 0), robust(&r, &keep, 1)];
+        let next: Vec<bool> = r
+            .iter()
+            .map(|r| (0..2).all(|e| r[e].abs() <= REJECT * spread[e]))
+            .collect();
+        let new_weights = spread.map(|s| 1.0 / s.max(1e-300));
+        rounds += 1;
+        let settled = next == keep && rounds > 1;
+        if settled || rounds > 8 || next.iter().filter(|&&k| k).count() < 8 {
+            break;
+        }
+        keep = next;
+        weights = new_weights;
+    }
+    let rejected = keep.iter().filter(|&&k| !k).count();
+    let (x, y, xtx, beta) = match solve(weights, &keep) {
+        (x, y, xtx, Some(b)) => (x, y, xtx, b),
+        _ => return Err(singular()),
+    };
     let r = &y - &x * &beta;
+    let kept = m1 - rejected;
     let rms = |part: std::ops::Range<usize>| {
         (part.clone().map(|k| r[k] * r[k]).sum::<f64>() / part.len().max(1) as f64).sqrt()
     };
-    let m1 = rows1.len();
-    let weights = [
-        1.0 / rms(0..m1).max(1e-300),
-        1.0 / rms(m1..2 * m1).max(1e-300),
-    ];
-    let (x, y, xtx, beta) = solve(weights);
-    let beta = beta.ok_or_else(singular)?;
-    let r = &y - &x * &beta;
     let dof = (x.nrows() - 6).max(1);
     let s2 = r.norm_squared() / dof as f64;
     let covariance = xtx.try_inverse().ok_or_else(singular)? * s2;
@@ -244,8 +317,8 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         / m1 as f64)
         .sqrt();
     let misfit = [
-        rms(0..m1) / weights[0] / size1.max(1e-300),
-        rms(m1..2 * m1) / weights[1] / size2.max(1e-300),
+        rms(0..kept) / weights[0] / size1.max(1e-300),
+        rms(kept..2 * kept) / weights[1] / size2.max(1e-300),
     ];
     // g_implied = l1 q / c, its relative variance from q's and c's.
     let (c, q) = (values[2], values[3]);
@@ -267,8 +340,9 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         values,
         errors,
         covariance,
-        stretches: m1,
-        stretch: rows as f64 / rate,
+        stretches: kept,
+        rejected,
+        stretch: durations.iter().sum::<f64>() / durations.len().max(1) as f64,
         misfit,
         l1,
         l2,

@@ -161,9 +161,14 @@ pub fn fit_model(
             .sum()
     };
     // Candidates: angles within +-0.15 rad (a few cm at these lengths), angular velocities
-    // within +-4 rad/s (central differences over 2/3 s are crude), damping 0..0.01 N m s.
+    // within +-4 rad/s (central differences over 2/3 s are crude), damping rates on the
+    // upper arm's inertia (scaling every mass changes nothing).
     let spans = [0.15, 4.0, 0.15, 4.0];
-    let dampings: Vec<f64> = (0..4).map(|k| 0.01 * k as f64 / 3.0).collect();
+    let scale = super::window::damping_scale(&spec.params);
+    let dampings: Vec<f64> = super::window::DAMPING_RATES
+        .iter()
+        .map(|r| r * scale)
+        .collect();
     let per_damping = (spec.candidates / dampings.len()).max(1);
     let starts: Vec<State> = (0..per_damping)
         .map(|k| {
@@ -203,8 +208,10 @@ pub fn fit_model(
                 .flat_map(|((_, a), b)| (0..4).map(move |k| a[k] - b[k])),
         )
     };
-    let steps = [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5];
-    let c0 = (best.2 + 1e-3).sqrt();
+    // The damping's root on the inertia's scale (the lab's 1e-5 on its 0.064 kg m^2).
+    let root = (1.5e-4 * scale).sqrt();
+    let steps = [1e-6, 1e-5, 1e-6, 1e-5, 3e-3 * root, 3e-3 * root];
+    let c0 = (best.2 + 1.5e-2 * scale).sqrt();
     let b = best.1.to_array();
     let refined = least_squares(
         |q| (residuals(q), numeric_jacobian(&residuals, q, &steps)),

@@ -118,12 +118,13 @@ pub fn positions(
 pub fn energy(
     out: &mut Outputs,
     path: &Path,
-    t: &[f64],
-    e: &[f64],
-    de: &[f64],
+    energies: &super::Energies,
     exponential: (f64, f64),
     inverse_square: (f64, f64),
+    unit: EnergyUnit,
 ) -> Result<()> {
+    let (t, e, de) = (&energies.t, &energies.e, &energies.de);
+    let u = unit.symbol();
     render::register_font();
     let (w, h) = (1000u32, 650u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
@@ -134,7 +135,10 @@ pub fn energy(
         let xr = range(t.iter().copied(), 0.02);
         let mut chart = ChartBuilder::on(&root)
             .caption(
-                "Energy of the tracked pendulum (J), with error bars, and two decay laws",
+                format!(
+                    "Energy of the tracked pendulum ({}), with error bars, and two decay laws",
+                    unit.name()
+                ),
                 ("sans-serif", 20),
             )
             .margin(15)
@@ -145,7 +149,7 @@ pub fn energy(
         chart
             .configure_mesh()
             .x_desc("t (s)")
-            .y_desc("E (J)")
+            .y_desc(unit.axis())
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
             .map_err(err)?;
@@ -169,7 +173,7 @@ pub fn energy(
                 FIT_A.stroke_width(2),
             ))
             .map_err(err)?
-            .label(format!("a exp(b t): a = {a:.3} J, b = {b:.4} 1/s"))
+            .label(format!("a exp(b t): a = {a:.3} {u}, b = {b:.4} 1/s"))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], FIT_A.stroke_width(2)));
         let (a2, b2) = inverse_square;
         chart
@@ -178,7 +182,7 @@ pub fn energy(
                 FIT_B.stroke_width(2),
             ))
             .map_err(err)?
-            .label(format!("a (b t + 1)^-2: a = {a2:.3} J, b = {b2:.4} 1/s"))
+            .label(format!("a (b t + 1)^-2: a = {a2:.3} {u}, b = {b2:.4} 1/s"))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], FIT_B.stroke_width(2)));
         chart
             .configure_series_labels()
@@ -191,8 +195,68 @@ pub fn energy(
     save(out, path, w, h, &rgb, "energy and decay fits")
 }
 
-/// omega against theta for both arms, as measured (central differences).
-pub fn phase(out: &mut Outputs, path: &Path, arms: [&[(f64, f64)]; 2]) -> Result<()> {
+/// The unit of an energy plot: joules (a model with masses given), or the upper arm's
+/// gravity moment P (a model found from the motion, which cannot see the masses' scale).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EnergyUnit {
+    Joule,
+    GravityMoment,
+}
+
+impl EnergyUnit {
+    fn symbol(self) -> &'static str {
+        match self {
+            EnergyUnit::Joule => "J",
+            EnergyUnit::GravityMoment => "P",
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            EnergyUnit::Joule => "J",
+            EnergyUnit::GravityMoment => "in units of the upper arm's gravity moment P",
+        }
+    }
+
+    fn axis(self) -> &'static str {
+        match self {
+            EnergyUnit::Joule => "E (J)",
+            EnergyUnit::GravityMoment => "E / P",
+        }
+    }
+}
+
+/// How often rows come, as a title says it: "every 1/3 s", "400 times a second".
+pub fn cadence(t: &[f64]) -> String {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return "once".into();
+    }
+    let mid = steps.len() / 2;
+    let step = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    // Three significant figures, no trailing zeros.
+    let figures = |x: f64| {
+        let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+        let text = format!("{x:.decimals$}");
+        match text.contains('.') {
+            true => text.trim_end_matches('0').trim_end_matches('.').to_string(),
+            false => text,
+        }
+    };
+    match 1.0 / step {
+        r if r >= 1.5 => format!("{} times a second", figures(r)),
+        _ => format!("every {} s", figures(step)),
+    }
+}
+
+/// omega against theta for both arms, as measured (central differences), `cadence` as
+/// [`cadence`] says it.
+pub fn phase(
+    out: &mut Outputs,
+    path: &Path,
+    arms: [&[(f64, f64)]; 2],
+    cadence: &str,
+) -> Result<()> {
     render::register_font();
     let (w, h) = (1200u32, 550u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
@@ -205,7 +269,7 @@ pub fn phase(out: &mut Outputs, path: &Path, arms: [&[(f64, f64)]; 2]) -> Result
             let mut chart = ChartBuilder::on(area)
                 .caption(
                     format!(
-                        "Arm {}: ω{} (rad/s) against θ{} (rad), measured every 1/3 s",
+                        "Arm {}: ω{} (rad/s) against θ{} (rad), measured {cadence}",
                         k + 1,
                         k + 1,
                         k + 1

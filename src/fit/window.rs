@@ -57,9 +57,23 @@ const PRIORS: usize = 4;
 pub const STEPS_PER_SECOND: f64 = 300.0;
 
 /// The parameters' steps (FITTED's order) of the central differences for the Jacobian:
-/// near the square root of f64's rounding times each parameter's size.
-const DIFFERENCE_STEPS: [f64; PARAMETERS] =
-    [1e-6, 1e-5, 1e-6, 1e-5, 1e-5, 1e-5, 1e-6, 1e-6, 1e-6, 1e-6];
+/// near the square root of f64's rounding times each parameter's size; the damping's on
+/// the scale of `p`'s upper arm's inertia ([`damping_scale`]).
+fn difference_steps(p: &Params) -> [f64; PARAMETERS] {
+    let c = 1e-4 * damping_scale(p);
+    [1e-6, 1e-5, 1e-6, 1e-5, c, c, 1e-6, 1e-6, 1e-6, 1e-6]
+}
+
+/// The joint damping the search tries, as rates on the upper arm's inertia (c / A, 1/s):
+/// none up to the lab pendulum's 0.01 N m s on its 0.064 kg m^2 upper arm. A pendulum of ten
+/// times the mass damped alike has ten times the damping: the search scales with it, so
+/// that scaling every mass changes nothing.
+pub const DAMPING_RATES: [f64; 4] = [0.0, 0.16 / 3.0, 0.32 / 3.0, 0.16];
+
+/// A damping (N m s) over this is a rate (1/s): the upper arm's inertia A (kg m^2).
+pub fn damping_scale(p: &Params) -> f64 {
+    p.inertia().a.abs().max(1e-300)
+}
 
 /// Candidates of the search refined by least squares, the least result kept.
 const REFINED: usize = 4;
@@ -131,7 +145,7 @@ impl WindowFit {
             DVector::from_iterator(4 * rows.len(), rows.into_iter().flatten())
         };
         let values = DVector::from_row_slice(&self.values);
-        let j = numeric_jacobian(&flat, &values, &DIFFERENCE_STEPS);
+        let j = numeric_jacobian(&flat, &values, &difference_steps(&self.params));
         let spread = &j * &self.covariance;
         (0..times.len())
             .map(|k| {
@@ -323,9 +337,15 @@ pub fn fit_window(
         omega2: w(|a| a.1),
     };
     // Candidates around the guess as `fit` searches them: angles +-0.15 rad, angular
-    // velocities +-4 rad/s (differences over 2/3 s are crude), damping 0 .. 0.01 N m s.
+    // velocities +-4 rad/s (differences over 2/3 s are crude), damping rates on the upper
+    // arm's inertia, and the model's own damping where it states one.
     let spans = [0.15, 4.0, 0.15, 4.0];
-    let dampings: Vec<f64> = (0..4).map(|k| 0.01 * k as f64 / 3.0).collect();
+    let own = (p.losses.joint1 + p.losses.joint2) / 2.0;
+    let dampings: Vec<f64> = DAMPING_RATES
+        .iter()
+        .map(|r| r * damping_scale(p))
+        .chain((own > 0.0).then_some(own))
+        .collect();
     let per_damping = (candidates / dampings.len()).max(1);
     let mut starts = Vec::with_capacity(per_damping * dampings.len());
     let mut pairs = Vec::with_capacity(starts.capacity());
@@ -400,7 +420,7 @@ pub fn fit_window(
     let solve = |q0: DVector<f64>, error: f64| {
         let r = |q: &DVector<f64>| residuals(q, error);
         least_squares(
-            |q| (r(q), numeric_jacobian(&r, q, &DIFFERENCE_STEPS)),
+            |q| (r(q), numeric_jacobian(&r, q, &difference_steps(p))),
             q0,
             100,
         )

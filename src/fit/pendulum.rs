@@ -1,0 +1,399 @@
+//! Which pendulum a track is fitted with, and whether the fit follows it. A model the user
+//! states (a preset, a parameter file) is used as given; with none, the pendulum's own
+//! moments are found from its motion ([`super::identify`]), never the lab's apparatus in
+//! silence. A fit is judged against the tracking error the rigid rods measure
+//! ([`super::window::rod_correlation`]): a model that strays from the data by many times
+//! that is no model of this pendulum, and its horizons are no findings.
+
+use super::data::{Estimate, Pivot, TrackedRow, angles, arm_lengths, fit_pivot};
+use super::identify::{Identified, identify};
+use super::window::{TrackRows, rod_correlation};
+use crate::error::{Error, Result};
+use crate::model::{Params, State};
+use crate::params::ParamSources;
+
+/// Where the fitted model came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelSource {
+    /// A preset or a parameter file (with any single values on top).
+    Given,
+    /// The pendulum's own moments, found from the track's motion.
+    Identified,
+}
+
+impl ModelSource {
+    pub fn describe(&self) -> &'static str {
+        match self {
+            ModelSource::Given => "the model given",
+            ModelSource::Identified => "the pendulum's own moments, found from its motion",
+        }
+    }
+
+    /// Short, for summary.json.
+    pub fn key(&self) -> &'static str {
+        match self {
+            ModelSource::Given => "given",
+            ModelSource::Identified => "identified",
+        }
+    }
+}
+
+/// What tracked data say about the apparatus, and the model to fit to them.
+pub struct Tracked {
+    pub pivot: Pivot,
+    pub l1: Estimate,
+    pub l2: Estimate,
+    /// The rows' times (s), the arms' angles (rad, unwrapped) and the positions relative to
+    /// the pivot (x1, y1, x2, y2; m).
+    pub t: Vec<f64>,
+    pub angles: Vec<(f64, f64)>,
+    pub measured: Vec<[f64; 4]>,
+    pub params: Params,
+    pub source: ModelSource,
+    /// What the motion says of the pendulum (the model itself where none was given), or
+    /// why it could not say.
+    pub identified: std::result::Result<Identified, String>,
+    /// Notices on the model (a negative damping, a time scale that disagrees).
+    pub notices: Vec<String>,
+}
+
+impl Tracked {
+    pub fn rows(&self) -> TrackRows<'_> {
+        TrackRows {
+            t: &self.t,
+            data: &self.measured,
+            angles: &self.angles,
+        }
+    }
+}
+
+/// Values that state a part of a pendulum, which only a stated model can hold: with none,
+/// the motion fixes them.
+fn stated_parts(given: &ParamSources) -> Option<&'static str> {
+    let parts = [
+        ("m1", given.m1.is_some()),
+        ("m2", given.m2.is_some()),
+        ("rod_mass", given.rod_mass.is_some()),
+        ("l1", given.l1.is_some()),
+        ("l2", given.l2.is_some()),
+        (
+            "air_drag",
+            given.air_drag
+                || given.rho.is_some()
+                || given.cw.is_some()
+                || given.drag_area.is_some()
+                || given.rod_drag_area.is_some(),
+        ),
+        (
+            "bearing_friction",
+            given.bearing_friction.is_some() || given.bearing_radius.is_some(),
+        ),
+    ];
+    parts.into_iter().find(|p| p.1).map(|p| p.0)
+}
+
+/// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
+/// `frames`, and the model: `given`'s where it names a preset or a file (the arm lengths
+/// from the data unless given), else the one the motion implies.
+pub fn tracked_model(frames: &[TrackedRow], given: &ParamSources) -> Result<Tracked> {
+    let pivot = fit_pivot(frames)?;
+    let (l1, l2) = arm_lengths(frames, (pivot.x, pivot.y));
+    let angles = angles(frames, (pivot.x, pivot.y));
+    let measured = super::measured(frames, (pivot.x, pivot.y));
+    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    let stated = given.preset.is_some() || given.params.is_some();
+    let rows = TrackRows {
+        t: &t,
+        data: &measured,
+        angles: &angles,
+    };
+    let mut notices = Vec::new();
+    let (params, source, identified) = if stated {
+        let sources = ParamSources {
+            l1: given.l1.or(Some(l1.value)),
+            l2: given.l2.or(Some(l2.value)),
+            ..given.clone()
+        };
+        let params = sources.resolve()?;
+        if params.losses.joint1 != 0.0 || params.losses.joint2 != 0.0 {
+            notices.push(format!(
+                "the joint damping the model states ({:.3e} and {:.3e} N m s) is one of the fit's starts: the fit finds its own",
+                params.losses.joint1, params.losses.joint2
+            ));
+        }
+        let identified = identify(&rows, params.g).map_err(|e| e.to_string());
+        (params, ModelSource::Given, identified)
+    } else {
+        if let Some(field) = stated_parts(given) {
+            return Err(Error::invalid(
+                field,
+                "states a part of a pendulum, but no model was given for it to be part of: with no preset or params the model is found from the motion, which fixes it; give a preset or params to state a model, or leave it out",
+            ));
+        }
+        let g = given.g.unwrap_or(Params::default().g);
+        let id = identify(&rows, g).map_err(|e| match e {
+            Error::InvalidSpec { reason, .. } => Error::invalid(
+                "params",
+                format!(
+                    "no model was given (a preset or params), and the file's motion does not give one: {reason}"
+                ),
+            ),
+            e => e,
+        })?;
+        if !id.physical() {
+            return Err(Error::invalid(
+                "params",
+                format!(
+                    "no model was given (a preset or params), and the moments the motion implies are no real pendulum's (a {:.3e}, b {:.3e}, c {:.3e} s^2, q {:.3e}: inertias and gravity's moments must be > 0 and a b > c^2): the track may not follow two rigid arms; state the model",
+                    id.values[0], id.values[1], id.values[2], id.values[3]
+                ),
+            ));
+        }
+        let params = id.params()?;
+        (params, ModelSource::Identified, Ok(id))
+    };
+    if let Ok(id) = &identified {
+        for (k, joint) in [(4, "pivot"), (5, "middle joint")] {
+            if id.values[k] < 0.0 {
+                notices.push(format!(
+                    "the motion implies a negative damping at the {joint} ({:.2e} ± {:.1e} s over P): the data gain energy there, from a drive, a hand, or tracking errors that lean one way{}",
+                    id.values[k],
+                    id.errors[k],
+                    match source {
+                        ModelSource::Identified => "; the model starts from none and the fit finds the damping",
+                        ModelSource::Given => "",
+                    }
+                ));
+            }
+        }
+    }
+    Ok(Tracked {
+        pivot,
+        l1,
+        l2,
+        t,
+        angles,
+        measured,
+        params,
+        source,
+        identified,
+        notices,
+    })
+}
+
+/// How many times the tracking error a fit may stray from the data in its window and still
+/// be said to follow them. A model that is right strays by the tracking error; the rods
+/// measure it only along themselves, and errors along the motion (a frame's timing, blur, a
+/// marker tracked by hand) are often a few times larger: the lab's hand-measured table
+/// strays 6.5 times its rods' error from the lab's own apparatus, the shared high-speed
+/// recording 2.4 times from its identified model. The failures this guards against stray
+/// by 70-200 times (the lab's apparatus forced on another pendulum: 180).
+pub const FOLLOWS_WITHIN: f64 = 8.0;
+
+/// The tracking error a fit is judged against never goes below this share of the reach
+/// (l1 + l2): a synthetic or encoder track's errors near zero leave the integrator's and the
+/// model's own few parts in a hundred thousand.
+pub const TRACKING_FLOOR: f64 = 1e-4;
+
+/// Whether a fit follows the data in its window.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Verdict {
+    pub follows: bool,
+    /// The fit's RMS residual per coordinate in the window (m).
+    pub rms: f64,
+    /// The tracking error per coordinate (m): what the rigid rods measure over the whole
+    /// track, with what the times' rounding moves a mass along its path, floored at
+    /// [`TRACKING_FLOOR`] of the reach.
+    pub tracking_error: f64,
+    /// Its parts: along the rods (m), and the times' rounding (s, as written in the file)
+    /// times the masses' RMS speed per coordinate.
+    pub rods: f64,
+    pub time_rounding: f64,
+    /// rms / tracking_error, and the most it may be ([`FOLLOWS_WITHIN`]).
+    pub ratio: f64,
+    pub limit: f64,
+}
+
+/// The rounding of the times `t` (s): the step to which they are written (the largest
+/// power of ten of which every time is a whole multiple, 0.001 for 0.333, 0.667, 1.0),
+/// where the steps between rows show it (they differ by that much: a clock of 1/3 s written
+/// to milliseconds); 0 where they do not (a clock of 1/200 s written exactly).
+pub fn time_quantum(t: &[f64]) -> f64 {
+    let q = (0..=9)
+        .map(|d| 10f64.powi(-d))
+        .find(|q| {
+            t.iter()
+                .all(|x| ((x / q) - (x / q).round()).abs() < 1e-6 * (1.0 + (x / q).abs() * 1e-9))
+        })
+        .unwrap_or(0.0);
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return 0.0;
+    }
+    let mid = steps.len() / 2;
+    let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let rounded = steps.iter().any(|s| {
+        let off = (s - median).abs();
+        off > 0.5 * q && off < 1.5 * q
+    });
+    if rounded { q } else { 0.0 }
+}
+
+/// The RMS speed per coordinate of both masses (m/s), by central differences.
+fn speed_per_coordinate(t: &[f64], data: &[[f64; 4]]) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in 1..t.len().saturating_sub(1) {
+        let h = t[i + 1] - t[i - 1];
+        for (after, before) in data[i + 1].iter().zip(&data[i - 1]) {
+            let v = (after - before) / h;
+            if v.is_finite() {
+                sum += v * v;
+                n += 1;
+            }
+        }
+    }
+    (sum / n.max(1) as f64).sqrt()
+}
+
+impl Verdict {
+    /// Judges a fit that strays from the track (`t`, `data`: positions relative to the
+    /// pivot) by `rms` per coordinate in its window, for a pendulum of `reach` (m).
+    pub fn judge(rms: f64, t: &[f64], data: &[[f64; 4]], reach: f64) -> Verdict {
+        let rods = rod_correlation(data).rms;
+        // A time written to 0.01 s is off by up to 5 ms, uniformly: sd q / sqrt 12, which
+        // moves a mass along its path by that times its speed.
+        let time_rounding = time_quantum(t) / 12f64.sqrt() * speed_per_coordinate(t, data);
+        let tracking_error = rods.hypot(time_rounding).max(TRACKING_FLOOR * reach);
+        let ratio = rms / tracking_error;
+        Verdict {
+            follows: ratio.is_finite() && ratio <= FOLLOWS_WITHIN,
+            rms,
+            tracking_error,
+            rods,
+            time_rounding,
+            ratio,
+            limit: FOLLOWS_WITHIN,
+        }
+    }
+
+    /// One line for the console.
+    pub fn describe(&self) -> String {
+        match self.follows {
+            true => format!(
+                "the model follows the data in the window: RMS {:.3} mm per coordinate, {:.1} times the tracking error ({})",
+                1e3 * self.rms,
+                self.ratio,
+                self.error_parts()
+            ),
+            false => format!(
+                "THE MODEL DOES NOT FOLLOW THE DATA: in the window it strays by {:.3} mm RMS per coordinate, {:.1} times the tracking error ({}; at most {} times is a fit); its horizons are no findings. State the pendulum's model (a preset or params), or try another window",
+                1e3 * self.rms,
+                self.ratio,
+                self.error_parts(),
+                self.limit
+            ),
+        }
+    }
+
+    fn error_parts(&self) -> String {
+        let mm = |x: f64| format!("{:.3} mm", 1e3 * x);
+        match self.time_rounding > 0.1 * self.rods {
+            true => format!(
+                "{}: {} along the rigid rods, {} from the times' rounding",
+                mm(self.tracking_error),
+                mm(self.rods),
+                mm(self.time_rounding)
+            ),
+            false => format!("{} along the rigid rods", mm(self.tracking_error)),
+        }
+    }
+}
+
+/// Energies at the interior rows in units of the upper arm's gravity moment P (E/P, zero
+/// hanging at rest) by the model `p` itself (rods and bars included), angular velocities by
+/// central differences, and their errors: a mass's velocity error `dv` (m/s) moves omega1
+/// by dv / l1 and omega2 by sqrt 2 dv / l2 (both its ends' errors), dE = |M omega| d omega.
+pub fn model_energies(t: &[f64], angles: &[(f64, f64)], p: &Params, dv: f64) -> super::Energies {
+    let k = p.inertia();
+    let floor = p.potential_energy(0.0, 0.0);
+    let mut out = super::Energies {
+        t: Vec::new(),
+        e: Vec::new(),
+        de: Vec::new(),
+    };
+    for i in 1..t.len() - 1 {
+        let h = t[i + 1] - t[i - 1];
+        let s = State {
+            theta1: angles[i].0,
+            omega1: (angles[i + 1].0 - angles[i - 1].0) / h,
+            theta2: angles[i].1,
+            omega2: (angles[i + 1].1 - angles[i - 1].1) / h,
+        };
+        let cd = (s.theta1 - s.theta2).cos();
+        let m_omega = [
+            k.a * s.omega1 + k.c * cd * s.omega2,
+            k.c * cd * s.omega1 + k.b * s.omega2,
+        ];
+        let (d1, d2) = (dv / p.l1, std::f64::consts::SQRT_2 * dv / p.l2);
+        out.t.push(t[i]);
+        out.e.push((p.energy(&s) - floor) / k.p);
+        out.de.push((m_omega[0] * d1).hypot(m_omega[1] * d2) / k.p);
+    }
+    out
+}
+
+/// The model `p` as a parameter file that `--params` reads back (src/params.rs), headed by
+/// `heading` (a comment: where it came from). A model found from the motion is written by
+/// its moments over P (table `[moments]`: the masses' scale is not in the motion); a model
+/// given by masses, by them, its losses included.
+pub fn model_file(p: &Params, source: &ModelSource, heading: &str) -> String {
+    let mut out = String::new();
+    for line in heading.lines() {
+        out.push_str(&format!("# {line}\n"));
+    }
+    let l = &p.losses;
+    match source {
+        ModelSource::Identified => {
+            let k = p.inertia();
+            out.push_str(&format!(
+                "l1 = {}  # the upper marker's distance from the pivot (m): the middle joint\n\
+                 l2 = {}  # the lower marker's distance from the middle joint (m)\n\
+                 g = {}  # the gravity under which the model follows the data's metres and seconds (m/s^2)\n\
+                 \n\
+                 [moments]  # over P, the upper arm's gravity moment\n\
+                 a = {}  # A/P (s^2): the upper arm's inertia about the pivot, the lower arm's mass at the joint\n\
+                 b = {}  # B/P (s^2): the lower arm's inertia about the middle joint\n\
+                 c = {}  # C/P (s^2): the arms' coupling\n\
+                 k1 = {}  # the pivot's damping over P (s)\n\
+                 k2 = {}  # the middle joint's damping over P (s)\n",
+                p.l1,
+                p.l2,
+                p.g,
+                k.a / k.p,
+                k.b / k.p,
+                k.c / k.p,
+                l.joint1 / k.p,
+                l.joint2 / k.p
+            ));
+        }
+        ModelSource::Given => {
+            out.push_str(&format!(
+                "m1 = {}\nm2 = {}\nl1 = {}\nl2 = {}\ng = {}\nrod_mass = [{}, {}]\njoint_damping = [{}, {}]  # N m s\n",
+                p.m1, p.m2, p.l1, p.l2, p.g, p.rod1, p.rod2, l.joint1, l.joint2
+            ));
+            if l.has_bearings() {
+                out.push_str(&format!(
+                    "bearing_friction = {}\nbearing_radius = {}\n",
+                    l.bearing, l.bearing_radius
+                ));
+            }
+            if l.has_drag() {
+                out.push_str(&format!(
+                    "\n[air_drag]\nrho = {}\ncw = {}\nbob_area = [{}, {}]\nrod_area = [{}, {}]\n",
+                    l.rho, l.cw, l.bob_area1, l.bob_area2, l.rod_area1, l.rod_area2
+                ));
+            }
+        }
+    }
+    out
+}
