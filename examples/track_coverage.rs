@@ -77,11 +77,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let job = ForecastJob {
             file: csv,
             output: out.clone(),
+            units: Default::default(),
             settings: ForecastSettings {
-                window: (0.8, 2.3),
+                window: Some((0.8, 2.3)),
                 members: 10_000,
                 seed: k as u64 + 1,
-                tolerance: 0.03,
+                tolerance: Some(0.03),
                 tracking_error: std::env::var("TRACKING_ERROR")
                     .ok()
                     .and_then(|v| v.parse().ok()),

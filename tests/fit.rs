@@ -447,3 +447,100 @@ fn a_model_that_does_not_follow_is_a_verdict_not_a_result() {
     assert!(err.contains("DOES NOT FOLLOW"), "{err}");
     assert!(!err.contains("agrees within"), "{err}");
 }
+
+/// Files as users have them: frame numbers at a frame rate, pixels (y down) at a scale, a
+/// pivot that moves, `;` separators with decimal commas, tabs and a byte-order mark; and what
+/// cannot be metres or seconds refused, naming the option that fixes it.
+#[test]
+fn files_as_users_have_them() {
+    use chaoscope::fit::data::{PixelScale, Units};
+    let dir = tempfile::tempdir().unwrap();
+    let semicolons = dir.path().join("semicolons.csv");
+    let rows: String = (0..6)
+        .map(|k| format!("{k};10,5;20;{};120;{};200\n", 10.5 + 300.0, 10.5 + 300.0))
+        .collect();
+    std::fs::write(&semicolons, format!("frame;x0;y0;x1;y1;x2;y2\n{rows}")).unwrap();
+    let units = Units {
+        pixels_per_metre: Some(PixelScale::PerMetre(1000.0)),
+        frame_rate: Some(100.0),
+    };
+    let read = fit::read_frames(&semicolons, &units).unwrap();
+    // Frame 3 at 100 a second; 300 px right and 100 px down of the pivot at 1000 px/m.
+    let r = read[3];
+    assert!((r.t - 0.03).abs() < 1e-12, "{r:?}");
+    assert!(
+        (r.x1 - 0.3).abs() < 1e-12 && (r.y1 + 0.1).abs() < 1e-12,
+        "{r:?}"
+    );
+    assert!((r.y2 + 0.18).abs() < 1e-12, "{r:?}");
+    // Tabs and a byte-order mark, times in seconds and metres.
+    let tabs = dir.path().join("tabs.csv");
+    let rows: String = (0..6)
+        .map(|k| format!("{}\t0,1\t-0,3\t0,1\t-0,5\n", k as f64 / 4.0))
+        .collect();
+    std::fs::write(
+        &tabs,
+        format!(
+            "\u{feff}t\tx1\ty1\tx2\ty2\n{}",
+            rows.replace("0.25", "0,25")
+        ),
+    )
+    .unwrap();
+    let read = fit::read_frames(&tabs, &Units::default()).unwrap();
+    assert_eq!((read[1].t, read[1].x1, read[1].y2), (0.25, 0.1, -0.5));
+    // Frame numbers without a rate: the error names the rate.
+    let e = fit::read_frames(&semicolons, &Units::default()).unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            chaoscope::Error::InvalidSpec {
+                field: "frame_rate",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // The command line: pixels read as metres, frame numbers read as seconds.
+    let truth = compound(1.0);
+    let csv = compound_csv(&truth, State::at_rest(2.0, 2.6), 200.0, 3.0, 1e-4);
+    let scaled = |f: &dyn Fn(usize, f64) -> f64| -> String {
+        csv.lines()
+            .enumerate()
+            .map(|(i, line)| match i {
+                0 => format!("{line}\n"),
+                _ => {
+                    let v: Vec<String> = line
+                        .split(',')
+                        .enumerate()
+                        .map(|(c, x)| f(c, x.parse().unwrap()).to_string())
+                        .collect();
+                    v.join(",") + "\n"
+                }
+            })
+            .collect()
+    };
+    for (name, text, flag) in [
+        (
+            "pixels.csv",
+            scaled(&|c, x| if c == 0 { x } else { 1200.0 * x }),
+            "--pixels-per-metre",
+        ),
+        (
+            "frames.csv",
+            scaled(&|c, x| if c == 0 { 200.0 * x } else { x }),
+            "--frame-rate",
+        ),
+    ] {
+        let file = dir.path().join(name);
+        std::fs::write(&file, text).unwrap();
+        chaoscope()
+            .arg("fit")
+            .arg(&file)
+            .args(["--backend", "cpu", "--output"])
+            .arg(dir.path().join("out"))
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(flag));
+    }
+    assert!(!dir.path().join("out").exists(), "nothing written");
+}

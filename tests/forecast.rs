@@ -245,10 +245,10 @@ fn forecast_bands_agree_on_gpu_and_cpu_across_chunks() {
     let truth = lab_with_damping();
     let track_ = make_track(&truth, RELEASE, 100.0, 1.5, 0.002, 1);
     let settings = ForecastSettings {
-        window: (0.0, 1.0),
+        window: Some((0.0, 1.0)),
         members: 16,
         seed: 1,
-        tolerance: 0.03,
+        tolerance: Some(0.03),
         tracking_error: None,
         candidates: 256,
     };
@@ -359,10 +359,10 @@ fn zero_noise_twin_holds_the_truth() {
     // RK4 at 1/300 s: its error over 1.5 s of this chaotic release is micrometres.
     assert!(error < 1e-5, "the model's step errs by {error} m");
     let settings = ForecastSettings {
-        window: (0.0, 1.0),
+        window: Some((0.0, 1.0)),
         members: 200,
         seed: 1,
-        tolerance: 0.03,
+        tolerance: Some(0.03),
         tracking_error: None,
         candidates: 1024,
     };
@@ -430,10 +430,10 @@ fn twin_experiments_are_calibrated() {
         rates: vec![100.0],
         replicates: 24,
         settings: ForecastSettings {
-            window: (0.0, 1.0),
+            window: Some((0.0, 1.0)),
             members: 1000,
             seed: 1,
-            tolerance: 0.03,
+            tolerance: Some(0.03),
             tracking_error: None,
             candidates: 1024,
         },
@@ -541,6 +541,10 @@ fn forecast_of_the_lab_run() {
         .args([
             "--preset",
             "lab",
+            "--window",
+            "0.6:2.1",
+            "--tolerance",
+            "0.03",
             "--members",
             "500",
             "--candidates",

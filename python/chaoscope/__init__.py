@@ -327,9 +327,11 @@ def fit(
     file: str,
     *,
     output: str = "out/fit",
-    start: float = 0.8,
-    window: float = 1.5,
-    tolerance: float = 0.03,
+    pixels_per_metre: Union[None, float, str] = None,
+    frame_rate: Optional[float] = None,
+    start: Optional[float] = None,
+    window: Optional[float] = None,
+    tolerance: Optional[float] = None,
     candidates: int = 65536,
     velocity_error: float = 0.1,
     m1: Optional[float] = None,
@@ -352,10 +354,13 @@ def fit(
     progress: Progress = None,
 ) -> dict:
     """The model fitted to a camera-tracked run (``chaoscope fit``): ``file`` is a CSV of
-    t, x1, y1, x2, y2 (s, m; y up). Returns the summary: the pivot and arm lengths (m, with
-    errors), the energy's exponential and inverse-square decay fits, and how long the model
-    released at ``start`` (s) agrees with the data within ``tolerance`` (m), its ``candidates``
-    fitted over ``window`` s; plots, derived.csv, summary.json and model.toml (the model as a
+    t, x1, y1, x2, y2 (s, m; y up), or ``frame`` numbers at ``frame_rate`` and pixels (y down)
+    at ``pixels_per_metre`` (or ``"motion"``: the scale the swing implies), a moving pivot in
+    ``x0``, ``y0``. Returns the summary: the pivot and arm lengths (m, with errors), the
+    energy's exponential and inverse-square decay fits, and how long the model released at
+    ``start`` (s; default the second row) agrees with the data within ``tolerance`` (m;
+    default 6 % of the reach), its ``candidates`` fitted over ``window`` s (default four of
+    the motion's own times); plots, derived.csv, summary.json and model.toml (the model as a
     parameter file, ``params_file=`` reads it back) go to ``output``. The model: a
     ``preset`` or ``params_file`` where given, else the pendulum's own moments found from its
     motion; the joint damping is what the fit finds. ``summary["verdict"]`` says whether the
@@ -459,10 +464,12 @@ def forecast(
     file: str,
     *,
     output: str = "out/forecast",
-    window: Pair = (0.6, 2.1),
+    pixels_per_metre: Union[None, float, str] = None,
+    frame_rate: Optional[float] = None,
+    window: Optional[Pair] = None,
     members: int = 10000,
     seed: int = 1,
-    tolerance: float = 0.03,
+    tolerance: Optional[float] = None,
     tracking_error: Optional[float] = None,
     candidates: int = 65536,
     video: Optional[str] = None,
@@ -485,15 +492,18 @@ def forecast(
     precision: Optional[str] = None,
     progress: Progress = None,
 ) -> xr.Dataset:
-    """An ensemble forecast of a camera-tracked run (``chaoscope forecast``): the model's state,
-    joint damping, pivot, scale and lower arm fitted on ``window`` = (start, end) in s, then
+    """An ensemble forecast of a camera-tracked run (``chaoscope forecast``; ``file`` and its
+    units as :func:`fit`): the model's state, joint damping, pivot, scale and lower arm
+    fitted on ``window`` = (start, end) in s (default: from the second row, four of the
+    motion's own times), then
     ``members`` drawn from the fit's covariance (``seed``) and integrated to the data's end.
     Returns an ``xarray.Dataset`` over ``time`` (s): ``model`` and ``measurement`` (the
     model's band with the tracking error, ``tracking_error`` m or the fit's residuals)
     quantiles of the positions (m) by ``coordinate`` (x1, y1, x2, y2) and ``quantile``
     (0.05 .. 0.95),
     ``spread_lower`` (m, the lower bob's RMS spread) and ``ftle`` (1/s, along the fitted
-    orbit); ``attrs`` hold the horizons (the spread past ``tolerance`` m; the data leaving
+    orbit); ``attrs`` hold the horizons (the spread past ``tolerance`` m, default 6 % of the
+    reach; the data leaving
     the 90 % band), the summary.json and the reproducing command. forecast.png, bands.csv and
     summary.json go to ``output``, and with ``video`` (the film :func:`track` read) the
     forecast drawn on its frames, overlay.mp4. The model as :func:`fit` finds it; where it

@@ -36,6 +36,26 @@ impl<'py> Keywords<'py> {
         }
     }
 
+    /// A tracked file's units: `pixels_per_metre` (a number, or "motion") and `frame_rate`.
+    pub fn units(&self) -> PyResult<chaoscope::fit::data::Units> {
+        use chaoscope::fit::data::PixelScale;
+        let pixels_per_metre = match self.get::<String>("pixels_per_metre") {
+            Ok(Some(text)) if text.trim() == "motion" => Some(PixelScale::FromMotion),
+            Ok(Some(text)) => {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "pixels_per_metre: {text:?} is neither a number nor \"motion\" (the scale from the swing)"
+                )));
+            }
+            _ => self
+                .get::<f64>("pixels_per_metre")?
+                .map(PixelScale::PerMetre),
+        };
+        Ok(chaoscope::fit::data::Units {
+            pixels_per_metre,
+            frame_rate: self.get("frame_rate")?,
+        })
+    }
+
     pub fn or<T: for<'a> FromPyObject<'a, 'py>>(&self, key: &str, default: T) -> PyResult<T> {
         Ok(self.get(key)?.unwrap_or(default))
     }

@@ -434,9 +434,10 @@ fn fit<'py>(
             .get("file")?
             .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
         output: k.or("output", std::path::PathBuf::from("out/fit"))?,
-        start: k.or("start", 0.8)?,
-        window: k.or("window", 1.5)?,
-        tolerance: k.or("tolerance", 0.03)?,
+        units: k.units()?,
+        start: k.get("start")?,
+        window: k.get("window")?,
+        tolerance: k.get("tolerance")?,
         candidates: k.whole("candidates")?.unwrap_or(65536),
         velocity_error: k.or("velocity_error", 0.1)?,
         params: k.sources()?,
@@ -517,11 +518,12 @@ fn forecast<'py>(
             .get("file")?
             .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
         output: k.or("output", std::path::PathBuf::from("out/forecast"))?,
+        units: k.units()?,
         settings: chaoscope::app::forecast::ForecastSettings {
-            window: k.or("window", (0.6, 2.1))?,
+            window: k.get("window")?,
             members: k.whole("members")?.unwrap_or(10_000),
             seed: k.whole("seed")?.unwrap_or(1),
-            tolerance: k.or("tolerance", 0.03)?,
+            tolerance: k.get("tolerance")?,
             tracking_error: k.get("tracking_error")?,
             candidates: k.whole("candidates")?.unwrap_or(65536),
         },

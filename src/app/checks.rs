@@ -161,3 +161,14 @@ pub fn check_damping_not_given(params: &crate::params::ParamSources) -> Result<(
     }
     Ok(())
 }
+
+/// A tracked file's units: a frame rate and a pixel scale within what cameras do.
+pub fn check_units(units: &crate::fit::data::Units) -> Result<()> {
+    if let Some(rate) = units.frame_rate {
+        check_within("frame_rate", rate, 1e-3, 1e7)?;
+    }
+    if let Some(crate::fit::data::PixelScale::PerMetre(p)) = units.pixels_per_metre {
+        check_within("pixels_per_metre", p, 1e-3, 1e9)?;
+    }
+    Ok(())
+}

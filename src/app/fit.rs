@@ -8,6 +8,7 @@ use serde_json::json;
 use super::{check_count, check_within};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
+use crate::fit::data::Units;
 use crate::fit::pendulum::{
     ModelSource, Tracked, Verdict, model_energies, model_file, tracked_model,
 };
@@ -25,12 +26,16 @@ pub struct FitJob {
     pub file: PathBuf,
     /// Directory for the plots, derived.csv and summary.json.
     pub output: PathBuf,
-    /// Time (s) to start the model fit; the nearest data row is used.
-    pub start: f64,
-    /// Length of data (s) the model is fitted to.
-    pub window: f64,
-    /// Position tolerance (m) for "the model agrees with the measurement".
-    pub tolerance: f64,
+    /// How the file's numbers become seconds and metres.
+    pub units: Units,
+    /// Time (s) to start the model fit; the nearest data row is used. None: the first row
+    /// with one before it.
+    pub start: Option<f64>,
+    /// Length of data (s) the model is fitted to. None: four of the motion's own times.
+    pub window: Option<f64>,
+    /// Position tolerance (m) for "the model agrees with the measurement". None: 6 % of
+    /// the reach (l1 + l2).
+    pub tolerance: Option<f64>,
     /// Size of the candidate ensemble of the model fit.
     pub candidates: usize,
     /// Velocity error (m/s) of each mass, for the energy error bars.
@@ -77,12 +82,17 @@ pub fn run(
     command: String,
     monitor: &Monitor,
 ) -> Result<FitSummary> {
-    check_within("window", job.window, 0.3, 60.0)?;
-    check_within("tolerance", job.tolerance, 1e-4, 1.0)?;
+    if let Some(window) = job.window {
+        check_within("window", window, 0.01, 60.0)?;
+    }
+    if let Some(tolerance) = job.tolerance {
+        check_within("tolerance", tolerance, 1e-6, 1e3)?;
+    }
     check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
     check_count("candidates", job.candidates as u64, 64, 4_000_000)?;
     super::checks::check_damping_not_given(&job.params)?;
-    if !job.start.is_finite() {
+    super::checks::check_units(&job.units)?;
+    if job.start.is_some_and(|s| !s.is_finite()) {
         return Err(Error::invalid("start", "must be a finite time (s)"));
     }
     super::checks::check_directory(
@@ -99,22 +109,27 @@ pub fn run(
         &[],
         &super::checks::tracked_inputs(&job.file, &job.params),
     )?;
-    let frames = read_frames(&job.file)?;
-    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    let read = read_frames(&job.file, &job.units)?;
+    let t: Vec<f64> = read.iter().map(|f| f.t).collect();
     // The fit starts at a data row with a neighbour on each side (its velocities are central
     // differences); a start outside them was moved to the nearest silently.
     let (first, last) = (t[1], t[t.len() - 2]);
-    if !(first..=last).contains(&job.start) {
+    if let Some(start) = job.start
+        && !(first..=last).contains(&start)
+    {
         return Err(Error::invalid(
             "start",
             format!(
-                "must lie within the data's times with a row either side, {first}..{last} s (got {})",
-                job.start
+                "must lie within the data's times with a row either side, {first}..{last} s (got {start})"
             ),
         ));
     }
 
-    let tracked = tracked_model(&frames, &job.params)?;
+    let tracked = tracked_model(&read, &job.params, &job.units)?;
+    let frames = &tracked.frames;
+    let start = job.start.unwrap_or_else(|| tracked.default_start());
+    let window = job.window.unwrap_or_else(|| tracked.default_window());
+    let tolerance = job.tolerance.unwrap_or_else(|| tracked.default_tolerance());
     let Tracked {
         pivot,
         l1,
@@ -127,14 +142,14 @@ pub fn run(
         ..
     } = tracked;
     // The report's grid: whole millimetres within 5 cm of the data's origin.
-    let grid = grid_pivot(&frames, (0.0, 0.0), 0.05, 0.001);
+    let grid = grid_pivot(frames, (0.0, 0.0), 0.05, 0.001);
 
     // A model found from the motion cannot see the masses' scale: its energy is in units of
     // its gravity moment P, and counts the arms' own inertia as the model does.
     let (en, unit) = match source {
         ModelSource::Given => (
             energies(
-                &frames,
+                frames,
                 (pivot.x, pivot.y),
                 (params.m1, params.m2),
                 (l1.value, l2.value),
@@ -158,9 +173,9 @@ pub fn run(
 
     let spec = ModelFitSpec {
         params,
-        start_time: job.start,
-        window: job.window,
-        tolerance: job.tolerance,
+        start_time: start,
+        window,
+        tolerance,
         candidates: job.candidates,
     };
     let mut notices: Vec<String> = engine.notices();
@@ -171,7 +186,7 @@ pub fn run(
         Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
     });
     notices.extend(tracked.notices.iter().cloned());
-    let fit = fit_model(&frames, (pivot.x, pivot.y), angle, &spec, engine, monitor)?;
+    let fit = fit_model(frames, (pivot.x, pivot.y), angle, &spec, engine, monitor)?;
     let verdict = Verdict::judge(fit.rms, &t, measured, params.l1 + params.l2);
     notices.push(verdict.describe());
 
@@ -292,9 +307,9 @@ pub fn run(
             "joint_damping": [fit.damping.0, fit.damping.1],
             "energy_unit": match unit { plots::EnergyUnit::Joule => "J", plots::EnergyUnit::GravityMoment => "P" },
             "rms_position_error_in_window": fit.rms,
-            "window": job.window,
+            "window": window,
             "candidates": fit.candidates, "searched_on": fit.backend,
-            "tolerance": job.tolerance,
+            "tolerance": tolerance,
             "agrees_until": fit.agrees_until,
             "agrees_for": fit.agrees_until - fit.t0,
         },
@@ -321,7 +336,7 @@ pub fn run(
         better,
         t0: fit.t0,
         agrees_until: fit.agrees_until,
-        tolerance: job.tolerance,
+        tolerance,
         verdict,
         energy_unit: match unit {
             plots::EnergyUnit::Joule => "J",
@@ -375,7 +390,7 @@ pub(crate) fn describe_model(source: &ModelSource, p: &crate::model::Params) -> 
     let k = p.inertia();
     match source {
         ModelSource::Given => format!(
-            "the model fitted: {}: bobs {} and {} kg, rods {} and {} kg, arms {:.4} and {:.4} m, g {} m/s^2",
+            "the model fitted: {}: bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg, arms {:.4} and {:.4} m, g {:.4} m/s^2",
             source.describe(),
             p.m1,
             p.m2,

@@ -26,6 +26,8 @@ pub struct ForecastJob {
     pub file: PathBuf,
     /// Directory for forecast.png, bands.csv and summary.json.
     pub output: PathBuf,
+    /// How the file's numbers become seconds and metres.
+    pub units: crate::fit::data::Units,
     /// The fit window, the ensemble and the horizon.
     pub settings: ForecastSettings,
     /// The model: the lab preset unless a preset or file is given, arm lengths from the data
@@ -50,6 +52,9 @@ pub struct Outcome {
     /// Whether the fit follows the data in its window: where it does not, the horizons are
     /// no findings.
     pub verdict: Verdict,
+    /// The window and the tolerance used: the settings', else the data's defaults.
+    pub window: (f64, f64),
+    pub tolerance: f64,
 }
 
 impl Outcome {
@@ -66,14 +71,15 @@ impl Outcome {
 /// experiments').
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ForecastSettings {
-    /// The fit window (s): the model is fitted to the rows from its start to its end.
-    pub window: (f64, f64),
+    /// The fit window (s): the model is fitted to the rows from its start to its end. None:
+    /// four of the motion's own times from the second row ([`TrackRows::default_window`]).
+    pub window: Option<(f64, f64)>,
     /// Number of ensemble members.
     pub members: usize,
     /// Seed of the members' draws and of the measurement noise in the bands.
     pub seed: u64,
-    /// The lower bob's spread (m) that ends the forecast's horizon.
-    pub tolerance: f64,
+    /// The lower bob's spread (m) that ends the forecast's horizon. None: 6 % of the reach.
+    pub tolerance: Option<f64>,
     /// A measurement's error (m per coordinate); None: what the fit's residuals imply.
     pub tracking_error: Option<f64>,
     /// Candidates of the fit's ensemble search.
@@ -89,7 +95,9 @@ impl ForecastSettings {
                 "must be at least 1 (10000 draws a smooth band)",
             ));
         }
-        check_within("tolerance", self.tolerance, 1e-4, 1.0)?;
+        if let Some(tolerance) = self.tolerance {
+            check_within("tolerance", tolerance, 1e-6, 1e3)?;
+        }
         if let Some(e) = self.tracking_error {
             check_within("tracking_error", e, 0.0, 0.1)?;
         }
@@ -108,7 +116,13 @@ pub fn fit_and_forecast(
 ) -> Result<Outcome> {
     let (t, data) = (track.t, track.data);
     let (first, last) = (t[0], t[t.len() - 1]);
-    let (a, b) = settings.window;
+    let window = settings
+        .window
+        .unwrap_or_else(|| (t[1], t[1] + track.default_window()));
+    let tolerance = settings
+        .tolerance
+        .unwrap_or_else(|| TrackRows::default_tolerance(p));
+    let (a, b) = window;
     if !(a.is_finite() && b.is_finite() && a < b && a >= first - 1e-6 && b < last) {
         return Err(Error::invalid(
             "window",
@@ -130,19 +144,12 @@ pub fn fit_and_forecast(
             ),
         ));
     }
-    let fit = fit_window(
-        track,
-        p,
-        settings.window,
-        settings.candidates,
-        engine,
-        monitor,
-    )?;
+    let fit = fit_window(track, p, window, settings.candidates, engine, monitor)?;
     let tracking_error = settings.tracking_error.unwrap_or(fit.tracking_error);
     let spec = ForecastSpec {
         members: settings.members,
         seed: settings.seed,
-        tolerance: settings.tolerance,
+        tolerance,
         tracking_error,
         end,
         data_times: t.to_vec(),
@@ -155,6 +162,8 @@ pub fn fit_and_forecast(
     let verdict = Verdict::judge(rms, t, data, p.l1 + p.l2);
     Ok(Outcome {
         verdict,
+        window,
+        tolerance,
         fit,
         forecast,
         tracking_error,
@@ -167,6 +176,8 @@ pub fn fit_and_forecast(
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct ForecastSummary {
     pub window: (f64, f64),
+    /// The lower bob's spread (m) that ends the horizon.
+    pub tolerance: f64,
     pub members: usize,
     pub tracking_error: f64,
     /// Horizons (s): absolute, after the window's end, and in Lyapunov times.
@@ -211,19 +222,21 @@ pub fn run(
         &[],
         &inputs,
     )?;
-    let frames = read_frames(&job.file)?;
+    super::checks::check_units(&job.units)?;
+    let read = read_frames(&job.file, &job.units)?;
     // Where the track lies in the film, before any work: only a CSV `track` wrote says.
     let geometry = match job.video {
         Some(_) => Some(super::overlay::geometry_in(&job.file)?),
         None => None,
     };
-    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     // The pivot, arm lengths and model as `fit` finds them.
-    let tracked = crate::fit::pendulum::tracked_model(&frames, &job.params)?;
+    let tracked = crate::fit::pendulum::tracked_model(&read, &job.params, &job.units)?;
     let mut notices = engine.notices();
     notices.push(super::fit::describe_model(&tracked.source, &tracked.params));
     notices.extend(tracked.notices.iter().cloned());
     let crate::fit::pendulum::Tracked {
+        frames,
+        t,
         pivot,
         angles: angle,
         measured: data,
@@ -259,18 +272,18 @@ pub fn run(
             measured: (&t, &data),
             truth: None,
             data_horizon: o.data_horizon,
-            tolerance: settings.tolerance,
+            tolerance: o.tolerance,
             until,
             title: format!(
-                "{}: fit {}..{} s, {} members; spread > {} m {}; data out of the 90 % band {}",
+                "{}: fit {:.3}..{:.3} s, {} members; spread > {:.3} m {}; data out of the 90 % band {}",
                 job.file
                     .file_name()
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default(),
-                settings.window.0,
-                settings.window.1,
+                o.window.0,
+                o.window.1,
                 settings.members,
-                settings.tolerance,
+                o.tolerance,
                 fmt_time(f.spread_horizon),
                 fmt_time(o.data_horizon),
             ),
@@ -292,7 +305,7 @@ pub fn run(
             "step": f.dt, "end": end,
         },
         "horizon": {
-            "tolerance": settings.tolerance,
+            "tolerance": o.tolerance,
             "spread": f.spread_horizon, "spread_after_window": spread_after,
             "spread_lyapunov_times": spread_lt,
             "data": o.data_horizon, "data_after_window": data_after, "data_lyapunov_times": data_lt,
@@ -314,7 +327,7 @@ pub fn run(
             geometry,
             pivot: (pivot.x, pivot.y),
             outcome: &o,
-            tolerance: settings.tolerance,
+            tolerance: o.tolerance,
         };
         let meta = crate::render::provenance(command.clone(), &engine.info());
         super::overlay::write(
@@ -328,7 +341,8 @@ pub fn run(
     }
     files.commit(monitor)?;
     Ok(ForecastSummary {
-        window: settings.window,
+        window: o.window,
+        tolerance: o.tolerance,
         members: settings.members,
         tracking_error: o.tracking_error,
         spread_horizon: f.spread_horizon,

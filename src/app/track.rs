@@ -267,7 +267,7 @@ fn bridge(
             .collect();
         return Ok(out);
     }
-    let model = crate::fit::pendulum::tracked_model(&frames, sources)?;
+    let model = crate::fit::pendulum::tracked_model(&frames, sources, &Default::default())?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     let track_rows = TrackRows {
         t: &t,

@@ -430,13 +430,13 @@ pub fn run(
                 measured: (&track.t, &track.measured),
                 truth: Some(at),
                 data_horizon: o.data_horizon,
-                tolerance: job.settings.tolerance,
+                tolerance: o.tolerance,
                 until: job.duration,
                 title: format!(
                     "twin experiment: {rate} Hz, noise {} mm, fit {}..{} s, {} members; truth green",
                     sigma * 1e3,
-                    job.settings.window.0,
-                    job.settings.window.1,
+                    o.window.0,
+                    o.window.1,
                     job.settings.members
                 ),
             },
@@ -463,8 +463,8 @@ pub fn run(
     let summary = json!({
         "command": command,
         "truth": { "parameters": super::fit::params_json(&truth), "start": job.start.to_array() },
-        "window": job.settings.window, "duration": job.duration, "members": job.settings.members,
-        "tolerance": job.settings.tolerance, "table": table,
+        "window": shown.as_ref().map(|s| s.0.window), "duration": job.duration, "members": job.settings.members,
+        "tolerance": shown.as_ref().map(|s| s.0.tolerance), "table": table,
         "coverage": coverage,
         "slopes": slopes.iter().map(|s| json!({
             "rate": s.rate, "slope": s.slope, "slope_error": s.slope_error, "lambda": s.lambda,

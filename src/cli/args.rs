@@ -298,3 +298,37 @@ pub fn no_picture_with_a_store(
     }
     Ok(())
 }
+
+/// How a tracked file's numbers become seconds and metres (`fit`, `forecast`).
+#[derive(Args, Debug, Clone, Default)]
+pub struct TrackedUnitsArgs {
+    /// The positions are in pixels as images count them (x right, y down), this many to a
+    /// metre; `motion`: the scale the swing implies under g at the file's times (a rigid
+    /// pendulum's motion fixes l/g in seconds) [default: the positions are in metres, y up]
+    #[arg(long, value_parser = parse_pixel_scale, allow_hyphen_values = true)]
+    pub pixels_per_metre: Option<crate::fit::data::PixelScale>,
+    /// The rows are numbered by a `frame` column, this many frames a second [default: a
+    /// `t` column in seconds]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub frame_rate: Option<f64>,
+}
+
+impl TrackedUnitsArgs {
+    pub fn units(&self) -> crate::fit::data::Units {
+        crate::fit::data::Units {
+            pixels_per_metre: self.pixels_per_metre,
+            frame_rate: self.frame_rate,
+        }
+    }
+}
+
+/// A pixel scale: a number (pixels per metre) or `motion`.
+fn parse_pixel_scale(s: &str) -> Result<crate::fit::data::PixelScale, String> {
+    use crate::fit::data::PixelScale;
+    match s.trim() {
+        "motion" => Ok(PixelScale::FromMotion),
+        other => parse_number(other)
+            .map(PixelScale::PerMetre)
+            .map_err(|e| format!("{e}, or `motion` (the scale from the swing)")),
+    }
+}

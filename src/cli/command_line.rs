@@ -449,13 +449,29 @@ pub fn boundary(job: &BoundaryJob) -> String {
     }
 }
 
+/// ` --NAME VALUE` where a value is given; nothing where the data's default stands.
+fn given<T: std::fmt::Display>(name: &str, v: Option<T>) -> String {
+    v.map_or(String::new(), |v| format!(" --{name} {v}"))
+}
+
+/// A tracked file's units as flags.
+fn units(u: &crate::fit::data::Units) -> String {
+    use crate::fit::data::PixelScale;
+    let scale = u.pixels_per_metre.map(|s| match s {
+        PixelScale::PerMetre(p) => p.to_string(),
+        PixelScale::FromMotion => "motion".to_string(),
+    });
+    given("pixels-per-metre", scale) + &given("frame-rate", u.frame_rate)
+}
+
 pub fn fit(job: &FitJob) -> String {
     format!(
-        "chaoscope fit {} --start {} --window {} --tolerance {} --candidates {} --velocity-error {}{} --backend {}",
+        "chaoscope fit {}{}{}{}{} --candidates {} --velocity-error {}{} --backend {}",
         word(&job.file),
-        job.start,
-        job.window,
-        job.tolerance,
+        units(&job.units),
+        given("start", job.start),
+        given("window", job.window),
+        given("tolerance", job.tolerance),
         job.candidates,
         job.velocity_error,
         sources(&job.params),
@@ -469,13 +485,16 @@ pub fn forecast(job: &ForecastJob) -> String {
         .tracking_error
         .map_or(String::new(), |e| format!(" --tracking-error {e}"));
     format!(
-        "chaoscope forecast {} --window {}:{} --members {} --seed {} --tolerance {}{noise} --candidates {}{} --backend {}",
+        "chaoscope forecast {}{}{} --members {} --seed {}{}{noise} --candidates {}{} --backend {}",
         word(&job.file),
-        job.settings.window.0,
-        job.settings.window.1,
+        units(&job.units),
+        given(
+            "window",
+            job.settings.window.map(|(a, b)| format!("{a}:{b}"))
+        ),
         job.settings.members,
         job.settings.seed,
-        job.settings.tolerance,
+        given("tolerance", job.settings.tolerance),
         job.settings.candidates,
         sources(&job.params),
         job.backend.name()
@@ -490,12 +509,14 @@ pub fn twin(job: &TwinJob) -> String {
             .join(",")
     };
     format!(
-        "chaoscope twin --sigma {} --rate {} --replicates {} --window {}:{} --duration {} --theta1 {} --omega1 {} --theta2 {} --omega2 {} --members {} --seed {} --tolerance {} --candidates {}{} --backend {}",
+        "chaoscope twin --sigma {} --rate {} --replicates {}{} --duration {} --theta1 {} --omega1 {} --theta2 {} --omega2 {} --members {} --seed {}{} --candidates {}{} --backend {}",
         list(&job.sigmas),
         list(&job.rates),
         job.replicates,
-        job.settings.window.0,
-        job.settings.window.1,
+        given(
+            "window",
+            job.settings.window.map(|(a, b)| format!("{a}:{b}"))
+        ),
         job.duration,
         job.start.theta1,
         job.start.omega1,
@@ -503,7 +524,7 @@ pub fn twin(job: &TwinJob) -> String {
         job.start.omega2,
         job.settings.members,
         job.settings.seed,
-        job.settings.tolerance,
+        given("tolerance", job.settings.tolerance),
         job.settings.candidates,
         sources(&job.params),
         job.backend.name()

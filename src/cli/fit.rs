@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{PhysicalArgs, backend_parser};
-use super::parse::{one_of, parse_number, parse_usize};
+use super::args::{PhysicalArgs, TrackedUnitsArgs, backend_parser};
+use super::parse::{one_of, parse_length, parse_number, parse_usize};
 use super::{command_line, json, say};
 use crate::app::fit::{self, FitJob};
 use crate::engine::Backend;
@@ -14,27 +14,33 @@ use crate::monitor::Monitor;
 use crate::spec::Precision;
 
 #[derive(Args, Debug, Clone)]
-#[command(mut_arg("m1", |a| a.help("Upper bob mass (kg) [default: the lab preset's]")))]
-#[command(mut_arg("m2", |a| a.help("Lower bob mass (kg) [default: the lab preset's]")))]
-#[command(mut_arg("l1", |a| a.help("Upper arm length (m) [default: fitted to the data]")))]
-#[command(mut_arg("l2", |a| a.help("Lower arm length (m) [default: fitted to the data]")))]
-#[command(mut_arg("preset", |a| a.help("A named set of parameters [default: lab, unless --params is given]")))]
+#[command(mut_arg("m1", |a| a.help("Upper bob mass (kg), with --preset or --params [default: the model's]")))]
+#[command(mut_arg("m2", |a| a.help("Lower bob mass (kg), with --preset or --params [default: the model's]")))]
+#[command(mut_arg("l1", |a| a.help("Upper arm length (m), with --preset or --params [default: fitted to the data]")))]
+#[command(mut_arg("l2", |a| a.help("Lower arm length (m), with --preset or --params [default: fitted to the data]")))]
+#[command(mut_arg("preset", |a| a.help("The pendulum's model by name (lab: the lab report's apparatus) [default: none: the pendulum's own moments, found from its motion]")))]
 pub struct FitArgs {
-    /// CSV of tracked positions: header with t, x1, y1, x2, y2 (s, m; y up); # comments.
+    /// CSV of tracked positions: header with t (or frame), x1, y1, x2, y2 (s, m; y up; or
+    /// pixels, see --pixels-per-metre), optionally a moving pivot x0, y0; # comments; `,`,
+    /// `;` or tab separated (decimal commas with `;` or tabs).
     pub file: PathBuf,
-    /// Directory for the plots, derived.csv and summary.json.
+    /// Directory for the plots, derived.csv, summary.json and model.toml.
     #[arg(long, default_value = "out/fit")]
     pub output: PathBuf,
-    /// Time (s) to start the model fit (the report: 0.8 s, where dx2/dt ~ 0); the nearest
-    /// data row is used. Within the data's times, a row either side.
-    #[arg(long, default_value = "0.8", value_parser = parse_number, allow_hyphen_values = true)]
-    pub start: f64,
-    /// Length of data (s) the model is fitted to.
-    #[arg(long, default_value = "1.5", value_parser = parse_number, allow_hyphen_values = true)]
-    pub window: f64,
-    /// Position tolerance (m) for "the model agrees with the measurement".
-    #[arg(long, default_value = "0.03", value_parser = parse_number, allow_hyphen_values = true)]
-    pub tolerance: f64,
+    #[command(flatten)]
+    pub units: TrackedUnitsArgs,
+    /// Time (s) to start the model fit; the nearest data row is used. Within the data's
+    /// times, a row either side [default: the second row]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub start: Option<f64>,
+    /// Length of data (s) the model is fitted to [default: four of the motion's own times,
+    /// 1/RMS of the upper arm's angular velocity; at least five rows]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub window: Option<f64>,
+    /// Position tolerance for "the model agrees with the measurement" (m, or with a unit:
+    /// 3cm) [default: 6 % of the reach l1 + l2]
+    #[arg(long, value_parser = parse_length, allow_hyphen_values = true)]
+    pub tolerance: Option<f64>,
     /// Size of the candidate ensemble of the model fit.
     #[arg(long, default_value = "65536", value_parser = parse_usize, allow_hyphen_values = true)]
     pub candidates: usize,
@@ -57,6 +63,7 @@ impl FitArgs {
         FitJob {
             file: self.file.clone(),
             output: self.output.clone(),
+            units: self.units.units(),
             start: self.start,
             window: self.window,
             tolerance: self.tolerance,
@@ -76,7 +83,7 @@ pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     say("fit", &s.notices);
     let agrees = match s.verdict.follows {
         true => format!(
-            "model from t = {} s agrees within {} m until {} s ({:.2} s)",
+            "model from t = {} s agrees within {:.4} m until {} s ({:.2} s)",
             s.t0,
             s.tolerance,
             s.agrees_until,

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{PhysicalArgs, backend_parser};
+use super::args::{PhysicalArgs, TrackedUnitsArgs, backend_parser};
 use super::parse::{one_of, parse_length, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
 use crate::app::forecast::{self, ForecastJob, ForecastSettings, fmt_time};
@@ -14,13 +14,15 @@ use crate::monitor::Monitor;
 use crate::spec::Precision;
 
 #[derive(Args, Debug, Clone)]
-#[command(mut_arg("m1", |a| a.help("Upper bob mass (kg) [default: the lab preset's]")))]
-#[command(mut_arg("m2", |a| a.help("Lower bob mass (kg) [default: the lab preset's]")))]
-#[command(mut_arg("l1", |a| a.help("Upper arm length (m) [default: fitted to the data]")))]
-#[command(mut_arg("l2", |a| a.help("Lower arm length (m) [default: fitted to the data]")))]
-#[command(mut_arg("preset", |a| a.help("A named set of parameters [default: lab, unless --params is given]")))]
+#[command(mut_arg("m1", |a| a.help("Upper bob mass (kg), with --preset or --params [default: the model's]")))]
+#[command(mut_arg("m2", |a| a.help("Lower bob mass (kg), with --preset or --params [default: the model's]")))]
+#[command(mut_arg("l1", |a| a.help("Upper arm length (m), with --preset or --params [default: fitted to the data]")))]
+#[command(mut_arg("l2", |a| a.help("Lower arm length (m), with --preset or --params [default: fitted to the data]")))]
+#[command(mut_arg("preset", |a| a.help("The pendulum's model by name (lab: the lab report's apparatus) [default: none: the pendulum's own moments, found from its motion]")))]
 pub struct ForecastArgs {
-    /// CSV of tracked positions: header with t, x1, y1, x2, y2 (s, m; y up); # comments.
+    /// CSV of tracked positions: header with t (or frame), x1, y1, x2, y2 (s, m; y up; or
+    /// pixels, see --pixels-per-metre), optionally a moving pivot x0, y0; # comments; `,`,
+    /// `;` or tab separated (decimal commas with `;` or tabs).
     pub file: PathBuf,
     /// Directory for forecast.png, bands.csv and summary.json (and overlay.mp4).
     #[arg(long, default_value = "out/forecast")]
@@ -30,20 +32,24 @@ pub struct ForecastArgs {
     /// window, then each mass's 90 % band and the horizon).
     #[arg(long)]
     pub video: Option<PathBuf>,
+    #[command(flatten)]
+    pub units: TrackedUnitsArgs,
     /// The fit window START:END (s): the state at its first row and the joint damping are
-    /// fitted to the rows within it (the default: the lab data's rows 0.667 to 2.002 s, near
-    /// the report's start at 0.8 s); the forecast runs from its end to the data's end.
-    #[arg(long, default_value = "0.6:2.1", value_parser = parse_window, allow_hyphen_values = true)]
-    pub window: (f64, f64),
+    /// fitted to the rows within it; the forecast runs from its end to the data's end
+    /// [default: from the second row, four of the motion's own times (1/RMS of the upper
+    /// arm's angular velocity), at least five rows]
+    #[arg(long, value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<(f64, f64)>,
     /// Ensemble members drawn from the fit's uncertainty (state, damping, pivot).
     #[arg(long, default_value = "10000", value_parser = parse_usize, allow_hyphen_values = true)]
     pub members: usize,
     /// Seed of the draws: the same seed, the same forecast.
     #[arg(long, default_value = "1", value_parser = parse_u64, allow_hyphen_values = true)]
     pub seed: u64,
-    /// The lower bob's spread that ends the horizon (m, or with a unit: 3cm).
-    #[arg(long, default_value = "3cm", value_parser = parse_length, allow_hyphen_values = true)]
-    pub tolerance: f64,
+    /// The lower bob's spread that ends the horizon (m, or with a unit: 3cm) [default: 6 %
+    /// of the reach l1 + l2]
+    #[arg(long, value_parser = parse_length, allow_hyphen_values = true)]
+    pub tolerance: Option<f64>,
     /// A measurement's error per coordinate (m, or 2mm) [default: from the fit's residuals].
     #[arg(long, value_parser = parse_length, allow_hyphen_values = true)]
     pub tracking_error: Option<f64>,
@@ -66,6 +72,7 @@ impl ForecastArgs {
         ForecastJob {
             file: self.file.clone(),
             output: self.output.clone(),
+            units: self.units.units(),
             settings: ForecastSettings {
                 window: self.window,
                 members: self.members,
@@ -97,12 +104,12 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
     }
     let lt = |v: Option<f64>| v.map_or(String::new(), |v| format!(" ({v:.1} Lyapunov times)"));
     eprintln!(
-        "fit {}..{} s, {} members, tracking error {:.1} mm; horizon: spread > {} m {}{}, data out of the 90 % band {}{}; FTLE along the orbit {:.2} 1/s -> {}",
+        "fit {:.4}..{:.4} s, {} members, tracking error {:.1} mm; horizon: spread > {:.4} m {}{}, data out of the 90 % band {}{}; FTLE along the orbit {:.2} 1/s -> {}",
         s.window.0,
         s.window.1,
         s.members,
         s.tracking_error * 1e3,
-        job.settings.tolerance,
+        s.tolerance,
         fmt_time(s.spread_horizon),
         lt(s.spread_horizon_lyapunov_times),
         fmt_time(s.data_horizon),

@@ -90,10 +90,10 @@ impl TwinArgs {
             rates: self.rate.clone(),
             replicates: self.replicates,
             settings: ForecastSettings {
-                window: self.window,
+                window: Some(self.window),
                 members: self.members,
                 seed: self.seed,
-                tolerance: self.tolerance,
+                tolerance: Some(self.tolerance),
                 tracking_error: None,
                 candidates: self.candidates,
             },

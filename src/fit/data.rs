@@ -33,11 +33,42 @@ fn bad(path: &Path, line: usize, what: String) -> Error {
     Error::invalid("file", format!("{}:{line}: {what}", path.display()))
 }
 
+/// How a tracked file's numbers become seconds and metres.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Units {
+    /// Positions in pixels as images count them (x right, y down), this many to a metre, or
+    /// the scale the motion implies under gravity; None: metres, y up.
+    pub pixels_per_metre: Option<PixelScale>,
+    /// Rows numbered by a `frame` column, this many frames a second; None: a `t` column in
+    /// seconds.
+    pub frame_rate: Option<f64>,
+}
+
+/// The metre scale of positions in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PixelScale {
+    PerMetre(f64),
+    /// From the motion: a rigid pendulum's swing fixes l1/g in seconds, so at the file's
+    /// frame rate and the stated g its upper arm's length in metres (src/fit/identify).
+    FromMotion,
+}
+
+/// The columns a tracked file may name, beside the positions x1, y1, x2, y2: the time `t`
+/// (s) or the `frame` number, and a pivot `x0`, `y0` that moves (positions are taken
+/// relative to it, row by row).
+const COLUMNS: [&str; 8] = ["t", "frame", "x0", "y0", "x1", "y1", "x2", "y2"];
+
 /// Reads a CSV with a header naming t, x1, y1, x2, y2 (any order, other columns ignored);
-/// lines starting with # are comments. Where the header names `seen1` and `seen2` (as
-/// `track` writes them), only the rows in which both masses were `measured` are read: a
-/// mass hidden in a frame has no position to fit. Errors name the line.
-pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
+/// lines starting with # are comments; a byte-order mark, `;` or tab separators and decimal
+/// commas (with those separators) as spreadsheets and Tracker write them. `units` says how
+/// its numbers become seconds and metres: a `frame` column at a frame rate instead of `t`,
+/// pixels instead of metres; a pivot column pair `x0`, `y0` moves the origin row by row.
+/// Where the header names `seen1` and `seen2` (as `track` writes them), only the rows in
+/// which both masses were `measured` are read: a mass hidden in a frame has no position to
+/// fit. Errors name the line. A scale from the motion ([`PixelScale::FromMotion`]) is
+/// applied by [`crate::fit::pendulum::tracked_model`]: the rows here are then in pixels,
+/// y up.
+pub fn read_frames(path: &Path, units: &Units) -> Result<Vec<TrackedRow>> {
     let text = crate::input::read_text("file", path, crate::input::CSV_CAP)?;
     // A byte-order mark (as some spreadsheets write) is not part of the first column's name.
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
@@ -49,9 +80,16 @@ pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
     let (header_line, header) = lines
         .next()
         .ok_or_else(|| bad(path, 1, "no header line (t,x1,y1,x2,y2)".into()))?;
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    // Spreadsheets in much of the world separate by `;` (or tabs) and write decimal commas.
+    let separator = match (header.contains(';'), header.contains('\t')) {
+        (true, _) => ';',
+        (false, true) => '\t',
+        _ => ',',
+    };
+    let names: Vec<&str> = header.split(separator).map(str::trim).collect();
+    let find = |name: &str| names.iter().position(|n| *n == name);
     let column = |name: &str| {
-        names.iter().position(|n| *n == name).ok_or_else(|| {
+        find(name).ok_or_else(|| {
             bad(
                 path,
                 header_line,
@@ -59,10 +97,33 @@ pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
             )
         })
     };
+    let time = match (find("t"), find("frame"), units.frame_rate) {
+        (Some(t), _, None) => t,
+        (_, Some(frame), Some(_)) => frame,
+        (None, Some(_), None) => {
+            return Err(Error::invalid(
+                "frame_rate",
+                format!(
+                    "{} numbers its rows by `frame`, with no `t`: give the frame rate (frames a second) to make them times",
+                    path.display()
+                ),
+            ));
+        }
+        (Some(_), None, Some(_)) => {
+            return Err(Error::invalid(
+                "frame_rate",
+                format!(
+                    "{} has times (`t`, s) and no `frame` column: a frame rate is for a file that numbers its rows by frame; leave it out",
+                    path.display()
+                ),
+            ));
+        }
+        (None, _, _) => column("t")?,
+    };
     // A column named twice would be read from its first copy silently.
     for (k, name) in names.iter().enumerate() {
         if let Some(again) = names[k + 1..].iter().position(|n| n == name)
-            && ["t", "x1", "y1", "x2", "y2"].contains(name)
+            && COLUMNS.contains(name)
         {
             return Err(bad(
                 path,
@@ -76,19 +137,43 @@ pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
         }
     }
     let cols = [
-        column("t")?,
+        time,
         column("x1")?,
         column("y1")?,
         column("x2")?,
         column("y2")?,
     ];
+    let pivot = match (find("x0"), find("y0")) {
+        (Some(x), Some(y)) => Some([x, y]),
+        (None, None) => None,
+        _ => {
+            return Err(bad(
+                path,
+                header_line,
+                "a moving pivot takes both columns `x0` and `y0`".into(),
+            ));
+        }
+    };
+    // Pixels count y down; metres here count it up.
+    let (scale, flip) = match units.pixels_per_metre {
+        None => (1.0, 1.0),
+        Some(PixelScale::PerMetre(p)) => (1.0 / p, -1.0),
+        Some(PixelScale::FromMotion) => (1.0, -1.0),
+    };
     let seen: Vec<usize> = ["seen1", "seen2"]
         .iter()
         .filter_map(|s| names.iter().position(|n| n == s))
         .collect();
     let mut frames = Vec::new();
+    let decimal_comma = separator != ',';
     for (n, line) in lines {
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let cells: Vec<String> = line
+            .split(separator)
+            .map(|c| match decimal_comma {
+                true => c.trim().replace(',', "."),
+                false => c.trim().to_string(),
+            })
+            .collect();
         // A row of more or fewer fields than the header has its values under other columns'
         // names (a decimal comma, a cell left out).
         if cells.len() != names.len() {
@@ -105,13 +190,9 @@ pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
         if seen.iter().any(|&c| cells[c] != "measured") {
             continue;
         }
-        let mut v = [0.0; 5];
-        for (k, &c) in cols.iter().enumerate() {
-            let cell = cells
-                .get(c)
-                .ok_or_else(|| bad(path, n, format!("missing column `{}`", names[c])))?;
-            v[k] = cell
-                .parse::<f64>()
+        let number = |c: usize| -> Result<f64> {
+            let cell = &cells[c];
+            cell.parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite())
                 .ok_or_else(|| {
@@ -120,7 +201,25 @@ pub fn read_frames(path: &Path) -> Result<Vec<TrackedRow>> {
                         n,
                         format!("`{cell}` in column `{}` is not a number", names[c]),
                     )
-                })?;
+                })
+        };
+        let mut v = [0.0; 5];
+        for (k, &c) in cols.iter().enumerate() {
+            v[k] = number(c)?;
+        }
+        let origin = match pivot {
+            Some([x, y]) => [number(x)?, number(y)?],
+            None => [0.0, 0.0],
+        };
+        if let Some(rate) = units.frame_rate {
+            v[0] /= rate;
+        }
+        for (k, x) in v.iter_mut().enumerate().skip(1) {
+            let along = match k % 2 {
+                1 => *x - origin[0],
+                _ => flip * (*x - origin[1]),
+            };
+            *x = along * scale;
         }
         if let Some(k) = (1..5).find(|&k| v[k].abs() > MAX_POSITION) {
             return Err(bad(

@@ -135,7 +135,7 @@ pub fn forecast(out: &mut Outputs, path: &Path, f: &Forecast, marks: &Marks) -> 
             / 2.0;
         let mut chart = ChartBuilder::on(&bottom)
             .caption(
-                "spread of the lower bob (m, RMS about the members' mean); tolerance dashed",
+                "spread of the lower bob (m, RMS about the members' mean)",
                 ("sans-serif", 16),
             )
             .margin(8)
@@ -153,7 +153,9 @@ pub fn forecast(out: &mut Outputs, path: &Path, f: &Forecast, marks: &Marks) -> 
             .map_err(err)?;
         chart
             .draw_series(LineSeries::new(spread, BAND.stroke_width(2)))
-            .map_err(err)?;
+            .map_err(err)?
+            .label("the lower bob's spread; above: the members' median, their 50 % and 90 % bands (a measurement's)")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BAND.stroke_width(2)));
         chart
             .draw_series(DashedLineSeries::new(
                 [(f.t0, marks.tolerance), (marks.until, marks.tolerance)],
@@ -161,8 +163,48 @@ pub fn forecast(out: &mut Outputs, path: &Path, f: &Forecast, marks: &Marks) -> 
                 4,
                 BLACK.stroke_width(1),
             ))
-            .map_err(err)?;
+            .map_err(err)?
+            .label(format!("the tolerance, {:.3} m", marks.tolerance))
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
         horizons(&mut chart, &lines, marks.until, low_spread, top_spread)?;
+        // What every mark means, once: the legend of all five panels.
+        let key = |colour: RGBColor| {
+            move |(x, y): (i32, i32)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            }
+        };
+        for (label, colour) in [
+            (
+                "spread horizon: the spread passes the tolerance",
+                SPREAD_HORIZON,
+            ),
+            (
+                "data horizon: the measurements leave their 90 % band",
+                DATA_HORIZON,
+            ),
+            ("measured (dots); grey: the fit window", MEASURED),
+        ] {
+            chart
+                .draw_series(LineSeries::new(Vec::<(f64, f64)>::new(), colour))
+                .map_err(err)?
+                .label(label)
+                .legend(key(colour));
+        }
+        if marks.truth.is_some() {
+            chart
+                .draw_series(LineSeries::new(Vec::<(f64, f64)>::new(), TRUTH))
+                .map_err(err)?
+                .label("the truth (a twin experiment)")
+                .legend(key(TRUTH));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .label_font(("sans-serif", 13))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(180, 180, 180))
+            .draw()
+            .map_err(err)?;
         root.present().map_err(err)?;
     }
     save(

@@ -40,6 +40,10 @@ impl ModelSource {
 
 /// What tracked data say about the apparatus, and the model to fit to them.
 pub struct Tracked {
+    /// The rows in seconds and metres (y up; a scale from the motion applied).
+    pub frames: Vec<TrackedRow>,
+    /// The metre scale found from the motion (pixels per metre and its error), where asked.
+    pub scale_from_motion: Option<(f64, f64)>,
     pub pivot: Pivot,
     pub l1: Estimate,
     pub l2: Estimate,
@@ -64,6 +68,22 @@ impl Tracked {
             data: &self.measured,
             angles: &self.angles,
         }
+    }
+
+    /// The tolerance unless given ([`TrackRows::default_tolerance`]).
+    pub fn default_tolerance(&self) -> f64 {
+        TrackRows::default_tolerance(&self.params)
+    }
+
+    /// The window's length (s) unless given ([`TrackRows::default_window`]).
+    pub fn default_window(&self) -> f64 {
+        self.rows().default_window()
+    }
+
+    /// The window's start (s) unless given: the first row with a row before it (the
+    /// velocities' central differences need one).
+    pub fn default_start(&self) -> f64 {
+        self.t[1]
     }
 }
 
@@ -92,15 +112,97 @@ fn stated_parts(given: &ParamSources) -> Option<&'static str> {
     parts.into_iter().find(|p| p.1).map(|p| p.0)
 }
 
+/// Arms longer than this (m) are no pendulum on a bench: positions in pixels read as metres.
+const LONGEST_ARM: f64 = 10.0;
+
+/// A motion slower than this (s, 1/RMS of the upper arm's angular velocity) is no swinging
+/// pendulum: frame numbers read as seconds (a 1 m pendulum's is about 0.3 s).
+const SLOWEST_MOTION: f64 = 60.0;
+
+/// A time scale off by more than this factor in g (the frame rate by 5, the metre by 25) is
+/// a unit mistake, not a camera's rate or scale a little off (the shared recording's usual
+/// rate and usual arm length disagree by 1.5).
+const UNIT_MISTAKE: f64 = 25.0;
+
+/// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
+/// `g` at their times: pixels per metre and its error.
+fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
+    let pivot = fit_pivot(frames)?;
+    let measured = super::measured(frames, (pivot.x, pivot.y));
+    let angles = angles(frames, (pivot.x, pivot.y));
+    let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    let rows = TrackRows {
+        t: &t,
+        data: &measured,
+        angles: &angles,
+    };
+    let id = identify(&rows, g).map_err(|e| match e {
+        Error::InvalidSpec { reason, .. } => Error::invalid(
+            "pixels_per_metre",
+            format!("the scale cannot be found from this file's motion: {reason}; give it"),
+        ),
+        e => e,
+    })?;
+    let ts = id.time_scale;
+    Ok((ts.g_implied / g, ts.g_implied_error / g))
+}
+
 /// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
 /// `frames`, and the model: `given`'s where it names a preset or a file (the arm lengths
-/// from the data unless given), else the one the motion implies.
-pub fn tracked_model(frames: &[TrackedRow], given: &ParamSources) -> Result<Tracked> {
+/// from the data unless given), else the one the motion implies. With `units` asking for
+/// the scale from the motion, `frames` are in pixels (y up) and are scaled first.
+pub fn tracked_model(
+    frames: &[TrackedRow],
+    given: &ParamSources,
+    units: &super::data::Units,
+) -> Result<Tracked> {
+    let g = given.g.unwrap_or(Params::default().g);
+    let (frames, scale_from_motion) = match units.pixels_per_metre {
+        Some(super::data::PixelScale::FromMotion) => {
+            let (ppm, error) = scale_from_motion(frames, g)?;
+            let scaled = frames
+                .iter()
+                .map(|f| TrackedRow {
+                    t: f.t,
+                    x1: f.x1 / ppm,
+                    y1: f.y1 / ppm,
+                    x2: f.x2 / ppm,
+                    y2: f.y2 / ppm,
+                })
+                .collect();
+            (scaled, Some((ppm, error)))
+        }
+        _ => (frames.to_vec(), None),
+    };
+    let frames = &frames[..];
     let pivot = fit_pivot(frames)?;
     let (l1, l2) = arm_lengths(frames, (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));
     let measured = super::measured(frames, (pivot.x, pivot.y));
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    if l1.value > LONGEST_ARM {
+        return Err(Error::invalid(
+            "pixels_per_metre",
+            format!(
+                "the upper arm comes out {:.4} m long (the pivot to the upper marker): are the positions in pixels? Give the camera's pixels per metre, or `motion` for the scale the swing implies",
+                l1.value
+            ),
+        ));
+    }
+    let natural = TrackRows {
+        t: &t,
+        data: &measured,
+        angles: &angles,
+    }
+    .motion_time();
+    if natural > SLOWEST_MOTION {
+        return Err(Error::invalid(
+            "frame_rate",
+            format!(
+                "the upper arm turns by 1 rad in {natural:.0} s (1/RMS of its angular velocity; a swinging pendulum's is under a second or so): are the times frame numbers? Name the column `frame` and give the frame rate"
+            ),
+        ));
+    }
     let stated = given.preset.is_some() || given.params.is_some();
     let rows = TrackRows {
         t: &t,
@@ -121,7 +223,10 @@ pub fn tracked_model(frames: &[TrackedRow], given: &ParamSources) -> Result<Trac
                 params.losses.joint1, params.losses.joint2
             ));
         }
-        let identified = identify(&rows, params.g).map_err(|e| e.to_string());
+        let identified = identify(&rows, params.g).map_err(|e| match e {
+            Error::InvalidSpec { reason, .. } => reason,
+            e => e.to_string(),
+        });
         (params, ModelSource::Given, identified)
     } else {
         if let Some(field) = stated_parts(given) {
@@ -130,7 +235,6 @@ pub fn tracked_model(frames: &[TrackedRow], given: &ParamSources) -> Result<Trac
                 "states a part of a pendulum, but no model was given for it to be part of: with no preset or params the model is found from the motion, which fixes it; give a preset or params to state a model, or leave it out",
             ));
         }
-        let g = given.g.unwrap_or(Params::default().g);
         let id = identify(&rows, g).map_err(|e| match e {
             Error::InvalidSpec { reason, .. } => Error::invalid(
                 "params",
@@ -153,6 +257,27 @@ pub fn tracked_model(frames: &[TrackedRow], given: &ParamSources) -> Result<Trac
         (params, ModelSource::Identified, Ok(id))
     };
     if let Ok(id) = &identified {
+        let ts = id.time_scale;
+        let factor = ts.g_implied / ts.g;
+        if !(1.0 / UNIT_MISTAKE..=UNIT_MISTAKE).contains(&factor) {
+            let (field, what) = match factor < 1.0 {
+                true => (
+                    "frame_rate",
+                    "the times run slow: are they frame numbers? Name the column `frame` and give the frame rate",
+                ),
+                false => (
+                    "pixels_per_metre",
+                    "the lengths run long: are the positions in pixels? Give the camera's pixels per metre, or `motion`",
+                ),
+            };
+            return Err(Error::invalid(
+                field,
+                format!(
+                    "the motion implies gravity {:.3e} m/s^2 at the file's metres and seconds, {factor:.2e} times g ({} m/s^2): {what}",
+                    ts.g_implied, ts.g
+                ),
+            ));
+        }
         for (k, joint) in [(4, "pivot"), (5, "middle joint")] {
             if id.values[k] < 0.0 {
                 notices.push(format!(
@@ -167,7 +292,15 @@ pub fn tracked_model(frames: &[TrackedRow], given: &ParamSources) -> Result<Trac
             }
         }
     }
+    if let Some((ppm, error)) = scale_from_motion {
+        notices.push(format!(
+            "the metre scale from the motion: {ppm:.2} ± {error:.2} pixels per metre at the file's frame rate and g {g} m/s^2 (arms {:.4} and {:.4} m)",
+            l1.value, l2.value
+        ));
+    }
     Ok(Tracked {
+        frames: frames.to_vec(),
+        scale_from_motion,
         pivot,
         l1,
         l2,

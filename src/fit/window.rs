@@ -290,6 +290,48 @@ pub struct TrackRows<'a> {
     pub angles: &'a [(f64, f64)],
 }
 
+/// The default tolerance, as a share of the reach (l1 + l2): 3 cm on the lab's pendulum.
+pub const TOLERANCE_SHARE: f64 = 0.06;
+
+/// A default window holds this many of the motion's own times ([`TrackRows::motion_time`]):
+/// long enough to pin the state and damping, short enough that chaos has not yet parted
+/// the model from the data (0.4 s on the shared high-speed run, 1.8 s on the lab's table).
+pub const WINDOW_TIMES: f64 = 4.0;
+
+/// The fewest row intervals in a default window.
+pub const WINDOW_ROWS: usize = 5;
+
+impl TrackRows<'_> {
+    /// The motion's own time (s): 1 / RMS of the upper arm's angular velocity, by
+    /// differences between rows.
+    pub fn motion_time(&self) -> f64 {
+        let steps: Vec<f64> = self
+            .angles
+            .windows(2)
+            .zip(self.t.windows(2))
+            .map(|(a, t)| (a[1].0 - a[0].0) / (t[1] - t[0]))
+            .filter(|w| w.is_finite())
+            .collect();
+        1.0 / (steps.iter().map(|w| w * w).sum::<f64>() / steps.len().max(1) as f64).sqrt()
+    }
+
+    /// A window's length (s) unless given: [`WINDOW_TIMES`] of the motion's own times, at
+    /// least [`WINDOW_ROWS`] row intervals, at most half the data.
+    pub fn default_window(&self) -> f64 {
+        let n = self.t.len();
+        let span = self.t[n - 1] - self.t[0];
+        let step = span / (n - 1).max(1) as f64;
+        (WINDOW_TIMES * self.motion_time())
+            .max(WINDOW_ROWS as f64 * step)
+            .min(0.5 * span)
+    }
+
+    /// A tolerance unless given: [`TOLERANCE_SHARE`] of the reach of `p`.
+    pub fn default_tolerance(p: &Params) -> f64 {
+        TOLERANCE_SHARE * (p.l1 + p.l2)
+    }
+}
+
 /// Fits `p`'s state, joint damping, pivot and scale to the `track`'s measured positions
 /// within `window`; `candidates` states and dampings are searched on `engine` first.
 pub fn fit_window(

@@ -29,10 +29,10 @@ pub(super) fn prepare(engine: &Engine, monitor: &Monitor) -> Result<crate::fit::
     };
     let track = make_track(&p, start, 30.0, 0.5 + SPAN, 0.002, 1);
     let settings = ForecastSettings {
-        window: (0.0, 0.5),
+        window: Some((0.0, 0.5)),
         members: 16,
         seed: 1,
-        tolerance: 0.03,
+        tolerance: Some(0.03),
         tracking_error: None,
         candidates: 4096,
     };
