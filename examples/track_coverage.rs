@@ -87,6 +87,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .ok()
                     .and_then(|v| v.parse().ok()),
                 candidates: 65_536,
+                // The model is the truth here: no model error to measure.
+                held_out: 0,
             },
             params: ParamSources {
                 preset: Some(Preset::Lab),

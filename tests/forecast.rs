@@ -251,6 +251,8 @@ fn forecast_bands_agree_on_gpu_and_cpu_across_chunks() {
         tolerance: Some(0.03),
         tracking_error: None,
         candidates: 256,
+        // The model is the truth here: no model error to measure.
+        held_out: 0,
     };
     let cpu_engine = Engine::new(Backend::Cpu).unwrap();
     let fit = experiment(
@@ -365,6 +367,8 @@ fn zero_noise_twin_holds_the_truth() {
         tolerance: Some(0.03),
         tracking_error: None,
         candidates: 1024,
+        // The model is the truth here: no model error to measure.
+        held_out: 0,
     };
     let engine = Engine::new(Backend::Cpu).unwrap();
     let (o, at) = experiment(
@@ -436,6 +440,8 @@ fn twin_experiments_are_calibrated() {
             tolerance: Some(0.03),
             tracking_error: None,
             candidates: 1024,
+            // The model is the truth here: no model error to measure.
+            held_out: 0,
         },
         duration: 2.5,
         start: RELEASE,

@@ -99,8 +99,8 @@ fn output_flags(store: &Path) -> Vec<(Vec<String>, &'static str, &'static str)> 
         "32",
     ]);
     let phase = words(&["phase", "--t-max", "0.5", "--size", "32"]);
-    let fit = vec!["fit".to_string(), lab.clone()];
-    let forecast = vec!["forecast".to_string(), lab];
+    let fit = words(&["fit", &lab, "--preset", "lab"]);
+    let forecast = words(&["forecast", &lab, "--preset", "lab"]);
     let twin = words(&["twin", "--replicates", "1"]);
     let render = vec!["render".to_string(), store.display().to_string()];
     vec![

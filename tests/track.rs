@@ -418,7 +418,7 @@ fn the_forecast_is_drawn_back_onto_the_film() {
             "--candidates",
             "1024",
         ])
-        .args(["--backend", "cpu", "--video"])
+        .args(["--preset", "lab", "--backend", "cpu", "--video"])
         .arg(&film)
         .arg("--output")
         .arg(&out)

@@ -472,6 +472,7 @@ def forecast(
     tolerance: Optional[float] = None,
     tracking_error: Optional[float] = None,
     candidates: int = 65536,
+    held_out: int = 8,
     video: Optional[str] = None,
     m1: Optional[float] = None,
     m2: Optional[float] = None,
@@ -496,7 +497,9 @@ def forecast(
     units as :func:`fit`): the model's state, joint damping, pivot, scale and lower arm
     fitted on ``window`` = (start, end) in s (default: from the second row, four of the
     motion's own times), then
-    ``members`` drawn from the fit's covariance (``seed``) and integrated to the data's end.
+    ``members`` drawn from the fit's covariance (``seed``) and integrated to the data's end,
+    the bands at least as wide as the model's own error measured on ``held_out`` other
+    windows of the recording.
     Returns an ``xarray.Dataset`` over ``time`` (s): ``model`` and ``measurement`` (the
     model's band with the tracking error, ``tracking_error`` m or the fit's residuals)
     quantiles of the positions (m) by ``coordinate`` (x1, y1, x2, y2) and ``quantile``

@@ -526,6 +526,9 @@ fn forecast<'py>(
             tolerance: k.get("tolerance")?,
             tracking_error: k.get("tracking_error")?,
             candidates: k.whole("candidates")?.unwrap_or(65536),
+            held_out: k
+                .whole("held_out")?
+                .unwrap_or(chaoscope::fit::model_error::HELD_OUT),
         },
         params: k.sources()?,
         backend: k.backend()?,

@@ -49,6 +49,8 @@ pub struct Outcome {
     pub data_horizon: Option<f64>,
     pub run: usize,
     pub data_coverage: Option<f64>,
+    /// The median's and the bands' record against the data after the window.
+    pub scores: forecast::Scores,
     /// Whether the fit follows the data in its window: where it does not, the horizons are
     /// no findings.
     pub verdict: Verdict,
@@ -84,6 +86,9 @@ pub struct ForecastSettings {
     pub tracking_error: Option<f64>,
     /// Candidates of the fit's ensemble search.
     pub candidates: usize,
+    /// Windows of the same recording held out to measure the model's own error (0: none;
+    /// the bands then hold the tracking error and the fit's uncertainty alone).
+    pub held_out: usize,
 }
 
 impl ForecastSettings {
@@ -104,6 +109,10 @@ impl ForecastSettings {
         check_count("candidates", self.candidates as u64, 64, 4_000_000)
     }
 }
+
+/// Candidates of each held-out window's search: the model's error needs each fit found, not
+/// the last digit of its state.
+const HELD_OUT_CANDIDATES: usize = 4096;
 
 /// Fits `p` to the `track` in the settings' window and forecasts to `end` (s).
 pub fn fit_and_forecast(
@@ -156,11 +165,28 @@ pub fn fit_and_forecast(
     };
     // The window ends at its last row.
     let window_end = t[fit.row0 + fit.rows - 1];
-    let forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
+    let mut forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
+    // The model's own error, from windows of the same recording held out from this one,
+    // each followed as far as this forecast's lead (or ten windows, at least 3 s: the
+    // departure has saturated by then).
+    let length = window.1 - window.0;
+    let lead = (end - window_end).min((10.0 * length).max(3.0));
+    let held = crate::fit::model_error::HeldOut {
+        window,
+        windows: settings.held_out,
+        lead,
+        candidates: settings.candidates.min(HELD_OUT_CANDIDATES),
+    };
+    if let Some(error) = crate::fit::model_error::estimate(track, p, &held, engine, monitor)? {
+        forecast.widen(error, (p.l1, p.l1 + p.l2));
+    }
     let (data_horizon, run, data_coverage) = forecast::data_horizon(&forecast, t, data);
+    // The median within 5 % of the reach, the measure a forecast is judged by here.
+    let scores = forecast::scores(&forecast, t, data, 0.05 * (p.l1 + p.l2));
     let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();
     let verdict = Verdict::judge(rms, t, data, p.l1 + p.l2);
     Ok(Outcome {
+        scores,
         verdict,
         window,
         tolerance,
@@ -187,6 +213,7 @@ pub struct ForecastSummary {
     pub data_horizon_lyapunov_times: Option<f64>,
     pub lyapunov_exponent: f64,
     pub data_coverage: Option<f64>,
+    pub scores: forecast::Scores,
     pub verdict: Verdict,
     pub output: PathBuf,
     pub files: Vec<PathBuf>,
@@ -275,7 +302,7 @@ pub fn run(
             tolerance: o.tolerance,
             until,
             title: format!(
-                "{}: fit {:.3}..{:.3} s, {} members; spread > {:.3} m {}; data out of the 90 % band {}",
+                "{}: fit {:.3}..{:.3} s, {} members; spread > {:.3} m {}; data leave the 90 % band {}",
                 job.file
                     .file_name()
                     .map(|n| n.to_string_lossy().into_owned())
@@ -284,12 +311,25 @@ pub fn run(
                 o.window.1,
                 settings.members,
                 o.tolerance,
-                fmt_time(f.spread_horizon),
-                fmt_time(o.data_horizon),
+                short_time(f.spread_horizon),
+                short_time(o.data_horizon),
             ),
         },
     )?;
     write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
+    // Which error ends the forecast first: the state's uncertainty spread by chaos (the
+    // ensemble), or the model's own (its departure on held-out windows).
+    let model_horizon = f
+        .model_error
+        .as_ref()
+        .and_then(|e| e.horizon(o.tolerance))
+        .map(|lead| f.window_end + lead);
+    let dominated_by = match (f.spread_horizon, model_horizon) {
+        (_, None) => "the state's uncertainty (the ensemble's spread)",
+        (None, Some(_)) => "the model's own error (its departure on held-out windows)",
+        (Some(s), Some(m)) if m < s => "the model's own error (its departure on held-out windows)",
+        _ => "the state's uncertainty (the ensemble's spread)",
+    };
     let summary = json!({
         "command": command,
         "file": job.file.display().to_string(),
@@ -297,6 +337,8 @@ pub fn run(
         "parameters": super::fit::params_json(&o.fit.params),
         "fit": fit_json(&o.fit),
         "verdict": o.verdict,
+        "scores": o.scores,
+        "model_error": f.model_error,
         "ensemble": {
             "members": settings.members, "seed": settings.seed, "clamped_negative_damping": f.clamped,
             "tracking_error": o.tracking_error,
@@ -312,6 +354,8 @@ pub fn run(
             "data_run": o.run,
             "data_rule": "the first row after the window from which a measured coordinate lies outside its 90 % band (model and tracking error) for `data_run` rows in a row",
             "data_coverage_before_spread_horizon": o.data_coverage,
+            "model_error": model_horizon,
+            "dominated_by": dominated_by,
         },
         "lyapunov": {
             "exponent": f.lyapunov, "time": (f.lyapunov > 0.0).then(|| 1.0 / f.lyapunov),
@@ -351,6 +395,7 @@ pub fn run(
         data_horizon_lyapunov_times: data_lt,
         lyapunov_exponent: f.lyapunov,
         data_coverage: o.data_coverage,
+        scores: o.scores,
         verdict: o.verdict,
         output: out.clone(),
         files: ["forecast.png", "bands.csv", "summary.json"]
@@ -364,6 +409,11 @@ pub fn run(
 
 /// The forecast drawn on the film (`--video`), in the output folder.
 pub const OVERLAY: &str = "overlay.mp4";
+
+/// "at 2.31 s", or "beyond the data": short enough for a title.
+fn short_time(t: Option<f64>) -> String {
+    t.map_or("beyond the data".into(), |t| format!("at {t:.2} s"))
+}
 
 /// "at 2.31 s", or "never (to the data's end)".
 pub fn fmt_time(t: Option<f64>) -> String {

@@ -485,7 +485,7 @@ pub fn forecast(job: &ForecastJob) -> String {
         .tracking_error
         .map_or(String::new(), |e| format!(" --tracking-error {e}"));
     format!(
-        "chaoscope forecast {}{}{} --members {} --seed {}{}{noise} --candidates {}{} --backend {}",
+        "chaoscope forecast {}{}{} --members {} --seed {}{}{noise} --candidates {} --held-out {}{} --backend {}",
         word(&job.file),
         units(&job.units),
         given(
@@ -496,6 +496,7 @@ pub fn forecast(job: &ForecastJob) -> String {
         job.settings.seed,
         given("tolerance", job.settings.tolerance),
         job.settings.candidates,
+        job.settings.held_out,
         sources(&job.params),
         job.backend.name()
     ) + &precision(job.precision)

@@ -56,6 +56,12 @@ pub struct ForecastArgs {
     /// Candidates of the fit's ensemble search.
     #[arg(long, default_value = "65536", value_parser = parse_usize, allow_hyphen_values = true)]
     pub candidates: usize,
+    /// Windows of the same recording held out to measure the model's own error: the model
+    /// fitted on each, how far the data depart from it by the time since its end; the
+    /// bands are at least that wide. 0: the bands hold the tracking error and the fit's
+    /// uncertainty alone.
+    #[arg(long, default_value_t = crate::fit::model_error::HELD_OUT, value_parser = parse_usize, allow_hyphen_values = true)]
+    pub held_out: usize,
     #[command(flatten)]
     pub physical: PhysicalArgs,
     /// auto, gpu or cpu (f64).
@@ -80,6 +86,7 @@ impl ForecastArgs {
                 tolerance: self.tolerance,
                 tracking_error: self.tracking_error,
                 candidates: self.candidates,
+                held_out: self.held_out,
             },
             params: self.physical.sources(),
             video: self.video.clone(),

@@ -96,6 +96,8 @@ impl TwinArgs {
                 tolerance: Some(self.tolerance),
                 tracking_error: None,
                 candidates: self.candidates,
+                // The model is the truth here: no model error to measure.
+                held_out: 0,
             },
             duration: self.duration,
             start: State {

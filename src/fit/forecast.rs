@@ -60,9 +60,39 @@ pub struct Forecast {
     /// The FTLE over the whole forecast (window end to end) and the integration step.
     pub lyapunov: f64,
     pub dt: f64,
+    /// The model's own error measured on held-out windows, by which the measurement bands
+    /// were widened ([`Forecast::widen`]); None where none was measured.
+    pub model_error: Option<super::model_error::ModelError>,
 }
 
 impl Forecast {
+    /// Widens the measurement bands after the window by `error`'s model part in quadrature,
+    /// each side's distance from the members' median (its 50 % half-width for the 25-75 %
+    /// band, its 90 % for the 5-95 %): where the model departs from this pendulum faster than
+    /// its state's uncertainty spreads, the bands say so. No band reaches past where the
+    /// masses can be: `reach` (m) from the pivot for the upper (l1) and the lower (l1 + l2).
+    pub fn widen(&mut self, error: super::model_error::ModelError, reach: (f64, f64)) {
+        for (k, &t) in self.times.iter().enumerate() {
+            let lead = t - self.window_end;
+            if lead <= 1e-9 {
+                continue;
+            }
+            let (half50, half90) = error.at(lead);
+            for c in 0..4 {
+                let median = self.model[k][c][2];
+                let q = &mut self.observed[k][c];
+                let below = |edge: f64, extra: f64| median - (median - edge).max(0.0).hypot(extra);
+                let above = |edge: f64, extra: f64| median + (edge - median).max(0.0).hypot(extra);
+                let most = if c < 2 { reach.0 } else { reach.1 };
+                q[0] = below(q[0], half90[c]).max(-most).min(q[0]);
+                q[1] = below(q[1], half50[c]).max(-most).min(q[1]);
+                q[3] = above(q[3], half50[c]).min(most).max(q[3]);
+                q[4] = above(q[4], half90[c]).min(most).max(q[4]);
+            }
+        }
+        self.model_error = Some(error);
+    }
+
     /// Index of the band at time `t` (one of `times`).
     pub fn index(&self, t: f64) -> Option<usize> {
         let k = self.times.partition_point(|&x| x < t - 1e-9);
@@ -250,6 +280,7 @@ pub fn forecast(
         spread_horizon,
         lyapunov,
         dt,
+        model_error: None,
     })
 }
 
@@ -410,6 +441,45 @@ pub fn data_horizon(
         }
     }
     (horizon, run, (all > 0).then(|| inside as f64 / all as f64))
+}
+
+/// How the forecast did against the data after its window: how long the members' median
+/// follows the lower mass within `within` (m, the distance), and the share of the lower
+/// mass's coordinates inside their measurement's 90 % band to the data's end.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Scores {
+    pub within: f64,
+    /// Seconds after the window's end until the median first strays past `within`.
+    pub median_follows_for: f64,
+    pub lower_in_band: Option<f64>,
+}
+
+pub fn scores(forecast: &Forecast, t: &[f64], data: &[[f64; 4]], within: f64) -> Scores {
+    let mut follows_for = None;
+    let (mut inside, mut all) = (0usize, 0usize);
+    for (i, &ti) in t.iter().enumerate() {
+        if ti <= forecast.window_end + 1e-9 {
+            continue;
+        }
+        let Some(k) = forecast.index(ti) else {
+            continue;
+        };
+        let (m, q) = (&forecast.model[k], &forecast.observed[k]);
+        let off = (data[i][2] - m[2][2]).hypot(data[i][3] - m[3][2]);
+        if follows_for.is_none() && off > within {
+            follows_for = Some(ti - forecast.window_end);
+        }
+        for c in 2..4 {
+            all += 1;
+            inside += (q[c][0]..=q[c][4]).contains(&data[i][c]) as usize;
+        }
+    }
+    let end = t.last().copied().unwrap_or(forecast.window_end);
+    Scores {
+        within,
+        median_follows_for: follows_for.unwrap_or(end - forecast.window_end),
+        lower_in_band: (all > 0).then(|| inside as f64 / all as f64),
+    }
 }
 
 /// Members the position budget allows over `times` band times.

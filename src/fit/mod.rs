@@ -8,6 +8,7 @@ pub mod forecast_plot;
 pub mod identify;
 mod lsq;
 mod model;
+pub mod model_error;
 pub mod pendulum;
 pub mod plots;
 mod quantiles;

@@ -35,6 +35,8 @@ pub(super) fn prepare(engine: &Engine, monitor: &Monitor) -> Result<crate::fit::
         tolerance: Some(0.03),
         tracking_error: None,
         candidates: 4096,
+        // The model is the truth here: no model error to measure.
+        held_out: 0,
     };
     Ok(
         experiment(&p, start, &track, &settings, 0.5 + SPAN, engine, monitor)?
