@@ -89,6 +89,9 @@ fn base(command: &str, data: &str) -> Vec<String> {
         ],
         "fit" => &["--candidates", "64", "--window", "0.5"],
         "forecast" => &[
+            // Each held-out window is a fit of its own: the lines here test the flags.
+            "--held-out",
+            "0",
             "--candidates",
             "64",
             "--members",

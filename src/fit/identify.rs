@@ -95,20 +95,25 @@ fn bump(s: f64) -> [f64; 3] {
     ]
 }
 
-/// The angular velocities at every row by a local quartic fit over `half` rows either side
-/// (fewer at the ends), at the data's own times.
+/// The angular velocities at every row by a local polynomial over `half` rows either side
+/// (fewer at the ends), at the data's own times: of degree up to 10, so that a swing
+/// sampled coarsely (30 frames a second: half a radian a frame) is still differentiated
+/// to its truncation error rather than a quartic's. On 50 seeded compound pendulums the
+/// quartic over five rows at 30 and 60 frames a second left a's 95 % interval missing the
+/// truth in 17 of 20 cases, degree 10 over eleven rows in 5 (examples/identify_coverage).
+/// Solved by singular values: the powers' columns are nearly parallel.
 fn velocities(t: &[f64], theta: &[f64], half: usize) -> Vec<f64> {
     let n = t.len();
     (0..n)
         .map(|i| {
             let (lo, hi) = (i.saturating_sub(half), (i + half + 1).min(n));
-            let degree = (hi - lo - 1).min(4);
+            let degree = (hi - lo - 1).min(10);
             let scale = (t[hi - 1] - t[lo]).max(1e-12);
             let x = DMatrix::from_fn(hi - lo, degree + 1, |r, k| {
                 ((t[lo + r] - t[i]) / scale).powi(k as i32)
             });
             let y = DVector::from_iterator(hi - lo, theta[lo..hi].iter().copied());
-            match (x.transpose() * &x).lu().solve(&(x.transpose() * y)) {
+            match x.svd(true, true).solve(&y, 1e-13).ok() {
                 Some(beta) if degree >= 1 => beta[1] / scale,
                 _ => f64::NAN,
             }
@@ -164,7 +169,7 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         }
         rows
     };
-    let half = ((0.1 * natural * rate).round() as usize).clamp(2, 8);
+    let half = ((0.1 * natural * rate).round() as usize).clamp(5, 8);
     let (w1, w2) = (velocities(t, &th1, half), velocities(t, &th2, half));
     // Two equations a stretch: the regressors of (a, b, c, q, k1, k2), and the first's right
     // side (the second's is 0: gravity's moment P, the unit, acts on the upper arm alone).
