@@ -362,7 +362,10 @@ pub fn run(
             "over": [f.window_end, end],
             "along": "the fitted orbit: ln of the tangent propagator's largest singular value over the time",
         },
-        "report": "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s",
+        // The lab report's comparison, for the lab's apparatus only.
+        "report": (job.params.preset == Some(crate::params::Preset::Lab)).then_some(
+            "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s"
+        ),
     });
     super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
     if let (Some(video), Some(geometry)) = (&job.video, geometry) {
