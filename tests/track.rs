@@ -466,3 +466,55 @@ fn the_forecast_is_drawn_back_onto_the_film() {
     }
     assert_eq!(k, 300);
 }
+
+/// `track` without a length: the scale from the swing itself. A film of 10 s at 60 frames a
+/// second of a pendulum with rods (no drag, light joint damping): the pixels per metre the
+/// motion implies under g at the film's own frame times within 2 % of the scene's (the
+/// time-scale check's error at this rate and length is under 1 %, examples/identify_coverage).
+#[test]
+fn the_scale_is_found_from_the_swing() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let video = dir.path().join("swing.mp4");
+    let mut p = chaoscope::model::Params {
+        m1: 0.2,
+        m2: 0.1,
+        l1: 0.3,
+        l2: 0.2,
+        rod1: 0.1,
+        rod2: 0.05,
+        ..Default::default()
+    };
+    (p.losses.joint1, p.losses.joint2) = (1e-4, 1e-5);
+    let scene = Scene {
+        fps: 60.0,
+        ..Scene::lab(480, 270, p.l1 + p.l2)
+    };
+    film(&scene, &p, State::at_rest(2.0, 2.5), 600, 14, &video).unwrap();
+    let csv = dir.path().join("swing.csv");
+    let o = chaoscope()
+        .arg("track")
+        .arg(&video)
+        .args(["--pixels-per-metre", "motion", "--json", "--output"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = common::summary(o);
+    let found = s["pixels_per_metre"].as_f64().unwrap();
+    assert!(
+        (found / scene.pixels_per_metre - 1.0).abs() < 0.02,
+        "{found} px/m against the scene's {}",
+        scene.pixels_per_metre
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        text.lines()
+            .next()
+            .unwrap()
+            .contains("--pixels-per-metre motion"),
+        "{text:.200}"
+    );
+}

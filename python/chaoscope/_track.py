@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
-from typing import Optional, Tuple
+from typing import Optional, Tuple, Union
 
 import numpy as np
 import xarray as xr
@@ -19,7 +19,7 @@ def track(
     *,
     output: str = "out/track.csv",
     l1: Optional[float] = None,
-    pixels_per_metre: Optional[float] = None,
+    pixels_per_metre: Union[None, float, str] = None,
     markers: str = "bright",
     region: Optional[Tuple[int, int, int, int]] = None,
     bridge: bool = False,
@@ -29,7 +29,8 @@ def track(
 ) -> xr.Dataset:
     """The positions of both masses in every frame of a film of the pendulum (``chaoscope
     track``): bright markers on a dark background, or ``markers="ff2020"`` of a colour; the
-    scale from the upper arm's length ``l1`` (m) or ``pixels_per_metre``; ``region`` (x0, y0,
+    scale from the upper arm's length ``l1`` (m) or ``pixels_per_metre`` (or ``"motion"``:
+    the scale the swing implies under g at the film's own frame times); ``region`` (x0, y0,
     x1, y1 in pixels) to look in part of the picture. ``bridge=True`` fills gaps where a mass
     is hidden (up to 1 s, with 5 measured rows on each side) with the model fitted to the
     half second measured on each side (``preset`` or ``params_file`` for its masses and

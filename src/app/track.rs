@@ -95,6 +95,7 @@ pub fn run(
     match job.scale {
         Scale::UpperArm(l1) => super::check_within("l1", l1, 1e-4, 1e4)?,
         Scale::PixelsPerMetre(p) => super::check_within("pixels_per_metre", p, 1e-3, 1e9)?,
+        Scale::FromMotion(g) => super::check_within("g", g, 1e-6, 1e6)?,
     }
     if !job.video.exists() {
         return Err(Error::Missing {

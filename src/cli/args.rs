@@ -323,7 +323,7 @@ impl TrackedUnitsArgs {
 }
 
 /// A pixel scale: a number (pixels per metre) or `motion`.
-fn parse_pixel_scale(s: &str) -> Result<crate::fit::data::PixelScale, String> {
+pub(super) fn parse_pixel_scale(s: &str) -> Result<crate::fit::data::PixelScale, String> {
     use crate::fit::data::PixelScale;
     match s.trim() {
         "motion" => Ok(PixelScale::FromMotion),

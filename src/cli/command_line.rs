@@ -538,6 +538,7 @@ pub fn track(job: &crate::app::track::TrackJob) -> String {
     match job.scale {
         crate::track::Scale::UpperArm(l1) => out += &format!(" --l1 {l1}"),
         crate::track::Scale::PixelsPerMetre(p) => out += &format!(" --pixels-per-metre {p}"),
+        crate::track::Scale::FromMotion(_) => out += " --pixels-per-metre motion",
     }
     if let crate::track::Markers::Colour([r, g, b]) = job.markers {
         out += &format!(" --markers {r:02x}{g:02x}{b:02x}");

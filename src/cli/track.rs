@@ -10,6 +10,7 @@ use super::{command_line, json, say};
 use crate::app::track::{self, TrackJob};
 use crate::engine::Backend;
 use crate::error::Result;
+use crate::fit::data::PixelScale;
 use crate::monitor::Monitor;
 use crate::params::{ParamSources, Preset};
 use crate::track::{Markers, Scale};
@@ -25,9 +26,11 @@ pub struct TrackArgs {
     /// The upper arm's length (m), pivot to the upper marker: the scale.
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true, required_unless_present = "pixels_per_metre", conflicts_with = "pixels_per_metre")]
     pub l1: Option<f64>,
-    /// The scale in pixels per metre, instead of --l1.
-    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
-    pub pixels_per_metre: Option<f64>,
+    /// The scale in pixels per metre, instead of --l1; `motion`: the scale the swing implies
+    /// under g (9.81 m/s^2) at the film's own frame times (a rigid pendulum's motion fixes
+    /// l1/g in seconds: some 8 s of swinging at 60 frames a second or more).
+    #[arg(long, value_parser = super::args::parse_pixel_scale, allow_hyphen_values = true)]
+    pub pixels_per_metre: Option<crate::fit::data::PixelScale>,
     /// What the markers look like: bright (lights on a dark background) or a colour as
     /// RRGGBB (coloured markers on a lighter or other-coloured background, e.g. ff2020).
     #[arg(long, default_value = "bright", value_parser = Markers::parse)]
@@ -70,7 +73,10 @@ impl TrackArgs {
             markers: self.markers,
             scale: match (self.l1, self.pixels_per_metre) {
                 (Some(l1), _) => Scale::UpperArm(l1),
-                (None, Some(p)) => Scale::PixelsPerMetre(p),
+                (None, Some(PixelScale::PerMetre(p))) => Scale::PixelsPerMetre(p),
+                (None, Some(PixelScale::FromMotion)) => {
+                    Scale::FromMotion(crate::model::Params::default().g)
+                }
                 // clap requires one of them.
                 (None, None) => Scale::UpperArm(f64::NAN),
             },

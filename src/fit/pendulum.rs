@@ -126,7 +126,7 @@ const UNIT_MISTAKE: f64 = 25.0;
 
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
-fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
+pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
     let pivot = fit_pivot(frames)?;
     let measured = super::measured(frames, (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));

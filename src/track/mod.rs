@@ -19,6 +19,9 @@ pub enum Scale {
     /// The upper arm's length (m): its circle's radius in pixels is that many metres.
     UpperArm(f64),
     PixelsPerMetre(f64),
+    /// The scale the swing implies under gravity g (m/s^2) at the film's own frame times: a
+    /// rigid pendulum's motion fixes l1/g in seconds ([`crate::fit::identify`]).
+    FromMotion(f64),
 }
 
 /// One mass in one frame, measured: its mean position over the exposure (m, origin at the
@@ -257,11 +260,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     let named = geometry::name(&plausible, &g, OFF_GEOMETRY);
     let g = geometry::refined(&named, g);
     let up = up_from_rest(&named, times, g.pivot).unwrap_or(Up::PICTURE);
-    let ppm = match scale {
-        Scale::UpperArm(l1) => g.r1 / l1,
-        Scale::PixelsPerMetre(p) => p,
-    };
-    let mark = |b: Blob| {
+    let mark_at = |b: Blob, ppm: f64| {
         let (x, y) = up.metres((b.x - g.pivot.0, b.y - g.pivot.1), ppm);
         let (sx, sy) = up.turned(b.sx, b.sy);
         Mark {
@@ -274,13 +273,41 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
             bridged: false,
         }
     };
+    let ppm = match scale {
+        Scale::UpperArm(l1) => g.r1 / l1,
+        Scale::PixelsPerMetre(p) => p,
+        Scale::FromMotion(gravity) => {
+            // The rows with both marks, in pixels (y up), are what the motion is read from.
+            let rows: Vec<crate::fit::TrackedRow> = named
+                .iter()
+                .zip(times)
+                .filter_map(|(&(a, b), &t)| {
+                    let (a, b) = (mark_at(a?, 1.0), mark_at(b?, 1.0));
+                    Some(crate::fit::TrackedRow {
+                        t,
+                        x1: a.x,
+                        y1: a.y,
+                        x2: b.x,
+                        y2: b.y,
+                    })
+                })
+                .collect();
+            if rows.len() < 5 {
+                return Err(Error::invalid(
+                    "pixels_per_metre",
+                    "the scale cannot be found from the motion: both markers are seen in fewer than 5 frames; give it",
+                ));
+            }
+            crate::fit::pendulum::scale_from_motion(&rows, gravity)?.0
+        }
+    };
     let rows = named
         .iter()
         .zip(times)
         .map(|(&(a, b), &t)| TrackRow {
             t,
-            m1: a.map(mark),
-            m2: b.map(mark),
+            m1: a.map(|a| mark_at(a, ppm)),
+            m2: b.map(|b| mark_at(b, ppm)),
         })
         .collect();
     Ok(Tracked {
