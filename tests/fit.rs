@@ -488,6 +488,25 @@ fn files_as_users_have_them() {
     .unwrap();
     let read = fit::read_frames(&tabs, &Units::default()).unwrap();
     assert_eq!((read[1].t, read[1].x1, read[1].y2), (0.25, 0.1, -0.5));
+    // Tracker's export of two point masses together (tabs, the tracks' names over `t x y x
+    // y`, decimal commas in some locales); a step not marked is left empty: that row is
+    // skipped.
+    let tracker = dir.path().join("tracker.txt");
+    let mut text = String::from("#multi:\n\tmass A\t\tmass B\t\t\nt\tx\ty\tx\ty\t\n");
+    for k in 0..7 {
+        let t = format!("{}", 0.04 * k as f64).replace('.', ",");
+        match k {
+            3 => text.push_str(&format!("{t}\t\t\t0,2\t-0,4\t\n")),
+            _ => text.push_str(&format!("{t}\t0,1\t-0,3\t0,15\t-0,5\t\n")),
+        }
+    }
+    std::fs::write(&tracker, text).unwrap();
+    let read = fit::read_frames(&tracker, &Units::default()).unwrap();
+    assert_eq!(read.len(), 6, "{read:?}");
+    assert_eq!(
+        (read[3].t, read[3].x1, read[3].x2, read[3].y2),
+        (0.16, 0.1, 0.15, -0.5)
+    );
     // Frame numbers without a rate: the error names the rate.
     let e = fit::read_frames(&semicolons, &Units::default()).unwrap_err();
     assert!(

@@ -23,7 +23,8 @@ use crate::spec::Precision;
 pub struct FitArgs {
     /// CSV of tracked positions: header with t (or frame), x1, y1, x2, y2 (s, m; y up; or
     /// pixels, see --pixels-per-metre), optionally a moving pivot x0, y0; # comments; `,`,
-    /// `;` or tab separated (decimal commas with `;` or tabs).
+    /// `;` or tab separated (decimal commas with `;` or tabs); Tracker's export of two
+    /// point masses (`t x y x y`, the upper mass first).
     pub file: PathBuf,
     /// Directory for the plots, derived.csv, summary.json and model.toml.
     #[arg(long, default_value = "out/fit")]

@@ -76,18 +76,45 @@ pub fn read_frames(path: &Path, units: &Units) -> Result<Vec<TrackedRow>> {
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let (header_line, header) = lines
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .peekable();
+    let (mut header_line, mut header) = lines
         .next()
         .ok_or_else(|| bad(path, 1, "no header line (t,x1,y1,x2,y2)".into()))?;
     // Spreadsheets in much of the world separate by `;` (or tabs) and write decimal commas.
-    let separator = match (header.contains(';'), header.contains('\t')) {
+    let separator_of = |line: &str| match (line.contains(';'), line.contains('\t')) {
         (true, _) => ';',
         (false, true) => '\t',
         _ => ',',
     };
-    let names: Vec<&str> = header.split(separator).map(str::trim).collect();
-    let find = |name: &str| names.iter().position(|n| *n == name);
+    let split = |line: &str| -> Vec<String> {
+        line.split(separator_of(line))
+            .map(|c| c.trim().to_string())
+            .collect()
+    };
+    // Tracker's export of two point masses together: a line of the tracks' names over
+    // `t x y x y` (the upper mass's track first).
+    let tracker = !split(header).iter().any(|n| n == "t" || n == "frame")
+        && lines.peek().is_some_and(|(_, next)| {
+            let names = split(next);
+            names.first().is_some_and(|n| n == "t")
+                && names.iter().filter(|n| *n == "x").count() >= 2
+                && names.iter().filter(|n| *n == "y").count() >= 2
+        });
+    if tracker {
+        (header_line, header) = lines.next().expect("the line peeked");
+    }
+    let separator = separator_of(header);
+    let mut names = split(header);
+    if tracker {
+        // The first x and y are the first track's (the upper mass), the next the second's.
+        for (name, numbered) in [("x", ["x1", "x2"]), ("y", ["y1", "y2"])] {
+            for (k, column) in names.iter_mut().filter(|n| *n == name).take(2).enumerate() {
+                *column = numbered[k].to_string();
+            }
+        }
+    }
+    let find = |name: &str| names.iter().position(|n| n == name);
     let column = |name: &str| {
         find(name).ok_or_else(|| {
             bad(
@@ -123,7 +150,7 @@ pub fn read_frames(path: &Path, units: &Units) -> Result<Vec<TrackedRow>> {
     // A column named twice would be read from its first copy silently.
     for (k, name) in names.iter().enumerate() {
         if let Some(again) = names[k + 1..].iter().position(|n| n == name)
-            && COLUMNS.contains(name)
+            && COLUMNS.contains(&name.as_str())
         {
             return Err(bad(
                 path,
@@ -174,9 +201,17 @@ pub fn read_frames(path: &Path, units: &Units) -> Result<Vec<TrackedRow>> {
                 false => c.trim().to_string(),
             })
             .collect();
+        // Tracker leaves a step that was not marked empty: no position to fit.
+        if tracker
+            && cols
+                .iter()
+                .any(|&c| cells.get(c).is_none_or(|c| c.is_empty()))
+        {
+            continue;
+        }
         // A row of more or fewer fields than the header has its values under other columns'
         // names (a decimal comma, a cell left out).
-        if cells.len() != names.len() {
+        if !tracker && cells.len() != names.len() {
             return Err(bad(
                 path,
                 n,
