@@ -65,7 +65,17 @@ pub fn track<'py>(
                     ..ParamSources::default()
                 })
             }
-            false => None,
+            false => {
+                // A model is only for bridging: given without it, it would do nothing.
+                for key in ["preset", "params_file"] {
+                    if k.dict.get_item(key)?.is_some_and(|v| !v.is_none()) {
+                        return Err(PyValueError::new_err(format!(
+                            "{key}: the model is only for bridging gaps: give bridge=True, or leave it out"
+                        )));
+                    }
+                }
+                None
+            }
         },
     };
     let command = chaoscope::cli::command_line::track(&job);

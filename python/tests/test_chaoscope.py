@@ -543,6 +543,9 @@ def test_track_equals_its_command_as_a_dataset(tmp_path):
         chaoscope.track(str(film), l1=0.3, markers="red", progress=False)
     with pytest.raises(ValueError, match="^region: "):
         chaoscope.track(str(film), l1=0.3, region=(0, 0, 5000, 10), progress=False)
+    # A model is for bridging only: without bridge=True it would do nothing.
+    with pytest.raises(ValueError, match="^preset: "):
+        chaoscope.track(str(film), l1=0.3, preset="lab", progress=False)
     # What is no film is a bad value of ``video``, as the command line's exit 2.
     (tmp_path / "text.mp4").write_text("no film here\n")
     with pytest.raises(ValueError, match="^video: "):
