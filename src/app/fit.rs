@@ -180,7 +180,7 @@ pub fn run(
     };
     let mut notices: Vec<String> = engine.notices();
     // Which pendulum is fitted is said, never assumed.
-    notices.push(describe_model(source, &params));
+    notices.push(source.describe_model(&params));
     notices.push(match identified {
         Ok(id) => describe_identified(id),
         Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
@@ -383,39 +383,6 @@ pub(crate) fn params_json(p: &crate::model::Params) -> serde_json::Value {
                       "rod_area": [l.rod_area1, l.rod_area2] },
         "bearing_friction": l.bearing, "bearing_radius": l.bearing_radius,
     })
-}
-
-/// One line on the model fitted: where it came from and what it is.
-pub(crate) fn describe_model(source: &ModelSource, p: &crate::model::Params) -> String {
-    let k = p.inertia();
-    match source {
-        ModelSource::Given => format!(
-            "the model fitted: {}: bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg, arms {:.4} and {:.4} m, g {:.4} m/s^2",
-            source.describe(),
-            p.m1,
-            p.m2,
-            p.rod1,
-            p.rod2,
-            p.l1,
-            p.l2,
-            p.g
-        ),
-        ModelSource::Identified => format!(
-            "the model fitted: {} (no preset or params given): A/P {:.4e}, B/P {:.4e}, C/P {:.4e} s^2, Q/P {:.4}, markers at {:.4} and {:.4} m, g {:.4} m/s^2 (the motion's); an equivalent pendulum of bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg (a 1 kg scale: the motion cannot see the masses')",
-            source.describe(),
-            k.a / k.p,
-            k.b / k.p,
-            k.c / k.p,
-            k.q / k.p,
-            p.l1,
-            p.l2,
-            p.g,
-            p.m1,
-            p.m2,
-            p.rod1,
-            p.rod2
-        ),
-    }
 }
 
 /// One line on what the motion says of the pendulum.

@@ -259,7 +259,7 @@ pub fn run(
     // The pivot, arm lengths and model as `fit` finds them.
     let tracked = crate::fit::pendulum::tracked_model(&read, &job.params, &job.units)?;
     let mut notices = engine.notices();
-    notices.push(super::fit::describe_model(&tracked.source, &tracked.params));
+    notices.push(tracked.source.describe_model(&tracked.params));
     notices.extend(tracked.notices.iter().cloned());
     let crate::fit::pendulum::Tracked {
         frames,

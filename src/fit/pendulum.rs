@@ -29,6 +29,39 @@ impl ModelSource {
         }
     }
 
+    /// One line on the model fitted: where it came from and what it is.
+    pub fn describe_model(&self, p: &Params) -> String {
+        let k = p.inertia();
+        match self {
+            ModelSource::Given => format!(
+                "the model fitted: {}: bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg, arms {:.4} and {:.4} m, g {:.4} m/s^2",
+                self.describe(),
+                p.m1,
+                p.m2,
+                p.rod1,
+                p.rod2,
+                p.l1,
+                p.l2,
+                p.g
+            ),
+            ModelSource::Identified => format!(
+                "the model fitted: {} (no preset or params given): A/P {:.4e}, B/P {:.4e}, C/P {:.4e} s^2, Q/P {:.4}, markers at {:.4} and {:.4} m, g {:.4} m/s^2 (the motion's); an equivalent pendulum of bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg (a 1 kg scale: the motion cannot see the masses')",
+                self.describe(),
+                k.a / k.p,
+                k.b / k.p,
+                k.c / k.p,
+                k.q / k.p,
+                p.l1,
+                p.l2,
+                p.g,
+                p.m1,
+                p.m2,
+                p.rod1,
+                p.rod2
+            ),
+        }
+    }
+
     /// Short, for summary.json.
     pub fn key(&self) -> &'static str {
         match self {
