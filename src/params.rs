@@ -510,3 +510,16 @@ impl ParamSources {
         Ok(p)
     }
 }
+
+/// The model's parameters as JSON, SI units.
+pub fn to_json(p: &Params) -> serde_json::Value {
+    let l = &p.losses;
+    serde_json::json!({
+        "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,
+        "rod_mass": [p.rod1, p.rod2],
+        "joint_damping": [l.joint1, l.joint2],
+        "air_drag": { "rho": l.rho, "cw": l.cw, "bob_area": [l.bob_area1, l.bob_area2],
+                      "rod_area": [l.rod_area1, l.rod_area2] },
+        "bearing_friction": l.bearing, "bearing_radius": l.bearing_radius,
+    })
+}

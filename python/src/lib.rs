@@ -17,9 +17,7 @@ use chaoscope::spec::{
     FlipMeasure, FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, MapSpec, Method,
 };
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::{
-    PyFileNotFoundError, PyKeyboardInterrupt, PyRuntimeError, PyTypeError, PyValueError,
-};
+use pyo3::exceptions::{PyFileNotFoundError, PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -27,6 +25,7 @@ mod keywords;
 mod picture;
 mod run;
 mod track;
+mod tracked;
 mod zoom;
 use keywords::Keywords;
 use run::{engine, engine_in, watched};
@@ -418,40 +417,6 @@ fn trajectory<'py>(
     String::from_utf8(csv).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
-/// The model fitted to a camera-tracked run (`chaoscope fit`'s job): its summary as JSON (the
-/// pivot, the arm lengths with errors, the energy's decay fits, how long the model from `start`
-/// agrees with the data), its plots, derived.csv and summary.json written to `output`.
-#[pyfunction]
-#[pyo3(signature = (keywords, progress=None))]
-fn fit<'py>(
-    py: Python<'py>,
-    keywords: Bound<'py, PyDict>,
-    progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<String> {
-    let k = Keywords { dict: keywords };
-    let job = chaoscope::app::fit::FitJob {
-        file: k
-            .get("file")?
-            .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
-        output: k.or("output", std::path::PathBuf::from("out/fit"))?,
-        units: k.units()?,
-        start: k.get("start")?,
-        window: k.get("window")?,
-        tolerance: k.get("tolerance")?,
-        candidates: k.whole("candidates")?.unwrap_or(65536),
-        velocity_error: k.or("velocity_error", 0.1)?,
-        params: k.sources()?,
-        backend: k.backend()?,
-        precision: k.precision()?,
-    };
-    let command = command_line::fit(&job);
-    let engine = engine_in(job.backend, job.precision)?;
-    let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::fit::run(&job, &engine, command, monitor)
-    })?;
-    serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
-}
-
 /// Light trails of releases from "the same" start (`chaoscope traces`'s job): the picture
 /// written to `output`, the runs' positions as float32 .npy to `data`; the summary as JSON.
 #[pyfunction]
@@ -500,47 +465,6 @@ fn traces<'py>(
         serde_json::to_value(&summary.0).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     value["command"] = summary.1.into();
     Ok(value.to_string())
-}
-
-/// An ensemble forecast of a camera-tracked run (`chaoscope forecast`'s job): fitted on
-/// `window`, `members` drawn from the fit's uncertainty to the data's end; forecast.png,
-/// bands.csv and summary.json written to `output`; the short summary as JSON.
-#[pyfunction]
-#[pyo3(signature = (keywords, progress=None))]
-fn forecast<'py>(
-    py: Python<'py>,
-    keywords: Bound<'py, PyDict>,
-    progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<String> {
-    let k = Keywords { dict: keywords };
-    let job = chaoscope::app::forecast::ForecastJob {
-        file: k
-            .get("file")?
-            .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
-        output: k.or("output", std::path::PathBuf::from("out/forecast"))?,
-        units: k.units()?,
-        settings: chaoscope::app::forecast::ForecastSettings {
-            window: k.get("window")?,
-            members: k.whole("members")?.unwrap_or(10_000),
-            seed: k.whole("seed")?.unwrap_or(1),
-            tolerance: k.get("tolerance")?,
-            tracking_error: k.get("tracking_error")?,
-            candidates: k.whole("candidates")?.unwrap_or(65536),
-            held_out: k
-                .whole("held_out")?
-                .unwrap_or(chaoscope::fit::model_error::HELD_OUT),
-        },
-        params: k.sources()?,
-        backend: k.backend()?,
-        precision: k.precision()?,
-        video: k.get("video")?,
-    };
-    let command = command_line::forecast(&job);
-    let engine = engine_in(job.backend, job.precision)?;
-    let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::forecast::run(&job, &engine, command, monitor)
-    })?;
-    serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
 /// The physics the keywords give (a preset or file, then the values given), resolved and
@@ -593,8 +517,8 @@ fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(picture::picture, m)?)?;
     m.add_function(wrap_pyfunction!(params, m)?)?;
-    m.add_function(wrap_pyfunction!(fit, m)?)?;
-    m.add_function(wrap_pyfunction!(forecast, m)?)?;
+    m.add_function(wrap_pyfunction!(tracked::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(tracked::forecast, m)?)?;
     m.add_function(wrap_pyfunction!(traces, m)?)?;
     m.add_function(wrap_pyfunction!(track::track, m)?)?;
     m.add_function(wrap_pyfunction!(zoom::png_rgb, m)?)?;

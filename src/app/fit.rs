@@ -301,7 +301,7 @@ pub fn run(
         "model": {
             "source": source.key(),
             "source_text": source.describe(),
-            "parameters": params_json(&params),
+            "parameters": crate::params::to_json(&params),
             "start_row": fit.row, "t0": fit.t0,
             "state": fit.start.to_array(),
             "joint_damping": [fit.damping.0, fit.damping.1],
@@ -314,7 +314,7 @@ pub fn run(
             "agrees_for": fit.agrees_until - fit.t0,
         },
     });
-    write_json(&mut files, &out.join("summary.json"), &summary)?;
+    files.write_json(&out.join("summary.json"), &summary)?;
     let mut fitted = params;
     (fitted.losses.joint1, fitted.losses.joint2) = fit.damping;
     let heading = format!(
@@ -355,33 +355,6 @@ pub fn run(
         .map(|f| out.join(f))
         .collect(),
         notices,
-    })
-}
-
-/// `value` as pretty JSON into `path` (a summary.json) among `files`.
-pub(crate) fn write_json(
-    files: &mut Outputs,
-    path: &std::path::Path,
-    value: &serde_json::Value,
-) -> Result<()> {
-    let text = serde_json::to_string_pretty(value).map_err(|e| Error::format(path, e))?;
-    files.write(path, |w| {
-        use std::io::Write;
-        writeln!(w, "{text}")?;
-        Ok(())
-    })
-}
-
-/// The model's parameters as JSON, SI units.
-pub(crate) fn params_json(p: &crate::model::Params) -> serde_json::Value {
-    let l = &p.losses;
-    json!({
-        "m1": p.m1, "m2": p.m2, "l1": p.l1, "l2": p.l2, "g": p.g,
-        "rod_mass": [p.rod1, p.rod2],
-        "joint_damping": [l.joint1, l.joint2],
-        "air_drag": { "rho": l.rho, "cw": l.cw, "bob_area": [l.bob_area1, l.bob_area2],
-                      "rod_area": [l.rod_area1, l.rod_area2] },
-        "bearing_friction": l.bearing, "bearing_radius": l.bearing_radius,
     })
 }
 
@@ -435,6 +408,6 @@ fn identified_json(id: &crate::fit::identify::Identified) -> serde_json::Value {
         "misfit": id.misfit,
         "marker_radii": [id.l1, id.l2],
         "time_scale": id.time_scale,
-        "equivalent_parameters": id.params().ok().map(|p| params_json(&p)),
+        "equivalent_parameters": id.params().ok().map(|p| crate::params::to_json(&p)),
     })
 }

@@ -334,7 +334,7 @@ pub fn run(
         "command": command,
         "file": job.file.display().to_string(),
         "pivot": [pivot.x, pivot.y],
-        "parameters": super::fit::params_json(&o.fit.params),
+        "parameters": crate::params::to_json(&o.fit.params),
         "fit": fit_json(&o.fit),
         "verdict": o.verdict,
         "scores": o.scores,
@@ -367,7 +367,7 @@ pub fn run(
             "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s"
         ),
     });
-    super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
+    files.write_json(&out.join("summary.json"), &summary)?;
     if let (Some(video), Some(geometry)) = (&job.video, geometry) {
         let overlay = super::overlay::Overlay {
             rows: &frames,

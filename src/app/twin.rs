@@ -462,7 +462,7 @@ pub fn run(
         .collect();
     let summary = json!({
         "command": command,
-        "truth": { "parameters": super::fit::params_json(&truth), "start": job.start.to_array() },
+        "truth": { "parameters": crate::params::to_json(&truth), "start": job.start.to_array() },
         "window": shown.as_ref().map(|s| s.0.window), "duration": job.duration, "members": job.settings.members,
         "tolerance": shown.as_ref().map(|s| s.0.tolerance), "table": table,
         "coverage": coverage,
@@ -473,7 +473,7 @@ pub fn run(
         })).collect::<Vec<_>>(),
         "example_fit": shown.as_ref().map(|s| fit_json(&s.0.fit)),
     });
-    super::fit::write_json(&mut files, &out.join("summary.json"), &summary)?;
+    files.write_json(&out.join("summary.json"), &summary)?;
     files.commit(monitor)?;
     Ok(TwinSummary {
         rows,

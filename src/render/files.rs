@@ -89,6 +89,16 @@ pub struct Outputs {
 }
 
 impl Outputs {
+    /// `value` as pretty JSON into `path` (a summary.json) among these outputs.
+    pub fn write_json(&mut self, path: &std::path::Path, value: &serde_json::Value) -> Result<()> {
+        let text = serde_json::to_string_pretty(value).map_err(|e| Error::format(path, e))?;
+        self.write(path, |w| {
+            use std::io::Write;
+            writeln!(w, "{text}")?;
+            Ok(())
+        })
+    }
+
     pub fn new() -> Self {
         Outputs::default()
     }
