@@ -136,7 +136,7 @@ pub fn energy(
         let mut chart = ChartBuilder::on(&root)
             .caption(
                 format!(
-                    "Energy of the tracked pendulum ({}), with error bars, and two decay laws",
+                    "Tracked energy ({}), error bars, two decay laws",
                     unit.name()
                 ),
                 ("sans-serif", 20),
@@ -214,7 +214,7 @@ impl EnergyUnit {
     fn name(self) -> &'static str {
         match self {
             EnergyUnit::Joule => "J",
-            EnergyUnit::GravityMoment => "in units of the upper arm's gravity moment P",
+            EnergyUnit::GravityMoment => "over P, the upper arm's gravity moment",
         }
     }
 
