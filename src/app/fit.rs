@@ -378,8 +378,15 @@ fn describe_identified(id: &crate::fit::identify::Identified) -> String {
         }
         false => "",
     };
+    let method = match &id.refinement {
+        Some(r) => format!(
+            "run on the angles over {} pieces of the motion ({} left out), the markers' arcs off it {:.3e} and {:.3e} RMS",
+            r.pieces, r.rejected, r.rms[0], r.rms[1]
+        ),
+        None => "from the equations' weak form alone (the run on the angles did not hold)".into(),
+    };
     format!(
-        "the pendulum's own moments from its motion, over P (the upper arm's gravity moment): a = A/P {} s^2, b = B/P {} s^2, c = C/P {} s^2, q = Q/P {}, damping k1 {} s, k2 {} s{damping}; {scale}; misfit {:.1e} and {:.1e} of the equations' size",
+        "the pendulum's own moments from its motion, over P (the upper arm's gravity moment): a = A/P {} s^2, b = B/P {} s^2, c = C/P {} s^2, q = Q/P {}, damping k1 {} s, k2 {} s{damping}; {method}; {scale}; the weak form's misfit {:.1e} and {:.1e} of the equations' size",
         v(0),
         v(1),
         v(2),
@@ -406,6 +413,12 @@ fn identified_json(id: &crate::fit::identify::Identified) -> serde_json::Value {
         "stretches": id.stretches,
         "stretch_s": id.stretch,
         "misfit": id.misfit,
+        "weak_form": id.weak,
+        "refinement": id.refinement.map(|r| json!({
+            "pieces": r.pieces,
+            "rejected": r.rejected,
+            "arc_rms": r.rms,
+        })),
         "marker_radii": [id.l1, id.l2],
         "time_scale": id.time_scale,
         "equivalent_parameters": id.params().ok().map(|p| crate::params::to_json(&p)),

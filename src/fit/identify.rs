@@ -13,13 +13,16 @@
 //! the angular velocities (from a local quartic fit). With phi vanishing so smoothly at both
 //! ends the trapezoid rule integrates to many digits even at 30 frames a second. Stretches
 //! do not overlap, so their residuals are independent and the least-squares covariance
-//! holds.
+//! holds. The velocities the centripetal terms need still bias the moments where the film is
+//! coarse, so this answer is the start of a run of the model on the angles themselves
+//! ([`super::refine`]), whose moments and errors are the ones given.
 //!
 //! A rigid lower arm has C/Q = l1/g: with the measured l1 this is the time-scale check
 //! ([`TimeScale`]): the frame rate, the metre scale and g must agree with it.
 
 use nalgebra::{DMatrix, DVector};
 
+use super::refine::{Motion, refine};
 use super::window::TrackRows;
 use crate::error::{Error, Result};
 use crate::model::{Losses, Params};
@@ -34,6 +37,10 @@ pub struct Identified {
     pub values: [f64; 6],
     pub errors: [f64; 6],
     pub covariance: DMatrix<f64>,
+    /// The weak form's moments (the refinement's start), and how the refinement on the
+    /// angles went (None: it did not hold, and the weak form's moments stand).
+    pub weak: [f64; 6],
+    pub refinement: Option<Refinement>,
     /// Stretches of data used (two equations each) and their length (s), and those left out
     /// as outliers (their residual beyond [`REJECT`] robust deviations).
     pub stretches: usize,
@@ -47,6 +54,15 @@ pub struct Identified {
     pub l1: f64,
     pub l2: f64,
     pub time_scale: TimeScale,
+}
+
+/// The refinement of the moments on the angles ([`super::refine`]): its pieces, those left
+/// out, and the markers' arcs off the model (RMS, in the data's lengths).
+#[derive(Clone, Copy, Debug)]
+pub struct Refinement {
+    pub pieces: usize,
+    pub rejected: usize,
+    pub rms: [f64; 2],
 }
 
 /// Whether the frame rate, the metre scale and g agree with the motion: a rigid lower arm
@@ -177,6 +193,7 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
     let mut rows2: Vec<[f64; 6]> = Vec::new();
     let mut start = 0;
     let mut durations = Vec::new();
+    let mut ranges = Vec::new();
     loop {
         let rows = stretch_rows(start);
         if start + rows > n {
@@ -220,6 +237,7 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         rows1.push((e1, rhs1));
         rows2.push(e2);
         durations.push(tb - ta);
+        ranges.push(range);
     }
     if rows1.len() < 8 {
         return Err(Error::invalid(
@@ -305,13 +323,40 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
     };
     let r = &y - &x * &beta;
     let kept = m1 - rejected;
+    let weak: [f64; 6] = std::array::from_fn(|k| beta[k]);
     let rms = |part: std::ops::Range<usize>| {
         (part.clone().map(|k| r[k] * r[k]).sum::<f64>() / part.len().max(1) as f64).sqrt()
     };
     let dof = (x.nrows() - 6).max(1);
     let s2 = r.norm_squared() / dof as f64;
-    let covariance = xtx.try_inverse().ok_or_else(singular)? * s2;
-    let values: [f64; 6] = std::array::from_fn(|k| beta[k]);
+    let weak_covariance = xtx.try_inverse().ok_or_else(singular)? * s2;
+    // The weak form's moments are the start; run on the positions themselves they lose the
+    // velocities' bias (super::refine).
+    let motion = Motion {
+        t,
+        theta: [&th1, &th2],
+        omega: [&w1, &w2],
+        radii: [l1, l2],
+        natural,
+    };
+    let stretches: Vec<_> = ranges
+        .iter()
+        .zip(&keep)
+        .filter(|(_, k)| **k)
+        .map(|(r, _)| r.clone())
+        .collect();
+    let (values, covariance, refinement) = match refine(&motion, &stretches, weak) {
+        Some(r) => (
+            r.values,
+            r.covariance,
+            Some(Refinement {
+                pieces: r.pieces,
+                rejected: r.rejected,
+                rms: r.rms,
+            }),
+        ),
+        None => (weak, weak_covariance, None),
+    };
     let errors: [f64; 6] = std::array::from_fn(|k| covariance[(k, k)].sqrt());
     // The equations' typical sizes: the gravity term's.
     let size1 = (rows1.iter().map(|r| r.1 * r.1).sum::<f64>() / m1 as f64).sqrt();
@@ -345,6 +390,8 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         values,
         errors,
         covariance,
+        weak,
+        refinement,
         stretches: kept,
         rejected,
         stretch: durations.iter().sum::<f64>() / durations.len().max(1) as f64,
@@ -490,6 +537,7 @@ mod tests {
             };
             let id = identify(&rows, 9.81).unwrap();
             let want = truth(&p);
+            assert!(id.refinement.is_some(), "{scale} {fps}: not refined");
             eprintln!(
                 "{scale} kg, {fps} fps: {:?}\n{:?}\n{want:?}\n{:?}",
                 id.values, id.errors, id.time_scale

@@ -12,6 +12,7 @@ pub mod model_error;
 pub mod pendulum;
 pub mod plots;
 mod quantiles;
+mod refine;
 pub mod window;
 
 pub use data::{
