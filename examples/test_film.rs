@@ -7,7 +7,9 @@
 //!
 //! options: --shutter S (s, default 1/2000), --lamp X,Y, --reflection X (a pane's column),
 //! --table Y (the table's edge, px row), --roll A (the camera's roll, rad), --rest S (s
-//! hanging still before the release), --seed N, --crf Q, --theta1 A --theta2 B.
+//! hanging still before the release), --seed N, --crf Q, --theta1 A --theta2 B, --fps F
+//! (frames a second, default 30), --params FILE.toml (the pendulum filmed, default the lab
+//! preset; its markers at the middle joint and the lower arm's end).
 
 use std::io::Write;
 
@@ -40,8 +42,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .cloned()
     };
     let number = |name: &str| option(name).map(|v| v.parse::<f64>()).transpose();
-    let p = Preset::Lab.params();
+    let p = match option("--params") {
+        Some(file) => chaoscope::params::ParamSources {
+            params: Some(file.into()),
+            ..Default::default()
+        }
+        .resolve()?,
+        None => Preset::Lab.params(),
+    };
     let mut scene = Scene::lab(w, h, p.l1 + p.l2);
+    if let Some(f) = number("--fps")? {
+        scene.fps = f;
+    }
     if let Some(s) = number("--shutter")? {
         scene.shutter = s;
     }

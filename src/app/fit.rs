@@ -286,6 +286,7 @@ pub fn run(
             "report_grid_least_distance_variance": { "x": grid.0, "y": grid.1, "grid_step": 0.001 },
         },
         "arm_lengths": { "l1": l1, "l2": l2 },
+        "middle_joint_off_marker": tracked.joint,
         "energy": {
             "velocity_error": job.velocity_error,
             "exponential": fitted(ex, ["a", "b"]),

@@ -238,8 +238,8 @@ fn draw(
     {
         text(
             format!(
-                "past the horizon ({hz:.2} s): the members spread over {} m: the model has lost the pendulum",
-                o.tolerance
+                "past the horizon ({hz:.2} s): the members spread beyond {:.1} mm: the forecast no longer says where the pendulum is",
+                1e3 * o.tolerance
             ),
             line,
             LOST,

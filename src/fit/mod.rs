@@ -6,6 +6,7 @@ pub mod data;
 pub mod forecast;
 pub mod forecast_plot;
 pub mod identify;
+pub mod joint;
 mod lsq;
 mod model;
 pub mod model_error;

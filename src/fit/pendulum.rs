@@ -7,6 +7,7 @@
 
 use super::data::{Estimate, Pivot, TrackedRow, angles, arm_lengths, fit_pivot};
 use super::identify::{Identified, identify};
+use super::joint::{Joint, joint_off_marker};
 use super::window::{TrackRows, rod_correlation};
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
@@ -77,6 +78,9 @@ pub struct Tracked {
     pub frames: Vec<TrackedRow>,
     /// The metre scale found from the motion (pixels per metre and its error), where asked.
     pub scale_from_motion: Option<(f64, f64)>,
+    /// The middle joint, where the upper marker is not on it (the frames then hold the
+    /// joint's positions in its place).
+    pub joint: Option<Joint>,
     pub pivot: Pivot,
     pub l1: Estimate,
     pub l2: Estimate,
@@ -160,6 +164,8 @@ const UNIT_MISTAKE: f64 = 25.0;
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
 pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
+    let (frames, _) = on_joint(frames)?;
+    let frames = &frames[..];
     let pivot = fit_pivot(frames)?;
     let measured = super::measured(frames, (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));
@@ -180,6 +186,17 @@ pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
     Ok((ts.g_implied / g, ts.g_implied_error / g))
 }
 
+/// `frames` with the upper marker moved out to the middle joint where it is not on it
+/// ([`super::joint`]), and where the joint lies.
+fn on_joint(frames: &[TrackedRow]) -> Result<(Vec<TrackedRow>, Option<Joint>)> {
+    let pivot = fit_pivot(frames)?;
+    let pivot = (pivot.x, pivot.y);
+    Ok(match joint_off_marker(frames, pivot) {
+        Some(j) => (j.moved(frames, pivot), Some(j)),
+        None => (frames.to_vec(), None),
+    })
+}
+
 /// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
 /// `frames`, and the model: `given`'s where it names a preset or a file (the arm lengths
 /// from the data unless given), else the one the motion implies. With `units` asking for
@@ -190,9 +207,18 @@ pub fn tracked_model(
     units: &super::data::Units,
 ) -> Result<Tracked> {
     let g = given.g.unwrap_or(Params::default().g);
+    let (frames, mut joint) = on_joint(frames)?;
+    let frames = &frames[..];
     let (frames, scale_from_motion) = match units.pixels_per_metre {
         Some(super::data::PixelScale::FromMotion) => {
             let (ppm, error) = scale_from_motion(frames, g)?;
+            if let Some(j) = &mut joint {
+                *j = Joint {
+                    marker: j.marker / ppm,
+                    joint: j.joint / ppm,
+                    error: j.error / ppm,
+                };
+            }
             let scaled = frames
                 .iter()
                 .map(|f| TrackedRow {
@@ -325,6 +351,12 @@ pub fn tracked_model(
             }
         }
     }
+    if let Some(j) = &joint {
+        notices.push(format!(
+            "the upper marker is not on the middle joint: it sits {:.4} m from the pivot, the joint (where the lower arm turns) {:.4} ± {:.4} m; the joint's positions along the upper arm stand in for the marker's",
+            j.marker, j.joint, j.error
+        ));
+    }
     if let Some((ppm, error)) = scale_from_motion {
         notices.push(format!(
             "the metre scale from the motion: {ppm:.2} ± {error:.2} pixels per metre at the file's frame rate and g {g} m/s^2 (arms {:.4} and {:.4} m)",
@@ -334,6 +366,7 @@ pub fn tracked_model(
     Ok(Tracked {
         frames: frames.to_vec(),
         scale_from_motion,
+        joint,
         pivot,
         l1,
         l2,
@@ -352,8 +385,8 @@ pub fn tracked_model(
 /// measure it only along themselves, and errors along the motion (a frame's timing, blur, a
 /// marker tracked by hand) are often a few times larger: the lab's hand-measured table
 /// strays 6.5 times its rods' error from the lab's own apparatus, the shared high-speed
-/// recording 2.4 times from its identified model. The failures this guards against stray
-/// by 70-200 times (the lab's apparatus forced on another pendulum: 180).
+/// recording 1.3 times from its identified model. The failures this guards against stray
+/// by 70-200 times (the lab's apparatus forced on another pendulum: 106 to 147).
 pub const FOLLOWS_WITHIN: f64 = 8.0;
 
 /// The tracking error a fit is judged against never goes below this share of the reach
