@@ -167,10 +167,9 @@ pub fn fit_and_forecast(
     let window_end = t[fit.row0 + fit.rows - 1];
     let mut forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
     // The model's own error, from windows of the same recording held out from this one,
-    // each followed as far as this forecast's lead (or ten windows, at least 3 s: the
-    // departure has saturated by then).
-    let length = window.1 - window.0;
-    let lead = (end - window_end).min((10.0 * length).max(3.0));
+    // each followed as far as this forecast's lead (a model's lag keeps growing on a
+    // pendulum that is not chaotic: a shorter reach would hold its last value on).
+    let lead = end - window_end;
     let held = crate::fit::model_error::HeldOut {
         window,
         windows: settings.held_out,
@@ -178,7 +177,8 @@ pub fn fit_and_forecast(
         candidates: settings.candidates.min(HELD_OUT_CANDIDATES),
     };
     if let Some(error) = crate::fit::model_error::estimate(track, p, &held, engine, monitor)? {
-        forecast.widen(error, (p.l1, p.l1 + p.l2));
+        let velocity = fit.velocities(&forecast.times);
+        forecast.widen(error, &velocity, (p.l1, p.l1 + p.l2), tolerance);
     }
     let (data_horizon, run, data_coverage) = forecast::data_horizon(&forecast, t, data);
     // The median within 5 % of the reach, the measure a forecast is judged by here.
@@ -319,11 +319,7 @@ pub fn run(
     write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
     // Which error ends the forecast first: the state's uncertainty spread by chaos (the
     // ensemble), or the model's own (its departure on held-out windows).
-    let model_horizon = f
-        .model_error
-        .as_ref()
-        .and_then(|e| e.horizon(o.tolerance))
-        .map(|lead| f.window_end + lead);
+    let model_horizon = f.model_horizon;
     let dominated_by = match (f.spread_horizon, model_horizon) {
         (_, None) => "the state's uncertainty (the ensemble's spread)",
         (None, Some(_)) => "the model's own error (its departure on held-out windows)",

@@ -63,6 +63,8 @@ pub struct Forecast {
     /// The model's own error measured on held-out windows, by which the measurement bands
     /// were widened ([`Forecast::widen`]); None where none was measured.
     pub model_error: Option<super::model_error::ModelError>,
+    /// When the model's own error alone first passes the tolerance ([`Forecast::widen`]).
+    pub model_horizon: Option<f64>,
 }
 
 impl Forecast {
@@ -71,13 +73,26 @@ impl Forecast {
     /// band, its 90 % for the 5-95 %): where the model departs from this pendulum faster than
     /// its state's uncertainty spreads, the bands say so. No band reaches past where the
     /// masses can be: `reach` (m) from the pivot for the upper (l1) and the lower (l1 + l2).
-    pub fn widen(&mut self, error: super::model_error::ModelError, reach: (f64, f64)) {
+    ///
+    /// `velocity` is the fitted orbit's at every band time (m/s), which carries the model's
+    /// lag to this orbit; the model's own horizon is the first time the lower mass's 90 %
+    /// half-width from it (its two coordinates' in quadrature) passes `tolerance`.
+    pub fn widen(
+        &mut self,
+        error: super::model_error::ModelError,
+        velocity: &[[f64; 4]],
+        reach: (f64, f64),
+        tolerance: f64,
+    ) {
         for (k, &t) in self.times.iter().enumerate() {
             let lead = t - self.window_end;
             if lead <= 1e-9 {
                 continue;
             }
-            let (half50, half90) = error.at(lead);
+            let (half50, half90) = error.at(lead, &velocity[k]);
+            if self.model_horizon.is_none() && half90[2].hypot(half90[3]) > tolerance {
+                self.model_horizon = Some(t);
+            }
             for c in 0..4 {
                 let median = self.model[k][c][2];
                 let q = &mut self.observed[k][c];
@@ -281,6 +296,7 @@ pub fn forecast(
         lyapunov,
         dt,
         model_error: None,
+        model_horizon: None,
     })
 }
 

@@ -7,9 +7,15 @@
 //! and how far the data lie from it is gathered by the time since the window's end. That
 //! departure holds every error: the state's uncertainty grown by chaos and the tracking error
 //! (which the ensemble holds already) and the model's own (air drag it lacks, a bearing's
-//! friction, arms that bend). The model's own part is what the departure's quantiles exceed
-//! the fit's own (its covariance carried along the orbit, to first order) by, in quadrature;
-//! a forecast's bands are widened by it in quadrature. Once chaos has spread the state over
+//! friction, arms that bend). A model's error shows mostly as its orbit running early or
+//! late: the departure lies along the motion, as the speed times a lag. So each row's
+//! departure d is split into a lag tau along the orbit's velocity v (tau = d.v / v.v) and
+//! what is left across it (d - tau v); the lag's quantiles by lead are carried to the
+//! forecast's own orbit as tau times its velocity there (a pendulum swinging slower or
+//! faster than the held-out windows' departs less or more), the rest as it is. The model's
+//! own part is what the quantiles exceed the fit's own (its covariance carried along the
+//! orbit, to first order) by, in quadrature; a forecast's bands are widened by it in
+//! quadrature. Once chaos has spread the state over
 //! the motion, the fit's own error outgrows the departure and the model's part is zero: the
 //! ensemble's bands stand (widening by the whole departure there would count the spread
 //! twice: a band about the members' median as wide as the distance between two unrelated
@@ -27,12 +33,16 @@ use crate::monitor::Monitor;
 pub struct ModelError {
     /// The width of a lead bin (s); bin k holds leads from k step to (k + 1) step.
     pub step: f64,
-    /// Per bin and coordinate (x1, y1, x2, y2): the 50 % and 90 % quantiles of |data - orbit|
-    /// (m), the departure itself.
+    /// Per bin: the 50 % and 90 % quantiles of the lag |tau| (s), and per coordinate (x1,
+    /// y1, x2, y2) those of the departure across the motion, |d - tau v| (m).
+    pub lag50: Vec<f64>,
+    pub lag90: Vec<f64>,
     pub q50: Vec<[f64; 4]>,
     pub q90: Vec<[f64; 4]>,
-    /// The model's own part of them (m): what they exceed the fits' own 50 % and 90 %
-    /// half-widths by, in quadrature (0 where they do not).
+    /// The model's own part of them: what they exceed the fits' own 50 % and 90 %
+    /// half-widths by, in quadrature (0 where they do not); the lag's in s, the rest in m.
+    pub model_lag50: Vec<f64>,
+    pub model_lag90: Vec<f64>,
     pub m50: Vec<[f64; 4]>,
     pub m90: Vec<[f64; 4]>,
     /// The held-out windows fitted (s), and those whose fit did not follow its data (left
@@ -42,21 +52,35 @@ pub struct ModelError {
 }
 
 impl ModelError {
-    /// The model's own 50 % and 90 % half-widths at `lead` (s after a window's end): the
-    /// last bin's past the leads measured.
-    pub fn at(&self, lead: f64) -> ([f64; 4], [f64; 4]) {
+    /// The model's own 50 % and 90 % half-widths at `lead` (s after a window's end) on an
+    /// orbit moving at `velocity` (m/s, each coordinate's): the lag times the velocity and
+    /// the departure across the motion, in quadrature. Past the leads measured, the last
+    /// bin's.
+    pub fn at(&self, lead: f64, velocity: &[f64; 4]) -> ([f64; 4], [f64; 4]) {
         let k = ((lead / self.step).floor().max(0.0) as usize).min(self.m50.len() - 1);
-        (self.m50[k], self.m90[k])
+        (
+            std::array::from_fn(|c| (self.model_lag50[k] * velocity[c]).hypot(self.m50[k][c])),
+            std::array::from_fn(|c| (self.model_lag90[k] * velocity[c]).hypot(self.m90[k][c])),
+        )
     }
+}
 
-    /// The lead (s) at which the lower mass's own 90 % model error (its two coordinates' in
-    /// quadrature) first passes `tolerance`.
-    pub fn horizon(&self, tolerance: f64) -> Option<f64> {
-        self.m90
-            .iter()
-            .position(|q| q[2].hypot(q[3]) > tolerance)
-            .map(|k| k as f64 * self.step)
-    }
+/// A row's lag is measured where the masses move faster than this share of their RMS speed
+/// after the window (both masses' velocities together).
+const MOVING: f64 = 0.3;
+
+/// Student's t quantile where the normal's is `z`, at `dof` degrees of freedom, by its
+/// Cornish-Fisher expansion in 1/dof (Abramowitz and Stegun 26.7.5): within 1 % from 2
+/// degrees of freedom on (2.885 for 2.920 at 95 %), 12 % low at 1.
+fn student_t(z: f64, dof: f64) -> f64 {
+    let (z3, z5, z7) = (z.powi(3), z.powi(5), z.powi(7));
+    z + (z3 + z) / (4.0 * dof)
+        + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * dof * dof)
+        + (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * dof.powi(3))
+}
+
+fn dot(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    (0..4).map(|c| a[c] * b[c]).sum()
 }
 
 /// Held-out windows fitted by default.
@@ -101,7 +125,13 @@ pub fn estimate(
     let step_rows = t.len() as f64 / (last - t[0]).max(1e-12);
     let step = (0.25 * length).max(2.0 / step_rows);
     let bins = (lead / step).ceil().max(1.0) as usize;
-    // Per bin: each row's departure |data - orbit| and the fit's own standard error there.
+    // Per bin: each row's lag and departure across the motion, and the fit's own standard
+    // errors of them there.
+    let mut lags: Vec<Vec<f64>> = vec![Vec::new(); bins];
+    // How many windows reach each bin: each window's departures are one draw of the model's
+    // error, so the bins' quantiles stand on this many draws.
+    let mut draws = vec![0usize; bins];
+    let mut own_lags: Vec<Vec<f64>> = vec![Vec::new(); bins];
     let mut departures: Vec<Vec<[f64; 4]>> = vec![Vec::new(); bins];
     let mut own: Vec<Vec<[f64; 4]>> = vec![Vec::new(); bins];
     let (mut windows, mut unfollowed) = (Vec::new(), 0);
@@ -132,64 +162,115 @@ pub fn estimate(
         }
         let times: Vec<f64> = after.iter().map(|&i| t[i]).collect();
         let orbit = fit.positions(&times);
+        let velocity = fit.velocities(&times);
         let errors = fit.position_errors(&times);
-        for ((&i, o), e) in after.iter().zip(&orbit).zip(&errors) {
+        // A lag is measured where the pendulum moves: near a standstill of both masses any
+        // departure would read as a long lag.
+        let speeds: Vec<f64> = velocity.iter().map(|v| dot(v, v)).collect();
+        let slow = MOVING * MOVING * speeds.iter().sum::<f64>() / speeds.len() as f64;
+        let mut reached = vec![false; bins];
+        for (((&i, o), v), e) in after.iter().zip(&orbit).zip(&velocity).zip(&errors) {
             let k = (((t[i] - end) / step).floor() as usize).min(bins - 1);
-            departures[k].push(std::array::from_fn(|c| (track.data[i][c] - o[c]).abs()));
+            reached[k] = true;
+            let d: [f64; 4] = std::array::from_fn(|c| track.data[i][c] - o[c]);
             // The fit's own error with the tracking error a measurement adds.
-            own[k].push(std::array::from_fn(|c| e[c].hypot(fit.tracking_error)));
+            let e: [f64; 4] = std::array::from_fn(|c| e[c].hypot(fit.tracking_error));
+            let vv = dot(v, v);
+            let lag = if vv > slow {
+                let tau = dot(&d, v) / vv;
+                lags[k].push(tau.abs());
+                // The fit's own errors along the motion, as a lag (the coordinates' errors
+                // taken as independent).
+                own_lags[k].push((0..4).map(|c| (e[c] * v[c]).powi(2)).sum::<f64>().sqrt() / vv);
+                tau
+            } else {
+                0.0
+            };
+            departures[k].push(std::array::from_fn(|c| (d[c] - lag * v[c]).abs()));
+            own[k].push(e);
+        }
+        for (n, r) in draws.iter_mut().zip(reached) {
+            *n += r as usize;
         }
         windows.push(w);
     }
     if windows.is_empty() {
         return Ok(None);
     }
-    let quantile = |values: &[[f64; 4]], c: usize, q: f64| -> f64 {
-        let mut v: Vec<f64> = values
-            .iter()
-            .map(|d| d[c])
-            .filter(|x| x.is_finite())
-            .collect();
+    let quantile_of = |mut v: Vec<f64>, q: f64| -> f64 {
+        v.retain(|x| x.is_finite());
         if v.is_empty() {
             return 0.0;
         }
         let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
         *v.select_nth_unstable_by(k, f64::total_cmp).1
     };
+    let quantile = |values: &[[f64; 4]], c: usize, q: f64| {
+        quantile_of(values.iter().map(|d| d[c]).collect(), q)
+    };
+    let rms = |v: &mut dyn Iterator<Item = f64>| {
+        let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
+        (sum / n.max(1) as f64).sqrt()
+    };
+    // What a quantile `q` exceeds a normal error of standard deviation `s`'s half-width
+    // (z of them) by, in quadrature.
+    let excess = |q: f64, z: f64, s: f64| (q * q - (z * s).powi(2)).max(0.0).sqrt();
+    // A quantile of n draws speaks for the next draw (this forecast's) only as widely as a
+    // prediction interval: Student's t with n - 1 degrees of freedom for the normal z, and
+    // the draws' own mean's uncertainty, sqrt(1 + 1/n). Five windows widen a 90 % band by
+    // 1.42, eight by 1.23.
+    let predictive = |z: f64, n: usize| match n {
+        0 => 1.0,
+        n => student_t(z, (n.max(2) - 1) as f64) / z * (1.0 + 1.0 / n as f64).sqrt(),
+    };
     // A normal error's 50 % and 90 % half-widths in standard deviations.
     const Z50: f64 = 0.6745;
     const Z90: f64 = 1.6449;
-    let (mut q50, mut q90) = (Vec::with_capacity(bins), Vec::with_capacity(bins));
-    let (mut m50, mut m90) = (Vec::with_capacity(bins), Vec::with_capacity(bins));
-    // A bin with no rows (a gap) takes the one before it.
-    let (mut last, mut last_model) = (([0.0; 4], [0.0; 4]), ([0.0; 4], [0.0; 4]));
-    for (bin, sd) in departures.iter().zip(&own) {
-        if !bin.is_empty() {
-            let excess = |q: f64, z: f64, c: usize| {
-                // The fit's own standard error in this bin: the root mean square.
-                let s = (sd.iter().map(|e| e[c] * e[c]).sum::<f64>() / sd.len() as f64).sqrt();
-                (q * q - (z * s).powi(2)).max(0.0).sqrt()
-            };
-            let d50: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.5));
-            let d90: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.9));
-            last = (d50, d90);
-            last_model = (
-                std::array::from_fn(|c| excess(d50[c], Z50, c)),
-                std::array::from_fn(|c| excess(d90[c], Z90, c)),
-            );
-        }
-        q50.push(last.0);
-        q90.push(last.1);
-        m50.push(last_model.0);
-        m90.push(last_model.1);
-    }
-    Ok(Some(ModelError {
+    let mut e = ModelError {
         step,
-        q50,
-        q90,
-        m50,
-        m90,
+        lag50: Vec::with_capacity(bins),
+        lag90: Vec::with_capacity(bins),
+        q50: Vec::with_capacity(bins),
+        q90: Vec::with_capacity(bins),
+        model_lag50: Vec::with_capacity(bins),
+        model_lag90: Vec::with_capacity(bins),
+        m50: Vec::with_capacity(bins),
+        m90: Vec::with_capacity(bins),
         windows,
         unfollowed,
-    }))
+    };
+    // A bin with no rows (a gap) takes the one before it.
+    let (mut lag, mut lag_model) = ([0.0; 2], [0.0; 2]);
+    let (mut across, mut across_model) = (([0.0; 4], [0.0; 4]), ([0.0; 4], [0.0; 4]));
+    for k in 0..bins {
+        if !lags[k].is_empty() {
+            // The fit's own standard error in this bin: the root mean square.
+            let s = rms(&mut own_lags[k].iter().copied());
+            let n = draws[k];
+            lag = [(0.5, Z50), (0.9, Z90)]
+                .map(|(q, z)| quantile_of(lags[k].clone(), q) * predictive(z, n));
+            lag_model = [excess(lag[0], Z50, s), excess(lag[1], Z90, s)];
+        }
+        if !departures[k].is_empty() {
+            let (bin, sd) = (&departures[k], &own[k]);
+            let s: [f64; 4] = std::array::from_fn(|c| rms(&mut sd.iter().map(|e| e[c])));
+            let (w50, w90) = (predictive(Z50, draws[k]), predictive(Z90, draws[k]));
+            let d50: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.5) * w50);
+            let d90: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.9) * w90);
+            across = (d50, d90);
+            across_model = (
+                std::array::from_fn(|c| excess(d50[c], Z50, s[c])),
+                std::array::from_fn(|c| excess(d90[c], Z90, s[c])),
+            );
+        }
+        e.lag50.push(lag[0]);
+        e.lag90.push(lag[1]);
+        e.model_lag50.push(lag_model[0]);
+        e.model_lag90.push(lag_model[1]);
+        e.q50.push(across.0);
+        e.q90.push(across.1);
+        e.m50.push(across_model.0);
+        e.m90.push(across_model.1);
+    }
+    Ok(Some(e))
 }

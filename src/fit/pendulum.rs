@@ -390,9 +390,12 @@ pub fn tracked_model(
 pub const FOLLOWS_WITHIN: f64 = 8.0;
 
 /// The tracking error a fit is judged against never goes below this share of the reach
-/// (l1 + l2): a synthetic or encoder track's errors near zero leave the integrator's and the
-/// model's own few parts in a hundred thousand.
-pub const TRACKING_FLOOR: f64 = 1e-4;
+/// (l1 + l2). The rods see only errors across the arms; positions made from an encoder's
+/// angles lie on their rods exactly, while its counts (a 12-bit encoder's 1.5 mrad moves a
+/// 0.2 m arm's end by 0.1 mm RMS), like a frame's timing, err along the motion. A fit that
+/// strays from such a track by under FOLLOWS_WITHIN thousandths of the reach still follows
+/// it; the failures this guards against stray by several hundredths.
+pub const TRACKING_FLOOR: f64 = 1e-3;
 
 /// Whether a fit follows the data in its window.
 #[derive(Clone, Copy, Debug, serde::Serialize)]

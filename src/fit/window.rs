@@ -134,6 +134,18 @@ impl WindowFit {
         self.positions_for(&self.values, times)
     }
 
+    /// The fitted model's velocities in the data's frame at `times` (m/s; as
+    /// [`WindowFit::positions`]), by a forward difference over 1e-6 s (RK4's error and
+    /// rounding leave some 1e-7 of it).
+    pub fn velocities(&self, times: &[f64]) -> Vec<[f64; 4]> {
+        const H: f64 = 1e-6;
+        let pairs: Vec<f64> = times.iter().flat_map(|&t| [t, t + H]).collect();
+        self.positions(&pairs)
+            .chunks(2)
+            .map(|p| std::array::from_fn(|c| (p[1][c] - p[0][c]) / H))
+            .collect()
+    }
+
     /// The standard errors of [`WindowFit::positions`] from the fit's covariance, to first
     /// order (the Jacobian J of the positions in the parameters: the diagonal of J Sigma J^T).
     /// Where the parameters' spread stretches along an unstable direction faster than
