@@ -515,6 +515,26 @@ fn a_killed_zoom_resumes_to_the_same_frames_and_tiles_add_up() {
     );
     assert_eq!(frames(&tiles), expected);
     assert!(tiles.join("zoom.mp4").exists());
+
+    // Damaged frames are made again, not kept: one cut short, one whose pixels changed
+    // under its own text.
+    let cut = tiles.join("frame_0002.png");
+    std::fs::write(&cut, &expected[2][..expected[2].len() / 2]).unwrap();
+    let changed = tiles.join("frame_0005.png");
+    let mut png = read_png(&changed).unwrap();
+    png.rgb[0] ^= 0xff;
+    chaoscope::render::write_png(&changed, png.width, png.height, &png.rgb, &png.text).unwrap();
+    let s = common::summary(zoom(&tiles).args(map).output().unwrap());
+    assert_eq!(
+        (s["made"].as_u64(), s["kept"].as_u64()),
+        (Some(2), Some(10))
+    );
+    let notices = s["notices"].to_string();
+    assert!(
+        notices.contains("frame_0002.png, frame_0005.png"),
+        "{notices}"
+    );
+    assert_eq!(frames(&tiles), expected);
 }
 
 /// What a zoom cannot do exits 2 naming the flag, and writes nothing: past f64's resolution
@@ -557,4 +577,163 @@ fn a_zoom_refuses_what_it_cannot_do() {
         assert!(err.contains(flag), "{args:?} should name {flag}: {err}");
     }
     assert!(!out.exists(), "nothing written");
+}
+
+/// The process ids of `parent`'s children named `name` (from /proc).
+fn children_named(parent: u32, name: &str) -> Vec<u32> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(entry.path().join("stat")) else {
+            continue;
+        };
+        // pid (comm) state ppid ...: the name may hold spaces, so split after its ')'.
+        let (Some(open), Some(close)) = (stat.find('('), stat.rfind(')')) else {
+            continue;
+        };
+        let ppid = stat[close + 1..].split_whitespace().nth(1);
+        if &stat[open + 1..close] == name && ppid == Some(&parent.to_string()) {
+            found.push(pid);
+        }
+    }
+    found
+}
+
+/// Whether process `pid` has ended (gone, or a zombie nobody has reaped yet).
+fn ended(pid: u32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Err(_) => true,
+        Ok(stat) => {
+            stat.rfind(')')
+                .and_then(|k| stat[k + 1..].split_whitespace().next())
+                == Some("Z")
+        }
+    }
+}
+
+/// One Ctrl-C stops a film while its FFmpeg has stalled (stopped here by SIGSTOP, as a full
+/// disk or a slow network drive stalls it): the run, blocked writing frames to it, ends
+/// within seconds as interrupted (exit 130), FFmpeg is gone, and no film or temporary file
+/// is left.
+#[cfg(unix)]
+#[test]
+fn one_ctrl_c_stops_a_film_whose_ffmpeg_stalled() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let film = dir.path().join("t.mp4");
+    // 3 MB frames: a stalled FFmpeg's pipe fills with the first.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_chaoscope"))
+        .args(["traces", "--theta1", "2", "--theta2", "2.5", "--runs", "2"])
+        .args([
+            "--exposure",
+            "60",
+            "--fps",
+            "30",
+            "--size",
+            "1001",
+            "--backend",
+            "cpu",
+        ])
+        .arg("--output")
+        .arg(dir.path().join("t.png"))
+        .arg("--film")
+        .arg(&film)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    let ffmpeg = loop {
+        if let Some(&pid) = children_named(child.id(), "ffmpeg").first() {
+            break pid;
+        }
+        assert!(child.try_wait().unwrap().is_none(), "ended before its film");
+        assert!(started.elapsed().as_secs() < 60, "no FFmpeg after 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let signal = |sig: &str, pid: u32| {
+        std::process::Command::new("kill")
+            .args([sig, &pid.to_string()])
+            .status()
+            .unwrap()
+    };
+    assert!(signal("-STOP", ffmpeg).success());
+    // Long enough for the pipe to fill and the run to block on it.
+    std::thread::sleep(std::time::Duration::from_secs(1));
+    assert!(signal("-INT", child.id()).success());
+    let asked = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        // The kill is immediate and the run's blocked write then fails; 5 s leaves room for
+        // a loaded machine's scheduler.
+        if asked.elapsed().as_secs() >= 5 {
+            let _ = signal("-KILL", ffmpeg);
+            let _ = child.kill();
+            panic!("still running 5 s after one Ctrl-C");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    assert_eq!(status.code(), Some(130), "{status}");
+    assert!(ended(ffmpeg), "FFmpeg {ffmpeg} outlived the run");
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+/// A film cut short (its index counts frames whose bytes are gone) or joined from pieces
+/// without new timestamps (every time twice) is refused as the bad input it is (exit 2,
+/// naming what is wrong), not tracked in part or with times misassigned.
+#[test]
+fn a_film_cut_short_or_joined_is_refused() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let whole =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/test_film.mp4")).unwrap();
+    let half = dir.path().join("half.mp4");
+    std::fs::write(&half, &whole[..whole.len() / 2]).unwrap();
+    let piece = dir.path().join("piece.ts");
+    let made = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/test_film.mp4"))
+        .args([
+            "-t",
+            "2",
+            "-c",
+            "copy",
+            "-bsf:v",
+            "h264_mp4toannexb",
+            "-f",
+            "mpegts",
+        ])
+        .arg(&piece)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let piece = std::fs::read(&piece).unwrap();
+    let joined = dir.path().join("joined.ts");
+    std::fs::write(&joined, [piece.clone(), piece].concat()).unwrap();
+    for (film, says) in [(&half, "cut short"), (&joined, "timestamps repeat")] {
+        let out = chaoscope()
+            .arg("track")
+            .arg(film)
+            .args(["--l1", "0.3", "--output"])
+            .arg(dir.path().join("t.csv"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{}: {err}", film.display());
+        assert!(err.contains(says), "{err}");
+        assert!(!dir.path().join("t.csv").exists());
+    }
 }

@@ -87,6 +87,8 @@ pub fn watched<T: Send + 'static>(
         });
         if let Err(e) = looked {
             cancel.store(true, Ordering::Relaxed);
+            // The work may be blocked on an FFmpeg program that stalled.
+            chaoscope::video::stop_all();
             stop = Some(e);
         }
     }

@@ -175,6 +175,12 @@ pub fn run(
         |f: &dyn Fn(&TrackRow) -> bool| tracked.rows.iter().filter(|r| f(r)).count() as f64 / n;
     let measured = |m: Option<track::Mark>| m.is_some_and(|m| !m.bridged);
     let mut notices = Vec::new();
+    if decoder.probe.repeated > 0 {
+        notices.push(format!(
+            "note: {} of the film's {} frames repeat another's timestamp (its container's rounding): each took its place in time order",
+            decoder.probe.repeated, total
+        ));
+    }
     let both = share(&|r| measured(r.m1) && measured(r.m2));
     if both < 0.5 {
         notices.push(format!(

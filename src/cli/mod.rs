@@ -332,11 +332,13 @@ where
     let flag = cancel.clone();
     // First Ctrl-C (or SIGTERM, SIGHUP): stop at the next dispatch, row or chunk and leave no
     // partial file; second: now, removing the temporary files being written.
+    // FFmpeg's programs stop at once: the run may be blocked on one that stalled.
     let _ = ctrlc::set_handler(move || {
         if flag.swap(true, Ordering::Relaxed) {
             crate::render::remove_pending();
             std::process::exit(130);
         }
+        crate::video::stop_all();
     });
     run_code(cli, &Monitor::terminal(cancel))
 }
@@ -389,6 +391,12 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
                 .map(|()| serde_json::Value::Null)
                 .map_err(Error::from)
         }
+    };
+    // A run stopped by Ctrl-C may fail where it was waiting (a pipe to an FFmpeg that was
+    // stopped with it): it was interrupted, whatever the failure says.
+    let result = match result {
+        Err(_) if monitor.is_cancelled() => Err(Error::Interrupted),
+        other => other,
     };
     let result = result.map(|mut summary| {
         // A fit whose model does not follow its data ran to the end and wrote its outputs,

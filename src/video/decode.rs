@@ -4,7 +4,7 @@
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Stdio};
+use std::process::Stdio;
 
 use crate::error::{Error, Result};
 
@@ -20,7 +20,12 @@ pub struct Probe {
     pub width: u32,
     pub height: u32,
     pub times: Vec<f64>,
+    /// Frames whose timestamp repeats another's (at most [`REPEATS_TOLERATED`] of them).
+    pub repeated: usize,
 }
+
+/// The share of frames whose timestamps may repeat another's before the film is refused.
+pub const REPEATS_TOLERATED: f64 = 0.1;
 
 /// The film at `path` as [`Probe`] tells it (ffprobe reads the container, decoding nothing).
 pub fn probe(path: &Path) -> Result<Probe> {
@@ -34,7 +39,7 @@ pub fn probe(path: &Path) -> Result<Probe> {
         "-select_streams",
         "v:0",
         "-show_entries",
-        "stream=codec_name,width,height:stream_side_data=rotation:packet=pts_time",
+        "stream=codec_name,width,height,nb_frames:stream_side_data=rotation:packet=pts_time",
         "-of",
         "json=c=1",
     ]));
@@ -98,6 +103,34 @@ fn parse_probe(path: &Path, text: &str) -> Result<Probe> {
     // Packets come in decoding order; frames are shown in the order of their timestamps.
     times.sort_by(f64::total_cmp);
     let first = *times.first().ok_or_else(|| bad("no frames"))?;
+    // A container that counts its frames (MP4, MOV) and holds fewer was cut short: its
+    // index lists pictures whose bytes are gone.
+    let counted = stream["nb_frames"]
+        .as_str()
+        .and_then(|n| n.parse::<usize>().ok());
+    if let Some(counted) = counted.filter(|&n| n > times.len()) {
+        return Err(Error::format(
+            path,
+            format!(
+                "its container counts {counted} frames but only {} are there: the film is cut short or damaged",
+                times.len()
+            ),
+        ));
+    }
+    // Frames at one time: pieces joined without new timestamps (MPEG-TS segments cat'ed
+    // together: every time twice), whose frames no time can be given to. A few repeats are
+    // a muxer's rounding (a variable-rate MOV with B-frames): those frames take their
+    // places in time order, and the probe counts them.
+    let repeated = times.windows(2).filter(|w| w[1] <= w[0]).count();
+    if repeated as f64 > REPEATS_TOLERATED * times.len() as f64 {
+        return Err(Error::format(
+            path,
+            format!(
+                "{repeated} of its {} frames' timestamps repeat another's: pieces joined without new timestamps? Re-encode it (ffmpeg -i FILM -c:v libx264 NEW.mp4) to give every frame its own time",
+                times.len()
+            ),
+        ));
+    }
     for t in &mut times {
         *t -= first;
     }
@@ -106,6 +139,7 @@ fn parse_probe(path: &Path, text: &str) -> Result<Probe> {
         width,
         height,
         times,
+        repeated,
     })
 }
 
@@ -135,7 +169,7 @@ impl Pixels {
 
 /// A film's frames in the order shown, one at a time.
 pub struct Decoder {
-    child: Child,
+    child: super::Program,
     stderr: Option<std::thread::JoinHandle<String>>,
     path: PathBuf,
     pub probe: Probe,
@@ -194,6 +228,7 @@ impl Decoder {
                 Err(e) => return Err(Error::format(&self.path, e)),
             }
         }
+        let listed = self.probe.times.len();
         if got == 0 {
             let status = self.child.wait()?;
             let stderr = self
@@ -204,35 +239,40 @@ impl Decoder {
             if !status.success() {
                 return Err(super::failed("ffmpeg", &self.path, &stderr));
             }
+            // Every frame the container lists must decode: a film cut short or damaged
+            // lists frames whose pictures are gone.
+            if self.next < listed {
+                return Err(Error::format(
+                    &self.path,
+                    format!(
+                        "only {} of the {listed} frames its container lists decode: the film is cut short or damaged",
+                        self.next
+                    ),
+                ));
+            }
             return Ok(None);
         }
         if got < bytes {
-            return Err(Error::format(&self.path, "its last frame was cut short"));
+            return Err(Error::format(
+                &self.path,
+                format!(
+                    "frame {} of {listed} was cut short: the film is damaged",
+                    self.next + 1
+                ),
+            ));
         }
         let k = self.next;
         self.next += 1;
-        // A decoder that gives more frames than the container's timestamps (it should not):
-        // the last step again.
-        let times = &self.probe.times;
-        Ok(Some(match times.get(k) {
-            Some(&t) => t,
-            None => {
-                let n = times.len();
-                let step = if n >= 2 {
-                    times[n - 1] - times[n - 2]
-                } else {
-                    1.0 / 30.0
-                };
-                times[n - 1] + (k + 1 - n) as f64 * step
-            }
-        }))
-    }
-}
-
-impl Drop for Decoder {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        // Each frame takes its own timestamp; a frame beyond them has no time.
+        match self.probe.times.get(k) {
+            Some(&t) => Ok(Some(t)),
+            None => Err(Error::format(
+                &self.path,
+                format!(
+                    "more frames decode than the {listed} timestamps its container lists: no time can be given to them"
+                ),
+            )),
+        }
     }
 }
 
@@ -247,6 +287,7 @@ mod tests {
             "side_data_list":[{"rotation":-90}]}]}"#;
         let p = parse_probe(Path::new("x.mov"), text).unwrap();
         assert_eq!((p.codec.as_str(), p.width, p.height), ("hevc", 1080, 1920));
+        assert_eq!(p.repeated, 0);
         let expected = [0.0, 0.033333, 0.066667];
         for (t, e) in p.times.iter().zip(expected) {
             assert!((t - e).abs() < 1e-9, "{:?}", p.times);

@@ -11,7 +11,8 @@ pub use decode::{Decoder, Pixels, Probe, probe};
 pub use encode::{Mp4, write_mp4};
 
 use std::io::Read;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::Mutex;
 
 use crate::error::{Error, Result};
 
@@ -20,6 +21,72 @@ pub const INSTALL: &str = "apt-get install ffmpeg";
 
 /// The most of a program's error output kept for the message (its last lines matter).
 const STDERR_CAP: u64 = 64 << 10;
+
+/// The FFmpeg programs running now, by process id (each leads its own process group), so
+/// that an interruption can stop them wherever the run waits on them ([`stop_all`]).
+static RUNNING: Mutex<Vec<u32>> = Mutex::new(Vec::new());
+
+/// A running FFmpeg program: registered in [`RUNNING`] until reaped, and killed (its
+/// process group) and reaped when dropped before it ended.
+pub(crate) struct Program {
+    child: Child,
+    reaped: bool,
+}
+
+impl Program {
+    fn wait(&mut self) -> std::io::Result<ExitStatus> {
+        let status = self.child.wait();
+        self.reaped = true;
+        forget(self.child.id());
+        status
+    }
+}
+
+impl std::ops::Deref for Program {
+    type Target = Child;
+    fn deref(&self) -> &Child {
+        &self.child
+    }
+}
+
+impl std::ops::DerefMut for Program {
+    fn deref_mut(&mut self) -> &mut Child {
+        &mut self.child
+    }
+}
+
+impl Drop for Program {
+    fn drop(&mut self) {
+        if !self.reaped {
+            let _ = self.child.kill();
+            let _ = self.wait();
+        }
+    }
+}
+
+fn forget(pid: u32) {
+    if let Ok(mut running) = RUNNING.lock() {
+        running.retain(|&p| p != pid);
+    }
+}
+
+/// Stops every FFmpeg program running now (SIGKILL to its process group): on Ctrl-C, so that
+/// a stalled encode or decode, on which the run may be blocked in a write or a read, ends at
+/// once; the blocked call then fails and the run stops as interrupted.
+pub fn stop_all() {
+    #[cfg(unix)]
+    if let Ok(running) = RUNNING.lock() {
+        for &pid in running.iter() {
+            if let Ok(group) = i32::try_from(pid) {
+                // SAFETY: kill(2) on a process group this process started and has not reaped
+                // (a reaped one is forgotten first), so its id cannot have been reused.
+                unsafe {
+                    libc::kill(-group, libc::SIGKILL);
+                }
+            }
+        }
+    }
+}
 
 /// `program` (ffmpeg, ffprobe) with `args`, its stdin, stdout and stderr as given, in a
 /// process group of its own: Ctrl-C at the terminal reaches chaoscope, which stops it, and
@@ -30,7 +97,7 @@ fn spawn(
     args: &[std::ffi::OsString],
     stdin: Stdio,
     stdout: Stdio,
-) -> Result<Child> {
+) -> Result<Program> {
     let mut c = Command::new(program);
     c.args(args)
         .stdin(stdin)
@@ -41,12 +108,20 @@ fn spawn(
         use std::os::unix::process::CommandExt;
         c.process_group(0);
     }
-    c.spawn().map_err(|e| match e.kind() {
+    // Registered while the lock is held, so that stop_all never misses a program started
+    // as it runs.
+    let mut running = RUNNING.lock().unwrap_or_else(|e| e.into_inner());
+    let child = c.spawn().map_err(|e| match e.kind() {
         std::io::ErrorKind::NotFound => Error::MissingTool {
             tool: program,
             what,
         },
         _ => Error::Io(e),
+    })?;
+    running.push(child.id());
+    Ok(Program {
+        child,
+        reaped: false,
     })
 }
 

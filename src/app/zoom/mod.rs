@@ -244,6 +244,18 @@ const UNRESOLVED_KEY: &str = "chaoscope:unresolved";
 const COMMAND_KEY: &str = "chaoscope:command";
 /// The precision the frame ran in (f32 or f64).
 const PRECISION_KEY: &str = "chaoscope:precision";
+/// The frame's pixels' digest ([`digest`]), so that a frame changed since it was written is
+/// made again rather than kept.
+const PIXELS_KEY: &str = "chaoscope:pixels";
+
+/// A frame's pixels as 16 hex digits: FNV-1a over its bytes (stable across Rust versions and
+/// machines, which a resume needs; a checksum against damage, not against intent).
+fn digest(rgb: &[u8]) -> String {
+    let hash = rgb.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    });
+    format!("{hash:016x}")
+}
 
 fn text<'a>(png: &'a render::Png, key: &str) -> Option<&'a str> {
     png.text
@@ -318,12 +330,27 @@ pub fn run<S: MapKernels + MapPicture>(
     };
     // A frame of this zoom already there (its own command and, with the verdict, its
     // judgement), read back; another zoom's is refused.
+    let damaged = std::cell::RefCell::new(std::collections::BTreeSet::new());
     let kept = |k: usize, range: Option<(f32, f32)>| -> Result<Option<render::Png>> {
         let path = job.output.join(frame_name(k as u32));
         if !path.exists() {
             return Ok(None);
         }
-        let png = render::read_png(&path)?;
+        // A frame cut short or otherwise unreadable as a PNG (a run killed as the disk
+        // filled, a bad copy), or whose pixels are no longer those it was written with, is
+        // made again (said in a notice); anything but a file there is refused when written.
+        let png = match render::read_png(&path) {
+            Ok(png) => png,
+            Err(Error::Format(_)) => {
+                damaged.borrow_mut().insert(k);
+                return Ok(None);
+            }
+            Err(e) => return Err(e),
+        };
+        if text(&png, PIXELS_KEY).is_some_and(|d| d != digest(&png.rgb)) {
+            damaged.borrow_mut().insert(k);
+            return Ok(None);
+        }
         let range = range.or_else(|| text(&png, RANGE_KEY).and_then(parse_range));
         if text(&png, COMMAND_KEY) != Some(frame_command(&frame_job(k, range)).as_str()) {
             return Err(Error::invalid(
@@ -407,6 +434,7 @@ pub fn run<S: MapKernels + MapPicture>(
             meta.push((UNRESOLVED_KEY.into(), format!("{unresolved}")));
         }
         let picture = &drawn.picture;
+        meta.push((PIXELS_KEY.into(), digest(&picture.rgb)));
         render::write_png(
             &job.output.join(frame_name(k as u32)),
             picture.width,
@@ -418,6 +446,15 @@ pub fn run<S: MapKernels + MapPicture>(
         monitor.advance(1);
     }
     monitor.finish();
+    let damaged = damaged.into_inner();
+    if !damaged.is_empty() {
+        let names: Vec<String> = damaged.iter().map(|&k| frame_name(k as u32)).collect();
+        notices.push(format!(
+            "{} frames were damaged (unreadable, or their pixels changed since they were written) and were made again: {}",
+            damaged.len(),
+            names.join(", ")
+        ));
+    }
     let compute_seconds = started.elapsed().as_secs_f64();
     let mut summary = ZoomSummary {
         frames: n,
