@@ -465,6 +465,37 @@ fn the_forecast_is_drawn_back_onto_the_film() {
         k += 1;
     }
     assert_eq!(k, 300);
+
+    // Another film (the same, cut near 5 s): refused before any forecast
+    // work, naming both films, and nothing written.
+    let other = dir.path().join("other.mp4");
+    let made = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(&film)
+        .args(["-t", "5", "-c", "copy"])
+        .arg(&other)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let refused = dir.path().join("refused");
+    let o = chaoscope()
+        .arg("forecast")
+        .arg(&csv)
+        .args(["--window", "0.8:2.3", "--preset", "lab", "--video"])
+        .arg(&other)
+        .arg("--output")
+        .arg(&refused)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--video")
+            && err.matches(" frames over ").count() == 2
+            && err.contains("300 frames over 9.967 s"),
+        "{err}"
+    );
+    assert!(!refused.exists());
 }
 
 /// `track` without a length: the scale from the swing itself. A film of 10 s at 60 frames a

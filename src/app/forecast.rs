@@ -239,9 +239,12 @@ pub fn run(
         }
         inputs.push(("video", video.as_path()));
         crate::video::require("ffmpeg", "drawing on a film")?;
-        // A film FFmpeg cannot read (or no ffprobe to read it) is refused before the work.
-        crate::video::probe(video).map_err(|e| e.as_input("video"))?;
     }
+    // A film FFmpeg cannot read (or no ffprobe to read it) is refused before the work.
+    let film = match &job.video {
+        Some(video) => Some(crate::video::probe(video).map_err(|e| e.as_input("video"))?),
+        None => None,
+    };
     super::checks::check_directory(
         "output",
         &job.output,
@@ -251,15 +254,29 @@ pub fn run(
     )?;
     super::checks::check_units(&job.units)?;
     let read = read_frames(&job.file, &job.units)?;
-    // Where the track lies in the film, before any work: only a CSV `track` wrote says.
-    let geometry = match job.video {
-        Some(_) => Some(super::overlay::geometry_in(&job.file)?),
+    // Where the track lies in the film, and that the film is the one it was tracked from,
+    // before any work: only a CSV `track` wrote says.
+    let mut film_notice = None;
+    let geometry = match &film {
+        Some(probe) => {
+            let header = crate::track::file::header_of(&job.file, "video")?;
+            match header.film {
+                Some(tracked) => tracked.check(&crate::track::file::Film::of(probe), "video")?,
+                None => {
+                    film_notice = Some(
+                        "the tracked file does not record its film (tracked by an earlier version): that the film is the one it was tracked from is not checked".to_string(),
+                    )
+                }
+            }
+            Some(header.placement)
+        }
         None => None,
     };
     // The pivot, arm lengths and model as `fit` finds them.
     let tracked = crate::fit::pendulum::tracked_model(&read, &job.params, &job.units)?;
     let mut notices = engine.notices();
     notices.push(tracked.source.describe_model(&tracked.params));
+    notices.extend(film_notice);
     notices.extend(tracked.notices.iter().cloned());
     let crate::fit::pendulum::Tracked {
         frames,

@@ -13,70 +13,13 @@ use crate::error::{Error, Result};
 use crate::fit::TrackedRow;
 use crate::monitor::Monitor;
 use crate::render::Outputs;
+use crate::track::file::Placement;
 use crate::video::{Decoder, Pixels};
-
-/// Where a tracked file's positions lie in its film's picture, from the comments `track`
-/// writes: the pivot (px), the scale (px per metre) and the world's up in the picture (a
-/// unit vector, px axes).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Placement {
-    pub pivot: (f64, f64),
-    pub pixels_per_metre: f64,
-    pub up: (f64, f64),
-}
-
-impl Placement {
-    /// Metres (x along the world's right, y up, from the pivot) to the picture's pixels.
-    fn pixels(&self, x: f64, y: f64) -> (f64, f64) {
-        let ((cx, cy), ppm, (ux, uy)) = (self.pivot, self.pixels_per_metre, self.up);
-        // The world's right in the picture: up turned a quarter clockwise as seen.
-        (cx + ppm * (-x * uy + y * ux), cy + ppm * (x * ux + y * uy))
-    }
-}
-
-/// The [`Placement`] of a tracked file's positions; an error naming `video` where the file
-/// does not say.
-pub fn geometry_in(csv: &Path) -> Result<Placement> {
-    let text = crate::input::read_text("file", csv, crate::input::CSV_CAP)?;
-    geometry_of(&text).ok_or_else(|| {
-        Error::invalid(
-            "video",
-            "the tracked file says nothing of where it lies in the film: draw on the film a CSV that `track` wrote",
-        )
-    })
-}
-
-/// The placement in `track`'s comments ("# pivot at (X, Y) px, ..., P px per metre" and
-/// "# up in the picture (X, Y): ..."; without the second, the picture's up).
-fn geometry_of(text: &str) -> Option<Placement> {
-    let numbers = |start: &str| -> Option<Vec<f64>> {
-        let line = text.lines().find(|l| l.starts_with(start))?;
-        Some(
-            line[start.len()..]
-                .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e'))
-                .filter_map(|w| w.parse().ok())
-                .collect(),
-        )
-    };
-    let up = match numbers("# up in the picture (").as_deref() {
-        Some(&[x, y, ..]) if (x.hypot(y) - 1.0).abs() < 1e-6 => (x, y),
-        Some(_) => return None,
-        None => (0.0, -1.0),
-    };
-    match numbers("# pivot at (")?[..] {
-        [x, y, _, _, ppm, ..] if ppm > 0.0 => Some(Placement {
-            pivot: (x, y),
-            pixels_per_metre: ppm,
-            up,
-        }),
-        _ => None,
-    }
-}
 
 /// What to draw: the tracked rows (m, from the fitted `pivot`), the forecast, the horizon.
 pub struct Overlay<'a> {
     pub rows: &'a [TrackedRow],
-    /// Where the track lies in the film ([`geometry_in`]).
+    /// Where the track lies in the film (the tracked file's header).
     pub geometry: Placement,
     /// The fitted pivot (m, in the CSV's frame) the forecast's positions are relative to.
     pub pivot: (f64, f64),
@@ -247,28 +190,4 @@ fn draw(
     }
     root.present()?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn the_geometry_is_read_from_tracks_comment() {
-        let text = "# chaoscope track x.mp4\n# pivot at (640.012, 323.950) px, upper arm 218.160 px, lower arm 141.810 px, 727.2000 px per metre; t from the film's first frame\nt,x1\n";
-        let placed = super::geometry_of(text).unwrap();
-        assert_eq!(
-            (placed.pivot, placed.pixels_per_metre, placed.up),
-            ((640.012, 323.95), 727.2, (0.0, -1.0))
-        );
-        // One metre right of the pivot and one up, in the picture's frame.
-        assert_eq!(placed.pixels(1.0, 1.0), (640.012 + 727.2, 323.95 - 727.2));
-        assert_eq!(super::geometry_of("t,x1\n"), None);
-        // A camera turned a quarter counter-clockwise: the world's up points left in the
-        // picture, and its right points up.
-        let turned =
-            format!("{text}# up in the picture (-1.000000000, 0.000000000): from the rest\n");
-        let placed = super::geometry_of(&turned).unwrap();
-        assert_eq!(placed.up, (-1.0, 0.0));
-        assert_eq!(placed.pixels(1.0, 0.0), (640.012, 323.95 - 727.2));
-        assert_eq!(placed.pixels(0.0, 1.0), (640.012 - 727.2, 323.95));
-    }
 }

@@ -1,7 +1,6 @@
 //! `track`: the positions of both masses in every frame of a film of the pendulum, as the
 //! CSV that `fit` and `forecast` read, with how each row was obtained and its uncertainty.
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use crate::engine::Engine;
@@ -189,7 +188,10 @@ pub fn run(
         ));
     }
     let mut files = Outputs::new();
-    files.write(&job.output, |w| write_csv(w, &tracked, command))?;
+    let film = track::file::Film::of(&decoder.probe);
+    files.write(&job.output, |w| {
+        track::file::write(w, &tracked, &film, command)
+    })?;
     files.commit(monitor)?;
     let g = tracked.geometry;
     Ok(TrackSummary {
@@ -380,69 +382,4 @@ fn bridge(
     }
     monitor.finish();
     Ok(out)
-}
-
-/// The CSV: t (s), x1 y1 x2 y2 (m, origin at the pivot, y up), seen1 seen2 (`measured`,
-/// `hidden`: a hidden mass's cells are empty, or `bridged`: placed by the model), sx1 sy1
-/// sx2 sy2 (each position's standard error: from the sensor's noise where measured, from
-/// the model's fit where bridged; m) and streak1 streak2 (the distance moved during the
-/// exposure, m; empty where bridged).
-fn write_csv(w: &mut impl Write, t: &track::Tracked, command: &str) -> Result<()> {
-    let g = t.geometry;
-    writeln!(w, "# {command}")?;
-    writeln!(
-        w,
-        "# pivot at ({:.3}, {:.3}) px, upper arm {:.3} px, lower arm {:.3} px, {:.4} px per metre; t from the film's first frame",
-        g.pivot.0, g.pivot.1, g.r1, g.r2, t.pixels_per_metre
-    )?;
-    writeln!(
-        w,
-        "# up in the picture ({:.9}, {:.9}): {}",
-        t.up.direction.0,
-        t.up.direction.1,
-        match t.up.rest {
-            Some((a, b)) => format!(
-                "from the pendulum at rest {a:.3}..{b:.3} s, {:.3} degrees counter-clockwise from the picture's",
-                t.up.tilt_degrees
-            ),
-            None => "the picture's (the film never shows the pendulum hanging at rest)".into(),
-        }
-    )?;
-    writeln!(
-        w,
-        "t,x1,y1,x2,y2,seen1,seen2,sx1,sy1,sx2,sy2,streak1,streak2"
-    )?;
-    for r in &t.rows {
-        let pos = |m: Option<track::Mark>| match m {
-            Some(m) => format!("{:.6},{:.6}", m.x, m.y),
-            None => ",".into(),
-        };
-        let seen = |m: Option<track::Mark>| match m {
-            Some(m) if m.bridged => "bridged",
-            Some(_) => "measured",
-            None => "hidden",
-        };
-        let err = |m: Option<track::Mark>| match m {
-            Some(m) => format!("{:.2e},{:.2e}", m.sx, m.sy),
-            None => ",".into(),
-        };
-        let streak = |m: Option<track::Mark>| match m {
-            Some(m) if !m.bridged => format!("{:.5}", m.streak),
-            _ => String::new(),
-        };
-        writeln!(
-            w,
-            "{:.6},{},{},{},{},{},{},{},{}",
-            r.t,
-            pos(r.m1),
-            pos(r.m2),
-            seen(r.m1),
-            seen(r.m2),
-            err(r.m1),
-            err(r.m2),
-            streak(r.m1),
-            streak(r.m2)
-        )?;
-    }
-    Ok(())
 }

@@ -5,10 +5,12 @@
 //! films with a known truth.
 
 pub mod detect;
+pub mod file;
 pub mod geometry;
 pub mod synth;
 
 pub use detect::{Blob, Markers};
+pub use file::{CsvRow, read_rows};
 pub use geometry::Geometry;
 
 use crate::error::{Error, Result};
@@ -317,41 +319,4 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         up,
         still,
     })
-}
-
-/// A row of a CSV that `track` wrote: its time (s) and the upper and lower mass's position
-/// (m), None where it was not measured.
-pub type CsvRow = (f64, Option<(f64, f64)>, Option<(f64, f64)>);
-
-/// Reads back the measured positions of a CSV that `track` wrote (its header and `seen`
-/// columns): a mass hidden, or placed by the model (`bridged`), is None.
-pub fn read_rows(path: &std::path::Path) -> Result<Vec<CsvRow>> {
-    let text = crate::input::read_text("file", path, crate::input::CSV_CAP)?;
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    let bad = |what: &str| Error::format(path, format!("not a CSV that track wrote: {what}"));
-    if lines.next() != Some("t,x1,y1,x2,y2,seen1,seen2,sx1,sy1,sx2,sy2,streak1,streak2") {
-        return Err(bad("its header"));
-    }
-    lines
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            if c.len() != 13 {
-                return Err(bad("a row of other than 13 fields"));
-            }
-            let at = |k: usize, seen: &str| -> Result<Option<(f64, f64)>> {
-                match seen {
-                    "measured" => {
-                        let v = |s: &str| s.parse::<f64>().map_err(|_| bad("a position"));
-                        Ok(Some((v(c[k])?, v(c[k + 1])?)))
-                    }
-                    // Not seen: no position, not even a guessed one.
-                    "hidden" if c[k].is_empty() && c[k + 1].is_empty() => Ok(None),
-                    "bridged" => Ok(None),
-                    _ => Err(bad("a seen cell, or a hidden mass's position")),
-                }
-            };
-            let t = c[0].parse::<f64>().map_err(|_| bad("a time"))?;
-            Ok((t, at(1, c[5])?, at(3, c[6])?))
-        })
-        .collect()
 }
