@@ -33,7 +33,7 @@ def zoom(
     frames: int = 120,
     fps: float = 30.0,
     crf: int = 18,
-    output: str = "out/zoom",
+    output: Optional[str] = None,
     film: Optional[str] = None,
     tile: Optional[Tuple[int, int]] = None,
     verdict: bool = False,
@@ -50,7 +50,7 @@ def zoom(
     ``frames`` frames; each frame runs in f32 while f32 resolves its step, then in f64; a zoom
     deeper than f64 resolves raises ValueError naming the end width.
 
-    Frames go to ``output`` as numbered PNGs (a call with the same settings keeps those already
+    Frames go to ``output`` (default ``out/zoom``) as numbered PNGs (a call with the same settings keeps those already
     there: an interrupted zoom resumes), then the film (``film``, default
     ``output/zoom.mp4``, ``fps``, ``crf``) and ``frames.csv``. ``tile=(index, count)`` makes
     every count-th frame from index and no film (workers sharing one folder; a call without
@@ -86,7 +86,7 @@ def zoom(
         "frames": frames,
         "fps": fps,
         "crf": crf,
-        "output": str(output),
+        "output": None if output is None else str(output),
         "film": None if film is None else str(film),
         "tile": tile,
         "verdict": verdict,
@@ -108,6 +108,12 @@ def _lyapunov_map() -> inspect.Signature:
 
 
 def _views(to: Sequence[View] | View) -> list:
+    bad = ValueError(f"to: {to!r} must be (x, y, width), or a list of them")
+    try:
+        if isinstance(to, (str, bytes)) or len(to) == 0:
+            raise bad
+    except TypeError:
+        raise bad from None
     items: Iterable = [to] if len(to) == 3 and not isinstance(to[0], (tuple, list)) else to
     views = []
     for v in items:

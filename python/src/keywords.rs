@@ -75,10 +75,17 @@ impl<'py> Keywords<'py> {
     }
 
     /// A (low, high) pair as a range.
+    /// A range (low, high), checked here so that its error names this keyword (the
+    /// library's checks name the quantity along the axis).
     pub fn range(&self, key: &str) -> PyResult<Option<Range>> {
-        Ok(self
-            .get::<(f64, f64)>(key)?
-            .map(|(min, max)| Range { min, max }))
+        match self.get::<(f64, f64)>(key)? {
+            Some((min, max)) if !(min.is_finite() && max.is_finite() && min < max) => {
+                Err(PyValueError::new_err(format!(
+                    "{key}: ({min}, {max}) must be (low, high) with low < high, both finite"
+                )))
+            }
+            r => Ok(r.map(|(min, max)| Range { min, max })),
+        }
     }
 
     /// An angle: one number (a start) or a (low, high) pair (a range along an axis).

@@ -586,4 +586,21 @@ def test_zoom_is_its_command_with_frames_read_lazily(tmp_path):
         chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), map="phase", progress=False)
     with pytest.raises(TypeError, match="sizes"):
         chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), sizes=64, progress=False)
+    for to in (None, 3, "abc", ()):
+        with pytest.raises(ValueError, match="^to: "):
+            chaoscope.zoom(to, output=str(tmp_path / "x"), progress=False)
     assert not (tmp_path / "x").exists()
+
+
+def test_none_means_the_default_and_ranges_name_their_keyword(tmp_path, monkeypatch):
+    # output=None is the library's default folder, out/zoom (here under tmp_path), never one
+    # named "None".
+    monkeypatch.chdir(tmp_path)
+    chaoscope.zoom((0.5, 0.5, 0.5), frames=2, size=8, t_max=1, output=None, progress=False)
+    assert (tmp_path / "out" / "zoom" / "frame_0001.png").exists()
+    assert not (tmp_path / "None").exists()
+    for bad in ((1, 1), (2, 1), (0, float("nan"))):
+        with pytest.raises(ValueError, match="^x_range: "):
+            chaoscope.flip_map(size=8, t_max=1, x="theta1", x_range=bad, progress=False)
+        with pytest.raises(ValueError, match="^y_range: "):
+            chaoscope.flip_map(size=8, t_max=1, y_range=bad, progress=False)
