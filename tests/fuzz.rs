@@ -181,16 +181,7 @@ fn random_command_lines_never_panic_and_name_what_is_wrong() {
                 };
                 let (flag, good) = &pool[rng.usize(..pool.len())];
                 line.push(flag.clone());
-                // Half the time a plausible value (or none for a switch), else a trap or
-                // nothing at all.
-                match (rng.bool(), good) {
-                    (true, Some(v)) => line.push(v.clone()),
-                    (true, None) => {}
-                    (false, _) if rng.u8(..10) < 8 => {
-                        line.push(VALUES[rng.usize(..VALUES.len())].to_string())
-                    }
-                    (false, _) => {}
-                }
+                line.extend(common::fuzz_value(&mut rng, good.as_deref(), VALUES));
             }
             line
         })

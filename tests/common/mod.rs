@@ -253,3 +253,13 @@ pub fn ffmpeg() -> bool {
     }
     found
 }
+
+/// A fuzzed flag's value: half the time its plausible one `good` (none for a switch), else
+/// one of `traps` or nothing at all.
+pub fn fuzz_value(rng: &mut fastrand::Rng, good: Option<&str>, traps: &[&str]) -> Option<String> {
+    match (rng.bool(), good) {
+        (true, good) => good.map(str::to_string),
+        (false, _) if rng.u8(..10) < 8 => Some(traps[rng.usize(..traps.len())].to_string()),
+        (false, _) => None,
+    }
+}
