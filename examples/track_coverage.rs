@@ -11,9 +11,10 @@
 //!
 //!     cargo run --release --example track_coverage -- [FILMS] [DIR] [FIRST] [CRF]
 
-use chaoscope::app::forecast::{ForecastJob, ForecastSettings, run as forecast};
+use chaoscope::app::forecast::{ForecastJob, run as forecast};
 use chaoscope::app::track::{TrackJob, run as track};
 use chaoscope::engine::{Backend, Engine};
+use chaoscope::fit::outcome::ForecastSettings;
 use chaoscope::model::State;
 use chaoscope::monitor::Monitor;
 use chaoscope::params::{ParamSources, Preset};

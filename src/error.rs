@@ -159,6 +159,30 @@ pub(crate) fn finite_positive(field: &'static str, v: f64) -> Result<()> {
     }
 }
 
+/// `v` within [lo, hi], else an error naming `field`.
+pub fn check_within(field: &'static str, v: f64, lo: f64, hi: f64) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("{v} must be in [{lo}, {hi}]"),
+        ))
+    }
+}
+
+/// A count within [lo, hi], else an error naming `field`.
+pub fn check_count(field: &'static str, n: u64, lo: u64, hi: u64) -> Result<()> {
+    if (lo..=hi).contains(&n) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("must be between {lo} and {hi}"),
+        ))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -6,11 +6,12 @@ mod common;
 
 use std::path::Path;
 
-use chaoscope::app::forecast::ForecastSettings;
-use chaoscope::app::twin::{self, TwinJob, experiment, make_track};
+use chaoscope::app::twin::{self, TwinJob};
 use chaoscope::cpu;
 use chaoscope::engine::{Backend, Engine};
 use chaoscope::fit::forecast::{ForecastSpec, forecast, stepping};
+use chaoscope::fit::outcome::ForecastSettings;
+use chaoscope::fit::twin::{experiment, make_track};
 use chaoscope::fit::window::{STEPS_PER_SECOND, track, track_with};
 use chaoscope::model::{Params, State};
 use chaoscope::monitor::Monitor;

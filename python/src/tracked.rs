@@ -61,7 +61,7 @@ pub fn forecast<'py>(
             .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
         output: k.or("output", std::path::PathBuf::from("out/forecast"))?,
         units: k.units()?,
-        settings: chaoscope::app::forecast::ForecastSettings {
+        settings: chaoscope::fit::outcome::ForecastSettings {
             window: k.get("window")?,
             members: k.whole("members")?.unwrap_or(10_000),
             seed: k.whole("seed")?.unwrap_or(1),

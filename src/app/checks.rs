@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, check_within};
 use crate::monitor::Monitor;
 use crate::render::{Outputs, check_writable};
 
@@ -122,30 +122,6 @@ pub fn check_extension(field: &'static str, path: &Path, ext: &str) -> Result<()
             field,
             format!("{} must end in .{ext}", path.display()),
         )),
-    }
-}
-
-/// `v` within [lo, hi], else an error naming `field`.
-pub fn check_within(field: &'static str, v: f64, lo: f64, hi: f64) -> Result<()> {
-    if v.is_finite() && v >= lo && v <= hi {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            field,
-            format!("{v} must be in [{lo}, {hi}]"),
-        ))
-    }
-}
-
-/// A count within [lo, hi], else an error naming `field`.
-pub fn check_count(field: &'static str, n: u64, lo: u64, hi: u64) -> Result<()> {
-    if (lo..=hi).contains(&n) {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            field,
-            format!("must be between {lo} and {hi}"),
-        ))
     }
 }
 

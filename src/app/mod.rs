@@ -12,7 +12,6 @@ pub mod flip;
 pub mod forecast;
 pub mod lyapunov;
 pub mod map;
-pub mod overlay;
 pub mod phase;
 pub mod serve;
 pub mod store;
@@ -24,5 +23,6 @@ pub mod trajectory;
 pub mod twin;
 pub mod zoom;
 
-pub use checks::{check_count, check_extension, check_output, check_within, write_text};
+pub use crate::error::{check_count, check_within};
+pub use checks::{check_extension, check_output, write_text};
 pub use map::{MapOutputs, check_tile, write_map};

@@ -7,9 +7,10 @@ use clap::Args;
 use super::args::{PhysicalArgs, TrackedUnitsArgs, backend_parser};
 use super::parse::{one_of, parse_length, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
-use crate::app::forecast::{self, ForecastJob, ForecastSettings, fmt_time};
+use crate::app::forecast::{self, ForecastJob, fmt_time};
 use crate::engine::Backend;
 use crate::error::Result;
+use crate::fit::outcome::ForecastSettings;
 use crate::monitor::Monitor;
 use crate::spec::Precision;
 

@@ -10,10 +10,13 @@ pub mod joint;
 mod lsq;
 mod model;
 pub mod model_error;
+pub mod outcome;
+pub mod overlay;
 pub mod pendulum;
 pub mod plots;
 mod quantiles;
 mod refine;
+pub mod twin;
 pub mod window;
 
 pub use data::{

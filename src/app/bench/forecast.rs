@@ -3,11 +3,11 @@
 //! FTLE along the fitted orbit) over 6 s past the window, on the GPU engine.
 
 use super::Sample;
-use crate::app::forecast::ForecastSettings;
-use crate::app::twin::{experiment, make_track};
 use crate::engine::Engine;
 use crate::error::Result;
 use crate::fit::forecast::{ForecastSpec, forecast};
+use crate::fit::outcome::ForecastSettings;
+use crate::fit::twin::{experiment, make_track};
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::params::Preset;

@@ -7,14 +7,13 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::film::{self, FilmSpec, Format};
-use super::forecast::Outcome;
+use super::outcome::Outcome;
 use crate::error::{Error, Result};
 use crate::fit::TrackedRow;
 use crate::monitor::Monitor;
 use crate::render::Outputs;
 use crate::track::file::Placement;
-use crate::video::{Decoder, Pixels};
+use crate::video::{Decoder, Mp4, Pixels};
 
 /// What to draw: the tracked rows (m, from the fitted `pivot`), the forecast, the horizon.
 pub struct Overlay<'a> {
@@ -29,13 +28,14 @@ pub struct Overlay<'a> {
 }
 
 /// Stages `path`, an MP4 of the frames of `video` with `overlay` drawn on them, at the
-/// film's own rate (the median step between its frames).
+/// film's own rate (the median step between its frames), `command` (which reproduces it)
+/// in its metadata.
 pub fn write(
     files: &mut Outputs,
     path: &Path,
     video: &Path,
     overlay: &Overlay,
-    meta: &[(String, String)],
+    command: &str,
     monitor: &Monitor,
 ) -> Result<()> {
     let placement = overlay.geometry;
@@ -48,8 +48,7 @@ pub fn write(
         _ if steps.is_empty() => 1.0 / 30.0,
         mid => *steps.select_nth_unstable_by(mid, f64::total_cmp).1,
     };
-    let film = FilmSpec {
-        path: path.to_path_buf(),
+    let film = Mp4 {
         fps: (1.0 / step).clamp(1.0, 240.0),
         crf: 18,
     };
@@ -62,7 +61,7 @@ pub fn write(
     crate::render::register_font();
     monitor.start("overlay", count as u64);
     let mut frame = Vec::new();
-    let result = film::write(files, &film, Format::Mp4, (w, h), count, meta, |_| {
+    let result = crate::video::write_mp4(files, path, (w, h), film, command, count, |_| {
         monitor.check()?;
         let t = decoder
             .next_frame(&mut frame)

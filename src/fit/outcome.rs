@@ -1,0 +1,187 @@
+//! A fit and forecast of one track: the window fit, the ensemble past it, the model's own
+//! error from held-out windows, and how the forecast did against the data (its horizons,
+//! scores and the fit's verdict). `forecast` and each of `twin`'s experiments run it.
+
+use serde_json::json;
+
+use super::forecast::{self, Forecast, ForecastSpec, band_times, most_members};
+use super::pendulum::Verdict;
+use super::window::{FITTED, TrackRows, WindowFit, fit_window};
+use crate::engine::Engine;
+use crate::error::{Error, Result, check_count, check_within};
+use crate::model::Params;
+use crate::monitor::Monitor;
+
+/// What a fit and forecast of one track found.
+pub struct Outcome {
+    pub fit: WindowFit,
+    pub forecast: Forecast,
+    pub tracking_error: f64,
+    /// The first time measurements leave their band for `run` rows in a row, and how often
+    /// they lie inside it before the spread's horizon.
+    pub data_horizon: Option<f64>,
+    pub run: usize,
+    pub data_coverage: Option<f64>,
+    /// The median's and the bands' record against the data after the window.
+    pub scores: forecast::Scores,
+    /// Whether the fit follows the data in its window: where it does not, the horizons are
+    /// no findings.
+    pub verdict: Verdict,
+    /// The window and the tolerance used: the settings', else the data's defaults.
+    pub window: (f64, f64),
+    pub tolerance: f64,
+}
+
+impl Outcome {
+    /// A horizon (s) as time after the window's end, and in Lyapunov times (None where the
+    /// orbit does not stretch: an exponent <= 0 has no Lyapunov time).
+    pub fn after_window(&self, horizon: Option<f64>) -> (Option<f64>, Option<f64>) {
+        let after = horizon.map(|t| t - self.forecast.window_end);
+        let lambda = self.forecast.lyapunov;
+        (after, after.filter(|_| lambda > 0.0).map(|a| a * lambda))
+    }
+}
+
+/// The settings of a fit and forecast of one track (`forecast`'s, and each of `twin`'s
+/// experiments').
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForecastSettings {
+    /// The fit window (s): the model is fitted to the rows from its start to its end. None:
+    /// four of the motion's own times from the second row ([`TrackRows::default_window`]).
+    pub window: Option<(f64, f64)>,
+    /// Number of ensemble members.
+    pub members: usize,
+    /// Seed of the members' draws and of the measurement noise in the bands.
+    pub seed: u64,
+    /// The lower bob's spread (m) that ends the forecast's horizon. None: 6 % of the reach.
+    pub tolerance: Option<f64>,
+    /// A measurement's error (m per coordinate); None: what the fit's residuals imply.
+    pub tracking_error: Option<f64>,
+    /// Candidates of the fit's ensemble search.
+    pub candidates: usize,
+    /// Windows of the same recording held out to measure the model's own error (0: none;
+    /// the bands then hold the tracking error and the fit's uncertainty alone).
+    pub held_out: usize,
+}
+
+impl ForecastSettings {
+    /// Checks the settings every forecast shares (the window against the data, later).
+    pub fn validate(&self) -> Result<()> {
+        if self.members == 0 {
+            return Err(Error::invalid(
+                "members",
+                "must be at least 1 (10000 draws a smooth band)",
+            ));
+        }
+        if let Some(tolerance) = self.tolerance {
+            check_within("tolerance", tolerance, 1e-6, 1e3)?;
+        }
+        if let Some(e) = self.tracking_error {
+            check_within("tracking_error", e, 0.0, 0.1)?;
+        }
+        check_count("candidates", self.candidates as u64, 64, 4_000_000)
+    }
+}
+
+/// Candidates of each held-out window's search: the model's error needs each fit found, not
+/// the last digit of its state.
+const HELD_OUT_CANDIDATES: usize = 4096;
+
+/// Fits `p` to the `track` in the settings' window and forecasts to `end` (s).
+pub fn fit_and_forecast(
+    track: &TrackRows,
+    p: &Params,
+    settings: &ForecastSettings,
+    end: f64,
+    engine: &Engine,
+    monitor: &Monitor,
+) -> Result<Outcome> {
+    let (t, data) = (track.t, track.data);
+    let (first, last) = (t[0], t[t.len() - 1]);
+    let window = settings
+        .window
+        .unwrap_or_else(|| (t[1], t[1] + track.default_window()));
+    let tolerance = settings
+        .tolerance
+        .unwrap_or_else(|| TrackRows::default_tolerance(p));
+    let (a, b) = window;
+    if !(a.is_finite() && b.is_finite() && a < b && a >= first - 1e-6 && b < last) {
+        return Err(Error::invalid(
+            "window",
+            format!(
+                "{a}:{b} must be START:END with START < END within the data's times {first}..{last} s, END before the last row (the forecast runs past it)"
+            ),
+        ));
+    }
+    let times = band_times(a, end, t).len();
+    let most = most_members(times);
+    if settings.members > most {
+        return Err(Error::invalid(
+            "members",
+            format!(
+                "{} members over {times} band times need {} GiB of positions; at most {most} fit the budget of {} GiB",
+                settings.members,
+                (settings.members as u64 * times as u64 * 16) >> 30,
+                forecast::POSITION_BUDGET >> 30
+            ),
+        ));
+    }
+    let fit = fit_window(track, p, window, settings.candidates, engine, monitor)?;
+    let tracking_error = settings.tracking_error.unwrap_or(fit.tracking_error);
+    let spec = ForecastSpec {
+        members: settings.members,
+        seed: settings.seed,
+        tolerance,
+        tracking_error,
+        end,
+        data_times: t.to_vec(),
+    };
+    // The window ends at its last row.
+    let window_end = t[fit.row0 + fit.rows - 1];
+    let mut forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
+    // The model's own error, from windows of the same recording held out from this one,
+    // each followed as far as this forecast's lead (a model's lag keeps growing on a
+    // pendulum that is not chaotic: a shorter reach would hold its last value on).
+    let lead = end - window_end;
+    let held = crate::fit::model_error::HeldOut {
+        window,
+        windows: settings.held_out,
+        lead,
+        candidates: settings.candidates.min(HELD_OUT_CANDIDATES),
+    };
+    if let Some(error) = crate::fit::model_error::estimate(track, p, &held, engine, monitor)? {
+        let velocity = fit.velocities(&forecast.times);
+        forecast.widen(error, &velocity, (p.l1, p.l1 + p.l2), tolerance);
+    }
+    let (data_horizon, run, data_coverage) = forecast::data_horizon(&forecast, t, data);
+    // The median within 5 % of the reach, the measure a forecast is judged by here.
+    let scores = forecast::scores(&forecast, t, data, 0.05 * (p.l1 + p.l2));
+    let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();
+    let verdict = Verdict::judge(rms, t, data, p.l1 + p.l2);
+    Ok(Outcome {
+        scores,
+        verdict,
+        window,
+        tolerance,
+        fit,
+        forecast,
+        tracking_error,
+        data_horizon,
+        run,
+        data_coverage,
+    })
+}
+
+/// The fit as JSON: values, errors, covariance in [`FITTED`]'s order.
+pub fn fit_json(fit: &WindowFit) -> serde_json::Value {
+    let cov: Vec<Vec<f64>> = (0..FITTED.len())
+        .map(|i| (0..FITTED.len()).map(|j| fit.covariance[(i, j)]).collect())
+        .collect();
+    json!({
+        "t0": fit.t0, "rows": fit.rows, "first_row": fit.row0,
+        "names": FITTED, "values": fit.values, "errors": fit.errors, "covariance": cov,
+        "tracking_error_correlation": fit.correlation,
+        "chi2": fit.chi2, "dof": fit.dof, "rms_residual": (fit.chi2 / (4 * fit.rows) as f64).sqrt(),
+        "candidates": fit.candidates, "searched_on": fit.backend,
+    })
+}
