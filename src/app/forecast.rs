@@ -221,14 +221,14 @@ pub fn run(
     });
     files.write_json(&out.join("summary.json"), &summary)?;
     if let (Some(video), Some(geometry)) = (&job.video, geometry) {
-        let overlay = crate::fit::overlay::Overlay {
+        let overlay = crate::track::overlay::Overlay {
             rows: &frames,
             geometry,
             pivot: (pivot.x, pivot.y),
             outcome: &o,
             tolerance: o.tolerance,
         };
-        crate::fit::overlay::write(
+        crate::track::overlay::write(
             &mut files,
             &out.join(OVERLAY),
             video,

@@ -11,7 +11,6 @@ mod lsq;
 mod model;
 pub mod model_error;
 pub mod outcome;
-pub mod overlay;
 pub mod pendulum;
 pub mod plots;
 mod quantiles;

@@ -4,9 +4,11 @@
 //! is not seen in a frame is reported as not seen, never placed. [`synth`] renders test
 //! films with a known truth.
 
+pub mod bridge;
 pub mod detect;
 pub mod file;
 pub mod geometry;
+pub mod overlay;
 pub mod synth;
 
 pub use detect::{Blob, Markers};
