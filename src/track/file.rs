@@ -4,15 +4,17 @@
 //! `# key = value` lines (numbers, then an optional remark in parentheses); `fit` and
 //! `forecast` read the rows as any positions file (`crate::fit::data`), skipping them.
 //!
-//!     # chaoscope track film.mp4 --l1 0.3
-//!     # pivot_px = 640.040 324.040
-//!     # arms_px = 200.018 159.991
-//!     # pixels_per_metre = 1998.5234
-//!     # up = 0.000000000 -1.000000000 (the picture's: ...)
-//!     # film_px = 1280 720
-//!     # film_frames = 600
-//!     # film_seconds = 5.990000 (the last frame's time from the first)
-//!     t,x1,y1,x2,y2,seen1,seen2,sx1,sy1,sx2,sy2,streak1,streak2
+//! ```text
+//! # chaoscope track film.mp4 --l1 0.3
+//! # pivot_px = 640.040 324.040
+//! # arms_px = 200.018 159.991
+//! # pixels_per_metre = 1998.5234
+//! # up = 0.000000000 -1.000000000 (the picture's: ...)
+//! # film_px = 1280 720
+//! # film_frames = 600
+//! # film_seconds = 5.990000 (the last frame's time from the first)
+//! t,x1,y1,x2,y2,seen1,seen2,sx1,sy1,sx2,sy2,streak1,streak2
+//! ```
 
 use std::io::Write;
 use std::path::Path;
