@@ -30,9 +30,9 @@ def zoom(
     to: Sequence[View] | View,
     *,
     map: str = "flip",
-    frames: int = 120,
-    fps: float = 30.0,
-    crf: int = 18,
+    frames: Optional[int] = None,
+    fps: Optional[float] = None,
+    crf: Optional[int] = None,
     output: Optional[str] = None,
     film: Optional[str] = None,
     tile: Optional[Tuple[int, int]] = None,
@@ -47,16 +47,17 @@ def zoom(
     order. ``map`` is "flip" or "lyapunov", and ``map_keywords`` are that map's, as
     :func:`flip_map` or :func:`lyapunov_map` take them (``size``, ``t_max``, ``x``, ``theta1``,
     ``indicator``, ...): that map is the first frame. Widths shrink geometrically over
-    ``frames`` frames; each frame runs in f32 while f32 resolves its step, then in f64; a zoom
-    deeper than f64 resolves raises ValueError naming the end width.
+    ``frames`` frames (default 120); each frame runs in f32 while f32 resolves its step, then
+    in f64; a zoom deeper than f64 resolves raises ValueError naming the end width.
 
-    Frames go to ``output`` (default ``out/zoom``) as numbered PNGs (a call with the same settings keeps those already
-    there: an interrupted zoom resumes), then the film (``film``, default
-    ``output/zoom.mp4``, ``fps``, ``crf``) and ``frames.csv``. ``tile=(index, count)`` makes
-    every count-th frame from index and no film (workers sharing one folder; a call without
-    it then encodes). ``verdict`` judges every frame (``unresolved``); ``show_unresolved``
-    paints those pixels grey; ``colour_range`` fixes a divergence map's colours (default:
-    frame 0's range, for every frame).
+    Frames go to ``output`` (default ``out/zoom``) as numbered PNGs (a call with the same
+    settings keeps those already there: an interrupted zoom resumes), then the film
+    (``film``, default ``output/zoom.mp4``, at ``fps`` (30) and ``crf`` (18)) and
+    ``frames.csv``; a setting given as None takes the library's default, as the command's
+    flag does. ``tile=(index, count)`` makes every count-th frame from index and no film
+    (workers sharing one folder; a call without it then encodes). ``verdict`` judges every
+    frame (``unresolved``); ``show_unresolved`` paints those pixels grey; ``colour_range``
+    fixes a divergence map's colours (default: frame 0's range, for every frame).
 
     Returns a Dataset over ``frame``: ``image`` (frame x y x x x channel, uint8 RGB, read
     from the PNGs only when its values are asked for), and per frame the view's centre

@@ -25,7 +25,7 @@ pub fn run<'py, S: MapKernels + MapPicture + Copy + Send + Sync + 'static>(
 ) -> PyResult<String> {
     let k = Keywords { dict: zoom };
     let to: Vec<(f64, f64, f64)> = k.get("to")?.unwrap_or_default();
-    let output: std::path::PathBuf = k.or("output", "out/zoom".into())?;
+    let output: std::path::PathBuf = k.or("output", zoom::OUTPUT.into())?;
     let tile = k.tile()?;
     let job = ZoomJob {
         map,
@@ -33,11 +33,11 @@ pub fn run<'py, S: MapKernels + MapPicture + Copy + Send + Sync + 'static>(
             .into_iter()
             .map(|(x, y, width)| View { x, y, width })
             .collect(),
-        frames: k.whole("frames")?.unwrap_or(120),
+        frames: k.whole("frames")?.unwrap_or(zoom::FRAMES),
         film: FilmSpec {
             path: k.get("film")?.unwrap_or_else(|| output.join(zoom::FILM)),
-            fps: k.or("fps", 30.0)?,
-            crf: k.whole("crf")?.unwrap_or(18),
+            fps: k.or("fps", zoom::FPS)?,
+            crf: k.whole("crf")?.unwrap_or(zoom::CRF),
         },
         output,
         tile,

@@ -604,3 +604,20 @@ def test_none_means_the_default_and_ranges_name_their_keyword(tmp_path, monkeypa
             chaoscope.flip_map(size=8, t_max=1, x="theta1", x_range=bad, progress=False)
         with pytest.raises(ValueError, match="^y_range: "):
             chaoscope.flip_map(size=8, t_max=1, y_range=bad, progress=False)
+
+
+def test_zooms_defaults_are_the_commands():
+    # Python's settings say None (the library's default, which the command's flags show),
+    # and the docstring names the same defaults as `chaoscope zoom --help`.
+    import inspect
+    import re
+
+    help_text = cli("zoom", "--help").stdout
+    shown = dict(re.findall(r"--(frames|fps|crf|output) <[A-Z]+>\s+.*?\[default: ([^\]]+)\]", help_text, re.S))
+    assert shown == {"frames": "120", "fps": "30", "crf": "18", "output": "out/zoom"}, shown
+    parameters = inspect.signature(chaoscope.zoom).parameters
+    for name in shown:
+        assert parameters[name].default is None, name
+    doc = chaoscope.zoom.__doc__
+    for said in ("frames (default 120)", "default ``out/zoom``", "``fps`` (30)", "``crf`` (18)"):
+        assert said in " ".join(doc.split()), said

@@ -311,7 +311,9 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
         let width = q
             .within("w", 1e-300, 1e6)?
             .ok_or_else(|| Error::invalid("w", "is needed (the width to zoom to)"))?;
-        let frames = q.count("frames", 2, 100_000)?.unwrap_or(120);
+        let frames = q
+            .count("frames", 2, 100_000)?
+            .unwrap_or(crate::app::zoom::FRAMES);
         q.finish()?;
         Ok((view, grid, ZoomView { x, y, width }, frames))
     })();
@@ -322,11 +324,11 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
     let (backend, commands) = (shared.backend, shared.commands);
     // Checked by its views alone, off the engine: a plan never holds the engine a tile needs.
     let result = tokio::task::spawn_blocking(move || -> Result<String> {
-        let output = std::path::PathBuf::from("out/zoom");
+        let output = std::path::PathBuf::from(crate::app::zoom::OUTPUT);
         let film = FilmSpec {
             path: output.join(crate::app::zoom::FILM),
-            fps: 30.0,
-            crf: 18,
+            fps: crate::app::zoom::FPS,
+            crf: crate::app::zoom::CRF,
         };
         let files = MapOutputs {
             output: output.join("frame.png"),
@@ -345,7 +347,7 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                 to: vec![to],
                 frames,
                 film: film.clone(),
-                output: std::path::PathBuf::from("out/zoom"),
+                output: std::path::PathBuf::from(crate::app::zoom::OUTPUT),
                 tile: None,
                 verdict: false,
             }
