@@ -299,6 +299,26 @@ pub fn no_picture_with_a_store(
     Ok(())
 }
 
+/// The model's flags as `fit` and `forecast` (which take a tracked file) tell them: a part
+/// of a pendulum only with a model stated, and the model, unless stated, the pendulum's own
+/// (`#[command(mut_args(tracked_model_help))]`).
+pub fn tracked_model_help(a: clap::Arg) -> clap::Arg {
+    let help = match a.get_id().as_str() {
+        "m1" => "Upper bob mass (kg), with --preset or --params [default: the model's]",
+        "m2" => "Lower bob mass (kg), with --preset or --params [default: the model's]",
+        "l1" => "Upper arm length (m), with --preset or --params [default: fitted to the data]",
+        "l2" => "Lower arm length (m), with --preset or --params [default: fitted to the data]",
+        "rod_mass" => {
+            "Masses of uniform rods along the arms, R or R1,R2 (kg), with --preset or --params [default: the model's]"
+        }
+        "preset" => {
+            "The pendulum's model by name (lab: the lab report's apparatus) [default: none: the pendulum's own moments, found from its motion]"
+        }
+        _ => return a,
+    };
+    a.help(help)
+}
+
 /// How a tracked file's numbers become seconds and metres (`fit`, `forecast`).
 #[derive(Args, Debug, Clone, Default)]
 pub struct TrackedUnitsArgs {

@@ -14,12 +14,7 @@ use crate::monitor::Monitor;
 use crate::spec::Precision;
 
 #[derive(Args, Debug, Clone)]
-#[command(mut_arg("m1", |a| a.help("Upper bob mass (kg), with --preset or --params [default: the model's]")))]
-#[command(mut_arg("m2", |a| a.help("Lower bob mass (kg), with --preset or --params [default: the model's]")))]
-#[command(mut_arg("l1", |a| a.help("Upper arm length (m), with --preset or --params [default: fitted to the data]")))]
-#[command(mut_arg("l2", |a| a.help("Lower arm length (m), with --preset or --params [default: fitted to the data]")))]
-#[command(mut_arg("rod_mass", |a| a.help("Masses of uniform rods along the arms, R or R1,R2 (kg), with --preset or --params [default: the model's]")))]
-#[command(mut_arg("preset", |a| a.help("The pendulum's model by name (lab: the lab report's apparatus) [default: none: the pendulum's own moments, found from its motion]")))]
+#[command(mut_args(super::args::tracked_model_help))]
 pub struct FitArgs {
     /// CSV of tracked positions: header with t (or frame), x1, y1, x2, y2 (s, m; y up; or
     /// pixels, see --pixels-per-metre), optionally a moving pivot x0, y0; # comments; `,`,
