@@ -121,6 +121,9 @@ fn sharp_markers_are_measured_to_a_fifth_of_a_pixel() {
         (s["l2"].as_f64().unwrap() - p.l2).abs() < 0.1 / scene.pixels_per_metre,
         "{s}"
     );
+    // The film's own rate, exactly, beside the processing speed.
+    assert_eq!(s["frame_rate"].as_f64(), Some(scene.fps), "{s}");
+    assert!(s["processing_frames_per_second"].as_f64().unwrap() > 0.0);
 }
 
 /// A 1/60 s exposure smears the fast lower marker into a streak many pixels long: its
@@ -436,6 +439,8 @@ fn the_forecast_is_drawn_back_onto_the_film() {
         ("h264", 1280, 720)
     );
     assert_eq!(decoder.probe.times.len(), 300);
+    // At the film's own rate, not the mean step's rounding of it.
+    assert_eq!(decoder.probe.frame_rate(), 30.0);
     // Pixels of the model's colours (within the film's compression of them), below the
     // caption's lines (written in the same colours, they end 120 px down). The arms alone
     // are some 360 px long and 3 px wide with two dots of 6 px: over 1,000 pixels, so more

@@ -41,7 +41,8 @@ def track(
     ``coordinate`` (x, y; m from the pivot, y up): ``position`` (NaN where a mass was not
     seen), ``error`` (its standard error: the sensor's noise's, or the model's where
     bridged), ``measured`` and ``bridged`` (bool) and ``streak`` (how far the marker moved
-    while the shutter was open, m); the summary (pivot, scale, up, frames/s...) in ``attrs``.
+    while the shutter was open, m); the summary (pivot, scale, up, the film's frame rate,
+    the processing speed...) in ``attrs``.
     """
     keywords = dict(locals())
     keywords.pop("progress")

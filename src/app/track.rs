@@ -39,10 +39,12 @@ pub struct TrackSummary {
     /// The pivot (px, x right, y down), the arms (px) and the scale (px per metre).
     pub pivot_px: (f64, f64),
     pub r1_px: f64,
-    pub r2_px: f64,
+    /// None where the lower mass was never measured: no length from what was not seen.
+    pub r2_px: Option<f64>,
     pub pixels_per_metre: f64,
-    /// The lower arm's length this scale gives (m).
-    pub l2: f64,
+    /// The lower arm's length this scale gives (m); None where the lower mass was never
+    /// measured.
+    pub l2: Option<f64>,
     /// Which way is up: from the pendulum at rest, or the picture's.
     pub up: track::Up,
     /// Still blobs set aside (lamps, reflections of them, fixed marks), px.
@@ -51,8 +53,10 @@ pub struct TrackSummary {
     pub width: u32,
     pub height: u32,
     pub duration: f64,
-    /// Frames read and tracked a second (decoding included).
-    pub frames_per_second: f64,
+    /// The film's own frame rate ([`crate::video::Probe::frame_rate`]).
+    pub frame_rate: f64,
+    /// Frames read and tracked a second of processing (decoding included).
+    pub processing_frames_per_second: f64,
     pub output: PathBuf,
     pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
@@ -172,6 +176,7 @@ pub fn run(
     })?;
     files.commit(monitor)?;
     let g = tracked.geometry;
+    let lower_seen = tracked.rows.iter().any(|r| measured(r.m2));
     Ok(TrackSummary {
         frames: tracked.rows.len(),
         seen1: share(&|r| measured(r.m1)),
@@ -180,16 +185,17 @@ pub fn run(
         both,
         pivot_px: g.pivot,
         r1_px: g.r1,
-        r2_px: g.r2,
+        r2_px: lower_seen.then_some(g.r2),
         pixels_per_metre: tracked.pixels_per_metre,
-        l2: g.r2 / tracked.pixels_per_metre,
+        l2: lower_seen.then_some(g.r2 / tracked.pixels_per_metre),
         up: tracked.up,
         still: tracked.still.clone(),
         codec: decoder.probe.codec.clone(),
         width,
         height,
         duration: times.last().copied().unwrap_or(0.0),
-        frames_per_second: n / seconds,
+        frame_rate: decoder.probe.frame_rate(),
+        processing_frames_per_second: n / seconds,
         output: job.output.clone(),
         files: vec![job.output.clone()],
         notices,

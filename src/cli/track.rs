@@ -100,19 +100,26 @@ pub fn run(args: &TrackArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let s = track::run(&job, engine.as_ref(), &command_line::track(&job), monitor)?;
     say("track", &s.notices);
     eprintln!(
-        "{} frames ({} {}x{}, {:.1} s) at {:.0} frames/s: upper mass measured in {:.1} %, lower in {:.1} %; pivot ({:.1}, {:.1}) px, {:.1} px per metre, lower arm {:.4} m; up {}; {} still blobs set aside -> {}",
+        "{} frames ({} {}x{}, {:.1} s at {} frames a second), tracked at {:.0} frames a second of processing: upper mass measured in {:.1} %, lower in {:.1} %; pivot ({:.1}, {:.1}) px, {:.1} px per metre, {}; up {}; {} still blobs set aside -> {}",
         s.frames,
         s.codec,
         s.width,
         s.height,
         s.duration,
-        s.frames_per_second,
+        match s.frame_rate.fract() {
+            0.0 => format!("{:.0}", s.frame_rate),
+            _ => format!("{:.3}", s.frame_rate),
+        },
+        s.processing_frames_per_second,
         100.0 * s.seen1,
         100.0 * s.seen2,
         s.pivot_px.0,
         s.pivot_px.1,
         s.pixels_per_metre,
-        s.l2,
+        match s.l2 {
+            Some(l2) => format!("lower arm {l2:.4} m"),
+            None => "the lower mass never measured: no lower arm".into(),
+        },
         match s.up.rest {
             Some((a, b)) => format!(
                 "from the rest at {a:.1}..{b:.1} s ({:+.2} degrees from the picture's)",

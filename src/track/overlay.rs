@@ -28,7 +28,7 @@ pub struct Overlay<'a> {
 }
 
 /// Stages `path`, an MP4 of the frames of `video` with `overlay` drawn on them, at the
-/// film's own rate (the median step between its frames), `command` (which reproduces it)
+/// film's own rate ([`crate::video::Probe::frame_rate`]), `command` (which reproduces it)
 /// in its metadata.
 pub fn write(
     files: &mut Outputs,
@@ -41,15 +41,9 @@ pub fn write(
     let placement = overlay.geometry;
     let mut decoder = Decoder::open(video, Pixels::Rgb).map_err(|e| e.as_input("video"))?;
     let (w, h) = (decoder.probe.width, decoder.probe.height);
-    let times = &decoder.probe.times;
-    let count = times.len();
-    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    let step = match steps.len() / 2 {
-        _ if steps.is_empty() => 1.0 / 30.0,
-        mid => *steps.select_nth_unstable_by(mid, f64::total_cmp).1,
-    };
+    let count = decoder.probe.times.len();
     let film = Mp4 {
-        fps: (1.0 / step).clamp(1.0, 240.0),
+        fps: decoder.probe.frame_rate().clamp(1.0, 240.0),
         crf: 18,
     };
     // Metres in the forecast's frame to the picture's pixels.

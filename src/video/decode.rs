@@ -24,6 +24,51 @@ pub struct Probe {
     pub repeated: usize,
 }
 
+impl Probe {
+    /// The film's frame rate: one over the median step between its frames, taken as the
+    /// standard rate it is within a thousandth of (a container's timestamps in milliseconds
+    /// make 60 frames a second read as 59.998; NTSC's 30000/1001 stays itself). A film of one
+    /// frame: 30.
+    pub fn frame_rate(&self) -> f64 {
+        let mut steps: Vec<f64> = self.times.windows(2).map(|w| w[1] - w[0]).collect();
+        if steps.is_empty() {
+            return 30.0;
+        }
+        let mid = steps.len() / 2;
+        let rate = 1.0 / *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+        const STANDARD: [f64; 22] = [
+            24000.0 / 1001.0,
+            24.0,
+            25.0,
+            30000.0 / 1001.0,
+            30.0,
+            48.0,
+            50.0,
+            60000.0 / 1001.0,
+            60.0,
+            90.0,
+            100.0,
+            120000.0 / 1001.0,
+            120.0,
+            200.0,
+            240.0,
+            250.0,
+            300.0,
+            400.0,
+            480.0,
+            500.0,
+            960.0,
+            1000.0,
+        ];
+        STANDARD
+            .iter()
+            .copied()
+            .min_by(|a, b| (a / rate - 1.0).abs().total_cmp(&(b / rate - 1.0).abs()))
+            .filter(|s| (s / rate - 1.0).abs() < 1e-3)
+            .unwrap_or(rate)
+    }
+}
+
 /// The share of frames whose timestamps may repeat another's before the film is refused.
 pub const REPEATS_TOLERATED: f64 = 0.1;
 
