@@ -83,7 +83,9 @@ fn draw(
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let f = &o.outcome.forecast;
     let root = BitMapBackend::with_buffer(rgb, (w, h)).into_drawing_area();
-    let scale = h as f64 / 720.0;
+    // Drawn for a 1280 x 720 frame, scaled by the narrower way, so that the captions (the
+    // longest some 1,100 px at that size) fit a portrait phone film's width too.
+    let scale = (h as f64 / 720.0).min(w as f64 / 1280.0);
     let px = |v: f64| (v * scale).round().max(1.0) as i32;
     // The model's band at the frame's time (the bands hold every tracked row's time).
     let k = f.times.partition_point(|&x| x < t - 1e-6);
