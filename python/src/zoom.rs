@@ -10,6 +10,7 @@ use chaoscope::app::map::MapJob;
 use chaoscope::app::zoom::{self, View, ZoomJob};
 use chaoscope::engine::MapKernels;
 use chaoscope::render::MapPicture;
+use chaoscope::spec::ZOOM;
 
 use super::keywords::Keywords;
 use super::py_err;
@@ -25,7 +26,7 @@ pub fn run<'py, S: MapKernels + MapPicture + Copy + Send + Sync + 'static>(
 ) -> PyResult<String> {
     let k = Keywords { dict: zoom };
     let to: Vec<(f64, f64, f64)> = k.get("to")?.unwrap_or_default();
-    let output: std::path::PathBuf = k.or("output", zoom::OUTPUT.into())?;
+    let output: std::path::PathBuf = k.or("output", ZOOM.output.into())?;
     let tile = k.tile()?;
     let job = ZoomJob {
         map,
@@ -33,11 +34,11 @@ pub fn run<'py, S: MapKernels + MapPicture + Copy + Send + Sync + 'static>(
             .into_iter()
             .map(|(x, y, width)| View { x, y, width })
             .collect(),
-        frames: k.whole("frames")?.unwrap_or(zoom::FRAMES),
+        frames: k.whole("frames")?.unwrap_or(ZOOM.frames),
         film: FilmSpec {
             path: k.get("film")?.unwrap_or_else(|| output.join(zoom::FILM)),
-            fps: k.or("fps", zoom::FPS)?,
-            crf: k.whole("crf")?.unwrap_or(zoom::CRF),
+            fps: k.or("fps", ZOOM.fps)?,
+            crf: k.whole("crf")?.unwrap_or(ZOOM.crf),
         },
         output,
         tile,

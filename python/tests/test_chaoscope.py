@@ -20,24 +20,7 @@ import pytest
 import xarray as xr
 
 import chaoscope
-
-BIN = Path(sys.executable).parent / "chaoscope"
-
-
-def cli(*args, check=True):
-    """The wheel's `chaoscope` command (the venv's console script)."""
-    return subprocess.run([str(BIN), *args], capture_output=True, text=True, check=check)
-
-
-def run_command(command, *extra):
-    """A map's reproducing command (attrs["command"]), with `extra` flags."""
-    words = command.split()
-    assert words[0] == "chaoscope"
-    return cli(*words[1:], *extra)
-
-
-def same_bits(a, b):
-    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+from _common import BIN, cli, run_command, same_bits
 
 
 def test_flip_map_equals_its_command_bit_for_bit(tmp_path):
@@ -55,6 +38,7 @@ def test_flip_map_equals_its_command_bit_for_bit(tmp_path):
     assert same_bits(np.load(npy), flips.values)
 
 
+
 def test_a_parameter_plane_with_its_verdict_equals_its_command(tmp_path):
     made = chaoscope.flip_map(
         size=(40, 24), t_max=3, x="m2/m1", x_range=(0.5, 2.0), y="omega1",
@@ -70,6 +54,7 @@ def test_a_parameter_plane_with_its_verdict_equals_its_command(tmp_path):
     assert same_bits(np.load(npy), made["map"].values)
     assert same_bits(np.load(mask), made["resolved"].values)
     assert set(np.unique(made["resolved"].values)) <= {0, 1}
+
 
 
 def test_a_map_is_what_xarrays_constructor_makes_without_importing_dask():
@@ -92,6 +77,7 @@ def test_a_map_is_what_xarrays_constructor_makes_without_importing_dask():
         capture_output=True, text=True, check=True,
     )
     assert fresh.stdout.strip() == "False", fresh.stdout + fresh.stderr
+
 
 
 def test_a_map_reaches_python_without_a_copy():
@@ -120,6 +106,7 @@ print(json.dumps({"over": status("VmHWM:") - base, "map": m.values.nbytes}))
     assert got["over"] <= 1.1 * got["map"], got
 
 
+
 @pytest.mark.parametrize("indicator", ["ftle", "megno"])
 def test_lyapunov_maps_equal_their_commands(tmp_path, indicator):
     made = chaoscope.lyapunov_map(size=32, t_max=2, indicator=indicator, progress=False)
@@ -127,6 +114,7 @@ def test_lyapunov_maps_equal_their_commands(tmp_path, indicator):
     run_command(made.attrs["command"], "--data", str(npy), "--output", str(tmp_path / "l.png"))
     assert same_bits(np.load(npy), made.values)
     assert f"--indicator {indicator}" in made.attrs["command"] or indicator == "ftle"
+
 
 
 def test_trajectory_equals_its_command():
@@ -142,6 +130,7 @@ def test_trajectory_equals_its_command():
         assert np.array_equal(table[:, k], run[name].values), name
 
 
+
 def png_pixels(png):
     """A PNG's size and its decompressed scanlines (the encoder's filtered rows)."""
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
@@ -155,6 +144,7 @@ def png_pixels(png):
             idat += data
         at += 12 + length
     return size, zlib.decompress(idat)
+
 
 
 def test_picture_is_the_commands_png(tmp_path):
@@ -178,6 +168,7 @@ def test_picture_is_the_commands_png(tmp_path):
     run_command(checked["map"].attrs["command"], "--show-unresolved", "--output", str(png),
                 "--resolved", str(tmp_path / "r.npy"))
     assert shown.png == png.read_bytes()
+
 
 
 @pytest.mark.parametrize(
@@ -205,6 +196,7 @@ def test_bad_values_raise_value_error_naming_the_keyword(keywords, name):
         chaoscope.flip_map(**{"size": 16, "t_max": 1, "progress": False, **keywords})
 
 
+
 def test_bad_keywords_and_types_raise_type_error():
     with pytest.raises(TypeError, match="tmax"):
         chaoscope.flip_map(tmax=3)
@@ -219,6 +211,7 @@ def test_bad_keywords_and_types_raise_type_error():
         chaoscope.lyapunov_map(size=16, t_max=1, accurate=True, method="twin")
     with pytest.raises(TypeError, match="colour"):
         chaoscope.params(colour=3)
+
 
 
 def test_ctrl_c_stops_a_long_map_and_the_next_call_works():
@@ -237,6 +230,7 @@ def test_ctrl_c_stops_a_long_map_and_the_next_call_works():
     assert again.shape == (16, 16)
 
 
+
 def test_progress_is_reported_to_a_callable():
     seen = []
     # Every pixel for every step (~1 s on lavapipe): long enough for the 0.1 s looks.
@@ -246,11 +240,13 @@ def test_progress_is_reported_to_a_callable():
     assert all(isinstance(phase, str) and done >= 0 for phase, done, _ in seen)
 
 
+
 def test_the_wheels_command_line_runs_from_the_venv():
     assert shutil.which("chaoscope", path=str(BIN.parent)) == str(BIN)
     assert cli("--version").stdout.startswith("chaoscope ")
     bad = cli("flip", "--size", "0", check=False)
     assert bad.returncode == 2 and "--size" in bad.stderr
+
 
 
 def test_a_store_opens_lazily_with_its_command(tmp_path):
@@ -266,6 +262,7 @@ def test_a_store_opens_lazily_with_its_command(tmp_path):
         chaoscope.flip_map(size=32, t_max=3, store=str(store), progress=False)
 
 
+
 def test_python_manners():
     sig = inspect.signature(chaoscope.flip_map)
     assert all(p.kind is p.KEYWORD_ONLY for p in sig.parameters.values())
@@ -277,6 +274,7 @@ def test_python_manners():
     assert chaoscope.flip_map(size=8, t_max=1, progress=False, **lab).shape == (8, 8)
     package = Path(chaoscope.__file__).parent
     assert (package / "py.typed").exists() and (package / "_chaoscope.pyi").exists()
+
 
 
 def test_the_readmes_python_runs(tmp_path, monkeypatch, capsys):
@@ -292,6 +290,7 @@ def test_the_readmes_python_runs(tmp_path, monkeypatch, capsys):
 
 
 EXAMPLES = Path(__file__).parents[2] / "examples"
+
 
 
 def test_the_notebook_executes_and_draws_its_figures(tmp_path):
@@ -323,6 +322,7 @@ def test_the_notebook_executes_and_draws_its_figures(tmp_path):
     assert all(len(png) > 10_000 for png in images), [len(png) for png in images]
 
 
+
 def test_the_dask_example_fills_one_store_equal_to_the_single_process_map(tmp_path):
     ran = subprocess.run(
         [sys.executable, str(EXAMPLES / "dask_map.py"), str(tmp_path / "dask.zarr"),
@@ -332,6 +332,7 @@ def test_the_dask_example_fills_one_store_equal_to_the_single_process_map(tmp_pa
     assert ran.returncode == 0, ran.stdout + ran.stderr
     assert "4 tasks on 2 workers filled 65536 pixels" in ran.stdout, ran.stdout
     assert "equal to the single-process map, bit for bit" in ran.stdout, ran.stdout
+
 
 
 def test_progress_goes_to_tqdm_when_it_is_installed(monkeypatch):
@@ -361,57 +362,6 @@ def test_progress_goes_to_tqdm_when_it_is_installed(monkeypatch):
     assert any(b.n > 0 for b in bars), [(b.desc, b.n, b.total) for b in bars]
 
 
-def test_fit_equals_its_command(tmp_path):
-    data = Path(__file__).parents[2] / "data" / "lab_table1.csv"
-    made = chaoscope.fit(str(data), output=str(tmp_path / "py"), candidates=4096,
-                         preset="lab", progress=False)
-    cli("fit", str(data), "--output", str(tmp_path / "cli"), "--candidates", "4096",
-        "--preset", "lab")
-    written = json.loads((tmp_path / "cli" / "summary.json").read_text())
-    ours = json.loads((tmp_path / "py" / "summary.json").read_text())
-    # The same fit: the model, its search and agreement, and the command that makes it.
-    assert ours["model"] == written["model"]
-    assert made["agrees_until"] == written["model"]["agrees_until"]
-    assert ours.get("command", "").replace(str(tmp_path / "py"), "") == written.get(
-        "command", "").replace(str(tmp_path / "cli"), "")
-    with pytest.raises(ValueError, match="^window: "):
-        chaoscope.fit(str(data), output=str(tmp_path / "bad"), window=100.0, progress=False)
-    # The fit finds the joint damping: no keyword for it.
-    with pytest.raises(TypeError, match="joint_damping"):
-        chaoscope.fit(str(data), joint_damping=0.01, progress=False)
-
-
-def test_forecast_equals_its_command(tmp_path):
-    data = Path(__file__).parents[2] / "data" / "lab_table1.csv"
-    bands = chaoscope.forecast(str(data), output=str(tmp_path / "py"), window=(0.6, 1.7),
-                               members=300, candidates=512, backend="cpu", preset="lab",
-                               progress=False)
-    cli("forecast", str(data), "--output", str(tmp_path / "cli"), "--window", "0.6:1.7",
-        "--members", "300", "--candidates", "512", "--backend", "cpu", "--preset", "lab")
-    # The same job: its bands byte for byte, and the command that makes them.
-    assert (tmp_path / "py" / "bands.csv").read_bytes() == (
-        tmp_path / "cli" / "bands.csv").read_bytes()
-    written = json.loads((tmp_path / "cli" / "summary.json").read_text())
-    assert bands.attrs["command"] == written["command"]
-    assert bands.model.dims == ("time", "coordinate", "quantile")
-    assert bands.model.attrs["units"] == "m" and bands.time.attrs["units"] == "s"
-    # The Dataset holds the CSV's numbers: the lower bob's median x at the first time.
-    lines = (tmp_path / "cli" / "bands.csv").read_text().splitlines()
-    header, first = lines[2].split(","), lines[3].split(",")
-    assert float(bands.model.sel(coordinate="x2", quantile=0.5)[0]) == float(
-        first[header.index("x2_median")])
-    # Quantiles ordered; the measurement's 90 % band (the model's with the tracking error) is
-    # wider on average (at any one time 300 members' quantiles scatter).
-    m, o = bands.model.values, bands.measurement.values
-    assert (np.diff(m, axis=2) >= 0).all()
-    assert (o[..., 4] - o[..., 0]).mean() > (m[..., 4] - m[..., 0]).mean()
-    with pytest.raises(ValueError, match="^window: "):
-        chaoscope.forecast(str(data), output=str(tmp_path / "bad"), window=(25.0, 30.0),
-                           preset="lab", progress=False)
-    with pytest.raises(ValueError, match="^members: "):
-        chaoscope.forecast(str(data), output=str(tmp_path / "bad"), members=0, preset="lab",
-                           progress=False)
-
 
 def test_traces_equal_their_command(tmp_path):
     runs = chaoscope.traces(theta1=2.0, theta2=2.5, runs=8, spread="5mm", exposure=0.5,
@@ -430,6 +380,7 @@ def test_traces_equal_their_command(tmp_path):
     with pytest.raises(ValueError, match="^spread: "):
         chaoscope.traces(theta1=2.0, theta2=2.5, spread="5 furlongs",
                          output=str(tmp_path / "bad.png"), progress=False)
+
 
 
 def test_python_is_as_strict_as_the_command_line(tmp_path):
@@ -465,6 +416,7 @@ def test_python_is_as_strict_as_the_command_line(tmp_path):
         chaoscope.traces(theta1=1, theta2=1, exposure=-1, progress=False)
 
 
+
 def test_reads_are_bounded_from_python(tmp_path):
     """`chaoscope.fit('/dev/zero')` read until the kernel killed it: a device, a FIFO and a
     10 GB sparse file are refused naming the keyword, at once."""
@@ -480,6 +432,7 @@ def test_reads_are_bounded_from_python(tmp_path):
             chaoscope.params(params_file=path)
     with pytest.raises(ValueError, match="^params_file: .*larger than"):
         chaoscope.params(params_file=str(sparse))
+
 
 
 def test_repeated_maps_do_not_grow_the_process():
@@ -506,6 +459,7 @@ print(json.dumps({"grown": rss() - before}))
     assert grown <= 2 << 20, grown
 
 
+
 def test_a_message_names_settings_as_keywords_not_flags():
     # The library names the setting to change; Python words it as its keyword.
     with pytest.raises(ValueError, match="^dt: ") as caught:
@@ -515,109 +469,3 @@ def test_a_message_names_settings_as_keywords_not_flags():
         chaoscope.lyapunov_map(size=8, t_max=1, indicator="sali", threshold=1e-8,
                                backend="gpu", progress=False)
     assert "precision='f64'" in str(caught.value) and "--" not in str(caught.value)
-
-
-def test_track_equals_its_command_as_a_dataset(tmp_path):
-    film = Path(__file__).parents[2] / "data" / "test_film.mp4"
-    tracked = chaoscope.track(str(film), output=str(tmp_path / "py.csv"), l1=0.30, progress=False)
-    cli("track", str(film), "--output", str(tmp_path / "cli.csv"), "--l1", "0.30")
-    # The same CSV as the command's, byte for byte.
-    assert (tmp_path / "py.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()
-    assert tracked.position.dims == ("time", "mass", "coordinate")
-    assert tracked.position.attrs["units"] == "m" and tracked.time.attrs["units"] == "s"
-    assert list(tracked.mass.values) == ["upper", "lower"]
-    # 300 frames at 30 a second, both markers in view throughout (the film's truth), where
-    # the truth has them to 0.3 px RMS (0.4 mm at 727 px/m: the film is compressed hard, at
-    # crf 23, which moves a centroid by a tenth of a pixel or two).
-    assert tracked.sizes["time"] == 300 and bool(tracked.measured.all())
-    truth = np.genfromtxt(film.with_suffix(".truth.csv"), delimiter=",", names=True,
-                          skip_header=1, dtype=None, encoding="utf-8")
-    assert np.allclose(tracked.time, truth["t"], atol=1e-4)
-    true_xy = np.stack([np.stack([truth["x1"], truth["y1"]], -1),
-                        np.stack([truth["x2"], truth["y2"]], -1)], 1)
-    rms = float(np.sqrt(((tracked.position.values - true_xy) ** 2).sum(-1).mean()))
-    assert rms < 0.3 / tracked.attrs["pixels_per_metre"], rms
-    with pytest.raises(ValueError, match="^l1: "):
-        chaoscope.track(str(film), output=str(tmp_path / "x.csv"), progress=False)
-    with pytest.raises(ValueError, match="^markers: "):
-        chaoscope.track(str(film), l1=0.3, markers="red", progress=False)
-    with pytest.raises(ValueError, match="^region: "):
-        chaoscope.track(str(film), l1=0.3, region=(0, 0, 5000, 10), progress=False)
-    # A model is for bridging only: without bridge=True it would do nothing.
-    with pytest.raises(ValueError, match="^preset: "):
-        chaoscope.track(str(film), l1=0.3, preset="lab", progress=False)
-    # What is no film is a bad value of ``video``, as the command line's exit 2.
-    (tmp_path / "text.mp4").write_text("no film here\n")
-    with pytest.raises(ValueError, match="^video: "):
-        chaoscope.track(str(tmp_path / "text.mp4"), l1=0.3, progress=False)
-    # Nothing hidden, nothing bridged: the same positions, each marked measured.
-    bridged = chaoscope.track(str(film), output=str(tmp_path / "b.csv"), l1=0.30, bridge=True,
-                              progress=False)
-    assert json.loads(bridged.attrs["bridged"])["gaps"] == 0 and not bool(bridged.bridged.any())
-    assert np.array_equal(bridged.position.values, tracked.position.values)
-    with pytest.raises(ValueError, match="^preset: "):
-        chaoscope.track(str(film), l1=0.3, bridge=True, preset="moon", progress=False)
-
-
-def test_zoom_is_its_command_with_frames_read_lazily(tmp_path):
-    edge = (-1.68923151770833, 0.74163544020833)
-    window = dict(size=(96, 54), theta2=(-1.7671458676442586, 1.7671458676442586), t_max=6)
-    ds = chaoscope.zoom((*edge, 1e-7), frames=6, output=str(tmp_path / "py"), progress=False, **window)
-    # The frames are read when asked for, not before.
-    assert isinstance(ds.image.variable._data, xr.core.indexing.LazilyIndexedArray)
-    assert ds.image.dims == ("frame", "y", "x", "channel") and ds.image.shape == (6, 54, 96, 3)
-    # Each frame the PNG the command makes, byte for byte in its pixels.
-    out = tmp_path / "cli"
-    cli("zoom", f"--to={edge[0]},{edge[1]},1e-7", "--frames", "6", "--output", str(out),
-        "flip", "--size", "96x54", "--theta2=-1.7671458676442586:1.7671458676442586", "--t-max", "6")
-    for k in (0, 3, 5):
-        w, h, rgb = chaoscope._chaoscope.png_rgb(str(out / f"frame_{k:04d}.png"))
-        assert ds.image.isel(frame=k).values.tobytes() == rgb
-    assert (out / "frames.csv").read_text() == (tmp_path / "py" / "frames.csv").read_text()
-    # f32 while the step between starts is >= 16 f32 ulps of pi, f64 after.
-    f32 = ds.step.values >= 16 * 2 * float(np.finfo(np.float32).eps)
-    assert list(ds.precision.values) == ["f32" if s else "f64" for s in f32]
-    assert json.loads(ds.attrs["switch"])["frame"] == int(np.argmin(f32))
-    with pytest.raises(ValueError, match="^to: a width of 1e-15"):
-        chaoscope.zoom((0.5, 0.5, 1e-15), output=str(tmp_path / "x"), size=64, progress=False)
-    with pytest.raises(ValueError, match="^store: "):
-        chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), store="m.zarr", progress=False)
-    with pytest.raises(ValueError, match="^map: "):
-        chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), map="phase", progress=False)
-    with pytest.raises(TypeError, match="sizes"):
-        chaoscope.zoom((0.5, 0.5, 1e-3), output=str(tmp_path / "x"), sizes=64, progress=False)
-    for to in (None, 3, "abc", ()):
-        with pytest.raises(ValueError, match="^to: "):
-            chaoscope.zoom(to, output=str(tmp_path / "x"), progress=False)
-    assert not (tmp_path / "x").exists()
-
-
-def test_none_means_the_default_and_ranges_name_their_keyword(tmp_path, monkeypatch):
-    # output=None is the library's default folder, out/zoom (here under tmp_path), never one
-    # named "None".
-    monkeypatch.chdir(tmp_path)
-    chaoscope.zoom((0.5, 0.5, 0.5), frames=2, size=8, t_max=1, output=None, progress=False)
-    assert (tmp_path / "out" / "zoom" / "frame_0001.png").exists()
-    assert not (tmp_path / "None").exists()
-    for bad in ((1, 1), (2, 1), (0, float("nan"))):
-        with pytest.raises(ValueError, match="^x_range: "):
-            chaoscope.flip_map(size=8, t_max=1, x="theta1", x_range=bad, progress=False)
-        with pytest.raises(ValueError, match="^y_range: "):
-            chaoscope.flip_map(size=8, t_max=1, y_range=bad, progress=False)
-
-
-def test_zooms_defaults_are_the_commands():
-    # Python's settings say None (the library's default, which the command's flags show),
-    # and the docstring names the same defaults as `chaoscope zoom --help`.
-    import inspect
-    import re
-
-    help_text = cli("zoom", "--help").stdout
-    shown = dict(re.findall(r"--(frames|fps|crf|output) <[A-Z]+>\s+.*?\[default: ([^\]]+)\]", help_text, re.S))
-    assert shown == {"frames": "120", "fps": "30", "crf": "18", "output": "out/zoom"}, shown
-    parameters = inspect.signature(chaoscope.zoom).parameters
-    for name in shown:
-        assert parameters[name].default is None, name
-    doc = chaoscope.zoom.__doc__
-    for said in ("frames (default 120)", "default ``out/zoom``", "``fps`` (30)", "``crf`` (18)"):
-        assert said in " ".join(doc.split()), said

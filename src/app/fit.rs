@@ -9,9 +9,8 @@ use super::{check_count, check_within};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::fit::data::Units;
-use crate::fit::pendulum::{
-    ModelSource, Tracked, Verdict, model_energies, model_file, tracked_model,
-};
+use crate::fit::pendulum::{ModelSource, Tracked, model_energies, model_file, tracked_model};
+use crate::fit::verdict::Verdict;
 use crate::fit::{
     Fit, ModelFitSpec, data, energies, fit_decay, fit_model, grid_pivot, plots, read_frames,
 };

@@ -15,6 +15,7 @@ use crate::app::zoom::{self, View, ZoomJob};
 use crate::engine::Engine;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
+use crate::spec::ZOOM;
 
 #[derive(Args, Debug, Clone)]
 pub struct ZoomArgs {
@@ -24,21 +25,21 @@ pub struct ZoomArgs {
     #[arg(long = "to", required = true, value_parser = parse_view, allow_hyphen_values = true)]
     pub to: Vec<View>,
     /// Frames in the film (2 to 100000).
-    #[arg(long, default_value_t = zoom::FRAMES, value_parser = parse_u32, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = ZOOM.frames, value_parser = parse_u32, allow_hyphen_values = true)]
     pub frames: u32,
     /// Frames a second.
-    #[arg(long, default_value_t = zoom::FPS, value_parser = parse_number, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = ZOOM.fps, value_parser = parse_number, allow_hyphen_values = true)]
     pub fps: f64,
     /// The film's quality: H.264's constant rate factor, 0 (lossless) to 51 (18 looks
     /// lossless; each 6 more halves the file).
-    #[arg(long, default_value_t = zoom::CRF, value_parser = parse_u32, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = ZOOM.crf, value_parser = parse_u32, allow_hyphen_values = true)]
     pub crf: u32,
     /// The film: .mp4 (H.264, through FFmpeg) or .png (APNG) [default: OUTPUT/zoom.mp4].
     #[arg(long)]
     pub film: Option<PathBuf>,
     /// Directory for frame_0000.png ... and frames.csv (each frame's view, precision, place
     /// and unresolved share). Frames of the same zoom already there are kept: a run resumes.
-    #[arg(long, default_value = zoom::OUTPUT)]
+    #[arg(long, default_value = ZOOM.output)]
     pub output: PathBuf,
     /// Make only part INDEX of COUNT of the frames (frames k with k % COUNT == INDEX) and no
     /// film, e.g. --tile $SLURM_ARRAY_TASK_ID/8; the same command without --tile then encodes

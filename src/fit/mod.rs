@@ -16,6 +16,7 @@ pub mod plots;
 mod quantiles;
 mod refine;
 pub mod twin;
+pub mod verdict;
 pub mod window;
 
 pub use data::{

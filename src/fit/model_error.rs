@@ -21,7 +21,7 @@
 //! twice: a band about the members' median as wide as the distance between two unrelated
 //! states holds 98 % of the data, not 90 %).
 
-use super::pendulum::Verdict;
+use super::verdict::Verdict;
 use super::window::{TrackRows, fit_window};
 use crate::engine::Engine;
 use crate::error::Result;

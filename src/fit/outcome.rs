@@ -5,7 +5,7 @@
 use serde_json::json;
 
 use super::forecast::{self, Forecast, ForecastSpec, band_times, most_members};
-use super::pendulum::Verdict;
+use super::verdict::Verdict;
 use super::window::{FITTED, TrackRows, WindowFit, fit_window};
 use crate::engine::Engine;
 use crate::error::{Error, Result, check_count, check_within};

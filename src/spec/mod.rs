@@ -14,6 +14,7 @@ mod method;
 mod plane;
 mod stability;
 mod var;
+mod zoom;
 
 pub use crate::measure::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator, IndicatorAsked};
 pub use ensemble::{Chunk, EnsembleSpec, Keep};
@@ -28,6 +29,7 @@ pub use method::{
 };
 pub use plane::{Angles, AxisAsked, PlaneAsked};
 pub use stability::{largest_stable_dt, speed_bound, validate_speeds, validate_stability};
+pub use zoom::{ZOOM, ZoomDefaults};
 
 /// A closed interval `min:max` of angles (rad).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -313,7 +313,7 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
             .ok_or_else(|| Error::invalid("w", "is needed (the width to zoom to)"))?;
         let frames = q
             .count("frames", 2, 100_000)?
-            .unwrap_or(crate::app::zoom::FRAMES);
+            .unwrap_or(crate::spec::ZOOM.frames);
         q.finish()?;
         Ok((view, grid, ZoomView { x, y, width }, frames))
     })();
@@ -324,11 +324,11 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
     let (backend, commands) = (shared.backend, shared.commands);
     // Checked by its views alone, off the engine: a plan never holds the engine a tile needs.
     let result = tokio::task::spawn_blocking(move || -> Result<String> {
-        let output = std::path::PathBuf::from(crate::app::zoom::OUTPUT);
+        let output = std::path::PathBuf::from(crate::spec::ZOOM.output);
         let film = FilmSpec {
             path: output.join(crate::app::zoom::FILM),
-            fps: crate::app::zoom::FPS,
-            crf: crate::app::zoom::CRF,
+            fps: crate::spec::ZOOM.fps,
+            crf: crate::spec::ZOOM.crf,
         };
         let files = MapOutputs {
             output: output.join("frame.png"),
@@ -347,7 +347,7 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                 to: vec![to],
                 frames,
                 film: film.clone(),
-                output: std::path::PathBuf::from(crate::app::zoom::OUTPUT),
+                output: std::path::PathBuf::from(crate::spec::ZOOM.output),
                 tile: None,
                 verdict: false,
             }

@@ -54,13 +54,6 @@ impl<S> ZoomJob<S> {
 pub const FILM_FORMATS: &[Format] = &[Format::Mp4, Format::Apng];
 /// The film's name in the output folder when no other is named.
 pub const FILM: &str = "zoom.mp4";
-
-/// A zoom's settings where none is given, read by every door (the CLI's flags, Python's
-/// keywords, the explorer's query): its frames, their rate and quality, and the folder.
-pub const FRAMES: u32 = 120;
-pub const FPS: f64 = 30.0;
-pub const CRF: u32 = 18;
-pub const OUTPUT: &str = "out/zoom";
 /// The frames' table's name in the output folder.
 pub const TABLE: &str = "frames.csv";
 
