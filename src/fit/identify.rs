@@ -10,7 +10,7 @@
 //! with its first three derivatives at the ends of a stretch of data, and integrated over it.
 //! Integrating by parts moves the time derivatives of the angular momenta onto phi, so no
 //! acceleration is ever differentiated out of noisy positions; only the centripetal terms need
-//! the angular velocities (from a local quartic fit). With phi vanishing so smoothly at both
+//! the angular velocities (from a local polynomial fit). With phi vanishing so smoothly at both
 //! ends the trapezoid rule integrates to many digits even at 30 frames a second. Stretches
 //! do not overlap, so their residuals are independent and the least-squares covariance
 //! holds. The velocities the centripetal terms need still bias the moments where the film is
@@ -22,6 +22,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+pub use super::refine::Refinement;
 use super::refine::{Motion, refine};
 use super::window::TrackRows;
 use crate::error::{Error, Result};
@@ -46,23 +47,14 @@ pub struct Identified {
     pub stretches: usize,
     pub rejected: usize,
     pub stretch: f64,
-    /// The weighted residuals' RMS in each equation (over their typical size): how well the
-    /// rigid-arm model with joint damping explains the motion.
+    /// The weak form's weighted residuals' RMS in each equation (over their typical size): how
+    /// well the rigid-arm model with joint damping explains the motion.
     pub misfit: [f64; 2],
     /// The markers' radii: the upper marker from the pivot (the middle joint, l1) and the
     /// lower marker from the middle joint (m), medians over the data.
     pub l1: f64,
     pub l2: f64,
     pub time_scale: TimeScale,
-}
-
-/// The refinement of the moments on the angles ([`super::refine`]): its pieces, those left
-/// out, and the markers' arcs off the model (RMS, in the data's lengths).
-#[derive(Clone, Copy, Debug)]
-pub struct Refinement {
-    pub pieces: usize,
-    pub rejected: usize,
-    pub rms: [f64; 2],
 }
 
 /// Whether the frame rate, the metre scale and g agree with the motion: a rigid lower arm
@@ -330,7 +322,7 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
     let dof = (x.nrows() - 6).max(1);
     let s2 = r.norm_squared() / dof as f64;
     let weak_covariance = xtx.try_inverse().ok_or_else(singular)? * s2;
-    // The weak form's moments are the start; run on the positions themselves they lose the
+    // The weak form's moments are the start; run on the angles themselves they lose the
     // velocities' bias (super::refine).
     let motion = Motion {
         t,
@@ -346,26 +338,13 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         .map(|(r, _)| r.clone())
         .collect();
     let (values, covariance, refinement) = match refine(&motion, &stretches, weak) {
-        Some(r) => (
-            r.values,
-            r.covariance,
-            Some(Refinement {
-                pieces: r.pieces,
-                rejected: r.rejected,
-                rms: r.rms,
-            }),
-        ),
+        Some(r) => (r.values, r.covariance, Some(r.refinement)),
         None => (weak, weak_covariance, None),
     };
     let errors: [f64; 6] = std::array::from_fn(|k| covariance[(k, k)].sqrt());
     // The equations' typical sizes: the gravity term's.
     let size1 = (rows1.iter().map(|r| r.1 * r.1).sum::<f64>() / m1 as f64).sqrt();
-    let size2 = (rows2
-        .iter()
-        .map(|r| (values[3] * r[3]).powi(2))
-        .sum::<f64>()
-        / m1 as f64)
-        .sqrt();
+    let size2 = (rows2.iter().map(|r| (weak[3] * r[3]).powi(2)).sum::<f64>() / m1 as f64).sqrt();
     let misfit = [
         rms(0..kept) / weights[0] / size1.max(1e-300),
         rms(kept..2 * kept) / weights[1] / size2.max(1e-300),

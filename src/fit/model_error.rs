@@ -218,7 +218,7 @@ pub fn estimate(
     // A quantile of n draws speaks for the next draw (this forecast's) only as widely as a
     // prediction interval: Student's t with n - 1 degrees of freedom for the normal z, and
     // the draws' own mean's uncertainty, sqrt(1 + 1/n). Five windows widen a 90 % band by
-    // 1.42, eight by 1.23.
+    // 1.42, eight by 1.22.
     let predictive = |z: f64, n: usize| match n {
         0 => 1.0,
         n => student_t(z, (n.max(2) - 1) as f64) / z * (1.0 + 1.0 / n as f64).sqrt(),

@@ -162,8 +162,11 @@ const UNIT_MISTAKE: f64 = 25.0;
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
 pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
-    let (frames, _) = on_joint(frames)?;
-    let frames = &frames[..];
+    motion_scale(&on_joint(frames)?.0, g)
+}
+
+/// [`scale_from_motion`] of `frames` whose upper marker is on the middle joint.
+fn motion_scale(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
     let pivot = fit_pivot(frames)?;
     let measured = super::measured(frames, (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));
@@ -209,7 +212,7 @@ pub fn tracked_model(
     let frames = &frames[..];
     let (frames, scale_from_motion) = match units.pixels_per_metre {
         Some(super::data::PixelScale::FromMotion) => {
-            let (ppm, error) = scale_from_motion(frames, g)?;
+            let (ppm, error) = motion_scale(frames, g)?;
             if let Some(j) = &mut joint {
                 *j = Joint {
                     marker: j.marker / ppm,

@@ -32,9 +32,15 @@ const REJECT: f64 = 5.0;
 pub struct Refined {
     pub values: [f64; M],
     pub covariance: DMatrix<f64>,
+    pub refinement: Refinement,
+}
+
+/// How the refinement went: its pieces, those left out, and the RMS of the upper and lower
+/// markers' arcs off the model (in the data's lengths).
+#[derive(Clone, Copy, Debug)]
+pub struct Refinement {
     pub pieces: usize,
     pub rejected: usize,
-    /// The RMS of the upper and lower markers' arcs (in the data's lengths) off the model.
     pub rms: [f64; 2],
 }
 
@@ -244,16 +250,13 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
             break;
         }
         rejected += dropped;
-        let mut k = 0;
-        pieces.retain(|_| {
-            k += 1;
-            keep[k - 1]
-        });
-        let mut k = 0;
-        states.retain(|_| {
-            k += 1;
-            keep[k - 1]
-        });
+        (pieces, states) = pieces
+            .into_iter()
+            .zip(states)
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .map(|(piece, _)| piece)
+            .unzip();
         if pieces.len() < 4 {
             return None;
         }
@@ -295,9 +298,11 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
     Some(Refined {
         values: m,
         covariance,
-        pieces: pieces.len(),
-        rejected,
-        rms: arcs.map(|s| (s / n).sqrt()),
+        refinement: Refinement {
+            pieces: pieces.len(),
+            rejected,
+            rms: arcs.map(|s| (s / n).sqrt()),
+        },
     })
 }
 
