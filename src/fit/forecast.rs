@@ -5,7 +5,7 @@
 
 use nalgebra::{Matrix4, SymmetricEigen};
 use rand::SeedableRng;
-use rand_distr::{Distribution, StandardNormal};
+use rand_distr::{ChiSquared, Distribution, StandardNormal};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
@@ -166,8 +166,13 @@ pub struct Members {
     pub clamped: usize,
 }
 
-/// Draws `n` members (state, joint damping and pivot) from the fit's normal distribution.
-/// No measurement allows a joint that pushes: a damping drawn below zero takes zero, and the
+/// Draws `n` members (state, joint damping and pivot) from the fit's distribution: the
+/// multivariate t the covariance and the residuals' degrees of freedom give (the covariance's
+/// scale is itself estimated from the window's residuals, so the fitted values are t
+/// distributed about the truth, not normal; a few rows at 3 Hz leave 14 degrees of freedom,
+/// whose 90 % interval is 7 % wider than the normal's). Correlated tracking errors carry
+/// less information than their count: the degrees of freedom are divided by the same
+/// inflation that widened the covariance. No measurement allows a joint that pushes: a damping drawn below zero takes zero, and the
 /// member's other parameters move with it as the fit's covariance says they go together
 /// (by their regression on the damping, Sigma_od Sigma_dd^-1), so that its state is one the
 /// data allow with that damping (clamping alone would keep a state that only suits a
@@ -186,6 +191,8 @@ pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
         nalgebra::DMatrix::from_fn(PARAMETERS, 2, |i, j| sigma[(i, DAMPING[j])]) * inverse
     });
     let fitted = nalgebra::DVector::from_row_slice(&fit.values);
+    let freedom = effective_freedom(fit);
+    let scatter = ChiSquared::new(freedom).ok();
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut members = Members {
         starts: Vec::with_capacity(n),
@@ -195,7 +202,9 @@ pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
     };
     for _ in 0..n {
         let z = nalgebra::DVector::from_fn(PARAMETERS, |_, _| StandardNormal.sample(&mut rng));
-        let mut v = &fitted + &root * z;
+        // A t draw: a normal over the root of a chi-square over its degrees of freedom.
+        let widen = scatter.map_or(1.0, |chi| (freedom / chi.sample(&mut rng)).sqrt());
+        let mut v = &fitted + &root * z * widen;
         let lift = nalgebra::Vector2::new((-v[4]).max(0.0), (-v[5]).max(0.0));
         if lift != nalgebra::Vector2::zeros() {
             members.clamped += 1;
@@ -212,6 +221,14 @@ pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
         members.pivots.push((v[6], v[7]));
     }
     members
+}
+
+/// The degrees of freedom the fit's covariance carries: the residuals' over the inflation
+/// that their correlation gave it, at least 3: the t's variance is infinite below 2, and a
+/// thinner fit than that is too thin to draw members from at all (its heavy tails would
+/// fill the bands with members that no window could have fitted).
+pub fn effective_freedom(fit: &WindowFit) -> f64 {
+    (fit.dof as f64 / fit.correlation.inflation.max(1.0)).max(3.0)
 }
 
 /// The bands' times: every [`BAND_STEP`] from `t0` to `end`, and the data's times between.
