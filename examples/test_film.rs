@@ -7,9 +7,13 @@
 //!
 //! options: --shutter S (s, default 1/2000), --lamp X,Y, --reflection X (a pane's column),
 //! --table Y (the table's edge, px row), --roll A (the camera's roll, rad), --rest S (s
-//! hanging still before the release), --seed N, --crf Q, --theta1 A --theta2 B, --fps F
+//! hanging still before the release), --lift S (s lifted by hand after the rest), --seed N, --crf Q, --theta1 A --theta2 B, --fps F
 //! (frames a second, default 30), --params FILE.toml (the pendulum filmed, default the lab
-//! preset; its markers at the middle joint and the lower arm's end).
+//! preset; its markers at the middle joint and the lower arm's end), --stickers C1,C2
+//! (coloured stickers on a lit, textured board instead of LEDs in the dark: the upper and
+//! the lower one's colours, as `track --markers` takes them), --marker-sigma PX (a
+//! marker's size, default 2.5), --ghost DX,DY,SHARE (both markers again, shifted by DX,DY
+//! px at SHARE of their brightness: a reflection that moves with the pendulum).
 
 use std::io::Write;
 
@@ -62,9 +66,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scene.lamp = Some((x.parse()?, y.parse()?));
     }
     scene.reflection = number("--reflection")?;
+    if let Some(v) = option("--ghost") {
+        let v: Vec<f64> = v.split(',').map(str::parse).collect::<Result<_, _>>()?;
+        let [dx, dy, share] = v[..] else {
+            return Err("--ghost DX,DY,SHARE".into());
+        };
+        scene.ghost = Some(((dx, dy), share));
+    }
     scene.table = number("--table")?;
     scene.roll = number("--roll")?.unwrap_or(0.0);
     scene.rest = number("--rest")?.unwrap_or(0.0);
+    scene.lift = number("--lift")?.unwrap_or(0.0);
+    if let Some(m) = option("--stickers") {
+        scene.stickers = Some(match chaoscope::track::Markers::parse(&m)? {
+            chaoscope::track::Markers::Colours(a, b) => [a, b],
+            chaoscope::track::Markers::Colour(c) => [c, c],
+            chaoscope::track::Markers::Bright => return Err("--stickers C1,C2".into()),
+        });
+    }
+    if let Some(s) = number("--marker-sigma")? {
+        scene.marker_sigma = s;
+    }
     if let Some(s) = number("--seed")? {
         scene.seed = s as u64;
     }

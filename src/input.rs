@@ -102,6 +102,26 @@ pub fn bytes(n: u64) -> String {
     }
 }
 
+/// The `# key = value` comments of `text` (before its header): each key's numbers.
+pub fn comment_values(text: &str) -> Vec<(&str, Vec<f64>)> {
+    text.lines()
+        .take_while(|l| l.starts_with('#'))
+        .filter_map(|l| {
+            let (key, value) = l[1..].trim_start().split_once(" = ")?;
+            let key = key.trim();
+            key.chars()
+                .all(|c| c.is_ascii_lowercase() || c == '_')
+                .then(|| {
+                    let numbers = value
+                        .split_whitespace()
+                        .map_while(|w| w.parse::<f64>().ok())
+                        .collect();
+                    (key, numbers)
+                })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -520,6 +520,7 @@ fn files_as_users_have_them() {
     let units = Units {
         pixels_per_metre: Some(PixelScale::PerMetre(1000.0)),
         frame_rate: Some(100.0),
+        ..Default::default()
     };
     let read = fit::read_frames(&semicolons, &units).unwrap();
     // Frame 3 at 100 a second; 300 px right and 100 px down of the pivot at 1000 px/m.

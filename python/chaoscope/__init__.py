@@ -329,6 +329,7 @@ def fit(
     output: str = "out/fit",
     pixels_per_metre: Union[None, float, str] = None,
     frame_rate: Optional[float] = None,
+    before_release: bool = False,
     start: Optional[float] = None,
     window: Optional[float] = None,
     tolerance: Optional[float] = None,
@@ -356,7 +357,8 @@ def fit(
     """The model fitted to a camera-tracked run (``chaoscope fit``): ``file`` is a CSV of
     t, x1, y1, x2, y2 (s, m; y up), or ``frame`` numbers at ``frame_rate`` and pixels (y down)
     at ``pixels_per_metre`` (or ``"motion"``: the scale the swing implies), a moving pivot in
-    ``x0``, ``y0``. Returns the summary: the pivot and arm lengths (m, with errors), the
+    ``x0``, ``y0``; a file ``track`` wrote is read from the release it found (the rest and
+    the lift by hand are no free motion) unless ``before_release=True``. Returns the summary: the pivot and arm lengths (m, with errors), the
     energy's exponential and inverse-square decay fits, and how long the model released at
     ``start`` (s; default the second row) agrees with the data within ``tolerance`` (m;
     default 6 % of the reach), its ``candidates`` fitted over ``window`` s (default four of
@@ -466,6 +468,7 @@ def forecast(
     output: str = "out/forecast",
     pixels_per_metre: Union[None, float, str] = None,
     frame_rate: Optional[float] = None,
+    before_release: bool = False,
     window: Optional[Pair] = None,
     members: int = 10000,
     seed: int = 1,

@@ -28,7 +28,8 @@ def track(
     progress: Progress = None,
 ) -> xr.Dataset:
     """The positions of both masses in every frame of a film of the pendulum (``chaoscope
-    track``): bright markers on a dark background, or ``markers="ff2020"`` of a colour; the
+    track``): bright markers on a dark background, ``markers="ff2020"`` (or ``"red"``) for
+    stickers of one colour, or ``markers="red,green"`` for the upper and the lower mass; the
     scale from the upper arm's length ``l1`` (m) or ``pixels_per_metre`` (or ``"motion"``:
     the scale the swing implies under g at the film's own frame times); ``region`` (x0, y0,
     x1, y1 in pixels) to look in part of the picture. ``bridge=True`` fills gaps where a mass

@@ -53,6 +53,7 @@ impl<'py> Keywords<'py> {
         Ok(chaoscope::fit::data::Units {
             pixels_per_metre,
             frame_rate: self.get("frame_rate")?,
+            before_release: self.or("before_release", false)?,
         })
     }
 

@@ -49,6 +49,11 @@ pub struct TrackSummary {
     pub up: track::Up,
     /// Still blobs set aside (lamps, reflections of them, fixed marks), px.
     pub still: Vec<(f64, f64)>,
+    /// The last still frame's time before free motion (s), where the film shows the
+    /// pendulum held and let go; and the stretch from the end of its rest to then, when
+    /// it was lifted by hand (where a rest was seen).
+    pub release: Option<f64>,
+    pub lift: Option<(f64, f64)>,
     pub codec: String,
     pub width: u32,
     pub height: u32,
@@ -115,7 +120,7 @@ pub fn run(
     };
     let total = decoder.probe.times.len();
     monitor.start("track", total as u64);
-    let (mut frame, mut score) = (Vec::new(), Vec::new());
+    let mut frame = Vec::new();
     let mut scratch = track::detect::Scratch::default();
     let (mut blobs, mut times) = (Vec::with_capacity(total), Vec::with_capacity(total));
     while let Some(t) = decoder
@@ -123,13 +128,10 @@ pub fn run(
         .map_err(|e| e.as_input("video"))?
     {
         monitor.check()?;
-        job.markers.score(&frame, &mut score);
-        blobs.push(track::detect::blobs(
-            &score,
-            width as usize,
-            region,
-            &mut scratch,
-        ));
+        blobs.push(
+            job.markers
+                .find(&frame, width as usize, region, &mut scratch),
+        );
         times.push(t);
         monitor.advance(1);
     }
@@ -140,7 +142,9 @@ pub fn run(
             format!("{} frames: tracking needs at least 10", blobs.len()),
         ));
     }
+    track::check_colours_seen(job.markers, &blobs)?;
     let mut tracked = track::track(&blobs, &times, job.scale)?;
+    track::check_upper_on_its_circle(job.markers, &blobs, &tracked)?;
     let bridged = match (&job.bridge, engine) {
         (Some(sources), Some(engine)) => Some(track::bridge::bridge(
             &mut tracked,
@@ -190,6 +194,13 @@ pub fn run(
         l2: lower_seen.then_some(g.r2 / tracked.pixels_per_metre),
         up: tracked.up,
         still: tracked.still.clone(),
+        release: tracked.release,
+        lift: tracked
+            .up
+            .rest
+            .zip(tracked.release)
+            .map(|((_, end), release)| (end, release))
+            .filter(|(end, release)| release > end),
         codec: decoder.probe.codec.clone(),
         width,
         height,

@@ -331,6 +331,10 @@ pub struct TrackedUnitsArgs {
     /// `t` column in seconds]
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub frame_rate: Option<f64>,
+    /// Read the rows before the release too (the pendulum at rest and lifted by hand, not
+    /// free motion) where `track` found one [default: from the release]
+    #[arg(long)]
+    pub before_release: bool,
 }
 
 impl TrackedUnitsArgs {
@@ -338,6 +342,7 @@ impl TrackedUnitsArgs {
         crate::fit::data::Units {
             pixels_per_metre: self.pixels_per_metre,
             frame_rate: self.frame_rate,
+            before_release: self.before_release,
         }
     }
 }

@@ -540,8 +540,8 @@ pub fn track(job: &crate::app::track::TrackJob) -> String {
         crate::track::Scale::PixelsPerMetre(p) => out += &format!(" --pixels-per-metre {p}"),
         crate::track::Scale::FromMotion(_) => out += " --pixels-per-metre motion",
     }
-    if let crate::track::Markers::Colour([r, g, b]) = job.markers {
-        out += &format!(" --markers {r:02x}{g:02x}{b:02x}");
+    if job.markers != crate::track::Markers::Bright {
+        out += &format!(" --markers {}", job.markers);
     }
     if let Some((x0, y0, x1, y1)) = job.region {
         out += &format!(" --region {x0},{y0},{x1},{y1}");

@@ -31,8 +31,12 @@ pub struct TrackArgs {
     /// l1/g in seconds: some 8 s of swinging at 60 frames a second or more).
     #[arg(long, value_parser = super::args::parse_pixel_scale, allow_hyphen_values = true)]
     pub pixels_per_metre: Option<crate::fit::data::PixelScale>,
-    /// What the markers look like: bright (lights on a dark background) or a colour as
-    /// RRGGBB (coloured markers on a lighter or other-coloured background, e.g. ff2020).
+    /// What the markers look like: bright (lights on a dark background), one colour for
+    /// both (stickers on a lighter or other-coloured board), or two as UPPER,LOWER (the
+    /// upper mass's first). A colour as RRGGBB (e.g. ff2020) or a name: red, orange, yellow,
+    /// green, cyan, blue, purple, magenta, pink. What counts is the hue, so a sticker in
+    /// shade or under a lighting gradient is still found; two colours must differ in hue by
+    /// more than 60 degrees.
     #[arg(long, default_value = "bright", value_parser = Markers::parse)]
     pub markers: Markers,
     /// Look only within X0,Y0,X1,Y1 (pixels from the top left corner).
@@ -130,6 +134,16 @@ pub fn run(args: &TrackArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         s.still.len(),
         s.output.display()
     );
+    match s.release {
+        Some(t) => eprintln!(
+            "released at {t:.3} s (the last still frame before it swings){}: fit and forecast read the free motion from there",
+            match s.lift {
+                Some((a, b)) => format!(", lifted {a:.2}..{b:.2} s"),
+                None => String::new(),
+            }
+        ),
+        None => eprintln!("no release seen: the film shows the pendulum swinging from its start"),
+    }
     if let Some(b) = &s.bridged {
         eprintln!(
             "bridged {} gap(s) by the model ({} places), {} left open{}",

@@ -42,7 +42,13 @@ pub struct Units {
     /// Rows numbered by a `frame` column, this many frames a second; None: a `t` column in
     /// seconds.
     pub frame_rate: Option<f64>,
+    /// Read the rows before the release as well, where `track` found one (its file says
+    /// `# release = T`): the rest and the lift by hand are not free motion.
+    pub before_release: bool,
 }
+
+/// The key of a tracked file's `# release = T` comment: where free motion begins (s).
+pub const RELEASE: &str = "release";
 
 /// The metre scale of positions in pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -306,6 +312,14 @@ pub fn read_frames(path: &Path, units: &Units) -> Result<Vec<TrackedRow>> {
             x2: v[3],
             y2: v[4],
         });
+    }
+    // Free motion only: before the release `track` saw the rest and the hand.
+    let release = crate::input::comment_values(text)
+        .into_iter()
+        .find(|(k, _)| *k == RELEASE)
+        .and_then(|(_, v)| v.first().copied());
+    if let (Some(release), false) = (release, units.before_release) {
+        frames.retain(|f| f.t >= release - 1e-9);
     }
     if frames.len() < 5 {
         return Err(bad(

@@ -3,30 +3,87 @@
 //! smeared into a streak by the exposure is measured as a streak: its centroid is the mean
 //! position over the exposure, its length and direction the motion during it).
 
-/// What a marker looks like.
+/// What the markers look like.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Markers {
     /// Bright on a dark background (the lab's LEDs in a dark room): the frame's luma.
     Bright,
-    /// Of this colour on a lighter or other-coloured background: each pixel's colour along
-    /// the marker's hue (its chroma projected on the marker's).
+    /// Both of this colour on a lighter or other-coloured background: each pixel's colour
+    /// along the marker's hue (its chroma projected on the marker's).
     Colour([u8; 3]),
+    /// The upper marker of the first colour, the lower of the second: each found on its own
+    /// colour's score, so that which mass a blob is follows from its colour as well as from
+    /// the geometry.
+    Colours([u8; 3], [u8; 3]),
+}
+
+/// Colour names a marker may be given by, and the colour a sticker of that name shows a
+/// camera in ordinary light (its hue is what matters: the score follows the hue).
+pub const COLOUR_NAMES: [(&str, [u8; 3]); 9] = [
+    ("red", [0xe0, 0x20, 0x20]),
+    ("orange", [0xf0, 0x80, 0x20]),
+    ("yellow", [0xe0, 0xd0, 0x20]),
+    ("green", [0x20, 0xa0, 0x40]),
+    ("cyan", [0x20, 0xc0, 0xd0]),
+    ("blue", [0x20, 0x40, 0xe0]),
+    ("purple", [0x80, 0x30, 0xc0]),
+    ("magenta", [0xd0, 0x20, 0xd0]),
+    ("pink", [0xff, 0x60, 0xa0]),
+];
+
+/// Which mass a blob may be: either (one look for both markers), or the one whose colour
+/// it has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    Either,
+    Upper,
+    Lower,
 }
 
 impl Markers {
-    /// `bright`, or a colour as RRGGBB (`ff2020`, a leading `#` allowed).
+    /// `bright`, or one or two colours (the upper marker's first), each as RRGGBB
+    /// (`ff2020`, a leading `#` allowed) or a name (`red`, `green`...).
     pub fn parse(s: &str) -> Result<Markers, String> {
         if s == "bright" {
             return Ok(Markers::Bright);
         }
-        let hex = s.trim_start_matches('#');
-        let byte = |k: usize| {
-            hex.get(k..k + 2)
-                .and_then(|h| u8::from_str_radix(h, 16).ok())
+        let names = COLOUR_NAMES.map(|(n, _)| n).join(", ");
+        let colour = |c: &str| -> Result<[u8; 3], String> {
+            let c = c.trim();
+            if let Some((_, rgb)) = COLOUR_NAMES.iter().find(|(n, _)| n.eq_ignore_ascii_case(c)) {
+                return Ok(*rgb);
+            }
+            let hex = c.trim_start_matches('#');
+            let byte = |k: usize| {
+                hex.get(k..k + 2)
+                    .and_then(|h| u8::from_str_radix(h, 16).ok())
+            };
+            match (hex.len(), byte(0), byte(2), byte(4)) {
+                (6, Some(r), Some(g), Some(b)) if r.max(g).max(b) - r.min(g).min(b) >= 40 => {
+                    Ok([r, g, b])
+                }
+                (6, Some(_), Some(_), Some(_)) => Err(format!(
+                    "{c} is grey or nearly: a marker's colour must differ from grey (its channels by 40 levels or more) for its hue to be found"
+                )),
+                _ => Err(format!(
+                    "{c}: bright, or a colour as RRGGBB (e.g. ff2020) or a name ({names}); two colours as UPPER,LOWER"
+                )),
+            }
         };
-        match (hex.len(), byte(0), byte(2), byte(4)) {
-            (6, Some(r), Some(g), Some(b)) => Ok(Markers::Colour([r, g, b])),
-            _ => Err(format!("{s}: bright, or a colour as RRGGBB (e.g. ff2020)")),
+        match s.split(',').collect::<Vec<_>>()[..] {
+            [one] => Ok(Markers::Colour(colour(one)?)),
+            [upper, lower] => {
+                let (a, b) = (colour(upper)?, colour(lower)?);
+                if hue_cosine(a, b) > 0.5 {
+                    return Err(format!(
+                        "{upper} and {lower} are too alike in hue to tell the markers apart (their hues within 60 degrees): give one colour for both"
+                    ));
+                }
+                Ok(Markers::Colours(a, b))
+            }
+            _ => Err(format!(
+                "{s}: at most two colours, the upper marker's then the lower's (e.g. red,green)"
+            )),
         }
     }
 
@@ -34,26 +91,87 @@ impl Markers {
     pub fn channels(self) -> usize {
         match self {
             Markers::Bright => 1,
-            Markers::Colour(_) => 3,
+            Markers::Colour(_) | Markers::Colours(..) => 3,
         }
     }
 
-    /// The frame as a marker-ness image (bright where a marker is), in `out`.
-    pub fn score(self, frame: &[u8], out: &mut Vec<f32>) {
-        out.clear();
+    /// The looks searched for, each with the role a blob of it takes.
+    fn looks(self) -> Vec<(Option<[u8; 3]>, Role)> {
         match self {
-            Markers::Bright => out.extend(frame.iter().map(|&v| v as f32)),
-            Markers::Colour([r, g, b]) => {
-                let grey = (r as f32 + g as f32 + b as f32) / 3.0;
-                let dir = [r as f32 - grey, g as f32 - grey, b as f32 - grey];
-                let norm = (dir.iter().map(|d| d * d).sum::<f32>()).sqrt().max(1.0);
-                let dir = dir.map(|d| d / norm);
-                out.extend(frame.chunks_exact(3).map(|p| {
-                    let grey = (p[0] as f32 + p[1] as f32 + p[2] as f32) / 3.0;
-                    let chroma = [p[0] as f32 - grey, p[1] as f32 - grey, p[2] as f32 - grey];
-                    (chroma[0] * dir[0] + chroma[1] * dir[1] + chroma[2] * dir[2]).max(0.0)
-                }));
-            }
+            Markers::Bright => vec![(None, Role::Either)],
+            Markers::Colour(c) => vec![(Some(c), Role::Either)],
+            Markers::Colours(a, b) => vec![(Some(a), Role::Upper), (Some(b), Role::Lower)],
+        }
+    }
+
+    /// The blobs of one decoded frame (`width` wide) within `region`, each with its role.
+    pub fn find(
+        self,
+        frame: &[u8],
+        width: usize,
+        region: Option<(usize, usize, usize, usize)>,
+        scratch: &mut Scratch,
+    ) -> Vec<Blob> {
+        let mut out = Vec::new();
+        for (colour, role) in self.looks() {
+            let mut score = std::mem::take(&mut scratch.score);
+            score_into(colour, frame, &mut score);
+            out.extend(
+                blobs(&score, width, region, scratch)
+                    .into_iter()
+                    .map(|b| Blob { role, ..b }),
+            );
+            scratch.score = score;
+        }
+        out
+    }
+
+    /// The frame as a marker-ness image (bright where a marker is), in `out`; with two
+    /// colours, the upper marker's.
+    pub fn score(self, frame: &[u8], out: &mut Vec<f32>) {
+        score_into(self.looks()[0].0, frame, out)
+    }
+}
+
+/// How alike two colours' hues are: the cosine between their chroma vectors.
+fn hue_cosine(a: [u8; 3], b: [u8; 3]) -> f32 {
+    let (a, b) = (chroma_direction(a), chroma_direction(b));
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// A colour's chroma (its channels less their mean), as a unit vector.
+fn chroma_direction([r, g, b]: [u8; 3]) -> [f32; 3] {
+    let grey = (r as f32 + g as f32 + b as f32) / 3.0;
+    let dir = [r as f32 - grey, g as f32 - grey, b as f32 - grey];
+    let norm = (dir.iter().map(|d| d * d).sum::<f32>()).sqrt().max(1.0);
+    dir.map(|d| d / norm)
+}
+
+/// Luma as it is (no colour), or each RGB pixel's chroma along `colour`'s: grey, however
+/// lit, scores nothing, and a sticker in shade scores in proportion to its light.
+fn score_into(colour: Option<[u8; 3]>, frame: &[u8], out: &mut Vec<f32>) {
+    out.clear();
+    match colour {
+        None => out.extend(frame.iter().map(|&v| v as f32)),
+        Some(c) => {
+            let dir = chroma_direction(c);
+            out.extend(frame.chunks_exact(3).map(|p| {
+                let grey = (p[0] as f32 + p[1] as f32 + p[2] as f32) / 3.0;
+                let chroma = [p[0] as f32 - grey, p[1] as f32 - grey, p[2] as f32 - grey];
+                (chroma[0] * dir[0] + chroma[1] * dir[1] + chroma[2] * dir[2]).max(0.0)
+            }));
+        }
+    }
+}
+
+impl std::fmt::Display for Markers {
+    /// As `--markers` takes it back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let hex = |[r, g, b]: [u8; 3]| format!("{r:02x}{g:02x}{b:02x}");
+        match *self {
+            Markers::Bright => write!(f, "bright"),
+            Markers::Colour(c) => write!(f, "{}", hex(c)),
+            Markers::Colours(a, b) => write!(f, "{},{}", hex(a), hex(b)),
         }
     }
 }
@@ -75,9 +193,19 @@ pub struct Blob {
     /// The centroid and light of the blob's core alone (its pixels above half its peak):
     /// where a dimmer blob (a reflection) runs into a marker, the core is the marker's.
     pub core: (f64, f64, f64),
+    /// Which mass it may be (by its colour).
+    pub role: Role,
 }
 
 impl Blob {
+    pub fn may_be_upper(&self) -> bool {
+        self.role != Role::Lower
+    }
+
+    pub fn may_be_lower(&self) -> bool {
+        self.role != Role::Upper
+    }
+
     /// The streak's length (px): a segment of length L blurred by the marker's own profile
     /// spreads L^2 / 12 more along it than across.
     pub fn streak(&self) -> f64 {
@@ -156,6 +284,7 @@ fn box5(score: &[f32], width: usize, rows: &mut Vec<f32>, out: &mut Vec<f32>) {
 /// Scratch a frame's search reuses.
 #[derive(Default)]
 pub struct Scratch {
+    score: Vec<f32>,
     visited: Vec<bool>,
     rows: Vec<f32>,
     smooth: Vec<f32>,
@@ -287,6 +416,7 @@ fn measure(score: &[f32], width: usize, pixels: &[usize], level: f32, noise: f32
         short: (mean - half).max(0.0).sqrt(),
         angle: 0.5 * (2.0 * cxy).atan2(cxx - cyy),
         core: (gx / g, gy / g, g),
+        role: Role::Either,
     })
 }
 
@@ -365,6 +495,12 @@ mod tests {
             "{:?}",
             found[0]
         );
-        assert!(Markers::parse("red").is_err() && Markers::parse("#ff2020").is_ok());
+        assert_eq!(Markers::parse("red"), Markers::parse("E02020"));
+        assert!(Markers::parse("#ff2020").is_ok() && Markers::parse("808080").is_err());
+        assert_eq!(
+            Markers::parse("red,green").unwrap().to_string(),
+            "e02020,20a040"
+        );
+        assert!(Markers::parse("red,orange").is_err() && Markers::parse("red,green,blue").is_err());
     }
 }

@@ -98,6 +98,8 @@ impl Film {
 pub struct Header {
     pub placement: Placement,
     pub film: Option<Film>,
+    /// Where free motion begins (s), where `track` saw the pendulum let go.
+    pub release: Option<f64>,
 }
 
 /// Writes `t`, tracked from `film` by `command`, as the tracked CSV.
@@ -120,6 +122,13 @@ pub fn write(w: &mut impl Write, t: &Tracked, film: &Film, command: &str) -> Res
             None => "the picture's: the film never shows the pendulum hanging at rest".into(),
         }
     )?;
+    if let Some(release) = t.release {
+        writeln!(
+            w,
+            "# {} = {release:.6} (s: the last still frame before the pendulum swings; fit and forecast read from it)",
+            crate::fit::data::RELEASE
+        )?;
+    }
     writeln!(w, "# film_px = {} {}", film.width, film.height)?;
     writeln!(w, "# film_frames = {}", film.frames)?;
     writeln!(
@@ -163,32 +172,12 @@ pub fn write(w: &mut impl Write, t: &Tracked, film: &Film, command: &str) -> Res
     Ok(())
 }
 
-/// The `# key = value` comments of `text` (before its header): each key's numbers.
-fn values(text: &str) -> Vec<(&str, Vec<f64>)> {
-    text.lines()
-        .take_while(|l| l.starts_with('#'))
-        .filter_map(|l| {
-            let (key, value) = l[1..].trim_start().split_once(" = ")?;
-            let key = key.trim();
-            key.chars()
-                .all(|c| c.is_ascii_lowercase() || c == '_')
-                .then(|| {
-                    let numbers = value
-                        .split_whitespace()
-                        .map_while(|w| w.parse::<f64>().ok())
-                        .collect();
-                    (key, numbers)
-                })
-        })
-        .collect()
-}
-
 /// What `text`'s comments say (None: it is no tracked file, or says nothing of where it
 /// lies in its film). A file tracked by an earlier version states its placement in prose
 /// ("# pivot at (X, Y) px, ..., P px per metre", "# up in the picture (X, Y): ...") and no
 /// film; that is read too.
 pub fn read_header(text: &str) -> Option<Header> {
-    let values = values(text);
+    let values = crate::input::comment_values(text);
     let get = |key: &str, n: usize| -> Option<Vec<f64>> {
         values
             .iter()
@@ -221,7 +210,11 @@ pub fn read_header(text: &str) -> Option<Header> {
         }),
         _ => None,
     };
-    Some(Header { placement, film })
+    Some(Header {
+        placement,
+        film,
+        release: get(crate::fit::data::RELEASE, 1).map(|v| v[0]),
+    })
 }
 
 /// The placement in prose, as earlier versions wrote it.
@@ -262,9 +255,24 @@ pub fn header_of(path: &Path, field: &'static str) -> Result<Header> {
     })
 }
 
-/// A row of a tracked CSV: its time (s) and the upper and lower mass's position (m), None
-/// where it was not measured.
-pub type CsvRow = (f64, Option<(f64, f64)>, Option<(f64, f64)>);
+/// A mass's measured place in a tracked CSV (m) and its stated standard errors (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measured {
+    pub x: f64,
+    pub y: f64,
+    pub sx: f64,
+    pub sy: f64,
+}
+
+impl Measured {
+    pub fn at(&self) -> (f64, f64) {
+        (self.x, self.y)
+    }
+}
+
+/// A row of a tracked CSV: its time (s) and the upper and lower mass as measured, None
+/// where it was not.
+pub type CsvRow = (f64, Option<Measured>, Option<Measured>);
 
 /// Reads back the measured positions of a tracked CSV (its header and `seen` columns): a
 /// mass hidden, or placed by the model (`bridged`), is None.
@@ -281,11 +289,17 @@ pub fn read_rows(path: &Path) -> Result<Vec<CsvRow>> {
             if c.len() != 13 {
                 return Err(bad("a row of other than 13 fields"));
             }
-            let at = |k: usize, seen: &str| -> Result<Option<(f64, f64)>> {
+            let at = |k: usize, seen: &str| -> Result<Option<Measured>> {
                 match seen {
                     "measured" => {
                         let v = |s: &str| s.parse::<f64>().map_err(|_| bad("a position"));
-                        Ok(Some((v(c[k])?, v(c[k + 1])?)))
+                        // x, y at k and k + 1; their errors 6 columns on.
+                        Ok(Some(Measured {
+                            x: v(c[k])?,
+                            y: v(c[k + 1])?,
+                            sx: v(c[k + 6])?,
+                            sy: v(c[k + 7])?,
+                        }))
                     }
                     // Not seen: no position, not even a guessed one.
                     "hidden" if c[k].is_empty() && c[k + 1].is_empty() => Ok(None),
@@ -348,6 +362,7 @@ mod tests {
                 rest: Some((0.0, 1.0)),
             },
             still: Vec::new(),
+            release: None,
         };
         let film = Film {
             width: 1280,
@@ -366,7 +381,12 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("t.csv");
         std::fs::write(&path, &text).unwrap();
-        let rows = read_rows(&path).unwrap();
+        type Places = (f64, Option<(f64, f64)>, Option<(f64, f64)>);
+        let rows: Vec<Places> = read_rows(&path)
+            .unwrap()
+            .into_iter()
+            .map(|(t, a, b)| (t, a.map(|m| m.at()), b.map(|m| m.at())))
+            .collect();
         assert_eq!(
             rows,
             vec![

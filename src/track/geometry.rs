@@ -71,7 +71,11 @@ pub fn find(frames: &[Vec<Blob>], tol: f64, seed: u64) -> Option<Geometry> {
     let points: Vec<(usize, (f64, f64))> = frames
         .iter()
         .enumerate()
-        .flat_map(|(f, b)| b.iter().map(move |b| (f, (b.x, b.y))))
+        .flat_map(|(f, b)| {
+            b.iter()
+                .filter(|b| b.may_be_upper())
+                .map(move |b| (f, (b.x, b.y)))
+        })
         .collect();
     if points.len() < 3 {
         return None;
@@ -127,11 +131,11 @@ pub fn find(frames: &[Vec<Blob>], tol: f64, seed: u64) -> Option<Geometry> {
     for blobs in frames {
         let on: Vec<&Blob> = blobs
             .iter()
-            .filter(|b| (dist((b.x, b.y), centre) - r).abs() < tol)
+            .filter(|b| b.may_be_upper() && (dist((b.x, b.y), centre) - r).abs() < tol)
             .collect();
         if let [m1] = on[..] {
             for b in blobs {
-                if b != m1 {
+                if b != m1 && b.may_be_lower() {
                     distances.push(dist((b.x, b.y), (m1.x, m1.y)));
                 }
             }
@@ -188,6 +192,22 @@ pub fn refined(named: &[(Named, Named)], g: Geometry) -> Geometry {
         return g;
     }
     let (pivot, r1) = fit_circle(&upper, (g.pivot, g.r1));
+    // A streak's centroid lies inside its arc by r phi^2 / 24 (phi = streak / r): put back,
+    // the circle is the marker's own, not one a little inside it where it moves fast (a
+    // scale from the arm's length was 5e-4 off at 1/60 s without it).
+    let outward: Vec<(f64, f64)> = named
+        .iter()
+        .filter_map(|(a, _)| *a)
+        .map(|b| {
+            let d = dist((b.x, b.y), pivot).max(1e-9);
+            let sag = b.streak().powi(2) / (24.0 * r1);
+            (
+                b.x + (b.x - pivot.0) / d * sag,
+                b.y + (b.y - pivot.1) / d * sag,
+            )
+        })
+        .collect();
+    let (pivot, r1) = fit_circle(&outward, (pivot, r1));
     let mid = arms.len() / 2;
     let r2 = *arms.select_nth_unstable_by(mid, f64::total_cmp).1;
     // A circle that wandered off (too few places on too short an arc) keeps the first.
@@ -318,8 +338,11 @@ fn name_along<'a>(
         let off = |p: Option<(f64, f64)>, b: &Blob| p.map_or(0.0, |p| dist(p, (b.x, b.y)));
         let on_circle = |b: &Blob| (dist((b.x, b.y), g.pivot) - g.r1).abs();
         let mut pair: Option<(f64, Blob, Blob)> = None;
-        for a in blobs.iter().filter(|b| on_circle(b) < tol) {
-            for b in blobs {
+        for a in blobs
+            .iter()
+            .filter(|b| b.may_be_upper() && on_circle(b) < tol)
+        {
+            for b in blobs.iter().filter(|b| b.may_be_lower()) {
                 let arm = (dist((a.x, a.y), (b.x, b.y)) - g.r2).abs();
                 if b == a || arm >= tol {
                     continue;
@@ -344,7 +367,7 @@ fn name_along<'a>(
                 // one hidden, the lower one where its own path goes on, within reach.
                 let m1 = blobs
                     .iter()
-                    .filter(|b| on_circle(b) < tol && !lower_path(b))
+                    .filter(|b| b.may_be_upper() && on_circle(b) < tol && !lower_path(b))
                     .filter(|b| p1.is_none_or(|p| dist(p, (b.x, b.y)) < gate1))
                     .min_by(|a, b| off(p1, a).total_cmp(&off(p1, b)))
                     .copied();
@@ -355,7 +378,7 @@ fn name_along<'a>(
                 // fast to follow from frame to frame where the upper arm is hidden.
                 let in_ring = |b: &Blob| {
                     let r = dist((b.x, b.y), g.pivot);
-                    r < reach && r > (g.r1 - g.r2).abs() - tol
+                    b.may_be_lower() && r < reach && r > (g.r1 - g.r2).abs() - tol
                 };
                 let m2 = match (m1, blobs.as_slice()) {
                     (Some(_), _) => None,
@@ -410,6 +433,7 @@ mod tests {
             short: 1.0,
             angle: 0.0,
             core: (x, y, 100.0),
+            role: super::super::detect::Role::Either,
         };
         let frames: Vec<Vec<Blob>> = (0..400)
             .map(|k| {

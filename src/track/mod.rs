@@ -6,13 +6,15 @@
 
 pub mod bridge;
 pub mod detect;
+mod errors;
 pub mod file;
 pub mod geometry;
 pub mod overlay;
+pub mod release;
 pub mod synth;
 
-pub use detect::{Blob, Markers};
-pub use file::{CsvRow, read_rows};
+pub use detect::{Blob, Markers, Role};
+pub use file::{CsvRow, Measured, read_rows};
 pub use geometry::Geometry;
 
 use crate::error::{Error, Result};
@@ -62,6 +64,9 @@ pub struct Tracked {
     pub pixels_per_metre: f64,
     pub up: Up,
     pub still: Vec<(f64, f64)>,
+    /// The time (s) of the last frame before free motion, where the film shows the
+    /// pendulum held still and then let go ([`release::release`]).
+    pub release: Option<f64>,
 }
 
 /// Which way is up: from the pendulum hanging at rest (the pivot straight above both
@@ -83,12 +88,6 @@ impl Up {
         rest: None,
     };
 
-    /// Standard errors along the picture's axes (independent) as those along the world's.
-    fn turned(&self, sx: f64, sy: f64) -> (f64, f64) {
-        let (ux, uy) = self.direction;
-        ((uy * sx).hypot(ux * sy), (ux * sx).hypot(uy * sy))
-    }
-
     /// Pixels from the pivot to metres (x along the world's right, y up).
     fn metres(&self, d: (f64, f64), ppm: f64) -> (f64, f64) {
         let (ux, uy) = self.direction;
@@ -100,8 +99,10 @@ impl Up {
 
 /// The least a rest lasts (s): a swing's turning point stands still for a frame or two.
 const REST: f64 = 1.0;
-/// How far (px) a marker at rest may move from one frame to the next: the centroid's noise.
-const STILL_STEP: f64 = 0.3;
+/// How far (px) a marker at rest may move from one frame to the next: the centroid's noise
+/// (a sticker's on a textured board, H.264 encoded twice when a phone's film is turned:
+/// up to 0.3 px on the test films).
+const STILL_STEP: f64 = 0.5;
 /// The most a hanging pendulum's arms may bend from one line (rad), and the most its line
 /// may lean from the picture's down (a camera held near level): a pendulum held still for
 /// its release bends at the middle joint, or leans further.
@@ -186,6 +187,47 @@ fn up_from_rest(
     })
 }
 
+/// `frames` without the blobs of less than half a marker's light: a reflection that moves
+/// with the pendulum (a glossy board, a window's second pane) is a dimmer copy of both
+/// markers at a fixed offset, and the upper one's copy keeps a fixed distance from the
+/// upper marker, which would pass for the lower arm. A marker's light is each frame's
+/// brightest blob of its colour (of one look for both: the second brightest), the median
+/// over the film.
+fn dim_ones_out(frames: Vec<Vec<Blob>>) -> Vec<Vec<Blob>> {
+    let reference = |role: Role| {
+        let rank = if role == Role::Either { 1 } else { 0 };
+        let mut lights: Vec<f64> = frames
+            .iter()
+            .filter_map(|f| {
+                let mut v: Vec<f64> = f
+                    .iter()
+                    .filter(|b| b.role == role)
+                    .map(|b| b.flux)
+                    .collect();
+                v.sort_by(|a, b| b.total_cmp(a));
+                v.get(rank).copied()
+            })
+            .collect();
+        let mid = lights.len() / 2;
+        (!lights.is_empty()).then(|| *lights.select_nth_unstable_by(mid, f64::total_cmp).1)
+    };
+    let least = [Role::Either, Role::Upper, Role::Lower].map(|r| (r, reference(r)));
+    frames
+        .into_iter()
+        .map(|f| {
+            f.into_iter()
+                .filter(|b| {
+                    least
+                        .iter()
+                        .find(|(r, _)| *r == b.role)
+                        .and_then(|(_, l)| *l)
+                        .is_none_or(|l| b.flux >= 0.5 * l)
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// How far (px) a blob may lie off the geometry and still be named by it: two pixels, a
 /// blurred upper marker's sag inside its circle (its mean over an arc lies r theta^2 / 24
 /// inside: 1 px at r = 300 px and 0.35 rad swept in one exposure) and its noise.
@@ -196,10 +238,12 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     let mut still = geometry::still(frames);
     let without = |still: &[(f64, f64)]| -> Vec<Vec<Blob>> {
         let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
-        frames
-            .iter()
-            .map(|f| f.iter().filter(|b| !is_still(b)).copied().collect())
-            .collect()
+        dim_ones_out(
+            frames
+                .iter()
+                .map(|f| f.iter().filter(|b| !is_still(b)).copied().collect())
+                .collect(),
+        )
     };
     let mut moving = without(&still);
     let not_found = || {
@@ -215,38 +259,47 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         still.retain(|s| !hanging.contains(s));
         moving = without(&still);
     }
-    // Markers are as bright as each other, give or take: a blob with much less light than
-    // the named ones is a reflection or a marker partly hidden (its centroid off), and one
-    // with much more is two blobs merged or a lamp.
+    // Markers of one look are as bright as each other, give or take: a blob with much less
+    // light than the named ones is a reflection or a marker partly hidden (its centroid
+    // off), and one with much more is two blobs merged or a lamp. Markers of two colours
+    // are compared each with its own.
     let named = geometry::name(&moving, &g, OFF_GEOMETRY);
-    let mut fluxes: Vec<f64> = named
-        .iter()
-        .flat_map(|(a, b)| [a, b])
-        .filter_map(|m| m.map(|b| b.flux))
-        .collect();
-    if fluxes.is_empty() {
+    let typical = |role: Role, of: fn(&Blob) -> f64| {
+        let mut v: Vec<f64> = named
+            .iter()
+            .flat_map(|(a, b)| [a, b])
+            .filter_map(|m| m.filter(|b| b.role == role).map(|b| of(&b)))
+            .collect();
+        let mid = v.len() / 2;
+        (!v.is_empty()).then(|| *v.select_nth_unstable_by(mid, f64::total_cmp).1)
+    };
+    let roles = [Role::Either, Role::Upper, Role::Lower];
+    let flux = roles.map(|r| typical(r, |b| b.flux));
+    let core = roles.map(|r| typical(r, |b| b.core.2));
+    if flux.iter().all(Option::is_none) {
         return Err(not_found());
     }
-    let median = |v: &mut Vec<f64>| {
-        let mid = v.len() / 2;
-        *v.select_nth_unstable_by(mid, f64::total_cmp).1
+    let index = |r: Role| roles.iter().position(|&x| x == r).unwrap_or(0);
+    // A sticker's colour smears further than a lamp's light under blur and the chroma's
+    // subsampling (1/120 s streaks kept 74 % of a still sticker's flux on the test film):
+    // a coloured marker may lose more before it is taken for a reflection (a quarter as
+    // bright, or less).
+    let least = |role: Role| if role == Role::Either { 0.75 } else { 0.6 };
+    let marker_like = |flux: f64, typical: f64, role: Role| {
+        (least(role) * typical..1.3 * typical).contains(&flux)
     };
-    let typical = median(&mut fluxes);
-    let mut cores: Vec<f64> = named
-        .iter()
-        .flat_map(|(a, b)| [a, b])
-        .filter_map(|m| m.map(|b| b.core.2))
-        .collect();
-    let typical_core = median(&mut cores);
-    let marker_like = |flux: f64, typical: f64| (0.75 * typical..1.3 * typical).contains(&flux);
     let plausible: Vec<Vec<Blob>> = moving
         .iter()
         .map(|f| {
             f.iter()
                 .filter_map(|b| {
-                    if marker_like(b.flux, typical) {
+                    let k = index(b.role);
+                    let (typical, typical_core) = (flux[k]?, core[k]?);
+                    // A dim blob run into a marker pulls its centroid off its core.
+                    let pulled = (b.x - b.core.0).hypot(b.y - b.core.1) > 1.0;
+                    if marker_like(b.flux, typical, b.role) && !(pulled && b.flux > 1.1 * typical) {
                         Some(*b)
-                    } else if b.flux > typical && marker_like(b.core.2, typical_core) {
+                    } else if b.flux > typical && marker_like(b.core.2, typical_core, b.role) {
                         // A marker with a dimmer blob run into it: its core is the marker.
                         Some(Blob {
                             x: b.core.0,
@@ -264,15 +317,40 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     let named = geometry::name(&plausible, &g, OFF_GEOMETRY);
     let g = geometry::refined(&named, g);
     let up = up_from_rest(&named, times, g.pivot).unwrap_or(Up::PICTURE);
-    let mark_at = |b: Blob, ppm: f64| {
+    let moved = errors::in_motion(&named);
+    let floors = errors::error_floors(&named, &moved, &g);
+    // A marker's own elongation (a sticker not quite round, lit from one side) is no
+    // motion: the median over the frames it stood still is taken out of its streaks.
+    let own = [0, 1].map(|k| {
+        let mut still: Vec<f64> = named
+            .iter()
+            .zip(&moved)
+            .filter(|(_, m)| m[k].is_none())
+            .filter_map(|(n, _)| if k == 0 { n.0 } else { n.1 })
+            .map(|b| b.streak().powi(2))
+            .collect();
+        let mid = still.len() / 2;
+        if still.is_empty() {
+            0.0
+        } else {
+            *still.select_nth_unstable_by(mid, f64::total_cmp).1
+        }
+    });
+    // The mass `k`'s place `b` in metres at `ppm`, moving as `motion` says.
+    let mark_at = |b: Blob, ppm: f64, k: usize, motion: Option<(f64, f64)>| {
         let (x, y) = up.metres((b.x - g.pivot.0, b.y - g.pivot.1), ppm);
-        let (sx, sy) = up.turned(b.sx, b.sy);
+        let floor = floors[usize::from(motion.is_some())][k].max(errors::LEAST_ERROR);
+        let (sx, sy) = up.errors(b.sx, b.sy, floor, motion);
         Mark {
             x,
             y,
             sx: sx / ppm,
             sy: sy / ppm,
-            streak: b.streak() / ppm,
+            // Still (under half a pixel a frame): no streak, whatever the shape.
+            streak: match motion {
+                Some(_) => (b.streak().powi(2) - own[k]).max(0.0).sqrt() / ppm,
+                None => 0.0,
+            },
             px: (b.x, b.y),
             bridged: false,
         }
@@ -286,7 +364,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
                 .iter()
                 .zip(times)
                 .filter_map(|(&(a, b), &t)| {
-                    let (a, b) = (mark_at(a?, 1.0), mark_at(b?, 1.0));
+                    let (a, b) = (mark_at(a?, 1.0, 0, None), mark_at(b?, 1.0, 1, None));
                     Some(crate::fit::TrackedRow {
                         t,
                         x1: a.x,
@@ -308,10 +386,11 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     let rows = named
         .iter()
         .zip(times)
-        .map(|(&(a, b), &t)| TrackRow {
+        .zip(&moved)
+        .map(|((&(a, b), &t), m)| TrackRow {
             t,
-            m1: a.map(|a| mark_at(a, ppm)),
-            m2: b.map(|b| mark_at(b, ppm)),
+            m1: a.map(|a| mark_at(a, ppm, 0, m[0])),
+            m2: b.map(|b| mark_at(b, ppm, 1, m[1])),
         })
         .collect();
     Ok(Tracked {
@@ -320,5 +399,60 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         pixels_per_metre: ppm,
         up,
         still,
+        release: release::release(&named, times),
     })
+}
+
+/// With a colour for each marker, each must be found in the film: a colour the camera never
+/// saw is named, not left to make a geometry of whatever else there is.
+pub fn check_colours_seen(markers: Markers, frames: &[Vec<Blob>]) -> Result<()> {
+    let Markers::Colours(upper, lower) = markers else {
+        return Ok(());
+    };
+    for (colour, role, which) in [(upper, Role::Upper, "upper"), (lower, Role::Lower, "lower")] {
+        let seen = frames
+            .iter()
+            .filter(|f| f.iter().any(|b| b.role == role))
+            .count();
+        // A marker hidden most of the film is still a marker; one seen in fewer than one
+        // frame in twenty is not there.
+        if seen * 20 < frames.len() {
+            let [r, g, b] = colour;
+            return Err(Error::invalid(
+                "markers",
+                format!(
+                    "no marker of colour {r:02x}{g:02x}{b:02x} (the {which} one) found: it stands out in {seen} of the {} frames; give its colour as the film shows it",
+                    frames.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// With a colour for each marker, the upper one's blobs must run on the circle the
+/// geometry found: where they mostly do not, the colours were given the other way round
+/// (the lower marker runs on no circle) and the geometry is noise.
+pub fn check_upper_on_its_circle(
+    markers: Markers,
+    frames: &[Vec<Blob>],
+    tracked: &Tracked,
+) -> Result<()> {
+    let Markers::Colours(..) = markers else {
+        return Ok(());
+    };
+    let with_upper = frames
+        .iter()
+        .filter(|f| f.iter().any(|b| b.role == Role::Upper))
+        .count();
+    let named = tracked.rows.iter().filter(|r| r.m1.is_some()).count();
+    if 2 * named < with_upper {
+        return Err(Error::invalid(
+            "markers",
+            format!(
+                "the upper marker's colour does not run on a circle about a pivot (named in {named} of the {with_upper} frames it stands out in): are the colours in order, the upper mass's first?"
+            ),
+        ));
+    }
+    Ok(())
 }

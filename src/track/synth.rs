@@ -32,14 +32,24 @@ pub struct Scene {
     /// A reflection of the lower marker in a pane at this column (px), at 40 % brightness:
     /// marker-sized and moving, but off the pendulum's geometry.
     pub reflection: Option<f64>,
+    /// A second reflection of the whole pendulum (a glossy board, a window's other pane):
+    /// both markers again, shifted by this offset (px) at this share of their brightness.
+    pub ghost: Option<((f64, f64), f64)>,
     /// The table's top edge (px row): below it the table hides what is behind it.
     pub table: Option<f64>,
     /// The camera's roll (rad): the picture shows the world turned by this much
     /// counter-clockwise about the pivot, so that the picture's up is not the world's.
     pub roll: f64,
+    /// Coloured stickers on a lit, textured grey board instead of lights in the dark: the
+    /// upper and the lower marker's colours.
+    pub stickers: Option<[[u8; 3]; 2]>,
     /// Seconds the pendulum hangs still before its release (the release at `rest`, from the
     /// film's start).
     pub rest: f64,
+    /// Seconds after the rest in which a hand lifts the pendulum to its release (its angles
+    /// eased from hanging to the start's over three quarters of it, then held still), the
+    /// release at `rest + lift`.
+    pub lift: f64,
     pub seed: u64,
 }
 
@@ -53,16 +63,19 @@ impl Scene {
             fps: 30.0,
             shutter: 1.0 / 2000.0,
             pivot: (width as f64 / 2.0, height as f64 * 0.45),
-            pixels_per_metre: 0.5 * height as f64 / reach,
+            pixels_per_metre: 0.5 * width.min(height) as f64 / reach,
             marker_sigma: 2.5,
             marker_peak: 200.0,
             background: 12.0,
             noise: 2.0,
             lamp: None,
             reflection: None,
+            ghost: None,
             table: None,
             roll: 0.0,
+            stickers: None,
             rest: 0.0,
+            lift: 0.0,
             seed: 1,
         }
     }
@@ -102,6 +115,9 @@ pub struct Renderer {
     rng: rand_pcg::Pcg64,
     noise: Vec<f32>,
     light: Vec<f32>,
+    /// With stickers: each marker's cover of each pixel (0 to 1), and the board's light.
+    cover: [Vec<f32>; 2],
+    board: Vec<f32>,
 }
 
 impl Renderer {
@@ -123,13 +139,17 @@ impl Renderer {
             .collect();
         let t_end = (frames as f64 + 1.0) / scene.fps;
         let steps = (t_end / dt).ceil() as u32 + 1;
-        // Hanging still until the release at `rest`, then swinging from `start`.
-        let swing: Vec<f64> = times.iter().map(|t| (t - scene.rest).max(0.0)).collect();
+        // Hanging still until `rest`, lifted by hand until the release at `rest + lift`,
+        // then swinging from `start`.
+        let release = scene.rest + scene.lift;
+        let swing: Vec<f64> = times.iter().map(|t| (t - release).max(0.0)).collect();
         let mut positions = crate::cpu::positions(params, start, dt, steps, &swing);
-        let hanging = params.positions(&State::at_rest(0.0, 0.0));
         for (p, t) in positions.iter_mut().zip(&times) {
-            if *t < scene.rest {
-                *p = hanging;
+            if *t < release {
+                // Smoothstep from hanging (0) to the start's angles (1), then held.
+                let u = ((t - scene.rest) / (0.75 * scene.lift).max(1e-9)).clamp(0.0, 1.0);
+                let ease = u * u * (3.0 - 2.0 * u);
+                *p = params.positions(&State::at_rest(ease * start.theta1, ease * start.theta2));
             }
         }
         let mut rng = rand_pcg::Pcg64::seed_from_u64(scene.seed);
@@ -139,6 +159,24 @@ impl Renderer {
         let noise: Vec<f32> = (0..(1 << 20) + w * h)
             .map(|_| normal.sample(&mut rng) as f32)
             .collect();
+        // The board: lit from the left (a 0.75 to 1.15 gradient across the picture) with a
+        // fixed texture of +-5 % in 4 px patches, under slightly warm light.
+        let board = match scene.stickers {
+            None => Vec::new(),
+            Some(_) => {
+                let patches = w.div_ceil(4) * h.div_ceil(4);
+                let texture: Vec<f32> = (0..patches)
+                    .map(|_| rng.random_range(-0.05f32..0.05))
+                    .collect();
+                (0..w * h)
+                    .map(|k| {
+                        let (x, y) = (k % w, k / w);
+                        let gradient = 0.75 + 0.4 * x as f32 / w as f32;
+                        gradient * (1.0 + texture[(y / 4) * w.div_ceil(4) + x / 4])
+                    })
+                    .collect()
+            }
+        };
         Renderer {
             scene: scene.clone(),
             samples,
@@ -146,10 +184,15 @@ impl Renderer {
             rng,
             noise,
             light: vec![0.0; w * h],
+            cover: match scene.stickers {
+                None => [Vec::new(), Vec::new()],
+                Some(_) => [vec![0.0; w * h], vec![0.0; w * h]],
+            },
+            board,
         }
     }
 
-    /// Frame `f` (frames in order: the noise's stream follows them) and its truth.
+    /// Frame `f` as RGB (frames in order: the noise's stream follows them) and its truth.
     pub fn frame(&mut self, f: usize) -> (Vec<u8>, TruthRow) {
         let scene = &self.scene;
         let (w, h) = (scene.width as usize, scene.height as usize);
@@ -168,6 +211,9 @@ impl Renderer {
         };
         let light = &mut self.light;
         light.iter_mut().for_each(|v| *v = scene.background as f32);
+        for c in &mut self.cover {
+            c.iter_mut().for_each(|v| *v = 0.0);
+        }
         let mut mean = [0.0f64; 4];
         let mut mean_m = [0.0f64; 4];
         // Each marker's highest and lowest row over the exposure.
@@ -176,8 +222,24 @@ impl Renderer {
             let q = self.positions[f * samples + s];
             let (p1, p2) = (scene.to_pixels(q.x1, q.y1), scene.to_pixels(q.x2, q.y2));
             let a = scene.marker_peak / samples as f64;
-            splat(light, p1, a);
-            splat(light, p2, a);
+            let shifted = |p: (f64, f64), (d, _): ((f64, f64), f64)| (p.0 + d.0, p.1 + d.1);
+            if scene.stickers.is_some() {
+                // A sticker covers its middle wholly and fades out over its edge.
+                let a = 1.0 / samples as f64;
+                splat(&mut self.cover[0], p1, a);
+                splat(&mut self.cover[1], p2, a);
+                if let Some(ghost) = scene.ghost {
+                    splat(&mut self.cover[0], shifted(p1, ghost), ghost.1 * a);
+                    splat(&mut self.cover[1], shifted(p2, ghost), ghost.1 * a);
+                }
+            } else {
+                splat(light, p1, a);
+                splat(light, p2, a);
+                if let Some(ghost) = scene.ghost {
+                    splat(light, shifted(p1, ghost), ghost.1 * a);
+                    splat(light, shifted(p2, ghost), ghost.1 * a);
+                }
+            }
             if let Some(pane) = scene.reflection {
                 splat(light, (2.0 * pane - p2.0, p2.1), 0.4 * a);
             }
@@ -196,19 +258,48 @@ impl Renderer {
         }
         let offset = self.rng.random_range(0..1 << 20);
         let edge = scene.table.unwrap_or(f64::INFINITY);
-        let frame: Vec<u8> = light
-            .iter()
-            .enumerate()
-            .map(|(k, &l)| {
-                // The table: a dark surface in front of everything below its edge.
-                let l = if (k / w) as f64 >= edge {
-                    scene.background as f32
-                } else {
-                    l
-                };
-                (l + self.noise[offset + k]).round().clamp(0.0, 255.0) as u8
-            })
-            .collect();
+        let frame: Vec<u8> = match scene.stickers {
+            None => light
+                .iter()
+                .enumerate()
+                .flat_map(|(k, &l)| {
+                    // The table: a dark surface in front of everything below its edge.
+                    let l = if (k / w) as f64 >= edge {
+                        scene.background as f32
+                    } else {
+                        l
+                    };
+                    let v = (l + self.noise[offset + k]).round().clamp(0.0, 255.0) as u8;
+                    [v, v, v]
+                })
+                .collect(),
+            Some([upper, lower]) => {
+                // The board's grey under warm light, the stickers' colours under the same
+                // light, each channel with its own noise.
+                const BOARD: [f32; 3] = [178.0, 170.0, 156.0];
+                let n = self.noise.len() - w * h;
+                (0..w * h)
+                    .flat_map(|k| {
+                        let shade = self.board[k];
+                        let (a1, a2) = (self.cover[0][k].min(1.0), self.cover[1][k].min(1.0));
+                        let bare = (1.0 - a1 - a2).max(0.0);
+                        let hidden = (k / w) as f64 >= edge;
+                        (0..3).map(move |c| {
+                            let v = if hidden {
+                                scene.background as f32
+                            } else {
+                                shade
+                                    * (bare * BOARD[c]
+                                        + a1 * upper[c] as f32
+                                        + a2 * lower[c] as f32)
+                            };
+                            (v, (offset + k + c * 7919) % n)
+                        })
+                    })
+                    .map(|(v, at)| (v + self.noise[at]).round().clamp(0.0, 255.0) as u8)
+                    .collect()
+            }
+        };
         // In view when all of the marker's light (to 3 sigma, over the whole streak) is
         // above the edge, hidden when all of it is below.
         let clear = 3.0 * sigma;
@@ -254,9 +345,9 @@ pub fn film(
         "chaoscope test film",
         frames,
         |f| {
-            let (grey, row) = renderer.frame(f);
+            let (rgb, row) = renderer.frame(f);
             truth.push(row);
-            Ok(grey.iter().flat_map(|&v| [v, v, v]).collect())
+            Ok(rgb)
         },
     )?;
     files.commit(&crate::monitor::Monitor::hidden())?;
