@@ -91,8 +91,10 @@ def test_track_equals_its_command_as_a_dataset(tmp_path):
     assert rms < 0.3 / tracked.attrs["pixels_per_metre"], rms
     with pytest.raises(ValueError, match="^l1: "):
         chaoscope.track(str(film), output=str(tmp_path / "x.csv"), progress=False)
-    with pytest.raises(ValueError, match="^markers: "):
-        chaoscope.track(str(film), l1=0.3, markers="red", progress=False)
+    # Not a colour, and two too alike in hue to tell apart.
+    for markers in ("chartreuse", "red,orange"):
+        with pytest.raises(ValueError, match="^markers: "):
+            chaoscope.track(str(film), l1=0.3, markers=markers, progress=False)
     with pytest.raises(ValueError, match="^region: "):
         chaoscope.track(str(film), l1=0.3, region=(0, 0, 5000, 10), progress=False)
     # A model is for bridging only: without bridge=True it would do nothing.
