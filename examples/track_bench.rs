@@ -121,17 +121,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let px = |m: Option<chaoscope::track::Measured>| m.map(|m| placed.pixels(m.x, m.y));
         let found: Vec<[Option<(f64, f64)>; 2]> = rows.iter().map(|r| [px(r.1), px(r.2)]).collect();
         let sc = score(&found, &truth);
-        // Each coordinate's error against its stated standard error, in pixels (the
-        // errors are stated along the world's axes, a few degrees from the picture's at
-        // most here, which moves a 1.96 sigma bound by well under 1 %).
+        // Each coordinate's error against its stated standard error, as the CSV states
+        // both: in metres from the tracked pivot along the world's axes (the truth's).
         let (mut inside, mut all) = (0usize, 0usize);
-        let ppm = placed.pixels_per_metre;
-        for ((r, t), f) in rows.iter().zip(&truth).zip(&found) {
-            for (m, at, true_at, seen) in [(r.1, f[0], t.m1, t.seen1), (r.2, f[1], t.m2, t.seen2)] {
-                if let (Some(m), Some(at), Some(true)) = (m, at, seen) {
-                    for (e, sigma) in [(at.0 - true_at.0, m.sx), (at.1 - true_at.1, m.sy)] {
+        for (r, t) in rows.iter().zip(&truth) {
+            for (m, k, seen) in [(r.1, 0, t.seen1), (r.2, 2, t.seen2)] {
+                if let (Some(m), Some(true)) = (m, seen) {
+                    for (e, sigma) in [(m.x - t.metres[k], m.sx), (m.y - t.metres[k + 1], m.sy)] {
                         all += 1;
-                        inside += usize::from(e.abs() < 1.96 * sigma * ppm);
+                        inside += usize::from(e.abs() < 1.96 * sigma);
                     }
                 }
             }

@@ -34,11 +34,15 @@ pub(super) fn in_motion(
 /// A step (px) from one frame to the next beyond a still marker's noise.
 const MOVED: f64 = 0.5;
 
-/// How much further a moving marker's place errs along its motion than across it: 1.45
-/// on the test films (a sticker at 1/120 s and LEDs at 1/60 s, H.264: the encoder's motion
-/// compensation smears a moving marker along its path). Across the motion the film's own
-/// rigid arms measure it ([`error_floors`]).
-const ALONG_MOTION: f64 = 1.45;
+/// How much further a moving marker's place errs along its motion than across it, and how
+/// that grows with its streak: along the motion the error is ALONG_MOTION times the floor
+/// and STREAK_SHARE of the streak's length in quadrature. Measured on the test films (H.264
+/// smears a moving marker along its path, the more the longer its streak): stickers at
+/// 1/120 s erred 1.3 times further along than across; LEDs at 1/60 s, whose streaks run to
+/// 60 px, by a further 0.5 % of the streak (0.05 px across, 0.25 px along at 50 px).
+/// Across the motion the film's own rigid arms measure it ([`error_floors`]).
+const ALONG_MOTION: f64 = 1.3;
+const STREAK_SHARE: f64 = 0.005;
 
 /// The least error (px) a place is stated with: a still sticker's centroid was 0.06 px
 /// from the truth on the test film, an LED's 0.06 px a coordinate (the chroma's subsampling and the board's texture
@@ -122,19 +126,23 @@ pub(super) fn error_floors(
 impl Up {
     /// A place's standard errors along the world's axes (px): its centroid's noise along
     /// the picture's (`sx`, `sy`, independent), and `floor` (px) across its motion and
-    /// [`ALONG_MOTION`] times it along the motion's direction (a unit vector in the
-    /// picture; None: alike every way).
+    /// more along the motion's direction (a unit vector in the picture; None: alike every
+    /// way) by [`ALONG_MOTION`] and [`STREAK_SHARE`] of the `streak` (px).
     pub(super) fn errors(
         &self,
         sx: f64,
         sy: f64,
         floor: f64,
         motion: Option<(f64, f64)>,
+        streak: f64,
     ) -> (f64, f64) {
         // The covariance in the picture's axes, then read along the world's right and up.
         let (mx, my) = motion.unwrap_or((1.0, 0.0));
         let excess = match motion {
-            Some(_) => (ALONG_MOTION * ALONG_MOTION - 1.0) * floor * floor,
+            Some(_) => {
+                (ALONG_MOTION * ALONG_MOTION - 1.0) * floor * floor
+                    + (STREAK_SHARE * streak).powi(2)
+            }
             None => 0.0,
         };
         let f2 = floor * floor;

@@ -340,7 +340,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     let mark_at = |b: Blob, ppm: f64, k: usize, motion: Option<(f64, f64)>| {
         let (x, y) = up.metres((b.x - g.pivot.0, b.y - g.pivot.1), ppm);
         let floor = floors[usize::from(motion.is_some())][k].max(errors::LEAST_ERROR);
-        let (sx, sy) = up.errors(b.sx, b.sy, floor, motion);
+        let (sx, sy) = up.errors(b.sx, b.sy, floor, motion, b.streak());
         Mark {
             x,
             y,
