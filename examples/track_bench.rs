@@ -121,19 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let px = |m: Option<chaoscope::track::Measured>| m.map(|m| placed.pixels(m.x, m.y));
         let found: Vec<[Option<(f64, f64)>; 2]> = rows.iter().map(|r| [px(r.1), px(r.2)]).collect();
         let sc = score(&found, &truth);
-        // Each coordinate's error against its stated standard error, as the CSV states
-        // both: in metres from the tracked pivot along the world's axes (the truth's).
-        let (mut inside, mut all) = (0usize, 0usize);
-        for (r, t) in rows.iter().zip(&truth) {
-            for (m, k, seen) in [(r.1, 0, t.seen1), (r.2, 2, t.seen2)] {
-                if let (Some(m), Some(true)) = (m, seen) {
-                    for (e, sigma) in [(m.x - t.metres[k], m.sx), (m.y - t.metres[k + 1], m.sy)] {
-                        all += 1;
-                        inside += usize::from(e.abs() < 1.96 * sigma);
-                    }
-                }
-            }
-        }
+        let calibration = chaoscope::track::synth::calibration(&rows, &truth);
         println!(
             "| {name} | {mbits:.0} | {:.3} | {:.2} % | {} | {} | {} | {:.1} % | {fps:.0} |",
             sc.rms,
@@ -141,7 +129,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             sc.invented,
             sc.swaps,
             sc.astray,
-            100.0 * inside as f64 / all.max(1) as f64,
+            100.0 * calibration,
         );
     }
     Ok(())

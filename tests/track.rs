@@ -8,7 +8,7 @@ use std::path::Path;
 
 use chaoscope::model::State;
 use chaoscope::params::Preset;
-use chaoscope::track::synth::{Scene, Score, film, score};
+use chaoscope::track::synth::{Scene, Score, calibration, film, score};
 use common::chaoscope;
 
 /// The lab's pendulum released high (it flips), as the report's runs were.
@@ -94,19 +94,8 @@ fn scored(
     // crf 14: the sensor's noise kept (a phone's film of a dark room is no cleaner).
     let truth = film(scene, &Preset::Lab.params(), start, frames, 14, &video).unwrap();
     let (rows, s) = tracked(&video, extra);
-    let (mut inside, mut all) = (0usize, 0usize);
     let measured = chaoscope::track::read_rows(&video.with_extension("csv")).unwrap();
-    for ((_, a, b), t) in measured.iter().zip(&truth) {
-        for (m, k, seen) in [(a, 0, t.seen1), (b, 2, t.seen2)] {
-            if let (Some(m), Some(true)) = (m, seen) {
-                for (e, sigma) in [(m.x - t.metres[k], m.sx), (m.y - t.metres[k + 1], m.sy)] {
-                    all += 1;
-                    inside += usize::from(e.abs() < 1.96 * sigma);
-                }
-            }
-        }
-    }
-    let calibration = inside as f64 / all.max(1) as f64;
+    let calibration = calibration(&measured, &truth);
     for ((t, _), truth) in rows.iter().zip(&truth) {
         assert!(
             (t - truth.t).abs() < 1e-4,
@@ -152,7 +141,10 @@ fn markers_of_two_colours_are_told_apart_by_colour() {
         &["--markers", "red,green"],
     );
     assert_eq!((sc.swaps, sc.astray, sc.invented), (0, 0, 0), "{sc:?}");
+    // The target for two colours.
     assert!(sc.found >= 0.98, "{sc:?}");
+    // The roll from a second's rest: the line of two markers 180 px long, each to some
+    // 0.05 px, gives its angle to 0.03 degrees; 0.1 leaves room for the chroma's blur.
     let tilt = s["up"]["tilt_degrees"].as_f64().unwrap();
     assert!((tilt - 2.5).abs() < 0.1, "{s}");
     assert!((0.85..=0.995).contains(&calibration), "{calibration}");
@@ -691,6 +683,8 @@ fn the_release_is_found_and_the_free_motion_read_from_it() {
     let (_, s) = tracked(&video, &[]);
     let found = s["release"].as_f64().unwrap();
     assert!((found - 2.2).abs() <= 1.0 / 60.0 + 1e-6, "{s}");
+    // The lift begins where the rest ends: the rest is the run of still frames before it,
+    // which the lift's first eased steps (a pixel or less) may lengthen by a few frames.
     let lift = &s["lift"];
     assert!((lift[0].as_f64().unwrap() - 1.2).abs() < 0.1, "{s}");
     let csv = video.with_extension("csv");

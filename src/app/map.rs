@@ -7,13 +7,13 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::check_output;
-use super::store::{Filled, StoreFill, fill_store, missing_note};
 use crate::engine::{Backend, Engine, MapKernels, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::monitor::Monitor;
 use crate::plan::{MapPlan, check_verdict};
 use crate::quantity::Quantity;
+use crate::render::store::{Filled, StoreFill, fill_store, missing_note};
 use crate::render::{self, MapPicture, Outputs, Picture, PictureSpec, check_writable};
 use crate::spec::{Grid, MapSpec};
 use crate::verdict;

@@ -12,7 +12,8 @@ use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::render::{self, MapPicture, Picture, PictureSpec};
 use crate::spec::{
-    self, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Range, Stepping,
+    self, AnyMap, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Range,
+    Stepping,
 };
 
 pub use crate::spec::MapKind;
@@ -150,9 +151,6 @@ pub struct Frame {
     pub grid: Grid,
 }
 
-/// One frame as a single map: what the frame's reproducing command describes.
-pub use crate::spec::AnyMap as FrameMap;
-
 /// The frames of a sweep, validated; errors name the job's field.
 pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
     if args.frames == 0 || args.frames > 100_000 {
@@ -270,7 +268,7 @@ pub fn run(
     job: &SweepJob,
     engine: &Engine,
     command: String,
-    frame_command: &dyn Fn(&FrameMap, Backend, &PictureSpec) -> String,
+    frame_command: &dyn Fn(&AnyMap, Backend, &PictureSpec) -> String,
     monitor: &Monitor,
 ) -> Result<SweepSummary> {
     // The plane as given, before any frame: its own errors name its own fields (--x),
@@ -297,7 +295,7 @@ pub fn run(
             (checked, _) => checked?,
         }
     }
-    if let FrameMap::Lyapunov(spec) = frame_map(job, &frames[0]) {
+    if let AnyMap::Lyapunov(spec) = frame_map(job, &frames[0]) {
         spec.validate()?;
     }
     if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
@@ -465,14 +463,14 @@ fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
     }
 }
 
-fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
+fn frame_map(job: &SweepJob, frame: &Frame) -> AnyMap {
     match job.map {
-        MapKind::FLIP_TIME => FrameMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
-        MapKind::FLIP_KIND => FrameMap::Flip(FlipSpec {
+        MapKind::FLIP_TIME => AnyMap::Flip(FlipSpec::new(frame.params, frame.grid, job.stepping)),
+        MapKind::FLIP_KIND => AnyMap::Flip(FlipSpec {
             measure: FlipMeasure::Kind,
             ..FlipSpec::new(frame.params, frame.grid, job.stepping)
         }),
-        kind => FrameMap::Lyapunov(LyapunovSpec {
+        kind => AnyMap::Lyapunov(LyapunovSpec {
             indicator: kind
                 .entry()
                 .indicator
@@ -484,16 +482,16 @@ fn frame_map(job: &SweepJob, frame: &Frame) -> FrameMap {
 
 /// One frame's map, on the GPU unless it needs f64 (the engine decides).
 /// One frame's map, planned as every map is ([`Engine::plan`]: the checks of its path).
-fn frame_field(map: &FrameMap, engine: &Engine, monitor: &Monitor) -> Result<Field> {
+fn frame_field(map: &AnyMap, engine: &Engine, monitor: &Monitor) -> Result<Field> {
     let (field, _) = match map {
-        FrameMap::Flip(spec) => engine.planned_map(&engine.plan(spec, false)?, monitor)?,
-        FrameMap::Lyapunov(spec) => engine.planned_map(&engine.plan(spec, false)?, monitor)?,
+        AnyMap::Flip(spec) => engine.planned_map(&engine.plan(spec, false)?, monitor)?,
+        AnyMap::Lyapunov(spec) => engine.planned_map(&engine.plan(spec, false)?, monitor)?,
     };
     Ok(field)
 }
 
 /// One frame's picture.
-fn frame_picture(job: &SweepJob, map: &FrameMap, field: &Field) -> Result<Picture> {
+fn frame_picture(job: &SweepJob, map: &AnyMap, field: &Field) -> Result<Picture> {
     // One colour range for every frame of the FTLE (--ftle-max); the other indicators take
     // their own default range per frame.
     let range = (job.map == MapKind::FTLE).then_some((0.0, job.ftle_max as f32));

@@ -142,9 +142,7 @@ pub fn run(
             format!("{} frames: tracking needs at least 10", blobs.len()),
         ));
     }
-    track::check_colours_seen(job.markers, &blobs)?;
-    let mut tracked = track::track(&blobs, &times, job.scale)?;
-    track::check_upper_on_its_circle(job.markers, &blobs, &tracked)?;
+    let mut tracked = track::track(&blobs, &times, job.scale, job.markers)?;
     let bridged = match (&job.bridge, engine) {
         (Some(sources), Some(engine)) => Some(track::bridge::bridge(
             &mut tracked,
@@ -195,12 +193,7 @@ pub fn run(
         up: tracked.up,
         still: tracked.still.clone(),
         release: tracked.release,
-        lift: tracked
-            .up
-            .rest
-            .zip(tracked.release)
-            .map(|((_, end), release)| (end, release))
-            .filter(|(end, release)| release > end),
+        lift: tracked.lift(),
         codec: decoder.probe.codec.clone(),
         width,
         height,

@@ -10,7 +10,7 @@ use crate::app::flip::FlipJob;
 use crate::app::forecast::ForecastJob;
 use crate::app::lyapunov::{LyapunovMapJob, LyapunovPointJob};
 use crate::app::phase::PhaseJob;
-use crate::app::sweep::{FrameMap, SweepJob};
+use crate::app::sweep::SweepJob;
 use crate::app::traces::TracesJob;
 use crate::app::trajectory::TrajectoryJob;
 use crate::app::twin::TwinJob;
@@ -19,6 +19,7 @@ use crate::engine::Backend;
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::PictureSpec;
+use crate::spec::AnyMap;
 use crate::spec::{
     FlipMeasure, FlipSpec, Grid, Indicator, Integrator, LyapunovSpec, Method, Precision, Spread,
     Stepping, Var,
@@ -365,10 +366,10 @@ pub fn phase(job: &PhaseJob) -> String {
 }
 
 /// One sweep frame as a single map.
-pub fn frame(map: &FrameMap, backend: Backend, pic: &PictureSpec) -> String {
+pub fn frame(map: &AnyMap, backend: Backend, pic: &PictureSpec) -> String {
     match map {
-        FrameMap::Flip(spec) => flip_map(spec, backend, pic),
-        FrameMap::Lyapunov(spec) => lyapunov_map_of(spec, backend, pic),
+        AnyMap::Flip(spec) => flip_map(spec, backend, pic),
+        AnyMap::Lyapunov(spec) => lyapunov_map_of(spec, backend, pic),
     }
 }
 

@@ -192,7 +192,7 @@ pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
     });
     let fitted = nalgebra::DVector::from_row_slice(&fit.values);
     let freedom = effective_freedom(fit);
-    let scatter = ChiSquared::new(freedom).ok();
+    let scatter = ChiSquared::new(freedom).expect("at least 3 degrees of freedom");
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut members = Members {
         starts: Vec::with_capacity(n),
@@ -203,7 +203,7 @@ pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
     for _ in 0..n {
         let z = nalgebra::DVector::from_fn(PARAMETERS, |_, _| StandardNormal.sample(&mut rng));
         // A t draw: a normal over the root of a chi-square over its degrees of freedom.
-        let widen = scatter.map_or(1.0, |chi| (freedom / chi.sample(&mut rng)).sqrt());
+        let widen = (freedom / scatter.sample(&mut rng)).sqrt();
         let mut v = &fitted + &root * z * widen;
         let lift = nalgebra::Vector2::new((-v[4]).max(0.0), (-v[5]).max(0.0));
         if lift != nalgebra::Vector2::zeros() {

@@ -13,7 +13,7 @@ pub mod model_error;
 pub mod outcome;
 pub mod pendulum;
 pub mod plots;
-mod quantiles;
+pub mod quantiles;
 mod refine;
 pub mod twin;
 pub mod verdict;

@@ -34,6 +34,21 @@ pub fn quantiles(v: &mut [f32]) -> [f64; 5] {
     ranks.map(|r| f32::from_bits(order(keys[r]) as u32) as f64)
 }
 
+/// The median of `v` by the nearest rank (the upper middle of an even count: the value
+/// at rank n / 2), `v` reordered; None for no values.
+pub fn median(v: &mut [f64]) -> Option<f64> {
+    let mid = v.len() / 2;
+    (!v.is_empty()).then(|| *v.select_nth_unstable_by(mid, f64::total_cmp).1)
+}
+
+/// The spread of `v` robust to strays: 1.4826 median absolute deviations from the median
+/// (the standard deviation, for normal values); None for no values.
+pub fn robust_spread(v: &mut [f64]) -> Option<f64> {
+    let m = median(v)?;
+    let mut dev: Vec<f64> = v.iter().map(|x| (x - m).abs()).collect();
+    Some(1.4826 * median(&mut dev)?)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -54,11 +54,9 @@ pub fn time_quantum(t: &[f64]) -> f64 {
         })
         .unwrap_or(0.0);
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    if steps.is_empty() {
+    let Some(median) = super::quantiles::median(&mut steps) else {
         return 0.0;
-    }
-    let mid = steps.len() / 2;
-    let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    };
     let rounded = steps.iter().any(|s| {
         let off = (s - median).abs();
         off > 0.5 * q && off < 1.5 * q

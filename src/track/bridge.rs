@@ -110,8 +110,7 @@ pub fn bridge(
     // The film's frame interval: the median step between rows.
     let frame = {
         let mut steps: Vec<f64> = tracked.rows.windows(2).map(|w| w[1].t - w[0].t).collect();
-        let mid = steps.len() / 2;
-        *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+        crate::fit::quantiles::median(&mut steps).unwrap_or(f64::NAN)
     };
     for gap in gaps {
         monitor.check()?;

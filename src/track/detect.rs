@@ -40,6 +40,11 @@ pub enum Role {
     Lower,
 }
 
+impl Role {
+    /// Every role, each at its own index (`role as usize`).
+    pub const ALL: [Role; 3] = [Role::Either, Role::Upper, Role::Lower];
+}
+
 impl Markers {
     /// `bright`, or one or two colours (the upper marker's first), each as RRGGBB
     /// (`ff2020`, a leading `#` allowed) or a name (`red`, `green`...).
@@ -124,12 +129,6 @@ impl Markers {
             scratch.score = score;
         }
         out
-    }
-
-    /// The frame as a marker-ness image (bright where a marker is), in `out`; with two
-    /// colours, the upper marker's.
-    pub fn score(self, frame: &[u8], out: &mut Vec<f32>) {
-        score_into(self.looks()[0].0, frame, out)
     }
 }
 
@@ -485,9 +484,9 @@ mod tests {
         };
         paint(&mut rgb, 40.4, 20.7, [230.0, 30.0, 30.0]);
         paint(&mut rgb, 15.0, 30.0, [60.0, 60.0, 60.0]);
-        let mut score = Vec::new();
-        Markers::parse("e01e1e").unwrap().score(&rgb, &mut score);
-        let found = blobs(&score, w, None, &mut Scratch::default());
+        let found = Markers::parse("e01e1e")
+            .unwrap()
+            .find(&rgb, w, None, &mut Scratch::default());
         assert_eq!(found.len(), 1, "{found:?}");
         // Within 0.05 px: the picture is quantised to whole levels.
         assert!(

@@ -3,10 +3,11 @@
 
 use super::geometry::{self, Geometry};
 use super::{Blob, Up};
+use crate::fit::quantiles::robust_spread;
 
-/// Which way each mass moved in each frame (a unit vector in the picture), where it moved
-/// more than [`MOVED`] px from its place in a neighbouring frame; None where it stood still
-/// or was seen in neither neighbour.
+/// Which way each mass moved in each frame (a unit vector in the picture), where its mean
+/// step from the neighbouring frames it was seen in (the one before to the one after) is
+/// more than [`MOVED`] px; None where it stood still or was seen in neither neighbour.
 pub(super) fn in_motion(
     named: &[(geometry::Named, geometry::Named)],
 ) -> Vec<[Option<(f64, f64)>; 2]> {
@@ -22,10 +23,10 @@ pub(super) fn in_motion(
                 let (before, here, after) =
                     (at(i.checked_sub(1), k), at(Some(i), k)?, at(Some(i + 1), k));
                 let (a, b) = (before.unwrap_or(here), after.unwrap_or(here));
+                let steps = usize::from(before.is_some()) + usize::from(after.is_some());
                 let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-                let step = dx.hypot(dy)
-                    / f64::from(u8::from(before.is_some()) + u8::from(after.is_some())).max(1.0);
-                (step > MOVED).then(|| (dx / dx.hypot(dy), dy / dx.hypot(dy)))
+                let length = dx.hypot(dy);
+                (steps > 0 && length > MOVED * steps as f64).then(|| (dx / length, dy / length))
             })
         })
         .collect()
@@ -98,10 +99,7 @@ pub(super) fn error_floors(
         if e.len() < 8 {
             return None;
         }
-        let mid = e.len() / 2;
-        let median = *e.select_nth_unstable_by(mid, f64::total_cmp).1;
-        let mut dev: Vec<f64> = e.iter().map(|x| (x - median).abs()).collect();
-        Some(1.4826 * *dev.select_nth_unstable_by(mid, f64::total_cmp).1)
+        robust_spread(&mut e)
     };
     [false, true].map(|motion| {
         let mean_noise = |k: usize| {

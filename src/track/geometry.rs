@@ -8,6 +8,7 @@
 use rand::{Rng, SeedableRng};
 
 use super::detect::Blob;
+use crate::fit::quantiles::median;
 
 /// The pivot (px), the upper marker's circle's radius and the lower arm (px).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -162,11 +163,7 @@ pub fn find(frames: &[Vec<Blob>], tol: f64, seed: u64) -> Option<Geometry> {
         .into_iter()
         .filter(|d| (d - peak).abs() < tol)
         .collect();
-    if near.is_empty() {
-        return None;
-    }
-    let mid = near.len() / 2;
-    let r2 = *near.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let r2 = median(&mut near)?;
     Some(Geometry {
         pivot: centre,
         r1: r,
@@ -208,8 +205,7 @@ pub fn refined(named: &[(Named, Named)], g: Geometry) -> Geometry {
         })
         .collect();
     let (pivot, r1) = fit_circle(&outward, (pivot, r1));
-    let mid = arms.len() / 2;
-    let r2 = *arms.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let r2 = median(&mut arms).unwrap_or(g.r2);
     // A circle that wandered off (too few places on too short an arc) keeps the first.
     if !(dist(pivot, g.pivot) < 3.0 && (r1 - g.r1).abs() < 3.0) {
         return g;

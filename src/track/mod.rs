@@ -18,6 +18,7 @@ pub use file::{CsvRow, Measured, read_rows};
 pub use geometry::Geometry;
 
 use crate::error::{Error, Result};
+use crate::fit::quantiles::median;
 
 /// How pixels become metres.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,6 +68,15 @@ pub struct Tracked {
     /// The time (s) of the last frame before free motion, where the film shows the
     /// pendulum held still and then let go ([`release::release`]).
     pub release: Option<f64>,
+}
+
+impl Tracked {
+    /// When the pendulum was lifted by hand: from the end of its rest to the release, where
+    /// the film shows both.
+    pub fn lift(&self) -> Option<(f64, f64)> {
+        let (_, end) = self.up.rest?;
+        self.release.filter(|&t| t > end).map(|t| (end, t))
+    }
 }
 
 /// Which way is up: from the pendulum hanging at rest (the pivot straight above both
@@ -208,21 +218,14 @@ fn dim_ones_out(frames: Vec<Vec<Blob>>) -> Vec<Vec<Blob>> {
                 v.get(rank).copied()
             })
             .collect();
-        let mid = lights.len() / 2;
-        (!lights.is_empty()).then(|| *lights.select_nth_unstable_by(mid, f64::total_cmp).1)
+        median(&mut lights)
     };
-    let least = [Role::Either, Role::Upper, Role::Lower].map(|r| (r, reference(r)));
+    let least = Role::ALL.map(reference);
     frames
         .into_iter()
         .map(|f| {
             f.into_iter()
-                .filter(|b| {
-                    least
-                        .iter()
-                        .find(|(r, _)| *r == b.role)
-                        .and_then(|(_, l)| *l)
-                        .is_none_or(|l| b.flux >= 0.5 * l)
-                })
+                .filter(|b| least[b.role as usize].is_none_or(|l| b.flux >= 0.5 * l))
                 .collect()
         })
         .collect()
@@ -233,8 +236,15 @@ fn dim_ones_out(frames: Vec<Vec<Blob>>) -> Vec<Vec<Blob>> {
 /// inside: 1 px at r = 300 px and 0.35 rad swept in one exposure) and its noise.
 const OFF_GEOMETRY: f64 = 3.0;
 
-/// Names every frame's blobs and turns them into rows (times from `times`).
-pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracked> {
+/// Names every frame's blobs (found as `markers` say) and turns them into rows (times from
+/// `times`).
+pub fn track(
+    frames: &[Vec<Blob>],
+    times: &[f64],
+    scale: Scale,
+    markers: Markers,
+) -> Result<Tracked> {
+    check_colours_seen(markers, frames)?;
     let mut still = geometry::still(frames);
     let without = |still: &[(f64, f64)]| -> Vec<Vec<Blob>> {
         let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
@@ -270,16 +280,13 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
             .flat_map(|(a, b)| [a, b])
             .filter_map(|m| m.filter(|b| b.role == role).map(|b| of(&b)))
             .collect();
-        let mid = v.len() / 2;
-        (!v.is_empty()).then(|| *v.select_nth_unstable_by(mid, f64::total_cmp).1)
+        median(&mut v)
     };
-    let roles = [Role::Either, Role::Upper, Role::Lower];
-    let flux = roles.map(|r| typical(r, |b| b.flux));
-    let core = roles.map(|r| typical(r, |b| b.core.2));
+    let flux = Role::ALL.map(|r| typical(r, |b| b.flux));
+    let core = Role::ALL.map(|r| typical(r, |b| b.core.2));
     if flux.iter().all(Option::is_none) {
         return Err(not_found());
     }
-    let index = |r: Role| roles.iter().position(|&x| x == r).unwrap_or(0);
     // A sticker's colour smears further than a lamp's light under blur and the chroma's
     // subsampling (1/120 s streaks kept 74 % of a still sticker's flux on the test film):
     // a coloured marker may lose more before it is taken for a reflection (a quarter as
@@ -293,7 +300,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         .map(|f| {
             f.iter()
                 .filter_map(|b| {
-                    let k = index(b.role);
+                    let k = b.role as usize;
                     let (typical, typical_core) = (flux[k]?, core[k]?);
                     // A dim blob run into a marker pulls its centroid off its core.
                     let pulled = (b.x - b.core.0).hypot(b.y - b.core.1) > 1.0;
@@ -315,6 +322,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
         })
         .collect();
     let named = geometry::name(&plausible, &g, OFF_GEOMETRY);
+    check_upper_on_its_circle(frames, &named)?;
     let g = geometry::refined(&named, g);
     let up = up_from_rest(&named, times, g.pivot).unwrap_or(Up::PICTURE);
     let moved = errors::in_motion(&named);
@@ -329,12 +337,7 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
             .filter_map(|(n, _)| if k == 0 { n.0 } else { n.1 })
             .map(|b| b.streak().powi(2))
             .collect();
-        let mid = still.len() / 2;
-        if still.is_empty() {
-            0.0
-        } else {
-            *still.select_nth_unstable_by(mid, f64::total_cmp).1
-        }
+        median(&mut still).unwrap_or(0.0)
     });
     // The mass `k`'s place `b` in metres at `ppm`, moving as `motion` says.
     let mark_at = |b: Blob, ppm: f64, k: usize, motion: Option<(f64, f64)>| {
@@ -403,17 +406,22 @@ pub fn track(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracke
     })
 }
 
+/// The frames in which a blob of `role` stands out.
+fn frames_with(frames: &[Vec<Blob>], role: Role) -> usize {
+    frames
+        .iter()
+        .filter(|f| f.iter().any(|b| b.role == role))
+        .count()
+}
+
 /// With a colour for each marker, each must be found in the film: a colour the camera never
 /// saw is named, not left to make a geometry of whatever else there is.
-pub fn check_colours_seen(markers: Markers, frames: &[Vec<Blob>]) -> Result<()> {
+fn check_colours_seen(markers: Markers, frames: &[Vec<Blob>]) -> Result<()> {
     let Markers::Colours(upper, lower) = markers else {
         return Ok(());
     };
     for (colour, role, which) in [(upper, Role::Upper, "upper"), (lower, Role::Lower, "lower")] {
-        let seen = frames
-            .iter()
-            .filter(|f| f.iter().any(|b| b.role == role))
-            .count();
+        let seen = frames_with(frames, role);
         // A marker hidden most of the film is still a marker; one seen in fewer than one
         // frame in twenty is not there.
         if seen * 20 < frames.len() {
@@ -433,20 +441,13 @@ pub fn check_colours_seen(markers: Markers, frames: &[Vec<Blob>]) -> Result<()> 
 /// With a colour for each marker, the upper one's blobs must run on the circle the
 /// geometry found: where they mostly do not, the colours were given the other way round
 /// (the lower marker runs on no circle) and the geometry is noise.
-pub fn check_upper_on_its_circle(
-    markers: Markers,
+fn check_upper_on_its_circle(
     frames: &[Vec<Blob>],
-    tracked: &Tracked,
+    named: &[(geometry::Named, geometry::Named)],
 ) -> Result<()> {
-    let Markers::Colours(..) = markers else {
-        return Ok(());
-    };
-    let with_upper = frames
-        .iter()
-        .filter(|f| f.iter().any(|b| b.role == Role::Upper))
-        .count();
-    let named = tracked.rows.iter().filter(|r| r.m1.is_some()).count();
-    if 2 * named < with_upper {
+    let with_upper = frames_with(frames, Role::Upper);
+    let named = named.iter().filter(|(a, _)| a.is_some()).count();
+    if with_upper > 0 && 2 * named < with_upper {
         return Err(Error::invalid(
             "markers",
             format!(

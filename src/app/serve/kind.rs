@@ -1,8 +1,8 @@
 //! The maps the explorer shows: every line of the kinds' table ([`MapKind::all`]), and the
 //! verdict; the page's menu and legends are built from [`Kind::describe`].
 
-use crate::app::sweep::FrameMap;
 use crate::error::{Error, Result};
+use crate::spec::AnyMap;
 use crate::spec::MapKind;
 
 /// The map a tile shows: a map of the kinds' table ([`MapKind::all`]), or the verdict.
@@ -59,7 +59,7 @@ impl Kind {
     }
 
     /// The kind a stored map shows.
-    pub fn of(map: &FrameMap) -> Kind {
+    pub fn of(map: &AnyMap) -> Kind {
         Kind::Map(MapKind::of(map))
     }
 

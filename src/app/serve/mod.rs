@@ -36,13 +36,13 @@ use self::view::{Kind, Query, View};
 use self::world::World;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::LyapunovMapJob;
-use crate::app::sweep::FrameMap;
 use crate::app::trajectory::TrajectoryJob;
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::store::MapStore;
+use crate::spec::AnyMap;
 use crate::spec::{Grid, MapSpec};
 
 /// Requests waiting for (or holding) the engine at most; more get 503 at once, so a burst
@@ -86,7 +86,7 @@ pub struct ServeJob {
 pub struct StoredMap {
     pub path: PathBuf,
     pub command: String,
-    pub map: FrameMap,
+    pub map: AnyMap,
 }
 
 impl StoredMap {
@@ -156,7 +156,7 @@ struct Shared {
 }
 
 impl Shared {
-    fn stored(&self) -> Option<FrameMap> {
+    fn stored(&self) -> Option<AnyMap> {
         self.store.as_ref().map(|(_, s)| s.map)
     }
 

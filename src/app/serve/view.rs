@@ -4,11 +4,11 @@
 
 use std::f64::consts::PI;
 
-use crate::app::sweep::FrameMap;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::params::ParamSources;
 use crate::render::Colormap;
+use crate::spec::AnyMap;
 use crate::spec::{
     Axis, FlipMeasure, FlipSpec, Grid, Integrator, LyapunovSpec, MapSpec, Precision, Range,
     Sampling, Stepping, Var,
@@ -54,7 +54,7 @@ pub struct View {
     /// FTLE colours from .0 to .1 (1/s).
     pub range: (f32, f32),
     /// A store's map, whose command fixed the physics, stepping and integrator.
-    pub stored: Option<FrameMap>,
+    pub stored: Option<AnyMap>,
     /// The plane and its region (256 x 256 pixels; tiles, points and saved views take their
     /// own sizes).
     pub plane: Grid,
@@ -69,7 +69,7 @@ impl Query {
     pub fn view(
         &mut self,
         base: &ParamSources,
-        stored: Option<FrameMap>,
+        stored: Option<AnyMap>,
         on_gpu: bool,
     ) -> Result<View> {
         let kind = self.take("kind");
@@ -289,7 +289,7 @@ fn rename(e: Error, from: &str, to: &'static str) -> Error {
 impl View {
     /// The flip map of this view over `grid`, as `chaoscope flip` makes it.
     pub fn flip_spec(&self, grid: Grid) -> FlipSpec {
-        if let Some(FrameMap::Flip(stored)) = self.stored {
+        if let Some(AnyMap::Flip(stored)) = self.stored {
             return FlipSpec {
                 grid,
                 band: None,
@@ -315,7 +315,7 @@ impl View {
     /// The divergence map of this view over `grid`, as `chaoscope lyapunov` makes it by
     /// default (tangent method, renormalised every 0.1 s), or with `--accurate`.
     pub fn lyapunov_spec(&self, grid: Grid) -> LyapunovSpec {
-        if let Some(FrameMap::Lyapunov(stored)) = self.stored {
+        if let Some(AnyMap::Lyapunov(stored)) = self.stored {
             return LyapunovSpec {
                 grid,
                 band: None,

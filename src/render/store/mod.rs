@@ -16,11 +16,13 @@ use zarrs::group::{Group, GroupBuilder};
 use zarrs::storage::ReadableStorageTraits;
 
 mod atomic;
+mod fill;
 mod identity;
 mod sweep;
 mod units;
 
 pub use atomic::AtomicStore;
+pub use fill::{Filled, StoreFill, fill_store, missing_note};
 use identity::check_same;
 pub use sweep::SweepStore;
 pub use units::{Unit, pairs_mirrored, task_units, units};
