@@ -7,13 +7,17 @@
 //!
 //! options: --shutter S (s, default 1/2000), --lamp X,Y, --reflection X (a pane's column),
 //! --table Y (the table's edge, px row), --roll A (the camera's roll, rad), --rest S (s
-//! hanging still before the release), --lift S (s lifted by hand after the rest), --seed N, --crf Q, --theta1 A --theta2 B, --fps F
-//! (frames a second, default 30), --params FILE.toml (the pendulum filmed, default the lab
-//! preset; its markers at the middle joint and the lower arm's end), --stickers C1,C2
+//! hanging still before the release), --lift S (s lifted by hand after the rest), --hand
+//! (a hand comes in during the rest, holds the lower mass through the lift and is pulled
+//! away at the release), --seed N, --crf Q, --theta1 A --theta2 B, --fps F (frames a
+//! second, default 30), --params FILE.toml (the pendulum filmed, default the lab preset;
+//! its markers at the middle joint and the lower arm's end), --stickers C1,C2[,C3]
 //! (coloured stickers on a lit, textured board instead of LEDs in the dark: the upper and
-//! the lower one's colours, as `track --markers` takes them), --marker-sigma PX (a
-//! marker's size, default 2.5), --ghost DX,DY,SHARE (both markers again, shifted by DX,DY
-//! px at SHARE of their brightness: a reflection that moves with the pendulum).
+//! the lower one's colours and the pivot's, as `track --markers` takes them),
+//! --pivot-marker (an LED on the axle), --wander PX (the picture wanders by this much, the
+//! pivot's marker with it), --marker-sigma PX (a marker's size, default 2.5), --ghost
+//! DX,DY,SHARE (both markers again, shifted by DX,DY px at SHARE of their brightness: a
+//! reflection that moves with the pendulum).
 
 use std::io::Write;
 
@@ -79,11 +83,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scene.lift = number("--lift")?.unwrap_or(0.0);
     if let Some(m) = option("--stickers") {
         scene.stickers = Some(match chaoscope::track::Markers::parse(&m)? {
-            chaoscope::track::Markers::Colours(a, b) => [a, b],
+            chaoscope::track::Markers::Colours {
+                upper,
+                lower,
+                pivot,
+            } => {
+                scene.pivot_marker = pivot.or(scene.pivot_marker);
+                [upper, lower]
+            }
             chaoscope::track::Markers::Colour(c) => [c, c],
             chaoscope::track::Markers::Bright => return Err("--stickers C1,C2".into()),
         });
     }
+    if args.iter().any(|a| a == "--pivot-marker") {
+        scene.pivot_marker = scene.pivot_marker.or(Some([255; 3]));
+    }
+    scene.wander = number("--wander")?.unwrap_or(0.0);
+    scene.hand = args.iter().any(|a| a == "--hand");
     if let Some(s) = number("--marker-sigma")? {
         scene.marker_sigma = s;
     }
@@ -101,10 +117,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut csv = std::io::BufWriter::new(std::fs::File::create(out.with_extension("truth.csv"))?);
     writeln!(
         csv,
-        "# the truth of {}: the markers' mean positions over each exposure",
+        "# the truth of {}: the markers' mean positions over each exposure (px as the picture would show them had it not wandered; its wander in shift_x, shift_y)",
         out.display()
     )?;
-    writeln!(csv, "t,px1,py1,px2,py2,x1,y1,x2,y2,seen1,seen2")?;
+    writeln!(
+        csv,
+        "t,px1,py1,px2,py2,x1,y1,x2,y2,seen1,seen2,shift_x,shift_y"
+    )?;
     let seen = |s: Option<bool>| match s {
         Some(true) => "in_view",
         Some(false) => "hidden",
@@ -114,7 +133,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let m = r.metres;
         writeln!(
             csv,
-            "{:.6},{:.4},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.6},{},{}",
+            "{:.6},{:.4},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.6},{},{},{:.4},{:.4}",
             r.t,
             r.m1.0,
             r.m1.1,
@@ -125,7 +144,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             m[2],
             m[3],
             seen(r.seen1),
-            seen(r.seen2)
+            seen(r.seen2),
+            r.shift.0,
+            r.shift.1
         )?;
     }
     csv.flush()?;

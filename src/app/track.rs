@@ -54,6 +54,8 @@ pub struct TrackSummary {
     /// it was lifted by hand (where a rest was seen).
     pub release: Option<f64>,
     pub lift: Option<(f64, f64)>,
+    /// The marker at the pivot the masses were measured from, where the film shows one.
+    pub pivot_marker: Option<track::PivotMarker>,
     pub codec: String,
     pub width: u32,
     pub height: u32,
@@ -194,6 +196,7 @@ pub fn run(
         still: tracked.still.clone(),
         release: tracked.release,
         lift: tracked.lift(),
+        pivot_marker: tracked.pivot_marker,
         codec: decoder.probe.codec.clone(),
         width,
         height,

@@ -33,10 +33,13 @@ pub struct TrackArgs {
     pub pixels_per_metre: Option<crate::fit::data::PixelScale>,
     /// What the markers look like: bright (lights on a dark background), one colour for
     /// both (stickers on a lighter or other-coloured board), or two as UPPER,LOWER (the
-    /// upper mass's first). A colour as RRGGBB (e.g. ff2020) or a name: red, orange, yellow,
-    /// green, cyan, blue, purple, magenta, pink. What counts is the hue, so a sticker in
-    /// shade or under a lighting gradient is still found; two colours must differ in hue by
-    /// more than 60 degrees.
+    /// upper mass's first), or three as UPPER,LOWER,PIVOT with a marker on the pivot. A
+    /// colour as RRGGBB (e.g. ff2020) or a name: red, orange, yellow, green, cyan, blue,
+    /// purple, magenta, pink. What counts is the hue, so a sticker in shade or under a
+    /// lighting gradient is still found; colours must differ in hue by more than 60 degrees.
+    /// A marker that stays at the pivot (of its own colour, or like the masses') is found
+    /// by itself: the masses are then measured from it frame by frame, so that a camera or
+    /// stand that creeps moves nothing.
     #[arg(long, default_value = "bright", value_parser = Markers::parse)]
     pub markers: Markers,
     /// Look only within X0,Y0,X1,Y1 (pixels from the top left corner).
@@ -134,6 +137,15 @@ pub fn run(args: &TrackArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         s.still.len(),
         s.output.display()
     );
+    if let Some(p) = &s.pivot_marker {
+        eprintln!(
+            "positions taken from the pivot's marker at ({:.1}, {:.1}) px, measured in {:.1} % of the frames; it wandered {:.2} px RMS",
+            p.place.0,
+            p.place.1,
+            100.0 * p.seen,
+            p.wander
+        );
+    }
     match s.release {
         Some(t) => eprintln!(
             "released at {t:.3} s (the last still frame before it swings){}: fit and forecast read the free motion from there",

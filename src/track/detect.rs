@@ -11,10 +11,14 @@ pub enum Markers {
     /// Both of this colour on a lighter or other-coloured background: each pixel's colour
     /// along the marker's hue (its chroma projected on the marker's).
     Colour([u8; 3]),
-    /// The upper marker of the first colour, the lower of the second: each found on its own
-    /// colour's score, so that which mass a blob is follows from its colour as well as from
-    /// the geometry.
-    Colours([u8; 3], [u8; 3]),
+    /// The upper marker of one colour, the lower of another (and a marker at the pivot of a
+    /// third, where there is one): each found on its own colour's score, so that which
+    /// mass a blob is follows from its colour as well as from the geometry.
+    Colours {
+        upper: [u8; 3],
+        lower: [u8; 3],
+        pivot: Option<[u8; 3]>,
+    },
 }
 
 /// Colour names a marker may be given by, and the colour a sticker of that name shows a
@@ -32,22 +36,25 @@ pub const COLOUR_NAMES: [(&str, [u8; 3]); 9] = [
 ];
 
 /// Which mass a blob may be: either (one look for both markers), or the one whose colour
-/// it has.
+/// it has; or the pivot's marker, by its own colour (a marker of one look at the pivot is
+/// told by its place: [`super::pivot`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Role {
     Either,
     Upper,
     Lower,
+    Pivot,
 }
 
 impl Role {
     /// Every role, each at its own index (`role as usize`).
-    pub const ALL: [Role; 3] = [Role::Either, Role::Upper, Role::Lower];
+    pub const ALL: [Role; 4] = [Role::Either, Role::Upper, Role::Lower, Role::Pivot];
 }
 
 impl Markers {
-    /// `bright`, or one or two colours (the upper marker's first), each as RRGGBB
-    /// (`ff2020`, a leading `#` allowed) or a name (`red`, `green`...).
+    /// `bright`, or one colour, or two (the upper marker's first) and a third for a marker
+    /// at the pivot, each as RRGGBB (`ff2020`, a leading `#` allowed) or a name (`red`,
+    /// `green`...).
     pub fn parse(s: &str) -> Result<Markers, String> {
         if s == "bright" {
             return Ok(Markers::Bright);
@@ -71,32 +78,52 @@ impl Markers {
                     "{c} is grey or nearly: a marker's colour must differ from grey (its channels by 40 levels or more) for its hue to be found"
                 )),
                 _ => Err(format!(
-                    "{c}: bright, or a colour as RRGGBB (e.g. ff2020) or a name ({names}); two colours as UPPER,LOWER"
+                    "{c}: bright, or a colour as RRGGBB (e.g. ff2020) or a name ({names}); two colours as UPPER,LOWER, three as UPPER,LOWER,PIVOT"
                 )),
             }
         };
-        match s.split(',').collect::<Vec<_>>()[..] {
-            [one] => Ok(Markers::Colour(colour(one)?)),
-            [upper, lower] => {
-                let (a, b) = (colour(upper)?, colour(lower)?);
-                if hue_cosine(a, b) > 0.5 {
+        let given: Vec<&str> = s.split(',').collect();
+        if given.len() > 3 {
+            return Err(format!(
+                "{s}: at most three colours, the upper marker's, the lower's and the pivot's (e.g. red,green,blue)"
+            ));
+        }
+        let colours = given
+            .iter()
+            .map(|c| colour(c))
+            .collect::<Result<Vec<_>, _>>()?;
+        for i in 0..colours.len() {
+            for j in i + 1..colours.len() {
+                if hue_cosine(colours[i], colours[j]) > 0.5 {
                     return Err(format!(
-                        "{upper} and {lower} are too alike in hue to tell the markers apart (their hues within 60 degrees): give one colour for both"
+                        "{} and {} are too alike in hue to tell the markers apart (their hues within 60 degrees): give colours further apart, or one colour for both masses",
+                        given[i].trim(),
+                        given[j].trim()
                     ));
                 }
-                Ok(Markers::Colours(a, b))
             }
-            _ => Err(format!(
-                "{s}: at most two colours, the upper marker's then the lower's (e.g. red,green)"
-            )),
         }
+        Ok(match colours[..] {
+            [one] => Markers::Colour(one),
+            [upper, lower] => Markers::Colours {
+                upper,
+                lower,
+                pivot: None,
+            },
+            [upper, lower, pivot] => Markers::Colours {
+                upper,
+                lower,
+                pivot: Some(pivot),
+            },
+            _ => unreachable!("one to three colours"),
+        })
     }
 
     /// The bytes a pixel of a decoded frame takes: 1 (luma) or 3 (RGB).
     pub fn channels(self) -> usize {
         match self {
             Markers::Bright => 1,
-            Markers::Colour(_) | Markers::Colours(..) => 3,
+            Markers::Colour(_) | Markers::Colours { .. } => 3,
         }
     }
 
@@ -105,7 +132,15 @@ impl Markers {
         match self {
             Markers::Bright => vec![(None, Role::Either)],
             Markers::Colour(c) => vec![(Some(c), Role::Either)],
-            Markers::Colours(a, b) => vec![(Some(a), Role::Upper), (Some(b), Role::Lower)],
+            Markers::Colours {
+                upper,
+                lower,
+                pivot,
+            } => {
+                let mut looks = vec![(Some(upper), Role::Upper), (Some(lower), Role::Lower)];
+                looks.extend(pivot.map(|p| (Some(p), Role::Pivot)));
+                looks
+            }
         }
     }
 
@@ -170,7 +205,17 @@ impl std::fmt::Display for Markers {
         match *self {
             Markers::Bright => write!(f, "bright"),
             Markers::Colour(c) => write!(f, "{}", hex(c)),
-            Markers::Colours(a, b) => write!(f, "{},{}", hex(a), hex(b)),
+            Markers::Colours {
+                upper,
+                lower,
+                pivot,
+            } => {
+                write!(f, "{},{}", hex(upper), hex(lower))?;
+                match pivot {
+                    Some(p) => write!(f, ",{}", hex(p)),
+                    None => Ok(()),
+                }
+            }
         }
     }
 }
@@ -197,12 +242,30 @@ pub struct Blob {
 }
 
 impl Blob {
+    /// A round blob at (x, y) of a marker's light, for the tests.
+    #[cfg(test)]
+    pub(crate) fn round(x: f64, y: f64, role: Role) -> Blob {
+        Blob {
+            x,
+            y,
+            sx: 0.05,
+            sy: 0.05,
+            flux: 100.0,
+            area: 20,
+            long: 1.0,
+            short: 1.0,
+            angle: 0.0,
+            core: (x, y, 100.0),
+            role,
+        }
+    }
+
     pub fn may_be_upper(&self) -> bool {
-        self.role != Role::Lower
+        matches!(self.role, Role::Either | Role::Upper)
     }
 
     pub fn may_be_lower(&self) -> bool {
-        self.role != Role::Upper
+        matches!(self.role, Role::Either | Role::Lower)
     }
 
     /// The streak's length (px): a segment of length L blurred by the marker's own profile
@@ -500,6 +563,13 @@ mod tests {
             Markers::parse("red,green").unwrap().to_string(),
             "e02020,20a040"
         );
-        assert!(Markers::parse("red,orange").is_err() && Markers::parse("red,green,blue").is_err());
+        assert_eq!(
+            Markers::parse("red,green,blue").unwrap().to_string(),
+            "e02020,20a040,2040e0"
+        );
+        // Two hues within 60 degrees, among two or three; four colours.
+        for refused in ["red,orange", "red,green,orange", "red,green,blue,cyan"] {
+            assert!(Markers::parse(refused).is_err(), "{refused}");
+        }
     }
 }

@@ -363,6 +363,7 @@ mod tests {
             },
             still: Vec::new(),
             release: None,
+            pivot_marker: None,
         };
         let film = Film {
             width: 1280,

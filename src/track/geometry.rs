@@ -418,19 +418,7 @@ mod tests {
     #[test]
     fn the_pivot_is_refined_on_the_upper_marker_alone() {
         let (pivot, r1, r2) = ((320.0, 160.0), 110.0, 71.0);
-        let blob = |x: f64, y: f64| Blob {
-            x,
-            y,
-            sx: 0.05,
-            sy: 0.05,
-            flux: 100.0,
-            area: 20,
-            long: 1.0,
-            short: 1.0,
-            angle: 0.0,
-            core: (x, y, 100.0),
-            role: super::super::detect::Role::Either,
-        };
+        let blob = |x: f64, y: f64| Blob::round(x, y, super::super::detect::Role::Either);
         let frames: Vec<Vec<Blob>> = (0..400)
             .map(|k| {
                 let t = k as f64 / 30.0;

@@ -10,12 +10,14 @@ mod errors;
 pub mod file;
 pub mod geometry;
 pub mod overlay;
+pub mod pivot;
 pub mod release;
 pub mod synth;
 
 pub use detect::{Blob, Markers, Role};
 pub use file::{CsvRow, Measured, read_rows};
 pub use geometry::Geometry;
+pub use pivot::PivotMarker;
 
 use crate::error::{Error, Result};
 use crate::fit::quantiles::median;
@@ -68,6 +70,8 @@ pub struct Tracked {
     /// The time (s) of the last frame before free motion, where the film shows the
     /// pendulum held still and then let go ([`release::release`]).
     pub release: Option<f64>,
+    /// The marker at the pivot the masses were measured from, where the film shows one.
+    pub pivot_marker: Option<PivotMarker>,
 }
 
 impl Tracked {
@@ -237,7 +241,8 @@ fn dim_ones_out(frames: Vec<Vec<Blob>>) -> Vec<Vec<Blob>> {
 const OFF_GEOMETRY: f64 = 3.0;
 
 /// Names every frame's blobs (found as `markers` say) and turns them into rows (times from
-/// `times`).
+/// `times`). Where a marker stays at the pivot, the blobs are measured from it frame by
+/// frame ([`pivot`]) and named again.
 pub fn track(
     frames: &[Vec<Blob>],
     times: &[f64],
@@ -245,6 +250,32 @@ pub fn track(
     markers: Markers,
 ) -> Result<Tracked> {
     check_colours_seen(markers, frames)?;
+    let tracked = track_steady(frames, times, scale)?;
+    let coloured = matches!(markers, Markers::Colours { pivot: Some(_), .. });
+    match pivot::find(frames, &tracked.geometry, coloured) {
+        Some((marker, shifts)) => {
+            let steady = pivot::steadied(frames, &shifts);
+            let mut tracked = track_steady(&steady, times, scale)?;
+            // The pivot's marker is no distractor set aside.
+            tracked
+                .still
+                .retain(|s| (s.0 - marker.place.0).hypot(s.1 - marker.place.1) > pivot::WANDER);
+            tracked.pivot_marker = Some(marker);
+            Ok(tracked)
+        }
+        None if coloured => Err(Error::invalid(
+            "markers",
+            format!(
+                "no marker of the pivot's colour stays at the pivot ({:.0}, {:.0}) px in half the frames or more: give the pivot's colour as the film shows it, or two colours only",
+                tracked.geometry.pivot.0, tracked.geometry.pivot.1
+            ),
+        )),
+        None => Ok(tracked),
+    }
+}
+
+/// [`track`] in a picture that stands still (or has been steadied on the pivot's marker).
+fn track_steady(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracked> {
     let mut still = geometry::still(frames);
     let without = |still: &[(f64, f64)]| -> Vec<Vec<Blob>> {
         let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
@@ -403,6 +434,7 @@ pub fn track(
         up,
         still,
         release: release::release(&named, times),
+        pivot_marker: None,
     })
 }
 
@@ -417,10 +449,17 @@ fn frames_with(frames: &[Vec<Blob>], role: Role) -> usize {
 /// With a colour for each marker, each must be found in the film: a colour the camera never
 /// saw is named, not left to make a geometry of whatever else there is.
 fn check_colours_seen(markers: Markers, frames: &[Vec<Blob>]) -> Result<()> {
-    let Markers::Colours(upper, lower) = markers else {
+    let Markers::Colours {
+        upper,
+        lower,
+        pivot,
+    } = markers
+    else {
         return Ok(());
     };
-    for (colour, role, which) in [(upper, Role::Upper, "upper"), (lower, Role::Lower, "lower")] {
+    let mut given = vec![(upper, Role::Upper, "upper"), (lower, Role::Lower, "lower")];
+    given.extend(pivot.map(|p| (p, Role::Pivot, "pivot")));
+    for (colour, role, which) in given {
         let seen = frames_with(frames, role);
         // A marker hidden most of the film is still a marker; one seen in fewer than one
         // frame in twenty is not there.

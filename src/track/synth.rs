@@ -50,6 +50,16 @@ pub struct Scene {
     /// eased from hanging to the start's over three quarters of it, then held still), the
     /// release at `rest + lift`.
     pub lift: f64,
+    /// A marker on the axle: an LED like the masses' in the dark, or with stickers a sticker
+    /// of this colour.
+    pub pivot_marker: Option<[u8; 3]>,
+    /// How far (px) the whole pendulum, its pivot's marker with it, wanders in the picture
+    /// (a creeping tripod, a flexing stand): a slow drift of this amplitude in x and y.
+    pub wander: f64,
+    /// A hand (an arm from the picture's right edge) that comes in during the rest, holds
+    /// the lower mass through the lift beside its marker, and is pulled away at the
+    /// release: skin-coloured before the board, faintly lit in the dark.
+    pub hand: bool,
     pub seed: u64,
 }
 
@@ -76,6 +86,9 @@ impl Scene {
             stickers: None,
             rest: 0.0,
             lift: 0.0,
+            pivot_marker: None,
+            wander: 0.0,
+            hand: false,
             seed: 1,
         }
     }
@@ -90,6 +103,47 @@ impl Scene {
             self.pivot.1 - y * self.pixels_per_metre,
         )
     }
+
+    /// The picture's shift at time `t` (px): the pendulum's [`Scene::wander`].
+    pub fn shift(&self, t: f64) -> (f64, f64) {
+        let tau = std::f64::consts::TAU;
+        (
+            self.wander * (tau * 0.37 * t + 0.3).sin(),
+            self.wander * (tau * 0.23 * t).cos(),
+        )
+    }
+
+    /// The hand's palm's centre (px) and radius at time `t`, given where the lower marker
+    /// is: in from the right edge over the half second before the lift, holding the mass
+    /// until the release, then pulled away to the right at two picture widths a second.
+    fn hand_at(&self, t: f64, lower: (f64, f64), radius: f64) -> Option<(f64, f64)> {
+        let holding = (lower.0 + radius + 2.0 * self.marker_sigma, lower.1);
+        let outside = self.width as f64 + radius;
+        let release = self.rest + self.lift;
+        let x = if t < self.rest - 0.5 {
+            return None;
+        } else if t < self.rest {
+            let u = (self.rest - t) / 0.5;
+            holding.0 + u * (outside - holding.0)
+        } else if t <= release {
+            holding.0
+        } else {
+            holding.0 + 2.0 * self.width as f64 * (t - release)
+        };
+        (x < outside).then_some((x, holding.1))
+    }
+}
+
+/// How much of pixel (`x`, `y`) a hand with its palm at `palm` (radius `r`) and its arm to
+/// the picture's right covers: a capsule with an edge a pixel wide.
+fn hand_cover(x: f64, y: f64, palm: (f64, f64), r: f64) -> f32 {
+    let along = (x - palm.0).max(0.0);
+    let d = if along > 0.0 {
+        (y - palm.1).abs()
+    } else {
+        (x - palm.0).hypot(y - palm.1)
+    };
+    (r + 0.5 - d).clamp(0.0, 1.0) as f32
 }
 
 /// Where the markers really were in one frame: the mean position over its exposure (px),
@@ -98,6 +152,10 @@ impl Scene {
 #[derive(Clone, Copy, Debug)]
 pub struct TruthRow {
     pub t: f64,
+    /// How far the picture had wandered ([`Scene::wander`], px): the positions below are
+    /// the pendulum's own, from its pivot where the scene puts it ([`film`]'s: where the
+    /// pivot stands on the film's median frame).
+    pub shift: (f64, f64),
     pub m1: (f64, f64),
     pub m2: (f64, f64),
     pub seen1: Option<bool>,
@@ -115,9 +173,12 @@ pub struct Renderer {
     rng: rand_pcg::Pcg64,
     noise: Vec<f32>,
     light: Vec<f32>,
-    /// With stickers: each marker's cover of each pixel (0 to 1), and the board's light.
-    cover: [Vec<f32>; 2],
+    /// With stickers: each marker's cover of each pixel (0 to 1: the upper, the lower, the
+    /// pivot's), and the board's light.
+    cover: [Vec<f32>; 3],
     board: Vec<f32>,
+    /// The hand's cover of each pixel (0 to 1).
+    hand: Vec<f32>,
 }
 
 impl Renderer {
@@ -185,10 +246,11 @@ impl Renderer {
             noise,
             light: vec![0.0; w * h],
             cover: match scene.stickers {
-                None => [Vec::new(), Vec::new()],
-                Some(_) => [vec![0.0; w * h], vec![0.0; w * h]],
+                None => [Vec::new(), Vec::new(), Vec::new()],
+                Some(_) => [vec![0.0; w * h], vec![0.0; w * h], vec![0.0; w * h]],
             },
             board,
+            hand: vec![0.0; if scene.hand { w * h } else { 0 }],
         }
     }
 
@@ -218,9 +280,15 @@ impl Renderer {
         let mut mean_m = [0.0f64; 4];
         // Each marker's highest and lowest row over the exposure.
         let mut rows = [(f64::INFINITY, f64::NEG_INFINITY); 2];
+        let t = f as f64 / scene.fps;
+        let shift = scene.shift(t);
+        let moved = |p: (f64, f64)| (p.0 + shift.0, p.1 + shift.1);
         for s in 0..samples {
             let q = self.positions[f * samples + s];
             let (p1, p2) = (scene.to_pixels(q.x1, q.y1), scene.to_pixels(q.x2, q.y2));
+            // The truth is the pendulum's own (from its pivot); the picture wanders.
+            let (m1, m2) = (p1, p2);
+            let (p1, p2) = (moved(p1), moved(p2));
             let a = scene.marker_peak / samples as f64;
             let shifted = |p: (f64, f64), (d, _): ((f64, f64), f64)| (p.0 + d.0, p.1 + d.1);
             if scene.stickers.is_some() {
@@ -246,7 +314,7 @@ impl Renderer {
             for (r, y) in rows.iter_mut().zip([p1.1, p2.1]) {
                 *r = (r.0.min(y), r.1.max(y));
             }
-            for (k, v) in [p1.0, p1.1, p2.0, p2.1].into_iter().enumerate() {
+            for (k, v) in [m1.0, m1.1, m2.0, m2.1].into_iter().enumerate() {
                 mean[k] += v / samples as f64;
             }
             for (k, v) in [q.x1, q.y1, q.x2, q.y2].into_iter().enumerate() {
@@ -255,6 +323,33 @@ impl Renderer {
         }
         if let Some(lamp) = scene.lamp {
             splat(light, lamp, scene.marker_peak);
+        }
+        if scene.pivot_marker.is_some() {
+            match scene.stickers {
+                Some(_) => splat(&mut self.cover[2], moved(scene.pivot), 1.0),
+                None => splat(light, moved(scene.pivot), scene.marker_peak),
+            }
+        }
+        if scene.hand {
+            self.hand.iter_mut().for_each(|v| *v = 0.0);
+            let radius = 0.06 * w.min(h) as f64;
+            let lower = moved((mean[2], mean[3]));
+            if let Some(palm) = scene.hand_at(t, lower, radius) {
+                // Only the rows the arm crosses.
+                let top = (palm.1 - radius - 1.0).max(0.0) as usize;
+                let bottom = ((palm.1 + radius + 2.0) as usize).min(h);
+                for y in top..bottom {
+                    for x in 0..w {
+                        self.hand[y * w + x] = hand_cover(x as f64, y as f64, palm, radius);
+                    }
+                }
+                if scene.stickers.is_none() {
+                    // In the dark, an arm faintly lit by the room's light.
+                    for (l, a) in light.iter_mut().zip(&self.hand) {
+                        *l += 30.0 * a;
+                    }
+                }
+            }
         }
         let offset = self.rng.random_range(0..1 << 20);
         let edge = scene.table.unwrap_or(f64::INFINITY);
@@ -274,24 +369,30 @@ impl Renderer {
                 })
                 .collect(),
             Some([upper, lower]) => {
-                // The board's grey under warm light, the stickers' colours under the same
-                // light, each channel with its own noise.
+                // The board's grey under warm light, a hand before it, the stickers'
+                // colours under the same light, each channel with its own noise.
                 const BOARD: [f32; 3] = [178.0, 170.0, 156.0];
+                const SKIN: [f32; 3] = [224.0, 172.0, 138.0];
+                let pivot = scene.pivot_marker.unwrap_or([0; 3]);
                 let n = self.noise.len() - w * h;
+                let (cover, hand) = (&self.cover, &self.hand);
                 (0..w * h)
                     .flat_map(|k| {
                         let shade = self.board[k];
-                        let (a1, a2) = (self.cover[0][k].min(1.0), self.cover[1][k].min(1.0));
-                        let bare = (1.0 - a1 - a2).max(0.0);
+                        let [a1, a2, a3] = [0, 1, 2].map(|m| cover[m][k].min(1.0));
+                        let skin = hand.get(k).copied().unwrap_or(0.0);
+                        let bare = (1.0 - a1 - a2 - a3).max(0.0);
                         let hidden = (k / w) as f64 >= edge;
                         (0..3).map(move |c| {
                             let v = if hidden {
                                 scene.background as f32
                             } else {
+                                let behind = (1.0 - skin) * BOARD[c] + skin * SKIN[c];
                                 shade
-                                    * (bare * BOARD[c]
+                                    * (bare * behind
                                         + a1 * upper[c] as f32
-                                        + a2 * lower[c] as f32)
+                                        + a2 * lower[c] as f32
+                                        + a3 * pivot[c] as f32)
                             };
                             (v, (offset + k + c * 7919) % n)
                         })
@@ -310,7 +411,8 @@ impl Renderer {
             Some(_) => None,
         };
         let truth = TruthRow {
-            t: f as f64 / scene.fps,
+            t,
+            shift,
             m1: (mean[0], mean[1]),
             m2: (mean[2], mean[3]),
             seen1: seen(rows[0]),
@@ -322,7 +424,8 @@ impl Renderer {
 }
 
 /// A test film: `frames` frames rendered by [`Renderer`] and encoded as an H.264 MP4 at
-/// `crf` into `path`; returns the truth of every frame.
+/// `crf` into `path`; returns the truth of every frame (its pixels with the pivot where
+/// the film's median frame shows it, where the picture wanders).
 pub fn film(
     scene: &Scene,
     params: &Params,
@@ -351,6 +454,18 @@ pub fn film(
         },
     )?;
     files.commit(&crate::monitor::Monitor::hidden())?;
+    // A tracker measures from the pivot's marker at its median place: the truth's pixels
+    // likewise (the wander about its median taken out).
+    let median = |of: fn(&TruthRow) -> f64| {
+        let mut v: Vec<f64> = truth.iter().map(of).collect();
+        crate::fit::quantiles::median(&mut v).unwrap_or(0.0)
+    };
+    let (mx, my) = (median(|r| r.shift.0), median(|r| r.shift.1));
+    for r in &mut truth {
+        r.m1 = (r.m1.0 + mx, r.m1.1 + my);
+        r.m2 = (r.m2.0 + mx, r.m2.1 + my);
+        r.shift = (r.shift.0 - mx, r.shift.1 - my);
+    }
     Ok(truth)
 }
 
