@@ -6,6 +6,7 @@ import numpy as np
 
 __version__: str
 INDICATORS: list[str]
+INDICATOR_OPTIONS: list[str]
 
 Progress = Optional[Callable[[str, int, Optional[int]], Any]]
 

@@ -132,6 +132,29 @@ impl<'py> Keywords<'py> {
         }
     }
 
+    /// The indicators' options given, each as the measures declare it
+    /// (`chaoscope::measure::options`): a whole number in its range, or any number.
+    pub fn indicator_options(&self) -> PyResult<Vec<(&'static str, f64)>> {
+        let mut given = Vec::new();
+        for o in chaoscope::measure::options() {
+            let value = match o.whole {
+                Some((low, high)) => match self.get::<i64>(o.field)? {
+                    Some(n) if (i64::from(low)..=i64::from(high)).contains(&n) => Some(n as f64),
+                    Some(n) => {
+                        return Err(PyValueError::new_err(format!(
+                            "{}: {n} must be a whole number from {low} to {high}",
+                            o.field
+                        )));
+                    }
+                    None => None,
+                },
+                None => self.get::<f64>(o.field)?,
+            };
+            given.extend(value.map(|v| (o.field, v)));
+        }
+        Ok(given)
+    }
+
     pub fn whole<T: TryFrom<i64>>(&self, key: &str) -> PyResult<Option<T>> {
         let Some(n) = self.get::<i64>(key)? else {
             return Ok(None);

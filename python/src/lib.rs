@@ -330,12 +330,10 @@ fn lyapunov_map<'py>(
     let precision = k.precision()?;
     let accurate: bool = k.or("accurate", false)?;
     let gpu_f32 = engine(backend)?.computes_in_f32(precision);
+    let options = k.indicator_options()?;
     let indicator = IndicatorAsked {
         name: &k.or("indicator", "ftle".to_string())?,
-        exponent: k.whole("exponent")?,
-        gali: k.whole("gali")?,
-        threshold: k.get("threshold")?,
-        ld_p: k.get("ld_p")?,
+        options: &options,
         accurate,
         gpu_f32,
     }
@@ -512,6 +510,13 @@ fn main(py: Python<'_>, args: Vec<String>) -> u8 {
 fn _chaoscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("INDICATORS", chaoscope::measure::names())?;
+    m.add(
+        "INDICATOR_OPTIONS",
+        chaoscope::measure::options()
+            .iter()
+            .map(|o| o.field)
+            .collect::<Vec<_>>(),
+    )?;
     m.add_function(wrap_pyfunction!(flip_map, m)?)?;
     m.add_function(wrap_pyfunction!(lyapunov_map, m)?)?;
     m.add_function(wrap_pyfunction!(trajectory, m)?)?;

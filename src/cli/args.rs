@@ -357,3 +357,49 @@ pub(super) fn parse_pixel_scale(s: &str) -> Result<crate::fit::data::PixelScale,
             .map_err(|e| format!("{e}, or `motion` (the scale from the swing)")),
     }
 }
+
+/// The indicators' options, one flag each as the measures declare them
+/// ([`crate::measure::options`]): a new option needs no line here. Given ones as (field,
+/// value).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct IndicatorOptions(pub Vec<(&'static str, f64)>);
+
+impl clap::FromArgMatches for IndicatorOptions {
+    fn from_arg_matches(matches: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        Ok(IndicatorOptions(
+            crate::measure::options()
+                .into_iter()
+                .filter_map(|o| matches.get_one::<f64>(o.field).map(|&v| (o.field, v)))
+                .collect(),
+        ))
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(matches)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for IndicatorOptions {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        crate::measure::options().into_iter().fold(cmd, |cmd, o| {
+            let flag = |field: &str| super::names::flag("lyapunov", field);
+            let arg = clap::Arg::new(o.field)
+                .long(flag(o.field).trim_start_matches("--").to_string())
+                .help(crate::measure::spelt(o.help, &flag))
+                .value_name(o.field.to_uppercase())
+                .allow_hyphen_values(true);
+            cmd.arg(match o.whole {
+                Some((low, high)) => arg.value_parser(clap::builder::TypedValueParser::map(
+                    clap::value_parser!(u8).range(i64::from(low)..=i64::from(high)),
+                    f64::from,
+                )),
+                None => arg.value_parser(super::parse::parse_number),
+            })
+        })
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}

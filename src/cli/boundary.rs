@@ -31,8 +31,9 @@ pub struct BoundaryArgs {
     /// Perturbation sizes, evenly spaced in log between the two (3 to 40).
     #[arg(long, default_value = "9", value_parser = parse_u32, allow_hyphen_values = true)]
     pub levels: u32,
-    /// The chaotic class's indicator: ftle (above 0.5 /s), megno (above 4) or fli (above 5).
-    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(["ftle", "megno", "fli"]))]
+    /// The chaotic class's indicator, by its rule (the measures' list:
+    /// `measure::classifying`) [default: megno].
+    #[arg(long, help = classifying_help(), value_parser = clap::builder::PossibleValuesParser::new(crate::measure::classifying().into_iter().map(|(name, _)| name)))]
     pub indicator: Option<String>,
     /// The chaotic class's renormalisation interval (s).
     #[arg(long, value_parser = super::parse::parse_number, allow_hyphen_values = true)]
@@ -58,6 +59,18 @@ pub struct BoundaryArgs {
     /// The counts at each eps as CSV: eps,pairs,resolved,uncertain,fraction.
     #[arg(long)]
     pub data: Option<PathBuf>,
+}
+
+/// `--indicator`'s help, from the measures.
+fn classifying_help() -> String {
+    let rules: Vec<String> = crate::measure::classifying()
+        .into_iter()
+        .map(|(name, rule)| format!("{name} ({rule})"))
+        .collect();
+    format!(
+        "The chaotic class's indicator, a start chaotic by its rule: {} [default: megno]",
+        rules.join(", ")
+    )
 }
 
 impl BoundaryArgs {
@@ -88,7 +101,7 @@ impl BoundaryArgs {
                 renorm: self.renorm.unwrap_or(0.1),
                 use_symmetry: false,
                 precision: self.precision,
-                // Clap took one of ftle, megno, fli: options take their defaults.
+                // Clap took one of the classifying names: options take their defaults.
                 indicator: IndicatorAsked::named(self.indicator.as_deref().unwrap_or("megno"))
                     .indicator()?,
                 ..LyapunovSpec::new(spec.params, spec.grid, spec.stepping)

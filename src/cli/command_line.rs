@@ -242,7 +242,7 @@ fn indicator(i: Indicator) -> String {
     }
     let mut out = format!(" --indicator {name}");
     for (opt, value) in options {
-        out += &format!(" --{} {value}", opt.field().replace('_', "-"));
+        out += &format!(" --{} {value}", opt.field.replace('_', "-"));
     }
     out
 }

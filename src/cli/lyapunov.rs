@@ -104,25 +104,13 @@ pub struct LyapunovArgs {
     /// What to map of each start (the measures' list: `measure::about`).
     #[arg(long, default_value = "ftle", help = indicator_help(), value_parser = clap::builder::PossibleValuesParser::new(crate::measure::names()))]
     pub indicator: String,
-    /// Which exponent --indicator exponent maps, 1..4, in Gram-Schmidt order: the k-th
-    /// orthonormalised tangent vector's growth. The first is the largest; at a finite time the
-    /// others are not sorted per pixel (exponents 3 and 4 cross where both are near 0).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=4))]
-    pub exponent: Option<u8>,
-    /// Tangent vectors of --indicator gali or gali-time, 2..4.
-    #[arg(long, value_parser = clap::value_parser!(u8).range(2..=4))]
-    pub gali: Option<u8>,
-    /// The alignment index below which a start is called chaotic and stops [default: 1e-8;
-    /// f32 resolves 1e-5 at best, its default there].
-    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
-    pub threshold: Option<f64>,
+    /// The indicators' options (`measure::options`): --exponent, --gali, --threshold...
+    #[command(flatten)]
+    pub options: super::args::IndicatorOptions,
     /// All four exponents (1/s, in Gram-Schmidt order, as --exponent) as float32 .npy of shape (4, height, width),
     /// from the same run as the map of --indicator exponent or exponent-sum.
     #[arg(long)]
     pub spectrum: Option<PathBuf>,
-    /// The exponent p of the descriptor's sum of |f_i|^p: 0.25, 0.5, 1 or 2.
-    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
-    pub ld_p: Option<f64>,
 }
 
 /// A unit as the summary line writes it ("/s" for 1/s; nothing for a plain number).
@@ -155,10 +143,7 @@ impl LyapunovArgs {
     fn indicator(&self, gpu_f32: bool) -> Result<Indicator> {
         IndicatorAsked {
             name: &self.indicator,
-            exponent: self.exponent,
-            gali: self.gali,
-            threshold: self.threshold,
-            ld_p: self.ld_p,
+            options: &self.options.0,
             accurate: self.accurate,
             gpu_f32,
         }

@@ -49,6 +49,20 @@ const NEVER_ALIGNED: f64 = 1e-300;
 
 pub struct AlignmentIndex;
 
+/// GALI's order.
+const ORDER: Opt = Opt {
+    field: "gali",
+    help: "Tangent vectors of {indicator} gali or gali-time, 2..4.",
+    whole: Some((2, 4)),
+};
+
+/// The index below which a start is called chaotic.
+const THRESHOLD: Opt = Opt {
+    field: "threshold",
+    help: "The alignment index below which a start is called chaotic and stops [default: 1e-8; f32 resolves 1e-5 at best, its default there].",
+    whole: None,
+};
+
 static KINDS: [MapKindEntry; 3] = [
     MapKindEntry {
         quantity: &SALI,
@@ -121,17 +135,17 @@ impl Measure for AlignmentIndex {
     }
     fn options(&self, name: &str) -> &'static [Opt] {
         match name.starts_with("gali") {
-            true => &[Opt::Gali, Opt::Threshold],
-            false => &[Opt::Threshold],
+            true => &[ORDER, THRESHOLD],
+            false => &[THRESHOLD],
         }
     }
     fn asked(&self, name: &str, asked: &IndicatorAsked) -> Indicator {
         let index = match name.starts_with("gali") {
-            true => Alignment::Gali(asked.gali.unwrap_or(4)),
+            true => Alignment::Gali(asked.get(ORDER).map_or(4, |k| k as u8)),
             false => Alignment::Sali,
         };
         // f32 on the GPU resolves an alignment index to about 1e-5: its default there.
-        let threshold = asked.threshold.unwrap_or(match asked.gpu_f32 {
+        let threshold = asked.get(THRESHOLD).unwrap_or(match asked.gpu_f32 {
             true => ALIGNED_F32_FLOOR,
             false => ALIGNED,
         });
@@ -142,13 +156,13 @@ impl Measure for AlignmentIndex {
     }
     fn spelled(&self, i: Indicator) -> (&'static str, Vec<(Opt, String)>) {
         let (index, threshold, time) = parts(i);
-        let threshold = (Opt::Threshold, format!("{threshold:e}"));
+        let threshold = (THRESHOLD, format!("{threshold:e}"));
         match (index, time) {
             (Alignment::Sali, false) => ("sali", vec![threshold]),
             (Alignment::Sali, true) => ("sali-time", vec![threshold]),
             (Alignment::Gali(k), time) => (
                 if time { "gali-time" } else { "gali" },
-                vec![(Opt::Gali, k.to_string()), threshold],
+                vec![(ORDER, k.to_string()), threshold],
             ),
         }
     }

@@ -13,6 +13,13 @@ pub const DESCRIPTOR_POWERS: [f64; 4] = [0.25, 0.5, 1.0, 2.0];
 
 pub struct Descriptor;
 
+/// The power p of the descriptor's sum.
+const POWER: Opt = Opt {
+    field: "ld_p",
+    help: "The exponent p of the descriptor's sum of |f_i|^p: 0.25, 0.5, 1 or 2.",
+    whole: None,
+};
+
 static KINDS: [MapKindEntry; 1] = [MapKindEntry {
     quantity: &DESCRIPTOR,
     name: "descriptor",
@@ -44,15 +51,15 @@ impl Measure for Descriptor {
         )]
     }
     fn options(&self, _name: &str) -> &'static [Opt] {
-        &[Opt::LdP]
+        &[POWER]
     }
     fn asked(&self, _name: &str, asked: &IndicatorAsked) -> Indicator {
         Indicator::Descriptor {
-            p: asked.ld_p.unwrap_or(0.5),
+            p: asked.get(POWER).unwrap_or(0.5),
         }
     }
     fn spelled(&self, i: Indicator) -> (&'static str, Vec<(Opt, String)>) {
-        ("descriptor", vec![(Opt::LdP, power(i).to_string())])
+        ("descriptor", vec![(POWER, power(i).to_string())])
     }
     fn quantity(&self, _i: Indicator) -> &'static Quantity {
         &DESCRIPTOR

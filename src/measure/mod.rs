@@ -99,29 +99,40 @@ impl Indicator {
     }
 }
 
-/// An option some measures take, by the job's field a door spells it from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Opt {
-    /// Which exponent of the spectrum.
-    Exponent,
-    /// GALI's order.
-    Gali,
-    /// An alignment index's threshold.
-    Threshold,
-    /// A Lagrangian descriptor's power.
-    LdP,
+/// An option some measures take: the job's field a door spells it from (`--ld-p`,
+/// `ld_p=`), what it sets (`{field}` where another field is named: the door spells it),
+/// and its values. Each measure declares its own; the doors iterate [`options`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Opt {
+    pub field: &'static str,
+    pub help: &'static str,
+    /// Whole numbers within this range (inclusive); None: any number, the measure's
+    /// [`Measure::validate`] checks it.
+    pub whole: Option<(u8, u8)>,
 }
 
-impl Opt {
-    /// The field a door spells it from (`--ld-p`, `ld_p=`).
-    pub fn field(self) -> &'static str {
-        match self {
-            Opt::Exponent => "exponent",
-            Opt::Gali => "gali",
-            Opt::Threshold => "threshold",
-            Opt::LdP => "ld_p",
+/// Every option the measures take, each once, in the list's order.
+pub fn options() -> Vec<Opt> {
+    let mut out: Vec<Opt> = Vec::new();
+    for m in MEASURES {
+        for name in m.names() {
+            for opt in m.options(name) {
+                if !out.iter().any(|o| o.field == opt.field) {
+                    out.push(*opt);
+                }
+            }
         }
     }
+    out
+}
+
+/// `text` with every `{field}` of an option, and `{indicator}`, spelt by `spell`.
+pub fn spelt(text: &str, spell: &impl Fn(&str) -> String) -> String {
+    let mut text = text.replace("{indicator}", &spell("indicator"));
+    for opt in options() {
+        text = text.replace(&format!("{{{}}}", opt.field), &spell(opt.field));
+    }
+    text
 }
 
 /// Where a measure's map is computed.
@@ -265,15 +276,24 @@ pub fn names() -> Vec<&'static str> {
     MEASURES.iter().flat_map(|m| m.names()).copied().collect()
 }
 
+/// The names whose indicator (its options at their defaults) calls each start chaotic or
+/// not, each with its rule ("megno", "<Y> > 4"): what may draw a boundary's chaotic class.
+pub fn classifying() -> Vec<(&'static str, String)> {
+    names()
+        .into_iter()
+        .filter_map(|name| {
+            let i = IndicatorAsked::named(name).indicator().ok()?;
+            (i.quantity().counted_as == "chaotic").then(|| (name, i.measure().counted_rule(i)))
+        })
+        .collect()
+}
+
 /// What each name maps, in the list's order ("ftle (the largest exponent), ..."), every
 /// `{field}` spelt by `spell` (a door's flag or keyword).
 pub fn about(spell: impl Fn(&str) -> String) -> String {
     let mut items = Vec::new();
     for (names, what) in MEASURES.iter().flat_map(|m| m.about()) {
-        let mut what = what.to_string();
-        for opt in [Opt::Exponent, Opt::Gali, Opt::Threshold, Opt::LdP] {
-            what = what.replace(&format!("{{{}}}", opt.field()), &spell(opt.field()));
-        }
+        let what = spelt(what, &spell);
         items.push(match what.is_empty() {
             true => names.to_string(),
             false => format!("{names} ({what})"),
@@ -291,21 +311,15 @@ pub fn wgsl() -> String {
         .join("\n")
 }
 
-/// An indicator as a user asks for it: its name and the options of some indicators.
+/// An indicator as a user asks for it: its name and the options given, by field.
 #[derive(Clone, Copy, Debug)]
 pub struct IndicatorAsked<'a> {
     pub name: &'a str,
-    /// Which exponent (`exponent`), 1..4.
-    pub exponent: Option<u8>,
-    /// GALI's order (`gali`, `gali-time`).
-    pub gali: Option<u8>,
-    /// The alignment index's threshold (`sali`, `gali` and their times).
-    pub threshold: Option<f64>,
-    /// The Lagrangian descriptor's p (`descriptor`).
-    pub ld_p: Option<f64>,
+    /// The options given ([`options`]), as (field, value).
+    pub options: &'a [(&'static str, f64)],
     /// The accurate settings asked.
     pub accurate: bool,
-    /// Whether it runs in f32 on a GPU (the alignment threshold's default).
+    /// Whether it runs in f32 on a GPU (some options' defaults).
     pub gpu_f32: bool,
 }
 
@@ -314,22 +328,18 @@ impl<'a> IndicatorAsked<'a> {
     pub fn named(name: &'a str) -> Self {
         IndicatorAsked {
             name,
-            exponent: None,
-            gali: None,
-            threshold: None,
-            ld_p: None,
+            options: &[],
             accurate: false,
             gpu_f32: false,
         }
     }
 
-    fn given(&self, opt: Opt) -> bool {
-        match opt {
-            Opt::Exponent => self.exponent.is_some(),
-            Opt::Gali => self.gali.is_some(),
-            Opt::Threshold => self.threshold.is_some(),
-            Opt::LdP => self.ld_p.is_some(),
-        }
+    /// The value given for `opt`, if any.
+    pub fn get(&self, opt: Opt) -> Option<f64> {
+        self.options
+            .iter()
+            .find(|(field, _)| *field == opt.field)
+            .map(|&(_, v)| v)
     }
 
     /// The indicator asked for; an option of another indicator is refused naming it.
@@ -342,8 +352,8 @@ impl<'a> IndicatorAsked<'a> {
             ));
         };
         let takes = measure.options(name);
-        for opt in [Opt::Exponent, Opt::Gali, Opt::Threshold, Opt::LdP] {
-            if self.given(opt) && !takes.contains(&opt) {
+        for opt in options() {
+            if self.get(opt).is_some() && !takes.contains(&opt) {
                 let of: Vec<&str> = names()
                     .into_iter()
                     .filter(|n| {
@@ -352,7 +362,7 @@ impl<'a> IndicatorAsked<'a> {
                     })
                     .collect();
                 return Err(Error::invalid(
-                    opt.field(),
+                    opt.field,
                     format!("is for the indicator {}", or_list(&of)),
                 ));
             }
@@ -403,7 +413,7 @@ mod tests {
     #[test]
     fn an_option_of_another_indicator_names_the_ones_it_is_for() {
         let asked = IndicatorAsked {
-            threshold: Some(1e-8),
+            options: &[("threshold", 1e-8)],
             ..IndicatorAsked::named("megno")
         };
         match asked.indicator() {

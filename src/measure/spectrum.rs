@@ -9,6 +9,13 @@ use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 pub struct Spectrum;
 
+/// Which exponent of the spectrum.
+const WHICH: Opt = Opt {
+    field: "exponent",
+    help: "Which exponent {indicator} exponent maps, 1..4, in Gram-Schmidt order: the k-th orthonormalised tangent vector's growth. The first is the largest; at a finite time the others are not sorted per pixel (exponents 3 and 4 cross where both are near 0).",
+    whole: Some((1, 4)),
+};
+
 static KINDS: [MapKindEntry; 2] = [
     MapKindEntry {
         quantity: &EXPONENT,
@@ -64,19 +71,19 @@ impl Measure for Spectrum {
     }
     fn options(&self, name: &str) -> &'static [Opt] {
         match name {
-            "exponent" => &[Opt::Exponent],
+            "exponent" => &[WHICH],
             _ => &[],
         }
     }
     fn asked(&self, name: &str, asked: &IndicatorAsked) -> Indicator {
         match name {
-            "exponent" => Indicator::Exponent(asked.exponent.unwrap_or(1)),
+            "exponent" => Indicator::Exponent(asked.get(WHICH).map_or(1, |k| k as u8)),
             _ => Indicator::ExponentSum,
         }
     }
     fn spelled(&self, i: Indicator) -> (&'static str, Vec<(Opt, String)>) {
         match which(i) {
-            Some(k) => ("exponent", vec![(Opt::Exponent, k.to_string())]),
+            Some(k) => ("exponent", vec![(WHICH, k.to_string())]),
             None => ("exponent-sum", Vec::new()),
         }
     }
