@@ -363,6 +363,8 @@ fn every_indicator() -> Vec<Indicator> {
     }
     all.extend([0.25, 0.5, 1.0, 2.0].map(|p| Indicator::Descriptor { p }));
     all.push(Indicator::Ofli);
+    // The distance f32 resolves (its least).
+    all.push(Indicator::Rli { delta: 1e-4 });
     all
 }
 

@@ -233,6 +233,7 @@ def lyapunov_map(
     gali: Optional[int] = None,
     threshold: Optional[float] = None,
     ld_p: Optional[float] = None,
+    rli_delta: Optional[float] = None,
     method: str = "tangent",
     eps: float = 1e-8,
     renorm: float = 0.1,
@@ -253,7 +254,8 @@ def lyapunov_map(
     Lyapunov exponent (1/s) of each pixel's start; ``indicator`` one of :data:`INDICATORS`
     (an exponent of the spectrum with ``exponent=k``, 1 to 4 in Gram-Schmidt order: the first
     is the largest, the others are not sorted per pixel at a finite time; their sum, SALI/GALI and the time they
-    take to fall below ``threshold``, MEGNO, the FLI, the Lagrangian descriptor with ``ld_p``).
+    take to fall below ``threshold``, MEGNO, the FLI, the Lagrangian descriptor with ``ld_p``,
+    the orthogonal FLI, the relative Lyapunov indicator with its neighbour ``rli_delta`` away).
     ``method``: "tangent" (the variational equations) or "twin" (a neighbour ``eps`` away);
     tangent vectors renormalised every ``renorm`` s. The plane, physics, stepping and the rest
     as :func:`flip_map`.

@@ -383,6 +383,25 @@ def test_traces_equal_their_command(tmp_path):
 
 
 
+def test_every_indicator_option_is_a_keyword_and_reaches_the_command():
+    """The measures declare their options (the registry); each is a keyword of
+    lyapunov_map, and one given travels into the map's reproducing command."""
+    keywords = inspect.signature(chaoscope.lyapunov_map).parameters
+    options = chaoscope._native.INDICATOR_OPTIONS
+    assert "rli_delta" in options and "ld_p" in options
+    for field in options:
+        assert field in keywords and keywords[field].default is None, field
+    m = chaoscope.lyapunov_map(size=8, t_max=1, indicator="rli", rli_delta=1e-6,
+                               backend="cpu", progress=False)
+    assert "--indicator rli --rli-delta 1e-6" in m.attrs["command"]
+    with pytest.raises(ValueError, match="^rli_delta: "):
+        chaoscope.lyapunov_map(size=8, t_max=1, indicator="rli", rli_delta=1.0,
+                               backend="cpu", progress=False)
+    with pytest.raises(ValueError, match="^gali: "):
+        chaoscope.lyapunov_map(size=8, t_max=1, indicator="gali", gali=7,
+                               backend="cpu", progress=False)
+
+
 def test_python_is_as_strict_as_the_command_line(tmp_path):
     """Issue 35's audit of the Python door: a bool where a number is wanted, a tile without
     a store, a progress of another type, a colour range upside down, an eps no twin could

@@ -11,6 +11,7 @@ mod descriptor;
 mod ftle;
 mod growth;
 mod ofli;
+mod rli;
 mod spectrum;
 
 use crate::error::{Error, Result};
@@ -45,16 +46,19 @@ pub enum Indicator {
     Descriptor { p: f64 },
     /// The orthogonal FLI: the largest log10 of the tangent vector's part across the flow.
     Ofli,
+    /// log10 of the relative Lyapunov indicator, the neighbour `delta` away.
+    Rli { delta: f64 },
 }
 
 /// Every family, in the order the doors list them.
-pub static MEASURES: [&dyn Measure; 6] = [
+pub static MEASURES: [&dyn Measure; 7] = [
     &ftle::Ftle,
     &spectrum::Spectrum,
     &alignment::AlignmentIndex,
     &growth::Growth,
     &descriptor::Descriptor,
     &ofli::Ofli,
+    &rli::Rli,
 ];
 
 impl Indicator {
@@ -69,6 +73,7 @@ impl Indicator {
             Indicator::Megno | Indicator::Fli => &growth::Growth,
             Indicator::Descriptor { .. } => &descriptor::Descriptor,
             Indicator::Ofli => &ofli::Ofli,
+            Indicator::Rli { .. } => &rli::Rli,
         }
     }
 
