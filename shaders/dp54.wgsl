@@ -7,6 +7,10 @@
 
 //{{COEFFICIENTS}}
 
+// The most step attempts a pixel takes through its renormalisation windows (2^24: a count an
+// f32 still holds exactly), after which it stalls (adaptive_windows.wgsl).
+const MAX_WINDOW_ATTEMPTS: real = 16777216.0;
+
 // The step-size controller (src/cpu/adaptive.rs SAFETY, SHRINK, GROW).
 const SAFETY = 0.9;
 const SHRINK = 0.2;

@@ -1,6 +1,6 @@
 // Flip-time map with adaptive steps: Dormand-Prince 5(4), every pendulum with its own step
 // size. Twin of src/cpu/adaptive.rs (which holds the tableau as data; here the stages are
-// unrolled); follows shaders/adaptive_common.wgsl. `flip_adaptive_init` sets up a tile,
+// written out from it by src/gpu/shaders.rs); follows shaders/adaptive_common.wgsl. `flip_adaptive_init` sets up a tile,
 // `flip_adaptive` gives every active pixel up to `params.steps` more step attempts.
 
 
@@ -97,13 +97,8 @@ fn flip_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         let step = at.step;
         let last = at.last;
-        let k2 = rate(c, advanced(p, A21 * step, k1));
-        let k3 = rate(c, along2(p, step, A31, k1, A32, k2));
-        let k4 = rate(c, along3(p, step, A41, k1, A42, k2, A43, k3));
-        let k5 = rate(c, along4(p, step, A51, k1, A52, k2, A53, k3, A54, k4));
-        let k6 = rate(c, along5(p, step, A61, k1, A62, k2, A63, k3, A64, k4, A65, k5));
-        let next = along5(p, step, B1, k1, B3, k3, B4, k4, B5, k5, B6, k6);
-        let k7 = rate(c, next);
+        // The stages (src/gpu/shaders.rs writes them from the tableau):
+        //{{DP54_STAGES}}
         let e = step * (E1 * k1.dy + E3 * k3.dy + E4 * k4.dy + E5 * k5.dy + E6 * k6.dy + E7 * k7.dy);
         let scale = params.atol + params.rtol * max(abs(p.y), abs(next.y));
         let q = e / scale;

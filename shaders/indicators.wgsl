@@ -279,9 +279,8 @@ fn scaled_squares(e: vec4<real>, x: vec4<real>, next: vec4<real>) -> real {
 
 // The spectrum with DP54 steps (dp54.wgsl) over the state and the four vectors, the error
 // controlled over the twenty components (RMS), as lyapunov.wgsl's tangent_adaptive does for
-// one: step0 and steps count renormalisation windows, every pixel lands on each exactly, steps
-// are at most dt; at most ATTEMPTS_PER_DISPATCH attempts a dispatch, a pixel keeping its own
-// place in its clock (the slot's last vec4) as the adaptive tangent does.
+// one, through renormalisation windows as shaders/adaptive_windows.wgsl steps them; a pixel
+// keeps its own place in its clock (the slot's last vec4).
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = linear_index(gid, groups);
@@ -297,35 +296,10 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     var stalled = attempts < 0.0;
     var done = u32(clock.z);
     var s = clock.w;
-    var budget = ATTEMPTS_PER_DISPATCH;
-    loop {
-        if stalled || done >= params.step0 + params.steps || budget == 0u {
-            break;
-        }
-        let first = done * params.interval;
-        let window = real(min((done + 1u) * params.interval, params.total_steps) - first) * params.dt;
-        var k1 = set_rate(c, x);
-        loop {
-            if s >= window || budget == 0u {
-                break;
-            }
-            budget -= 1u;
-            if attempts >= 16777216.0 {
-                stalled = true;
-                break;
-            }
-            attempts += 1.0;
-            let last = s + h >= window;
-            var step = h;
-            if last {
-                step = window - s;
-            }
-            if !(s + step > s) {
-                stalled = true;
-                break;
-            }
-            // The stages (src/gpu/shaders.rs writes them from the tableau):
-            //{{DP54_STAGES}}
+    //{{ADAPTIVE_WINDOWS}} (shaders/adaptive_windows.wgsl), filled by:
+    //{{RATE}}
+    set_rate(c, x)
+    //{{ERROR}}
             // The error estimate: sum_j E_j k_j, times the step.
             let e = set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(set_ahead(Set(vec4<real>(), vec4<real>(), Vectors(vec4<real>(), vec4<real>(), vec4<real>(), vec4<real>())), E1, k1), E3, k3), E4, k4), E5, k5), E6, k6), E7, k7);
             let squares = scaled_squares(step * e.y, x.y, next.y)
@@ -334,31 +308,18 @@ fn spectrum_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
                 + scaled_squares(step * e.v.c, x.v.c, next.v.c)
                 + scaled_squares(step * e.v.d, x.v.d, next.v.d);
             let err = sqrt(squares / 20.0);
-            let factor = clamp(SAFETY / sqrt(sqrt(err)), SHRINK, GROW);
-            if err <= 1.0 {
-                s = select(s + step, window, last);
+    //{{ACCEPT}}
                 let on = tangent_on_circles(Tangent(next.y, next.u, vec4<real>()));
                 x = Set(on.y, on.u, next.v);
-                k1 = k7;
-            }
-            h = min(h * factor, params.dt);
-        }
-        if stalled {
+    //{{STALLED}}
             sums = vec4<real>(LEFT_THE_NUMBERS);
-            break;
-        }
-        if s < window {
-            // The budget ran out mid-window.
-            break;
-        }
+    //{{WINDOW_END}}
         // (A pointer to a member of `x` trips naga 30's SPIR-V writer: a copy.)
         var v = x.v;
         let l = gram_schmidt(&v, 4u);
         x.v = v;
         sums += vec4<real>(ln_real(l.x), ln_real(l.y), ln_real(l.z), ln_real(l.w));
-        done += 1u;
-        s = 0.0;
-    }
+    //{{END}}
     slots[i].y = x.y;
     slots[i].u = x.u;
     store_vectors(i, x.v);

@@ -5,15 +5,18 @@
 // the stretch to `log_sums`. The host divides by t-max.
 
 @group(0) @binding(0) var<uniform> params: Params;
-// Per pixel i a LyapunovSlot, as vec4s: states[4 i ..= 4 i + 2] = Tangent.y, .u, .v (twin:
-// 4 i ..= 4 i + 3 = y, u, y2, u2).
-@group(0) @binding(1) var<storage, read_write> states: array<vec4<real>>;
-
-// Mirror of src/gpu/layout.rs `GpuLyapunovSlot`: the layout of one pixel's states.
+// Mirror of src/gpu/layout.rs `GpuLyapunovSlot`: one pixel's states.
 struct LyapunovSlot {
-    a: Pendulum,
-    b: Pendulum,
+    // The pendulum (Tangent.y, .u).
+    y: vec4<real>,
+    u: vec4<real>,
+    // Tangent method: the tangent vector; twin method: the twin's y.
+    v: vec4<real>,
+    // Tangent method: the adaptive tangent's clock (the next step, attempts so far (-1:
+    // stalled), windows done, the time into the next); twin method: the twin's u.
+    w: vec4<real>,
 }
+@group(0) @binding(1) var<storage, read_write> states: array<LyapunovSlot>;
 // Sum of the log stretch factors so far.
 @group(0) @binding(2) var<storage, read_write> log_sums: array<real>;
 
@@ -26,12 +29,12 @@ fn tangent_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
         return;
     }
     let p = pendulum_from(grid_start(params, i));
-    states[4u * i] = p.y;
-    states[4u * i + 1u] = p.u;
-    states[4u * i + 2u] = TANGENT_START;
+    states[i].y = p.y;
+    states[i].u = p.u;
+    states[i].v = TANGENT_START;
     // The adaptive tangent's clock: the next step, attempts so far (-1: stalled), windows
     // done, the time into the next.
-    states[4u * i + 3u] = vec4<real>(params.dt, 0.0, 0.0, 0.0);
+    states[i].w = vec4<real>(params.dt, 0.0, 0.0, 0.0);
     log_sums[i] = 0.0;
 }
 
@@ -39,14 +42,10 @@ fn tangent_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
 const STALLED_LOG_SUM: real = -3.0e38;
 
 // The adaptive tangent: DP54 (dp54.wgsl) over the state and the tangent vector, the error
-// controlled over both (RMS of error / (atol + rtol |y|) over the eight components). Here
-// step0 and steps count renormalisation windows: window k ends at step min(k interval,
-// total_steps) of dt, and every pixel lands on it exactly; steps are at most dt. A pixel
-// takes at most ATTEMPTS_PER_DISPATCH attempts a dispatch (lavapipe ends all of an
-// invocation's loops after 65,535 iterations, silently) and keeps its own place: the
-// windows it has done and the time into the next (the clock), so a pixel the budget stopped
-// mid-window goes on from there in the next dispatch, up to that dispatch's last window
-// (the host dispatches the last window again until every pixel is there: `catch_up`).
+// controlled over both (RMS of error / (atol + rtol |y|) over the eight components), through
+// renormalisation windows as shaders/adaptive_windows.wgsl steps them; its clock in the
+// slot's last vec4 (`catch_up` on the host dispatches the last window again until every
+// pixel is there).
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = linear_index(gid, groups);
@@ -54,74 +53,34 @@ fn tangent_adaptive(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
         return;
     }
     let c = pixel_coeffs(params, i);
-    var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u]);
-    let clock = states[4u * i + 3u];
+    var t = Tangent(states[i].y, states[i].u, states[i].v);
+    let clock = states[i].w;
     var h = clock.x;
     var attempts = clock.y;
     var stalled = attempts < 0.0;
     var done = u32(clock.z);
     var s = clock.w;
-    var budget = ATTEMPTS_PER_DISPATCH;
     var log_sum = log_sums[i];
-    loop {
-        if stalled || done >= params.step0 + params.steps || budget == 0u {
-            break;
-        }
-        let first = done * params.interval;
-        let window = real(min((done + 1u) * params.interval, params.total_steps) - first) * params.dt;
-        var k1 = tangent_rate(c, t);
-        loop {
-            if s >= window || budget == 0u {
-                break;
-            }
-            budget -= 1u;
-            // As adaptive_common.wgsl's `attempt`: 2^24 attempts at most, and a step that
-            // still advances the time.
-            if attempts >= 16777216.0 {
-                stalled = true;
-                break;
-            }
-            attempts += 1.0;
-            let last = s + h >= window;
-            var step = h;
-            if last {
-                step = window - s;
-            }
-            if !(s + step > s) {
-                stalled = true;
-                break;
-            }
-            // The stages (src/gpu/shaders.rs writes them from the tableau):
-            //{{DP54_STAGES}}
+    //{{ADAPTIVE_WINDOWS}} (shaders/adaptive_windows.wgsl), filled by:
+    //{{RATE}}
+    tangent_rate(c, t)
+    //{{ERROR}}
             let ey = step * (E1 * k1.y + E3 * k3.y + E4 * k4.y + E5 * k5.y + E6 * k6.y + E7 * k7.y);
             let ev = step * (E1 * k1.v + E3 * k3.v + E4 * k4.v + E5 * k5.v + E6 * k6.v + E7 * k7.v);
             let qy = ey / (params.atol + params.rtol * max(abs(t.y), abs(next.y)));
             let qv = ev / (params.atol + params.rtol * max(abs(t.v), abs(next.v)));
             let err = sqrt((dot(qy, qy) + dot(qv, qv)) / 8.0);
-            let factor = clamp(SAFETY / sqrt(sqrt(err)), SHRINK, GROW);
-            if err <= 1.0 {
-                s = select(s + step, window, last);
+    //{{ACCEPT}}
                 t = tangent_on_circles(next);
-                k1 = k7;
-            }
-            h = min(h * factor, params.dt);
-        }
-        if stalled {
+    //{{STALLED}}
             log_sum = STALLED_LOG_SUM;
-            break;
-        }
-        if s < window {
-            // The budget ran out mid-window.
-            break;
-        }
+    //{{WINDOW_END}}
         log_sum += ln_real(unit_tangent(&t));
-        done += 1u;
-        s = 0.0;
-    }
-    states[4u * i] = t.y;
-    states[4u * i + 1u] = t.u;
-    states[4u * i + 2u] = t.v;
-    states[4u * i + 3u] = vec4<real>(h, select(attempts, -1.0, stalled), real(done), s);
+    //{{END}}
+    states[i].y = t.y;
+    states[i].u = t.u;
+    states[i].v = t.v;
+    states[i].w = vec4<real>(h, select(attempts, -1.0, stalled), real(done), s);
     log_sums[i] = log_sum;
 }
 
@@ -133,7 +92,7 @@ fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     }
     let c = pixel_coeffs(params, i);
     let dt = params.dt;
-    var t = Tangent(states[4u * i], states[4u * i + 1u], states[4u * i + 2u]);
+    var t = Tangent(states[i].y, states[i].u, states[i].v);
     var log_sum = log_sums[i];
     let k_end = params.step0 + params.steps;
     for (var k = params.step0 + 1u; k <= k_end; k++) {
@@ -142,9 +101,9 @@ fn tangent_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
             log_sum += ln_real(unit_tangent(&t));
         }
     }
-    states[4u * i] = t.y;
-    states[4u * i + 1u] = t.u;
-    states[4u * i + 2u] = t.v;
+    states[i].y = t.y;
+    states[i].u = t.u;
+    states[i].v = t.v;
     log_sums[i] = log_sum;
 }
 
@@ -157,10 +116,10 @@ fn twin_init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     let y = grid_start(params, i);
     let a = pendulum_from(y);
     let b = pendulum_from(y + params.setting * TANGENT_START);
-    states[4u * i] = a.y;
-    states[4u * i + 1u] = a.u;
-    states[4u * i + 2u] = b.y;
-    states[4u * i + 3u] = b.u;
+    states[i].y = a.y;
+    states[i].u = a.u;
+    states[i].v = b.y;
+    states[i].w = b.u;
     log_sums[i] = 0.0;
 }
 
@@ -173,8 +132,8 @@ fn twin_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let c = pixel_coeffs(params, i);
     let dt = params.dt;
     let eps = params.setting;
-    var a = Pendulum(states[4u * i], states[4u * i + 1u]);
-    var b = Pendulum(states[4u * i + 2u], states[4u * i + 3u]);
+    var a = Pendulum(states[i].y, states[i].u);
+    var b = Pendulum(states[i].v, states[i].w);
     var log_sum = log_sums[i];
     let k_end = params.step0 + params.steps;
     for (var k = params.step0 + 1u; k <= k_end; k++) {
@@ -201,26 +160,29 @@ fn twin_advance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             b = Pendulum(yb, ub);
         }
     }
-    states[4u * i] = a.y;
-    states[4u * i + 1u] = a.u;
-    states[4u * i + 2u] = b.y;
-    states[4u * i + 3u] = b.u;
+    states[i].y = a.y;
+    states[i].u = a.u;
+    states[i].v = b.y;
+    states[i].w = b.u;
     log_sums[i] = log_sum;
 }
 
-// For the tests: the Jacobian d(rate)/d(theta1, omega1, theta2, omega2) at states[4 i] (read
-// as y), written as its columns J e_j to states[4 i + j], from the same dual-number rate.
+// For the tests: the Jacobian d(rate)/d(theta1, omega1, theta2, omega2) at states[i].y,
+// written as its columns J e_j to the slot's four vec4s in order, from the same dual-number
+// rate.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn jacobian_columns(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = linear_index(gid, groups);
     if i >= params.count {
         return;
     }
-    let p = pendulum_from(states[4u * i]);
+    let p = pendulum_from(states[i].y);
     let c = coeffs_from(params);
+    var columns: array<vec4<real>, 4>;
     for (var j = 0u; j < 4u; j++) {
         var v = vec4<real>();
         v[j] = 1.0;
-        states[4u * i + j] = tangent_rate(c, Tangent(p.y, p.u, v)).v;
+        columns[j] = tangent_rate(c, Tangent(p.y, p.u, v)).v;
     }
+    states[i] = LyapunovSlot(columns[0], columns[1], columns[2], columns[3]);
 }

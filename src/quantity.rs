@@ -1,7 +1,9 @@
 //! What a map can measure, one table line each: a quantity's name and unit, when two values of
 //! one pixel agree (the verdict's rule, as data), and which pixels its summary counts. The
-//! one map path (engine, verdict, store, summary) reads a quantity from here; its kernels are
-//! in `engine::MapKernels`.
+//! one map path (engine, verdict, store, summary) reads a map's quantity through its spec;
+//! its kernels are in `engine::MapKernels`. Here: the flip family's quantities, the FTLE
+//! (the divergence kernel's, which the verdict's tests and --samples lean on) and the rules
+//! they share; every other indicator's quantity lives with its measure (src/measure/).
 
 /// Flip times agree within this fraction of the time ...
 pub const FLIP_RELATIVE: f64 = 0.01;
@@ -31,7 +33,7 @@ pub fn exponents_agree(a: f32, b: f32) -> bool {
 }
 
 /// [`within`] for times where +inf is "never": two nevers agree, a never and a time do not.
-fn times_within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
+pub fn times_within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
     match a.is_infinite() || b.is_infinite() {
         true => a == b,
         false => within(a, b, relative, absolute),
@@ -95,150 +97,6 @@ pub const FTLE: Quantity = Quantity {
     counted: |x| x > CHAOTIC_FTLE,
     counted_as: "chaotic",
     counted_rule: "FTLE > 0.5 /s",
-};
-
-/// One exponent of the Lyapunov spectrum (1/s).
-pub const EXPONENT: Quantity = Quantity {
-    name: "Lyapunov exponent",
-    unit: "1/s",
-    agree: exponents_agree,
-    agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
-    tolerance: "5 % or 0.02 /s",
-    vouch: |a, b| within(a, b, 0.01, 0.004),
-    vouching: "an exponent within 1 % or 0.004 /s (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.004 /s",
-    counted: |x| x > CHAOTIC_FTLE,
-    counted_as: "chaotic",
-    counted_rule: "exponent > 0.5 /s",
-};
-
-/// The sum of the four exponents (1/s): 0 without losses, the mean phase-space contraction
-/// rate with them.
-pub const EXPONENT_SUM: Quantity = Quantity {
-    name: "sum of the Lyapunov exponents",
-    unit: "1/s",
-    // Its scale is the volume change over t (ln 2 / t at most for equal masses), not the
-    // exponents': 0.005 /s absolute.
-    agree: |a, b| within(a, b, 0.05, 0.005),
-    agreement: "a sum within 5 % or 0.005 /s (NaN never agrees)",
-    tolerance: "5 % or 0.005 /s",
-    vouch: |a, b| within(a, b, 0.01, 0.001),
-    vouching: "a sum within 1 % or 0.001 /s (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.001 /s",
-    counted: |x| x < -FTLE_ABSOLUTE as f32,
-    counted_as: "contracting",
-    counted_rule: "sum < -0.02 /s",
-};
-
-/// Alignment indices (log10) agree within this many decades.
-pub const ALIGNMENT_DECADES: f64 = 0.5;
-
-/// log10 of an alignment index at or below this calls a start chaotic in the summary: SALI
-/// of a regular orbit stays near 1e-1..1, GALI_k of a regular orbit decays like a power of
-/// t, far slower than 1e-4 within a map's minutes of simulated time.
-pub const ALIGNED_LOG10: f32 = -4.0;
-
-fn alignments_agree(a: f32, b: f32) -> bool {
-    ((a - b) as f64).abs() <= ALIGNMENT_DECADES
-}
-
-/// log10 SALI at t-max, or where it fell below the threshold.
-pub const SALI: Quantity = Quantity {
-    name: "log10 SALI",
-    unit: "1 (log10)",
-    agree: alignments_agree,
-    agreement: "log10 SALI within 0.5 (NaN never agrees)",
-    tolerance: "0.5 decades",
-    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
-    vouching: "log10 SALI within 0.1 (NaN never agrees)",
-    vouch_tolerance: "0.1 decades",
-    // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
-    counted: |x| x <= ALIGNED_LOG10,
-    counted_as: "chaotic",
-    counted_rule: "log10 SALI <= -4",
-};
-
-/// log10 GALI_k at t-max, or where it fell below the threshold.
-pub const GALI: Quantity = Quantity {
-    name: "log10 GALI",
-    unit: "1 (log10)",
-    agree: alignments_agree,
-    agreement: "log10 GALI within 0.5 (NaN never agrees)",
-    tolerance: "0.5 decades",
-    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
-    vouching: "log10 GALI within 0.1 (NaN never agrees)",
-    vouch_tolerance: "0.1 decades",
-    // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
-    counted: |x| x <= ALIGNED_LOG10,
-    counted_as: "chaotic",
-    counted_rule: "log10 GALI <= -4",
-};
-
-/// The time an alignment index fell below its threshold (s; +inf = not within t-max).
-pub const ALIGNMENT_TIME: Quantity = Quantity {
-    name: "time to alignment",
-    unit: "s",
-    agree: |a, b| times_within(a, b, 0.05, 0.1),
-    agreement: "a time within 5 % or 0.1 s (both never aligning agrees; NaN never does)",
-    tolerance: "5 % or 0.1 s",
-    vouch: |a, b| times_within(a, b, 0.01, 0.02),
-    vouching: "a time within 1 % or 0.02 s (both never aligning agrees; NaN never does)",
-    vouch_tolerance: "1 % or 0.02 s",
-    counted: f32::is_finite,
-    counted_as: "chaotic",
-    counted_rule: "aligned within t-max",
-};
-
-/// <Y> above this calls a start chaotic in the summary (regular orbits tend to 2 or 0).
-pub const CHAOTIC_MEGNO: f32 = 4.0;
-
-/// MEGNO <Y> at t-max (1).
-pub const MEGNO: Quantity = Quantity {
-    name: "MEGNO",
-    unit: "1",
-    agree: |a, b| within(a, b, 0.1, 0.2),
-    agreement: "<Y> within 10 % or 0.2 (NaN never agrees)",
-    tolerance: "10 % or 0.2",
-    vouch: |a, b| within(a, b, 0.02, 0.04),
-    vouching: "<Y> within 2 % or 0.04 (NaN never agrees)",
-    vouch_tolerance: "2 % or 0.04",
-    counted: |x| x > CHAOTIC_MEGNO,
-    counted_as: "chaotic",
-    counted_rule: "<Y> > 4",
-};
-
-/// FLI above this (log10 |v|) calls a start chaotic in the summary: a regular orbit's tangent
-/// vector grows like t, to about 10^2.5 in a few minutes of simulated time.
-pub const CHAOTIC_FLI: f32 = 5.0;
-
-/// The fast Lyapunov indicator: the largest log10 |v| so far (1).
-pub const FLI: Quantity = Quantity {
-    name: "fast Lyapunov indicator",
-    unit: "1 (log10)",
-    agree: |a, b| within(a, b, 0.05, 0.1),
-    agreement: "an FLI within 5 % or 0.1 (NaN never agrees)",
-    tolerance: "5 % or 0.1",
-    vouch: |a, b| within(a, b, 0.01, 0.02),
-    vouching: "an FLI within 1 % or 0.02 (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.02",
-    counted: |x| x > CHAOTIC_FLI,
-    counted_as: "chaotic",
-    counted_rule: "FLI > 5",
-};
-
-/// The Lagrangian descriptor M (the unit of |f|^p times s; f mixes rad/s and rad/s^2).
-pub const DESCRIPTOR: Quantity = Quantity {
-    name: "Lagrangian descriptor",
-    unit: "sum of |f_i|^p s",
-    agree: |a, b| within(a, b, 0.01, 1e-3),
-    agreement: "M within 1 % (NaN never agrees)",
-    tolerance: "1 %",
-    vouch: |a, b| within(a, b, 0.002, 2e-4),
-    vouching: "M within 0.2 % (NaN never agrees)",
-    vouch_tolerance: "0.2 %",
-    counted: f32::is_finite,
-    counted_as: "finite",
-    counted_rule: "M finite",
 };
 
 /// Which arm flips first and which way: a class per pixel (its code in the map, as f32; NaN

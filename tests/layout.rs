@@ -91,7 +91,7 @@ fn params_struct_matches_its_rust_mirror() {
 fn storage_structs_match_their_rust_mirrors() {
     let pendulum = rust_offsets!(GpuPendulum; y, u);
     let pendulum64 = rust_offsets!(GpuPendulum64; y, u);
-    let slot = rust_offsets!(GpuLyapunovSlot; a, b);
+    let slot = rust_offsets!(GpuLyapunovSlot; y, u, v, w);
     for (name, source) in all_shaders() {
         let module = module(&name, &source);
         let (wgsl, span) = wgsl_struct(&module, "Pendulum");

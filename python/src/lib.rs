@@ -55,7 +55,7 @@ fn spelt(text: &str) -> String {
 
 /// The library's error as Python's: a bad value is a ValueError naming its keyword (the
 /// spec's field), Ctrl-C a KeyboardInterrupt.
-fn py_err(e: Error) -> PyErr {
+pub(crate) fn py_err(e: Error) -> PyErr {
     match e {
         Error::InvalidSpec { field, reason } => {
             PyValueError::new_err(format!("{}: {}", keyword(field), spelt(&reason)))

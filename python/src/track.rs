@@ -7,7 +7,6 @@ use pyo3::types::PyDict;
 
 use chaoscope::app::track::TrackJob;
 use chaoscope::engine::Backend;
-use chaoscope::fit::data::PixelScale;
 use chaoscope::params::ParamSources;
 use chaoscope::spec::Precision;
 use chaoscope::track::{Markers, Scale};
@@ -29,23 +28,8 @@ pub fn track<'py>(
             Markers::parse(&s).map_err(|e| PyValueError::new_err(format!("markers: {e}")))?
         }
     };
-    let scale = match (k.get::<f64>("l1")?, k.units()?.pixels_per_metre) {
-        (Some(l1), None) => Scale::UpperArm(l1),
-        (None, Some(PixelScale::PerMetre(p))) => Scale::PixelsPerMetre(p),
-        (None, Some(PixelScale::FromMotion)) => {
-            Scale::FromMotion(chaoscope::model::Params::default().g)
-        }
-        (Some(_), Some(_)) => {
-            return Err(PyValueError::new_err(
-                "pixels_per_metre: give the scale once, by l1 or by pixels_per_metre",
-            ));
-        }
-        (None, None) => {
-            return Err(PyValueError::new_err(
-                "l1: the scale is needed: the upper arm's length (m), or pixels_per_metre",
-            ));
-        }
-    };
+    let scale =
+        Scale::asked(k.get::<f64>("l1")?, k.units()?.pixels_per_metre).map_err(crate::py_err)?;
     let job = TrackJob {
         video: k
             .get("video")?

@@ -7,7 +7,7 @@ use pyo3::types::{PyBytes, PyDict};
 
 use chaoscope::app::film::FilmSpec;
 use chaoscope::app::map::MapJob;
-use chaoscope::app::zoom::{self, View, ZoomJob};
+use chaoscope::app::zoom::{self, Target, ZoomJob};
 use chaoscope::engine::MapKernels;
 use chaoscope::render::MapPicture;
 use chaoscope::spec::ZOOM;
@@ -32,7 +32,7 @@ pub fn run<'py, S: MapKernels + MapPicture + Copy + Send + Sync + 'static>(
         map,
         to: to
             .into_iter()
-            .map(|(x, y, width)| View { x, y, width })
+            .map(|(x, y, width)| Target { x, y, width })
             .collect(),
         frames: k.whole("frames")?.unwrap_or(ZOOM.frames),
         film: FilmSpec {

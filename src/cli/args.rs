@@ -23,6 +23,20 @@ pub fn f32_on_the_cpu(precision: Option<crate::spec::Precision>, backend: Backen
     }
 }
 
+/// The engine a map's command computes on, and its job as `job` builds it knowing whether
+/// that engine computes in f32 (some settings' defaults are f32's); [`f32_on_the_cpu`]'s
+/// note first.
+pub fn engine_then<J>(
+    precision: Option<crate::spec::Precision>,
+    backend: Backend,
+    job: impl FnOnce(bool) -> crate::Result<J>,
+) -> crate::Result<(Engine, J)> {
+    f32_on_the_cpu(precision, backend);
+    let engine = Engine::new(backend)?;
+    let job = job(engine.computes_in_f32(precision.unwrap_or_default()))?;
+    Ok((engine, job))
+}
+
 /// The engine a command that runs trajectories or ensembles lends its run: in the precision
 /// asked (f32 unless given), made once for the command ([`f32_on_the_cpu`]'s note first).
 pub fn lent_engine(
@@ -192,10 +206,10 @@ impl PlaneArgs {
 #[derive(Args, Debug, Clone)]
 pub struct StepArgs {
     /// Simulated time (s).
-    #[arg(long, default_value = "30", value_parser = parse_number, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = Stepping::FLIP_T_MAX, value_parser = parse_number, allow_hyphen_values = true)]
     pub t_max: f64,
     /// RK4 time step (s).
-    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = Stepping::DT, value_parser = parse_number, allow_hyphen_values = true)]
     pub dt: f64,
 }
 

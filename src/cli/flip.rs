@@ -11,7 +11,7 @@ use super::parse::{one_of, parse_number, parse_tile};
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::flip::{self, FlipJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::{FlipMeasure, FlipSpec, Integrator, MapSpec, Precision, SteppingAsked};
@@ -157,9 +157,8 @@ pub fn nan_note(nan: usize) -> String {
 }
 
 pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend);
-    let engine = Engine::new(args.backend)?;
-    let job = args.job_on(engine.computes_in_f32(args.precision.unwrap_or_default()))?;
+    let (engine, job) =
+        super::args::engine_then(args.precision, args.backend, |f32| args.job_on(f32))?;
     let s = flip::run(&job, &engine, command_line::flip(&job), monitor)?;
     say("flip", &s.notices);
     eprintln!(

@@ -9,7 +9,7 @@ use super::parse::{Angles, one_of, parse_number, parse_range, parse_size, parse_
 use super::{command_line, json, say};
 use crate::app::MapOutputs;
 use crate::app::lyapunov::{self, LyapunovMapJob, LyapunovPointJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::model::State;
 use crate::monitor::Monitor;
@@ -37,10 +37,10 @@ pub struct LyapunovArgs {
     #[command(flatten)]
     pub plane: PlaneArgs,
     /// Simulated time (s); the exponent is the mean log stretch rate over [0, t-max].
-    #[arg(long, default_value = "20", value_parser = parse_number, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = Stepping::DIVERGENCE_T_MAX, value_parser = parse_number, allow_hyphen_values = true)]
     pub t_max: f64,
     /// RK4 time step (s).
-    #[arg(long, default_value = "0.01", value_parser = parse_number, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = Stepping::DT, value_parser = parse_number, allow_hyphen_values = true)]
     pub dt: f64,
     /// Renormalisation interval (s), a multiple of dt.
     #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
@@ -299,9 +299,9 @@ impl LyapunovArgs {
 }
 
 pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    super::args::f32_on_the_cpu(args.precision, args.backend());
-    let engine = Engine::new(args.backend())?;
-    match args.job_on(engine.computes_in_f32(args.precision.unwrap_or_default()))? {
+    let (engine, job) =
+        super::args::engine_then(args.precision, args.backend(), |f32| args.job_on(f32))?;
+    match job {
         LyapunovJob::Map(job) => {
             let command = command_line::lyapunov_map(&job);
             let s = match &args.spectrum {

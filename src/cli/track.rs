@@ -10,7 +10,6 @@ use super::{command_line, json, say};
 use crate::app::track::{self, TrackJob};
 use crate::engine::Backend;
 use crate::error::Result;
-use crate::fit::data::PixelScale;
 use crate::monitor::Monitor;
 use crate::params::{ParamSources, Preset};
 use crate::track::{Markers, Scale};
@@ -73,32 +72,24 @@ fn parse_region(s: &str) -> std::result::Result<(u32, u32, u32, u32), String> {
 }
 
 impl TrackArgs {
-    pub fn job(&self) -> TrackJob {
-        TrackJob {
+    pub fn job(&self) -> Result<TrackJob> {
+        Ok(TrackJob {
             video: self.video.clone(),
             output: self.output.clone(),
             markers: self.markers,
-            scale: match (self.l1, self.pixels_per_metre) {
-                (Some(l1), _) => Scale::UpperArm(l1),
-                (None, Some(PixelScale::PerMetre(p))) => Scale::PixelsPerMetre(p),
-                (None, Some(PixelScale::FromMotion)) => {
-                    Scale::FromMotion(crate::model::Params::default().g)
-                }
-                // clap requires one of them.
-                (None, None) => Scale::UpperArm(f64::NAN),
-            },
+            scale: Scale::asked(self.l1, self.pixels_per_metre)?,
             region: self.region,
             bridge: self.bridge.then(|| ParamSources {
                 preset: self.preset,
                 params: self.params.clone(),
                 ..ParamSources::default()
             }),
-        }
+        })
     }
 }
 
 pub fn run(args: &TrackArgs, monitor: &Monitor) -> Result<serde_json::Value> {
-    let job = args.job();
+    let job = args.job()?;
     // Only bridging integrates the model.
     let engine = match job.bridge {
         Some(_) => Some(super::args::lent_engine(None, Backend::Auto)?),

@@ -11,8 +11,7 @@ use super::parse::{not_a_flag, parse_number, parse_tile, parse_u32};
 use super::{command_line, json, say};
 use crate::app::film::FilmSpec;
 use crate::app::map::MapJob;
-use crate::app::zoom::{self, View, ZoomJob};
-use crate::engine::Engine;
+use crate::app::zoom::{self, Target, ZoomJob};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::spec::ZOOM;
@@ -23,7 +22,7 @@ pub struct ZoomArgs {
     /// width along x; the height keeps the first view's proportions). Given more than once:
     /// the views the film passes through, in order, the last its end.
     #[arg(long = "to", required = true, value_parser = parse_view, allow_hyphen_values = true)]
-    pub to: Vec<View>,
+    pub to: Vec<Target>,
     /// Frames in the film (2 to 100000).
     #[arg(long, default_value_t = ZOOM.frames, value_parser = parse_u32, allow_hyphen_values = true)]
     pub frames: u32,
@@ -64,13 +63,13 @@ pub enum ZoomMap {
 }
 
 /// `X,Y,WIDTH`.
-pub fn parse_view(s: &str) -> std::result::Result<View, String> {
+pub fn parse_view(s: &str) -> std::result::Result<Target, String> {
     not_a_flag(s)?;
     let parts: Vec<&str> = s.split(',').collect();
     let [x, y, width] = parts[..] else {
         return Err(format!("`{s}` must be X,Y,WIDTH"));
     };
-    Ok(View {
+    Ok(Target {
         x: parse_number(x)?,
         y: parse_number(y)?,
         width: parse_number(width)?,
@@ -141,10 +140,9 @@ pub fn run(args: &ZoomArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let s = match &args.map {
         ZoomMap::Flip(map) => {
             not_in_a_zoom(&map.output, &map.data, map.tile, &map.verdict.resolved)?;
-            super::args::f32_on_the_cpu(map.precision, map.backend);
-            let engine = Engine::new(map.backend)?;
-            let job =
-                args.job_of(map.job_on(engine.computes_in_f32(map.precision.unwrap_or_default()))?);
+            let (engine, job) =
+                super::args::engine_then(map.precision, map.backend, |f32| map.job_on(f32))?;
+            let job = args.job_of(job);
             let command = command_line::zoom(&job, &command_line::flip(&job.map));
             zoom::run(&job, &engine, command, &command_line::flip, monitor)?
         }
@@ -156,11 +154,9 @@ pub fn run(args: &ZoomArgs, monitor: &Monitor) -> Result<serde_json::Value> {
                     "is a map's own file; a zoom's frames show one exponent or indicator each",
                 ));
             }
-            super::args::f32_on_the_cpu(map.precision, map.backend());
-            let engine = Engine::new(map.backend())?;
-            let LyapunovJob::Map(mapjob) =
-                map.job_on(engine.computes_in_f32(map.precision.unwrap_or_default()))?
-            else {
+            let (engine, job) =
+                super::args::engine_then(map.precision, map.backend(), |f32| map.job_on(f32))?;
+            let LyapunovJob::Map(mapjob) = job else {
                 return Err(Error::invalid(
                     "theta1",
                     "a zoom needs a plane: ranges (or --x and --y), not a single start",

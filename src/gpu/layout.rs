@@ -77,11 +77,14 @@ mirrors! {
         u: [real; 4],
     }
 
-    /// Mirror of WGSL `LyapunovSlot`, one per pixel of a divergence map: a pendulum and its
-    /// tangent vector in `b.y` (tangent method), or a pendulum and its twin (twin method).
+    /// Mirror of WGSL `LyapunovSlot`, one per pixel of a divergence map: a pendulum (`y`,
+    /// `u`) and its tangent vector in `v` and adaptive clock in `w` (tangent method), or its
+    /// twin's `y` and `u` there (twin method).
     struct GpuLyapunovSlot / GpuLyapunovSlot64 {
-        a: pendulum,
-        b: pendulum,
+        y: [real; 4],
+        u: [real; 4],
+        v: [real; 4],
+        w: [real; 4],
     }
 
     /// Mirror of WGSL `AdaptiveSlot` (shaders/adaptive_common.wgsl), one per pixel of an

@@ -300,10 +300,9 @@ impl JacobianKernel {
         // Each state in the first vec4 of its slot; the columns come back in the slot.
         let slots: Vec<GpuLyapunovSlot> = states
             .iter()
-            .map(|s| {
-                let mut slot = GpuLyapunovSlot::default();
-                slot.a.y = s.to_array().map(|v| v as f32);
-                slot
+            .map(|s| GpuLyapunovSlot {
+                y: s.to_array().map(|v| v as f32),
+                ..Default::default()
             })
             .collect();
         let bytes = states.len() as u64 * SLOT_BYTES;

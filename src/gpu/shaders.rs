@@ -14,6 +14,7 @@ const DP54: &str = include_str!("../../shaders/dp54.wgsl");
 const FLIP_DP54: &str = include_str!("../../shaders/flip_adaptive.wgsl");
 const FLIP_DOP853: &str = include_str!("../../shaders/flip_dop853.wgsl");
 const TANGENT: &str = include_str!("../../shaders/tangent.wgsl");
+const ADAPTIVE_WINDOWS: &str = include_str!("../../shaders/adaptive_windows.wgsl");
 const LYAPUNOV: &str = include_str!("../../shaders/lyapunov.wgsl");
 const INDICATORS: &str = include_str!("../../shaders/indicators.wgsl");
 const TRAJECTORY: &str = include_str!("../../shaders/trajectory.wgsl");
@@ -71,17 +72,31 @@ impl Kernel {
         match self {
             Kernel::FlipTime => FLIP_TIME.to_string(),
             Kernel::FlipKind => format!("{FLIP_TIME}\n{FLIP_KIND}"),
-            Kernel::FlipDp54 => format!("{ADAPTIVE_COMMON}\n{}\n{FLIP_DP54}", dp54()),
+            Kernel::FlipDp54 => format!(
+                "{ADAPTIVE_COMMON}\n{}\n{}",
+                dp54(),
+                with_flip_dp54_stages(FLIP_DP54)
+            ),
             Kernel::FlipDop853 => flip_dop853(),
             Kernel::Lyapunov => format!(
                 "{}\n{TANGENT}\n{}",
                 dp54(),
-                with_dp54_stages(LYAPUNOV, "tangent_rate", "tangent_ahead", "t")
+                with_dp54_stages(
+                    &with_adaptive_windows(LYAPUNOV),
+                    "tangent_rate",
+                    "tangent_ahead",
+                    "t"
+                )
             ),
             Kernel::Indicators => format!(
                 "{}\n{TANGENT}\n{}\n{}",
                 dp54(),
-                with_dp54_stages(INDICATORS, "set_rate", "set_ahead", "x"),
+                with_dp54_stages(
+                    &with_adaptive_windows(INDICATORS),
+                    "set_rate",
+                    "set_ahead",
+                    "x"
+                ),
                 crate::measure::wgsl()
             ),
             Kernel::Trajectory => TRAJECTORY.to_string(),
@@ -147,6 +162,92 @@ fn with_dp54_stages(body: &str, rate: &str, ahead: &str, y: &str) -> String {
     lines.push(format!("let k7 = {rate}(c, next);"));
     let out = body.replace("//{{DP54_STAGES}}", &lines.join("\n            "));
     assert!(!out.contains("{{"), "a placeholder left in a DP54 kernel");
+    out
+}
+
+/// `body` with the adaptive windows' loop (shaders/adaptive_windows.wgsl) where it marks
+/// `//{{ADAPTIVE_WINDOWS}}`, filled from the sections that follow the mark up to `//{{END}}`
+/// (`//{{RATE}}`, `//{{ERROR}}`, `//{{ACCEPT}}`, `//{{STALLED}}`, `//{{WINDOW_END}}`, each a
+/// line of its own): the loop written once for every state kind.
+fn with_adaptive_windows(body: &str) -> String {
+    let start = body
+        .find("    //{{ADAPTIVE_WINDOWS}}")
+        .expect("the kernel marks where its adaptive windows go");
+    let end_mark = "    //{{END}}\n";
+    let end = body[start..].find(end_mark).expect("its fills end") + start;
+    let block = &body[start..end];
+    // The block's first line is the mark; then each section's mark and its lines.
+    let mut fills: Vec<(&str, String)> = Vec::new();
+    for part in block.split("    //{{").skip(2) {
+        let (name, text) = part
+            .split_once("}}\n")
+            .expect("a section's mark on its own line");
+        fills.push((name, text.trim_end_matches('\n').to_string()));
+    }
+    // The template without its header of comments.
+    let template: String = ADAPTIVE_WINDOWS
+        .lines()
+        .skip_while(|l| l.starts_with("//"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let mut filled = template;
+    for (name, text) in fills {
+        let text = match name {
+            "RATE" => text.trim().to_string(),
+            _ => text,
+        };
+        filled = filled.replace(&format!("{{{{{name}}}}}"), &text);
+    }
+    let out = format!(
+        "{}{filled}{}",
+        &body[..start],
+        &body[end + end_mark.len()..]
+    );
+    assert!(
+        !out.replace("//{{DP54_STAGES}}", "").contains("{{"),
+        "a section of the adaptive windows left unfilled"
+    );
+    out
+}
+
+/// The flip kernel's `body` with DP54's stages written in at `//{{DP54_STAGES}}` from the
+/// tableau, over a `Pendulum` `p` and its `Rate`s: each stage's state is `p` plus the step
+/// times one sum of the weighted rates (`advanced` for one weight, `alongN` of
+/// flip_adaptive.wgsl for N), the nonzero weights only.
+fn with_flip_dp54_stages(body: &str) -> String {
+    let t = &crate::tableau::DP54;
+    let along = |weights: &[f64], name: &dyn Fn(usize) -> String| {
+        let terms: Vec<(String, usize)> = weights
+            .iter()
+            .enumerate()
+            .filter(|(_, w)| **w != 0.0)
+            .map(|(j, _)| (name(j), j + 1))
+            .collect();
+        match &terms[..] {
+            [(w, k)] => format!("advanced(p, {w} * step, k{k})"),
+            _ => {
+                let weighted: Vec<String> =
+                    terms.iter().map(|(w, k)| format!("{w}, k{k}")).collect();
+                format!("along{}(p, step, {})", terms.len(), weighted.join(", "))
+            }
+        }
+    };
+    let mut lines: Vec<String> = (1..6)
+        .map(|s| {
+            let stage = along(&t.a[s][..s], &|j| format!("A{}{}", s + 1, j + 1));
+            format!("let k{} = rate(c, {stage});", s + 1)
+        })
+        .collect();
+    lines.push(format!(
+        "let next = {};",
+        along(&t.b, &|j| format!("B{}", j + 1))
+    ));
+    lines.push("let k7 = rate(c, next);".into());
+    let out = body.replace("//{{DP54_STAGES}}", &lines.join("\n        "));
+    assert!(
+        !out.contains("{{"),
+        "a placeholder left in the flip's DP54 kernel"
+    );
     out
 }
 

@@ -6,7 +6,7 @@ use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Run
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::gpu::layout::NEVER;
-use crate::quantity::{ALIGNMENT_TIME, GALI, Quantity, SALI};
+use crate::quantity::{Quantity, times_within};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 /// Which alignment index of normalised tangent vectors.
@@ -48,6 +48,65 @@ pub const ALIGNED_F32_FLOOR: f64 = 1e-5;
 const NEVER_ALIGNED: f64 = 1e-300;
 
 pub struct AlignmentIndex;
+
+/// Alignment indices (log10) agree within this many decades.
+pub const ALIGNMENT_DECADES: f64 = 0.5;
+
+/// log10 of an alignment index at or below this calls a start chaotic in the summary: SALI
+/// of a regular orbit stays near 1e-1..1, GALI_k of a regular orbit decays like a power of
+/// t, far slower than 1e-4 within a map's minutes of simulated time.
+pub const ALIGNED_LOG10: f32 = -4.0;
+
+fn alignments_agree(a: f32, b: f32) -> bool {
+    ((a - b) as f64).abs() <= ALIGNMENT_DECADES
+}
+
+/// log10 SALI at t-max, or where it fell below the threshold.
+pub const SALI: Quantity = Quantity {
+    name: "log10 SALI",
+    unit: "1 (log10)",
+    agree: alignments_agree,
+    agreement: "log10 SALI within 0.5 (NaN never agrees)",
+    tolerance: "0.5 decades",
+    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
+    vouching: "log10 SALI within 0.1 (NaN never agrees)",
+    vouch_tolerance: "0.1 decades",
+    // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
+    counted: |x| x <= ALIGNED_LOG10,
+    counted_as: "chaotic",
+    counted_rule: "log10 SALI <= -4",
+};
+
+/// log10 GALI_k at t-max, or where it fell below the threshold.
+pub const GALI: Quantity = Quantity {
+    name: "log10 GALI",
+    unit: "1 (log10)",
+    agree: alignments_agree,
+    agreement: "log10 GALI within 0.5 (NaN never agrees)",
+    tolerance: "0.5 decades",
+    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
+    vouching: "log10 GALI within 0.1 (NaN never agrees)",
+    vouch_tolerance: "0.1 decades",
+    // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
+    counted: |x| x <= ALIGNED_LOG10,
+    counted_as: "chaotic",
+    counted_rule: "log10 GALI <= -4",
+};
+
+/// The time an alignment index fell below its threshold (s; +inf = not within t-max).
+pub const ALIGNMENT_TIME: Quantity = Quantity {
+    name: "time to alignment",
+    unit: "s",
+    agree: |a, b| times_within(a, b, 0.05, 0.1),
+    agreement: "a time within 5 % or 0.1 s (both never aligning agrees; NaN never does)",
+    tolerance: "5 % or 0.1 s",
+    vouch: |a, b| times_within(a, b, 0.01, 0.02),
+    vouching: "a time within 1 % or 0.02 s (both never aligning agrees; NaN never does)",
+    vouch_tolerance: "1 % or 0.02 s",
+    counted: f32::is_finite,
+    counted_as: "chaotic",
+    counted_rule: "aligned within t-max",
+};
 
 /// GALI's order.
 const ORDER: Opt = Opt {

@@ -5,13 +5,28 @@ use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Run
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
-use crate::quantity::{DESCRIPTOR, Quantity};
+use crate::quantity::{Quantity, within};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 /// The exponents p a Lagrangian descriptor takes.
 pub const DESCRIPTOR_POWERS: [f64; 4] = [0.25, 0.5, 1.0, 2.0];
 
 pub struct Descriptor;
+
+/// The Lagrangian descriptor M (the unit of |f|^p times s; f mixes rad/s and rad/s^2).
+pub const DESCRIPTOR: Quantity = Quantity {
+    name: "Lagrangian descriptor",
+    unit: "sum of |f_i|^p s",
+    agree: |a, b| within(a, b, 0.01, 1e-3),
+    agreement: "M within 1 % (NaN never agrees)",
+    tolerance: "1 %",
+    vouch: |a, b| within(a, b, 0.002, 2e-4),
+    vouching: "M within 0.2 % (NaN never agrees)",
+    vouch_tolerance: "0.2 %",
+    counted: f32::is_finite,
+    counted_as: "finite",
+    counted_rule: "M finite",
+};
 
 /// The power p of the descriptor's sum.
 const POWER: Opt = Opt {

@@ -5,12 +5,13 @@
 //! (growing like log t); chaotic orbits grow like λ t, as for the FLI. Its kernel is
 //! `shaders/ofli.wgsl`; its CPU twin, below, steps with the FTLE's dual numbers.
 
+use super::growth::CHAOTIC_FLI;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::cpu::{TANGENT_START, derivative, tangent_step};
 use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
-use crate::quantity::{CHAOTIC_FLI, Quantity, within};
+use crate::quantity::{Quantity, within};
 use crate::spec::{LyapunovSpec, MapKindEntry};
 
 pub struct Ofli;

@@ -4,10 +4,43 @@
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::quantity::{EXPONENT, EXPONENT_SUM, Quantity};
+use crate::quantity::{CHAOTIC_FTLE, FTLE_ABSOLUTE, Quantity, exponents_agree, within};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 pub struct Spectrum;
+
+/// One exponent of the Lyapunov spectrum (1/s).
+pub const EXPONENT: Quantity = Quantity {
+    name: "Lyapunov exponent",
+    unit: "1/s",
+    agree: exponents_agree,
+    agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
+    tolerance: "5 % or 0.02 /s",
+    vouch: |a, b| within(a, b, 0.01, 0.004),
+    vouching: "an exponent within 1 % or 0.004 /s (NaN never agrees)",
+    vouch_tolerance: "1 % or 0.004 /s",
+    counted: |x| x > CHAOTIC_FTLE,
+    counted_as: "chaotic",
+    counted_rule: "exponent > 0.5 /s",
+};
+
+/// The sum of the four exponents (1/s): 0 without losses, the mean phase-space contraction
+/// rate with them.
+pub const EXPONENT_SUM: Quantity = Quantity {
+    name: "sum of the Lyapunov exponents",
+    unit: "1/s",
+    // Its scale is the volume change over t (ln 2 / t at most for equal masses), not the
+    // exponents': 0.005 /s absolute.
+    agree: |a, b| within(a, b, 0.05, 0.005),
+    agreement: "a sum within 5 % or 0.005 /s (NaN never agrees)",
+    tolerance: "5 % or 0.005 /s",
+    vouch: |a, b| within(a, b, 0.01, 0.001),
+    vouching: "a sum within 1 % or 0.001 /s (NaN never agrees)",
+    vouch_tolerance: "1 % or 0.001 /s",
+    counted: |x| x < -FTLE_ABSOLUTE as f32,
+    counted_as: "contracting",
+    counted_rule: "sum < -0.02 /s",
+};
 
 /// Which exponent of the spectrum.
 const WHICH: Opt = Opt {

@@ -67,6 +67,14 @@ pub struct Stepping {
 }
 
 impl Stepping {
+    /// A flip-family map's simulated time by default (s): most starts that flip at all do
+    /// within it.
+    pub const FLIP_T_MAX: f64 = 30.0;
+    /// A divergence map's (s): long enough for the exponents to part regular from chaotic.
+    pub const DIVERGENCE_T_MAX: f64 = 20.0;
+    /// The RK4 step by default (s): well inside RK4's stable step for the presets.
+    pub const DT: f64 = 0.01;
+
     /// Number of steps to cover `t_max`; a final partial step is taken whole, and events
     /// after `t_max` are not reported.
     pub fn steps(&self) -> u32 {

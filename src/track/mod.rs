@@ -33,6 +33,32 @@ pub enum Scale {
     FromMotion(f64),
 }
 
+impl Scale {
+    /// The scale as a door asks for it: by the upper arm's length (`l1`) or by
+    /// `pixels_per_metre` (a number, or the swing's), one of the two.
+    pub fn asked(
+        l1: Option<f64>,
+        pixels_per_metre: Option<crate::fit::data::PixelScale>,
+    ) -> Result<Scale> {
+        use crate::fit::data::PixelScale;
+        match (l1, pixels_per_metre) {
+            (Some(l1), None) => Ok(Scale::UpperArm(l1)),
+            (None, Some(PixelScale::PerMetre(p))) => Ok(Scale::PixelsPerMetre(p)),
+            (None, Some(PixelScale::FromMotion)) => {
+                Ok(Scale::FromMotion(crate::model::Params::default().g))
+            }
+            (Some(_), Some(_)) => Err(Error::invalid(
+                "pixels_per_metre",
+                "give the scale once, by [[l1]] or by [[pixels_per_metre]]",
+            )),
+            (None, None) => Err(Error::invalid(
+                "l1",
+                "the scale is needed: the upper arm's length (m), or [[pixels_per_metre]]",
+            )),
+        }
+    }
+}
+
 /// One mass in one frame, measured: its mean position over the exposure (m, origin at the
 /// pivot, y up), the standard errors of that position from the sensor's noise (m), and the
 /// streak's length (m: the distance moved during the exposure, 0 for a sharp marker).

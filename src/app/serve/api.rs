@@ -9,7 +9,7 @@ use crate::app::film::FilmSpec;
 use crate::app::flip::FlipJob;
 use crate::app::lyapunov::LyapunovMapJob;
 use crate::app::trajectory::TrajectoryJob;
-use crate::app::zoom::{View as ZoomView, ZoomJob};
+use crate::app::zoom::{Target, ZoomJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
@@ -293,7 +293,7 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
 /// pixels) to the view centred at (`cx`, `cy`), `w` wide along x, over `frames` frames,
 /// planned as `chaoscope zoom` plans it (a view past f64 is refused as it refuses it).
 pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) -> Response {
-    let parsed = (|| -> Result<(View, Grid, ZoomView, u32)> {
+    let parsed = (|| -> Result<(View, Grid, Target, u32)> {
         let mut q = Query::new(q)?;
         let view = shared.view(&mut q)?;
         if view.stored.is_some() {
@@ -315,7 +315,7 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
             .count("frames", 2, 100_000)?
             .unwrap_or(crate::spec::ZOOM.frames);
         q.finish()?;
-        Ok((view, grid, ZoomView { x, y, width }, frames))
+        Ok((view, grid, Target { x, y, width }, frames))
     })();
     let (view, grid, to, frames) = match parsed {
         Ok(p) => p,
@@ -338,7 +338,7 @@ pub(super) async fn zoom(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
         };
         fn of<M>(
             map: crate::app::map::MapJob<M>,
-            to: ZoomView,
+            to: Target,
             frames: u32,
             film: &FilmSpec,
         ) -> ZoomJob<M> {

@@ -150,8 +150,13 @@ impl Query {
             ));
         }
         let method = self.method(accurate, on_gpu)?;
-        let t_max = self.within("t_max", 0.0, MAX_T_MAX)?.unwrap_or(20.0);
-        let dt = self.within("dt", MIN_DT, 0.1)?.unwrap_or(0.01);
+        // The divergence map's default time for every kind: a view computes fast.
+        let t_max = self
+            .within("t_max", 0.0, MAX_T_MAX)?
+            .unwrap_or(crate::spec::Stepping::DIVERGENCE_T_MAX);
+        let dt = self
+            .within("dt", MIN_DT, 0.1)?
+            .unwrap_or(crate::spec::Stepping::DT);
         if let Kind::Map(k) = kind
             && k.entry().indicator.is_some()
             && t_max < renorm_of(dt)

@@ -22,7 +22,7 @@ use crate::spec::{Grid, Precision};
 
 mod views;
 use views::grid_of_view;
-pub use views::{View, grids};
+pub use views::{Target, grids};
 
 /// A zoom to make.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,7 +31,7 @@ pub struct ZoomJob<S> {
     /// sub-samples and `show_unresolved`; its other files are not used.
     pub map: MapJob<S>,
     /// The views after the first, in order; the last is the film's end.
-    pub to: Vec<View>,
+    pub to: Vec<Target>,
     pub frames: u32,
     /// The film: MP4 (or APNG), its rate and quality.
     pub film: FilmSpec,
@@ -153,7 +153,8 @@ pub fn check<S: MapKernels + MapPicture>(job: &ZoomJob<S>) -> Result<Vec<Grid>> 
         })?;
     }
     let end = job.to.last().expect("checked: a view to go to");
-    let aspect = (spec.grid().y.range.max - spec.grid().y.range.min) / View::of(spec.grid()).width;
+    let aspect =
+        (spec.grid().y.range.max - spec.grid().y.range.min) / Target::of(spec.grid()).width;
     for (k, g) in grids.iter().enumerate() {
         let fine = computed_grid(g, job.map.samples);
         if fine.beyond_f64() {

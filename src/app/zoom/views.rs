@@ -3,19 +3,20 @@
 use crate::error::{Error, Result};
 use crate::spec::{Grid, Range};
 
-/// One view of the plane: its centre on the map's axes and its width along x (its height
-/// keeps the first view's proportions).
+/// Where a zoom goes: a view of the plane by its centre on the map's axes and its width
+/// along x (its height keeps the first view's proportions). (The explorer's `View` is what
+/// its page shows.)
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct View {
+pub struct Target {
     pub x: f64,
     pub y: f64,
     pub width: f64,
 }
 
-impl View {
+impl Target {
     /// The view a grid spans.
-    pub fn of(grid: &Grid) -> View {
-        View {
+    pub fn of(grid: &Grid) -> Target {
+        Target {
             x: grid.x.range.mid(),
             y: grid.y.range.mid(),
             width: grid.x.range.max - grid.x.range.min,
@@ -27,7 +28,7 @@ impl View {
 /// between views, the centre moving so that one point stays in place on the screen (the
 /// point a zoom closes in on); frames shared between the legs by how far each goes (its
 /// zoom in e-folds, its pan in screens). Frame 0 is `start` itself.
-pub fn grids(start: &Grid, to: &[View], frames: u32) -> Result<Vec<Grid>> {
+pub fn grids(start: &Grid, to: &[Target], frames: u32) -> Result<Vec<Grid>> {
     if !(2..=100_000).contains(&frames) {
         return Err(Error::invalid(
             "frames",
@@ -48,9 +49,9 @@ pub fn grids(start: &Grid, to: &[View], frames: u32) -> Result<Vec<Grid>> {
             ));
         }
     }
-    let first = View::of(start);
+    let first = Target::of(start);
     let aspect = (start.y.range.max - start.y.range.min) / first.width;
-    let views: Vec<View> = std::iter::once(first).chain(to.iter().copied()).collect();
+    let views: Vec<Target> = std::iter::once(first).chain(to.iter().copied()).collect();
     let legs: Vec<f64> = views
         .windows(2)
         .map(|w| {
@@ -67,7 +68,7 @@ pub fn grids(start: &Grid, to: &[View], frames: u32) -> Result<Vec<Grid>> {
             "is the view the film starts from: give a view to zoom to",
         ));
     }
-    let grid_of = |v: View| grid_of_view(start, v);
+    let grid_of = |v: Target| grid_of_view(start, v);
     let last = frames - 1;
     Ok((0..frames)
         .map(|k| {
@@ -93,7 +94,7 @@ pub fn grids(start: &Grid, to: &[View], frames: u32) -> Result<Vec<Grid>> {
             } else {
                 u
             };
-            grid_of(View {
+            grid_of(Target {
                 x: a.x + (b.x - a.x) * moved,
                 y: a.y + (b.y - a.y) * moved,
                 width,
@@ -103,8 +104,8 @@ pub fn grids(start: &Grid, to: &[View], frames: u32) -> Result<Vec<Grid>> {
 }
 
 /// The grid of view `v` on `start`'s plane and pixels, its height in `start`'s proportions.
-pub(super) fn grid_of_view(start: &Grid, v: View) -> Grid {
-    let aspect = (start.y.range.max - start.y.range.min) / View::of(start).width;
+pub(super) fn grid_of_view(start: &Grid, v: Target) -> Grid {
+    let aspect = (start.y.range.max - start.y.range.min) / Target::of(start).width;
     let h = v.width * aspect;
     let mut g = *start;
     g.x.range = Range {
@@ -142,13 +143,13 @@ mod tests {
     #[test]
     fn a_zoom_is_geometric_about_a_fixed_point() {
         let start = plane();
-        let end = View {
+        let end = Target {
             x: 1.0,
             y: -0.5,
             width: 1e-4,
         };
         let g = grids(&start, &[end], 61).unwrap();
-        let w: Vec<f64> = g.iter().map(|g| View::of(g).width).collect();
+        let w: Vec<f64> = g.iter().map(|g| Target::of(g).width).collect();
         let ratio = (w[60] / w[0]).powf(1.0 / 60.0);
         for k in 1..61 {
             // Each width the last times the ratio, to round-off of a few ulp per power.
@@ -157,40 +158,40 @@ mod tests {
         // The fixed point P: where the line from the first centre through the last meets
         // scale 0 (P = c0 + (c1 - c0) w0 / (w0 - w1)); its screen place (P - c) / w is the
         // same in every frame.
-        let v0 = View::of(&g[0]);
+        let v0 = Target::of(&g[0]);
         let p = v0.x + (end.x - v0.x) * w[0] / (w[0] - w[60]);
         let place0 = (p - v0.x) / w[0];
         for gk in &g {
-            let v = View::of(gk);
+            let v = Target::of(gk);
             assert!(((p - v.x) / v.width - place0).abs() < 1e-6);
         }
         assert_eq!(g[0], start);
-        assert_eq!(View::of(&g[60]).x, end.x);
+        assert_eq!(Target::of(&g[60]).x, end.x);
     }
 
     /// Legs get frames by how far they go: a leg of 4 e-folds twice a leg of 2.
     #[test]
     fn keyframes_share_the_frames_by_their_zoom() {
         let start = plane();
-        let w0 = View::of(&start).width;
-        let via = View {
+        let w0 = Target::of(&start).width;
+        let via = Target {
             x: 0.0,
             y: 0.0,
             width: w0 * (-4.0f64).exp(),
         };
-        let end = View {
+        let end = Target {
             width: via.width * (-2.0f64).exp(),
             ..via
         };
         let g = grids(&start, &[via, end], 31).unwrap();
         // 6 e-folds over 30 steps: frame 20 is the middle view.
-        assert!((View::of(&g[20]).width / via.width - 1.0).abs() < 1e-9);
+        assert!((Target::of(&g[20]).width / via.width - 1.0).abs() < 1e-9);
     }
 
     #[test]
     fn bad_views_name_their_flag() {
         let start = plane();
-        let v = View {
+        let v = Target {
             x: 0.0,
             y: 0.0,
             width: 0.0,
@@ -200,11 +201,11 @@ mod tests {
             Err(Error::InvalidSpec { field: "to", .. })
         ));
         assert!(matches!(
-            grids(&start, &[View::of(&start)], 10),
+            grids(&start, &[Target::of(&start)], 10),
             Err(Error::InvalidSpec { field: "to", .. })
         ));
         assert!(matches!(
-            grids(&start, &[View { width: 1.0, ..v }], 1),
+            grids(&start, &[Target { width: 1.0, ..v }], 1),
             Err(Error::InvalidSpec {
                 field: "frames",
                 ..
