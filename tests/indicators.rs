@@ -342,29 +342,44 @@ fn the_descriptor_of_a_start_at_rest_is_twice_its_forward_integral() {
     }
 }
 
-/// Every indicator's map settings, with the threshold f32 resolves where there is one.
+/// Every indicator's map settings, from the registry: each name with its options at an f32
+/// GPU run's defaults (the threshold and distance f32 resolves), every value of a
+/// whole-number option (the exponents, GALI's orders), and every descriptor power.
 fn every_indicator() -> Vec<Indicator> {
-    let threshold = chaoscope::spec::ALIGNED_F32_FLOOR;
-    let mut all = vec![
-        Indicator::Ftle,
-        Indicator::ExponentSum,
-        Indicator::Megno,
-        Indicator::Fli,
-    ];
-    all.extend((1..=4).map(Indicator::Exponent));
-    for index in [
-        Alignment::Sali,
-        Alignment::Gali(2),
-        Alignment::Gali(3),
-        Alignment::Gali(4),
-    ] {
-        all.push(Indicator::Alignment { index, threshold });
-        all.push(Indicator::AlignmentTime { index, threshold });
+    let mut all = Vec::new();
+    for m in chaoscope::measure::MEASURES {
+        for &name in m.names() {
+            let mut asked: Vec<Vec<(&'static str, f64)>> = vec![Vec::new()];
+            for opt in m.options(name) {
+                if let Some((low, high)) = opt.whole {
+                    asked = (low..=high)
+                        .flat_map(|v| {
+                            asked.iter().map(move |given| {
+                                let mut given = given.clone();
+                                given.push((opt.field, v as f64));
+                                given
+                            })
+                        })
+                        .collect();
+                }
+            }
+            for given in &asked {
+                let i = chaoscope::spec::IndicatorAsked {
+                    options: given,
+                    gpu_f32: true,
+                    ..chaoscope::spec::IndicatorAsked::named(name)
+                }
+                .indicator()
+                .unwrap();
+                match i {
+                    Indicator::Descriptor { .. } => all.extend(
+                        chaoscope::measure::DESCRIPTOR_POWERS.map(|p| Indicator::Descriptor { p }),
+                    ),
+                    i => all.push(i),
+                }
+            }
+        }
     }
-    all.extend([0.25, 0.5, 1.0, 2.0].map(|p| Indicator::Descriptor { p }));
-    all.push(Indicator::Ofli);
-    // The distance f32 resolves (its least).
-    all.push(Indicator::Rli { delta: 1e-4 });
     all
 }
 

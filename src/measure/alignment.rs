@@ -77,20 +77,13 @@ pub const SALI: Quantity = Quantity {
     counted_rule: "log10 SALI <= -4",
 };
 
-/// log10 GALI_k at t-max, or where it fell below the threshold.
+/// log10 GALI_k at t-max, or where it fell below the threshold: SALI's rules.
 pub const GALI: Quantity = Quantity {
     name: "log10 GALI",
-    unit: "1 (log10)",
-    agree: alignments_agree,
     agreement: "log10 GALI within 0.5 (NaN never agrees)",
-    tolerance: "0.5 decades",
-    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
     vouching: "log10 GALI within 0.1 (NaN never agrees)",
-    vouch_tolerance: "0.1 decades",
-    // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
-    counted: |x| x <= ALIGNED_LOG10,
-    counted_as: "chaotic",
     counted_rule: "log10 GALI <= -4",
+    ..SALI
 };
 
 /// The time an alignment index fell below its threshold (s; +inf = not within t-max).

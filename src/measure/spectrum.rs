@@ -4,24 +4,17 @@
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::quantity::{CHAOTIC_FTLE, FTLE_ABSOLUTE, Quantity, exponents_agree, within};
+use crate::quantity::{FTLE, FTLE_ABSOLUTE, Quantity, within};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 pub struct Spectrum;
 
-/// One exponent of the Lyapunov spectrum (1/s).
+/// One exponent of the Lyapunov spectrum (1/s): the FTLE's rules, the first exponent being
+/// the FTLE.
 pub const EXPONENT: Quantity = Quantity {
     name: "Lyapunov exponent",
-    unit: "1/s",
-    agree: exponents_agree,
-    agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
-    tolerance: "5 % or 0.02 /s",
-    vouch: |a, b| within(a, b, 0.01, 0.004),
-    vouching: "an exponent within 1 % or 0.004 /s (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.004 /s",
-    counted: |x| x > CHAOTIC_FTLE,
-    counted_as: "chaotic",
     counted_rule: "exponent > 0.5 /s",
+    ..FTLE
 };
 
 /// The sum of the four exponents (1/s): 0 without losses, the mean phase-space contraction
