@@ -34,6 +34,7 @@ pub mod params;
 pub mod plan;
 pub mod quantity;
 pub mod render;
+pub mod serve;
 pub mod spec;
 pub mod tableau;
 pub mod track;

@@ -107,7 +107,7 @@ fn rgb_of_bytes(bytes: &[u8], dir: &Path, name: &str) -> (u32, u32, Vec<u8>) {
 /// Tile (z, x, y)'s theta ranges as `--theta1 MIN:MAX --theta2 MIN:MAX` (the server's own
 /// arithmetic, printed shortest-exact so the command gets the same numbers).
 fn tile_ranges(z: u32, x: u64, y: u64) -> [String; 4] {
-    let g = chaoscope::app::serve::world::World::turn()
+    let g = chaoscope::serve::world::World::turn()
         .tile_grid(z, x, y, 256)
         .unwrap();
     [
@@ -314,7 +314,7 @@ fn a_planes_tiles_and_points_equal_the_map_commands() {
         assert_eq!(status, 200, "{query}: {}", String::from_utf8_lossy(&body));
         assert_eq!(ran.as_deref(), Some("f32"));
         let (_, _, tile) = rgb_of_bytes(&body, dir.path(), &format!("plane{k}.png"));
-        let g = chaoscope::app::serve::world::World::of_plane(&plane)
+        let g = chaoscope::serve::world::World::of_plane(&plane)
             .tile_grid(z, x, y, 64)
             .unwrap();
         let axis = |a: Axis| format!("{}={}:{}", a.var.name(), a.range.min, a.range.max);
@@ -598,7 +598,7 @@ fn a_burst_of_requests_is_bounded_and_the_server_still_answers() {
         "every request gets a tile or 503: {statuses:?}"
     );
     assert!(
-        ok >= chaoscope::app::serve::MAX_WAITING.min(200) / 2,
+        ok >= chaoscope::serve::MAX_WAITING.min(200) / 2,
         "{ok} tiles"
     );
     let (status, _, stats) = server.get("/api/stats");
@@ -654,7 +654,7 @@ fn a_stored_map_is_served_from_its_pixels_and_computed_below_them() {
     if gpu().is_none() {
         return;
     }
-    use chaoscope::app::serve::world::World;
+    use chaoscope::serve::world::World;
     let dir = tempfile::tempdir().unwrap();
     let store = dir.path().join("map.zarr");
     // 600 x 300 pixels: level 2 holds them one to one (3 x 2 tiles, the last ones partly
@@ -1023,7 +1023,7 @@ fn a_request_never_finished_is_cut_off() {
     // The server closes the connection (perhaps after a 408): the read ends.
     let _ = slow.read_to_end(&mut rest);
     let waited = started.elapsed();
-    let limit = chaoscope::app::serve::HEADER_READ_LIMIT;
+    let limit = chaoscope::serve::HEADER_READ_LIMIT;
     assert!(
         waited < limit + Duration::from_secs(5),
         "closed after {waited:?} (limit {limit:?})"

@@ -13,7 +13,6 @@ pub mod forecast;
 pub mod lyapunov;
 pub mod map;
 pub mod phase;
-pub mod serve;
 pub mod store;
 pub mod supersample;
 pub mod sweep;

@@ -7,11 +7,11 @@ use clap::Args;
 
 use super::args::{PhysicalArgs, backend_parser};
 use super::{command_line, json, say};
-use crate::app::serve::{self, Commands, ServeJob, StoredMap};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
+use crate::serve::{self, Commands, ServeJob, StoredMap};
 
 #[derive(Args, Debug, Clone)]
 pub struct ServeArgs {

@@ -9,31 +9,31 @@ const ASSETS: &[(&str, &str, &[u8])] = &[
     (
         "app.js",
         "text/javascript; charset=utf-8",
-        include_bytes!("../../../assets/serve/app.js"),
+        include_bytes!("../../assets/serve/app.js"),
     ),
     (
         "style.css",
         "text/css; charset=utf-8",
-        include_bytes!("../../../assets/serve/style.css"),
+        include_bytes!("../../assets/serve/style.css"),
     ),
     (
         "vendor/leaflet/leaflet.js",
         "text/javascript; charset=utf-8",
-        include_bytes!("../../../assets/serve/vendor/leaflet/leaflet.js"),
+        include_bytes!("../../assets/serve/vendor/leaflet/leaflet.js"),
     ),
     (
         "vendor/leaflet/leaflet.css",
         "text/css; charset=utf-8",
-        include_bytes!("../../../assets/serve/vendor/leaflet/leaflet.css"),
+        include_bytes!("../../assets/serve/vendor/leaflet/leaflet.css"),
     ),
     (
         "vendor/leaflet/LICENSE",
         "text/plain; charset=utf-8",
-        include_bytes!("../../../assets/serve/vendor/leaflet/LICENSE"),
+        include_bytes!("../../assets/serve/vendor/leaflet/LICENSE"),
     ),
 ];
 
-const PAGE: &str = include_str!("../../../assets/serve/index.html");
+const PAGE: &str = include_str!("../../assets/serve/index.html");
 
 pub fn page() -> Response {
     ([(header::CONTENT_TYPE, "text/html; charset=utf-8")], PAGE).into_response()
