@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::film::{FilmSpec, Format};
+use super::film::{FilmSpec, Format, frame_name};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::field::Field;
@@ -243,10 +243,6 @@ pub const FILM_FORMATS: &[Format] = &[Format::Apng, Format::Mp4];
 
 fn frame_path(dir: &Path, k: u32) -> PathBuf {
     dir.join(frame_name(k))
-}
-
-fn frame_name(k: u32) -> String {
-    format!("frame_{k:04}.png")
 }
 
 #[derive(Clone, Debug, serde::Serialize)]

@@ -12,7 +12,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::film::{FilmSpec, Format};
+use super::film::{FilmSpec, Format, frame_name};
 use super::map::{MapJob, check_in_memory, compute};
 use crate::engine::{Backend, Engine, MapKernels};
 use crate::error::{Error, Result};
@@ -56,10 +56,6 @@ pub const FILM_FORMATS: &[Format] = &[Format::Mp4, Format::Apng];
 pub const FILM: &str = "zoom.mp4";
 /// The frames' table's name in the output folder.
 pub const TABLE: &str = "frames.csv";
-
-pub fn frame_name(k: u32) -> String {
-    format!("frame_{k:04}.png")
-}
 
 /// One frame as planned: its view, its grid and where and how precisely it runs.
 #[derive(Clone, Debug, serde::Serialize)]
