@@ -501,23 +501,6 @@ fn sweeps_go_into_one_store() {
             .collect();
         assert_eq!(frame, npy_bits(&npy), "frame {k}");
     }
-    chaoscope()
-        .args([
-            "sweep",
-            "--zoom-to",
-            "1,1",
-            "--zoom",
-            "4",
-            "--size",
-            "8",
-            "--output",
-        ])
-        .arg(&out)
-        .arg("--data")
-        .arg(dir.path().join("z.zarr"))
-        .assert()
-        .code(2)
-        .stderr(predicates::str::contains("--data"));
 }
 
 /// Divergence maps go into stores the same way: two tasks equal the .npy, and the store

@@ -1,5 +1,5 @@
-//! `chaoscope sweep`: one map per frame while a physical parameter changes, or a zoom into a
-//! point of the map; numbered PNGs plus an animated PNG. Frames that already exist (from an
+//! `chaoscope sweep`: one map per frame while a physical parameter changes (a zoom into a
+//! point is `chaoscope zoom`); numbered PNGs plus an animated PNG. Frames that already exist (from an
 //! interrupted run of the same sweep) are kept, so running the command again resumes it.
 
 use std::path::{Path, PathBuf};
@@ -12,8 +12,7 @@ use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::render::{self, MapPicture, Picture, PictureSpec};
 use crate::spec::{
-    self, AnyMap, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Range,
-    Stepping,
+    self, AnyMap, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Stepping,
 };
 
 pub use crate::spec::MapKind;
@@ -113,19 +112,10 @@ fn progress(k: usize, n: usize) -> f64 {
     }
 }
 
-/// A zoom into a point: the last frame is `factor` times magnified around `to` (theta1,
-/// theta2), which keeps its place in the picture.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Zoom {
-    pub to: (f64, f64),
-    pub factor: f64,
-}
-
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepJob {
     pub map: MapKind,
-    pub vary: Option<Vary>,
-    pub zoom: Option<Zoom>,
+    pub vary: Vary,
     pub frames: u32,
     /// The animation: its file (APNG, MP4), rate and quality.
     pub film: FilmSpec,
@@ -157,7 +147,7 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
         return Err(Error::invalid("frames", "must be between 1 and 100000"));
     }
     // A parameter along an axis is the pixel's own: a sweep of it would change nothing.
-    if let Some(var) = args.vary.and_then(|v| v.param.var())
+    if let Some(var) = args.vary.param.var()
         && [args.grid.x.var, args.grid.y.var]
             .iter()
             .any(|a| a.overlaps(var))
@@ -170,12 +160,6 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
             ),
         ));
     }
-    if args.vary.is_none() && args.zoom.is_none() {
-        return Err(Error::invalid(
-            "vary",
-            "a sweep needs a parameter to vary or a point to zoom into",
-        ));
-    }
     spec::validate_params(&args.params)?;
     let base_params = args.params;
     let base_grid = args.grid;
@@ -185,51 +169,17 @@ pub fn frames(args: &SweepJob) -> Result<Vec<Frame>> {
         let s = progress(k as usize, n as usize);
         let mut p = base_params;
         let mut g = base_grid;
-        if let Some(v) = args.vary {
-            let x = v.at(s);
-            match v.param.var() {
-                Some(var) => var.set(x, &mut p, &mut g.fixed),
-                None => {
-                    p.m1 *= x;
-                    p.m2 *= x;
-                }
+        let v = args.vary;
+        let x = v.at(s);
+        match v.param.var() {
+            Some(var) => var.set(x, &mut p, &mut g.fixed),
+            None => {
+                p.m1 *= x;
+                p.m2 *= x;
             }
-            spec::validate_params(&p)
-                .map_err(|e| Error::invalid("vary", format!("at frame {k}: {e}")))?;
         }
-        if let Some(Zoom {
-            to: (t1, t2),
-            factor,
-        }) = args.zoom
-        {
-            // Beyond this, neighbouring pixels of the last frame would start from the same
-            // f64 angle (8 ulps of the point apart at least).
-            let ulp = f64::EPSILON * t1.abs().max(t2.abs()).max(1.0);
-            let max_zoom = base_grid.x_step().min(base_grid.y_step()) / (8.0 * ulp);
-            if !(factor.is_finite() && factor >= 1.0 && factor <= max_zoom) {
-                return Err(Error::invalid(
-                    "zoom",
-                    format!(
-                        "{factor} must be a magnification from 1 to {max_zoom:.3e} (where this grid's pixels reach f64 resolution)"
-                    ),
-                ));
-            }
-            let (r1, r2) = (base_grid.x.range, base_grid.y.range);
-            if !(r1.min..=r1.max).contains(&t1) || !(r2.min..=r2.max).contains(&t2) {
-                return Err(Error::invalid(
-                    "zoom_to",
-                    "must lie inside the x and y ranges",
-                ));
-            }
-            // The point keeps its place in the picture while the window shrinks.
-            let scale = factor.powf(-s);
-            let shrink = |r: Range, c: f64| Range {
-                min: c + (r.min - c) * scale,
-                max: c + (r.max - c) * scale,
-            };
-            g.x.range = shrink(base_grid.x.range, t1);
-            g.y.range = shrink(base_grid.y.range, t2);
-        }
+        spec::validate_params(&p)
+            .map_err(|e| Error::invalid("vary", format!("at frame {k}: {e}")))?;
         out.push(Frame { params: p, grid: g });
     }
     Ok(out)
@@ -277,19 +227,17 @@ pub fn run(
             .and_then(|()| spec::validate_stability(&f.params, &job.stepping))
             .and_then(|()| spec::validate_plane(&f.params, &f.grid, &job.stepping));
         // A frame the varied parameter made impossible is the range's fault (--vary).
-        match (checked, job.vary) {
-            (Err(Error::InvalidSpec { field, reason }), Some(v)) => {
-                return Err(Error::invalid(
-                    "vary",
-                    format!(
-                        "at frame {k} ({} = {:e}): {field}: {reason}",
-                        v.param.name(),
-                        v.at(progress(k, frames.len()))
-                    ),
-                ));
-            }
-            (checked, _) => checked?,
+        if let Err(Error::InvalidSpec { field, reason }) = checked {
+            return Err(Error::invalid(
+                "vary",
+                format!(
+                    "at frame {k} ({} = {:e}): {field}: {reason}",
+                    job.vary.param.name(),
+                    job.vary.at(progress(k, frames.len()))
+                ),
+            ));
         }
+        checked?;
     }
     if let AnyMap::Lyapunov(spec) = frame_map(job, &frames[0]) {
         spec.validate()?;
@@ -313,12 +261,6 @@ pub fn run(
     job.film.validate("film", FILM_FORMATS)?;
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;
-        if job.zoom.is_some() || job.vary.is_none() {
-            return Err(Error::invalid(
-                "data",
-                "a store holds a sweep along [[vary]] (a zoom's frames each have angles of their own)",
-            ));
-        }
     }
     let mut notices: Vec<String> = engine.notices();
     if let (Some(_), Some(k)) = (engine.gpu(), frames.iter().position(|f| f.grid.needs_f64())) {
@@ -327,8 +269,9 @@ pub fn run(
         ));
     }
     std::fs::create_dir_all(&job.output)?;
-    let store = match (&job.data, job.vary) {
-        (Some(path), Some(vary)) => {
+    let store = match &job.data {
+        Some(path) => {
+            let vary = job.vary;
             let n = frames.len();
             let values: Vec<f64> = (0..n).map(|k| vary.at(progress(k, n))).collect();
             let info = crate::render::store::StoreInfo {
@@ -352,7 +295,7 @@ pub fn run(
                 map,
             )?)
         }
-        _ => None,
+        None => None,
     };
     monitor.start("frames", frames.len() as u64);
     let quiet = monitor.quiet();

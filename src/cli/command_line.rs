@@ -393,18 +393,14 @@ pub fn zoom<S>(job: &ZoomJob<S>, map: &str) -> String {
 }
 
 pub fn sweep(job: &SweepJob) -> String {
-    let varied = job.vary.and_then(|v| v.param.var());
+    let varied = job.vary.param.var();
     let along: Vec<Var> = [Some(job.grid.x.var), Some(job.grid.y.var), varied]
         .into_iter()
         .flatten()
         .collect();
     let mut out = format!("chaoscope sweep --map {}", job.map.name());
-    if let Some(v) = job.vary {
-        out += &format!(" --vary {}={}:{}", v.param.name(), v.from, v.to);
-    }
-    if let Some(z) = job.zoom {
-        out += &format!(" --zoom-to {},{} --zoom {}", z.to.0, z.to.1, z.factor);
-    }
+    let v = job.vary;
+    out += &format!(" --vary {}={}:{}", v.param.name(), v.from, v.to);
     out += &format!(
         " --frames {} --fps {} {} {} --renorm {} --ftle-max {} {} --backend {}",
         job.frames,

@@ -62,8 +62,8 @@ pub enum Command {
     /// pairs of starts eps apart, fitted over several eps, and the boundary's dimension
     /// D = 2 - alpha, with a log-log plot.
     Boundary(boundary::BoundaryArgs),
-    /// Frames of a map while a parameter changes (--vary) or zooming into a point (--zoom-to),
-    /// as numbered PNGs and an animated PNG; an interrupted sweep resumes where it stopped.
+    /// Frames of a map while a parameter changes (--vary), as numbered PNGs and an animated
+    /// PNG; an interrupted sweep resumes where it stopped.
     Sweep(sweep::SweepArgs),
     /// A film zooming from a map's plane into a view of it (or through several): every frame
     /// the map of its view in the precision its pixel step needs (f32, then f64, refused past

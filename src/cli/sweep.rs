@@ -8,7 +8,7 @@ use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser}
 use super::parse::{one_of, parse_number, parse_point, parse_u32, parse_vary};
 use super::{command_line, json, say};
 use crate::app::film::FilmSpec;
-use crate::app::sweep::{self, MapKind, SweepJob, Vary, Zoom};
+use crate::app::sweep::{self, MapKind, SweepJob, Vary};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
 use crate::monitor::Monitor;
@@ -25,11 +25,11 @@ pub struct SweepArgs {
     /// damping (both joints, N m s).
     #[arg(long, value_parser = parse_vary, allow_hyphen_values = true)]
     pub vary: Option<Vary>,
-    /// Zoom towards THETA1,THETA2 (rad), which stays fixed in the picture.
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "zoom")]
+    /// Sweep's zoom, moved to `chaoscope zoom`: refused with the zoom that does it.
+    #[arg(long, hide = true, value_parser = parse_point, allow_hyphen_values = true)]
     pub zoom_to: Option<(f64, f64)>,
-    /// Total magnification of the last frame over the first.
-    #[arg(long, value_parser = parse_number, allow_hyphen_values = true, requires = "zoom_to")]
+    /// Sweep's zoom's magnification, moved to `chaoscope zoom`.
+    #[arg(long, hide = true, value_parser = parse_number, allow_hyphen_values = true)]
     pub zoom: Option<f64>,
     /// Number of frames.
     #[arg(long, default_value = "24", value_parser = parse_u32, allow_hyphen_values = true)]
@@ -74,8 +74,31 @@ pub struct SweepArgs {
 impl SweepArgs {
     pub fn job(&self) -> Result<SweepJob> {
         let grid = self.grid.grid()?;
+        if let Some((x, y)) = self.zoom_to {
+            // The zoom's last view: the grid's width over the magnification.
+            let width = (grid.x.range.max - grid.x.range.min) / self.zoom.unwrap_or(1.0);
+            return Err(crate::Error::invalid(
+                "zoom_to",
+                format!(
+                    "sweep no longer zooms: `chaoscope zoom --to {x},{y},{width:e} --frames {} flip ...` (the map's flags after it) films that zoom, the first frame the whole plane, in f64 where f32 runs out, resumable",
+                    self.frames
+                ),
+            ));
+        }
+        if self.zoom.is_some() {
+            return Err(crate::Error::invalid(
+                "zoom",
+                "sweep no longer zooms: `chaoscope zoom --to X,Y,WIDTH` films a zoom",
+            ));
+        }
+        let Some(vary) = self.vary else {
+            return Err(crate::Error::invalid(
+                "vary",
+                "a sweep needs a parameter to vary, PARAM=FROM:TO (a zoom into a point is `chaoscope zoom --to`)",
+            ));
+        };
         let sources = self.physical.sources();
-        if let Some(var) = self.vary.and_then(|v| v.param.var()) {
+        if let Some(var) = vary.param.var() {
             sources.check_along(&[("vary", var)])?;
             let plane = &self.grid.plane;
             for (given, field, v) in [
@@ -94,11 +117,7 @@ impl SweepArgs {
         }
         Ok(SweepJob {
             map: self.map,
-            vary: self.vary,
-            zoom: self
-                .zoom_to
-                .zip(self.zoom)
-                .map(|(to, factor)| Zoom { to, factor }),
+            vary,
             frames: self.frames,
             film: FilmSpec {
                 path: self
