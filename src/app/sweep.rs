@@ -11,9 +11,7 @@ use crate::field::Field;
 use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::render::{self, MapPicture, Picture, PictureSpec};
-use crate::spec::{
-    self, AnyMap, F32_MIN_PIXEL_STEP, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Stepping,
-};
+use crate::spec::{self, AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Stepping};
 
 pub use crate::spec::MapKind;
 
@@ -262,12 +260,13 @@ pub fn run(
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;
     }
-    let mut notices: Vec<String> = engine.notices();
-    if let (Some(_), Some(k)) = (engine.gpu(), frames.iter().position(|f| f.grid.needs_f64())) {
-        notices.push(format!(
-            "note: from frame {k} on the pixel step is below {F32_MIN_PIXEL_STEP:.1e} rad, finer than f32 resolves near pi; those frames run in f64 (flip maps on a GPU with f64, else on the CPU)"
-        ));
-    }
+    // Every frame has the first's grid (a sweep varies the physics or the fixed start): the
+    // first frame's plan says what all of them will (the engine, f64 where f32 runs out, the
+    // measure's own notes), in the words a single map uses.
+    let notices = match frame_map(job, &frames[0]) {
+        AnyMap::Flip(spec) => engine.plan(&spec, false)?.notices,
+        AnyMap::Lyapunov(spec) => engine.plan(&spec, false)?.notices,
+    };
     std::fs::create_dir_all(&job.output)?;
     let store = match &job.data {
         Some(path) => {
