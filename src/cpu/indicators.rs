@@ -4,7 +4,7 @@
 //! FTLE map's bit for bit; the shader differentiates its closed form instead (a hand-derived
 //! Jacobian, or its own dual numbers with drag and bearings).
 
-use super::lyapunov::{TANGENT_START, tangent_step};
+use super::lyapunov::{TANGENT_START, norm, tangent_step};
 use super::{derivative, map_pixels, rk4_step};
 use crate::error::Result;
 use crate::field::Field;
@@ -28,10 +28,6 @@ pub const FRAME: [[f64; 4]; 4] = [
 
 fn dot(a: &[f64; 4], b: &[f64; 4]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn norm(v: &[f64; 4]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 /// Modified Gram-Schmidt in place: each vector made orthogonal to those before it, then unit;

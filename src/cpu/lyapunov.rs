@@ -43,7 +43,8 @@ pub fn tangent_step(p: &Params, y: &[f64; 4], v: &[f64; 4], dt: f64) -> ([f64; 4
     )
 }
 
-fn norm(v: &[f64; 4]) -> f64 {
+/// A state-sized vector's Euclidean length (a tangent vector's, before it is renormalised).
+pub fn norm(v: &[f64; 4]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 

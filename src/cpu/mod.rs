@@ -19,7 +19,7 @@ pub use indicators::{
     indicator_run, spectrum_adaptive, spectrum_map, tangent_sums,
 };
 pub use lyapunov::{
-    TANGENT_START, ftle, ftle_map, ftle_monitored, lyapunov_spectrum, tangent_step,
+    TANGENT_START, ftle, ftle_map, ftle_monitored, lyapunov_spectrum, norm, tangent_step,
 };
 
 use nalgebra::{Matrix2, Matrix4, RealField, Vector2, Vector4};

@@ -7,7 +7,7 @@
 
 use super::growth::CHAOTIC_FLI;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
-use crate::cpu::{TANGENT_START, derivative, tangent_step};
+use crate::cpu::{TANGENT_START, derivative, norm, tangent_step};
 use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
@@ -108,7 +108,7 @@ impl Measure for Ofli {
         let (mut log10_length, mut fli) = (0.0, 0.0f64);
         for k in 1..=run.spec.stepping.steps() {
             let (next, w) = tangent_step(p, &y, &v, dt);
-            let n = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let n = norm(&w);
             (y, v) = (next, w.map(|x| x / n));
             log10_length += n.log10();
             fli = fli.max(log10_length);

@@ -9,7 +9,7 @@
 //! the FTLE's dual numbers.
 
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
-use crate::cpu::{TANGENT_START, tangent_step};
+use crate::cpu::{TANGENT_START, norm, tangent_step};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::quantity::{Quantity, within};
@@ -69,10 +69,6 @@ fn separation(i: Indicator) -> f64 {
         Indicator::Rli { delta } => delta,
         other => unreachable!("{other:?} is not the RLI"),
     }
-}
-
-fn length(v: &[f64; 4]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 impl Measure for Rli {
@@ -152,7 +148,7 @@ impl Measure for Rli {
         for k in 1..=steps {
             let (next_a, wa) = tangent_step(p, &a, &va, dt);
             let (next_b, wb) = tangent_step(p, &b, &vb, dt);
-            let (na, nb) = (length(&wa), length(&wb));
+            let (na, nb) = (norm(&wa), norm(&wb));
             (a, va, b, vb) = (next_a, wa.map(|x| x / na), next_b, wb.map(|x| x / nb));
             ln_a += na.ln();
             ln_b += nb.ln();

@@ -64,16 +64,13 @@ pub fn find(
         return None;
     }
     let place = (median(&mut xs)?, median(&mut ys)?);
-    let mut fluxes: Vec<f64> = frames
-        .iter()
-        .filter_map(|f| nearest(f, place, WANDER))
-        .map(|b| b.flux)
-        .collect();
+    let near: Vec<Option<Blob>> = frames.iter().map(|f| nearest(f, place, WANDER)).collect();
+    let mut fluxes: Vec<f64> = near.iter().flatten().map(|b| b.flux).collect();
     let flux = median(&mut fluxes)?;
     // A mass crossing the marker adds its light: such a frame's centroid is not the pivot's.
-    let measured: Vec<Option<Blob>> = frames
-        .iter()
-        .map(|f| nearest(f, place, WANDER).filter(|b| (0.7 * flux..1.4 * flux).contains(&b.flux)))
+    let measured: Vec<Option<Blob>> = near
+        .into_iter()
+        .map(|b| b.filter(|b| (0.7 * flux..1.4 * flux).contains(&b.flux)))
         .collect();
     let seen = measured.iter().flatten().count();
     if 2 * seen < frames.len() {

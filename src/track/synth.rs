@@ -137,8 +137,8 @@ impl Scene {
 /// How much of pixel (`x`, `y`) a hand with its palm at `palm` (radius `r`) and its arm to
 /// the picture's right covers: a capsule with an edge a pixel wide.
 fn hand_cover(x: f64, y: f64, palm: (f64, f64), r: f64) -> f32 {
-    let along = (x - palm.0).max(0.0);
-    let d = if along > 0.0 {
+    // Right of the palm's centre the arm's straight edges; left of it the palm's round end.
+    let d = if x > palm.0 {
         (y - palm.1).abs()
     } else {
         (x - palm.0).hypot(y - palm.1)
