@@ -176,27 +176,44 @@ fn precision_notices(
         .check_f64(precision, engine.asked())?
         .into_iter()
         .collect();
-    // Today's plane says it as it always has; any other names its axes.
-    let below = |step: f64, float: &str| match grid.is_angle_plane() {
+    if engine.computes_in_f32(precision) && grid.needs_f64() {
+        notices.push(f64_notice(grid, info.path.on_gpu(), None));
+    }
+    if grid.beyond_f64() {
+        notices.push(format!(
+            "note: the pixel step is {}: neighbouring pixels start from the same numbers, and the verdict ([[resolved]]) marks every pixel unresolved",
+            below(grid, crate::spec::F64_MIN_PIXEL_STEP, "even f64")
+        ));
+    }
+    Ok(notices)
+}
+
+/// How fine a grid's pixel step is, against the finest `float` resolves (`step`, near pi):
+/// the angle plane says it in radians; any other names its axes.
+fn below(grid: &Grid, step: f64, float: &str) -> String {
+    match grid.is_angle_plane() {
         true => format!("below {step:.1e} rad, finer than {float} resolves near pi"),
         false => format!(
             "finer along {} or {} than {float} resolves",
             grid.x.var.name(),
             grid.y.var.name()
         ),
+    }
+}
+
+/// The one note that maps run in f64 because their pixel step is finer than f32 resolves:
+/// a map's, or a film's from the frame (and its width) where its maps turn to f64.
+pub fn f64_notice(grid: &Grid, on_gpu: bool, from: Option<(u32, f64)>) -> String {
+    let (when, what) = match from {
+        None => (String::new(), "the map runs"),
+        Some((frame, width)) => (
+            format!("from frame {frame} on (width {width:.3e}) "),
+            "those frames run",
+        ),
     };
-    if engine.computes_in_f32(precision) && grid.needs_f64() {
-        notices.push(format!(
-            "note: the pixel step is {}; the map runs on the {} in f64",
-            below(crate::spec::F32_MIN_PIXEL_STEP, "f32"),
-            if info.path.on_gpu() { "GPU" } else { "CPU" }
-        ));
-    }
-    if grid.beyond_f64() {
-        notices.push(format!(
-            "note: the pixel step is {}: neighbouring pixels start from the same numbers, and the verdict ([[resolved]]) marks every pixel unresolved",
-            below(crate::spec::F64_MIN_PIXEL_STEP, "even f64")
-        ));
-    }
-    Ok(notices)
+    format!(
+        "note: {when}the pixel step is {}; {what} on the {} in f64",
+        below(grid, crate::spec::F32_MIN_PIXEL_STEP, "f32"),
+        if on_gpu { "GPU" } else { "CPU" }
+    )
 }

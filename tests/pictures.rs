@@ -184,6 +184,54 @@ fn an_interrupted_sweep_resumes_and_refuses_to_mix_sweeps() {
         .stderr(predicate::str::contains("--output"));
 }
 
+/// A sweep is a film of maps as a zoom is: made in tiles that add up to the whole, a
+/// damaged frame made again, and a table of what each frame varied.
+#[test]
+fn a_sweep_in_tiles_adds_up_to_the_whole_and_remakes_a_damaged_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, tiled) = (dir.path().join("whole"), dir.path().join("tiled"));
+    let args = ["--vary", "g=5:15", "--frames", "3"];
+    sweep(&whole, "cpu", &args).success();
+    for tile in ["0/2", "1/2"] {
+        sweep(&tiled, "cpu", &[&args[..], &["--tile", tile]].concat())
+            .success()
+            .stderr(predicate::str::contains(format!("tile {tile} done")));
+    }
+    assert!(
+        !tiled.join("animation.png").exists(),
+        "a tile makes no film"
+    );
+    // Damage one frame's pixels (its digest no longer matches): it is made again.
+    let damaged = tiled.join("frame_0002.png");
+    let mut png = read_png(&damaged).unwrap();
+    png.rgb[0] ^= 0xff;
+    chaoscope::render::write_png(&damaged, png.width, png.height, &png.rgb, &png.text).unwrap();
+    sweep(&tiled, "cpu", &args)
+        .success()
+        .stderr(predicate::str::contains("1 made, 2 kept"))
+        .stderr(predicate::str::contains("damaged"));
+    for k in 0..3 {
+        let name = format!("frame_{k:04}.png");
+        assert_eq!(
+            read_png(&whole.join(&name)).unwrap().rgb,
+            read_png(&tiled.join(&name)).unwrap().rgb,
+            "{name}"
+        );
+    }
+    let table = std::fs::read_to_string(tiled.join("frames.csv")).unwrap();
+    let rows: Vec<&str> = table.lines().skip(1).collect();
+    assert_eq!(rows[0], "frame,g,precision,place");
+    assert_eq!(&rows[1..], ["0,5,f64,cpu", "1,10,f64,cpu", "2,15,f64,cpu"]);
+    // A sweep's store is one task's.
+    sweep(
+        &tiled,
+        "cpu",
+        &[&args[..], &["--tile", "0/2", "--data", "s.zarr"]].concat(),
+    )
+    .code(2)
+    .stderr(predicate::str::contains("--tile"));
+}
+
 /// Sweep's zoom moved to `chaoscope zoom`: the flags are refused with the zoom that does
 /// it, its last view's width the grid's over the magnification (2 pi / 1e6 here).
 #[test]

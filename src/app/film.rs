@@ -8,12 +8,6 @@ use crate::error::{Error, Result};
 use crate::render::Outputs;
 use crate::video::Mp4;
 
-/// Frame `k`'s file in a film's folder of frames (a sweep's, a zoom's): the name each
-/// resumes by and each encodes from.
-pub fn frame_name(k: u32) -> String {
-    format!("frame_{k:04}.png")
-}
-
 /// The formats a film may take.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {

@@ -163,6 +163,9 @@ pub fn run<S: MapKernels + MapPicture>(
     })
 }
 
+/// A map made with, where asked, its verdict's mask (1 where a pixel is resolved).
+pub type Judged = Made<(Field, Option<Vec<u8>>)>;
+
 /// `spec`'s map (with `verdict`, its mask) in memory, as `run` makes it for a PNG or .npy:
 /// `samples` x `samples` sub-samples a pixel when more than 1 ([`super::supersample`]).
 /// Unchecked: [`run`] checks the job first, a library caller [`check_in_memory`].
@@ -172,7 +175,7 @@ pub fn compute<S: MapKernels>(
     verdict: bool,
     samples: u32,
     monitor: &Monitor,
-) -> Result<Made<(Field, Option<Vec<u8>>)>> {
+) -> Result<Judged> {
     if samples == 1 {
         return make(spec, engine, verdict, monitor);
     }

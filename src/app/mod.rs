@@ -10,6 +10,7 @@ pub mod film;
 pub mod fit;
 pub mod flip;
 pub mod forecast;
+pub mod frames;
 pub mod lyapunov;
 pub mod map;
 pub mod phase;

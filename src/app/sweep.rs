@@ -2,14 +2,16 @@
 //! point is `chaoscope zoom`); numbered PNGs plus an animated PNG. Frames that already exist (from an
 //! interrupted run of the same sweep) are kept, so running the command again resumes it.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use super::film::{FilmSpec, Format, frame_name};
-use crate::engine::{Backend, Engine};
+use super::film::{FilmSpec, Format};
+use super::frames::{FrameSet, Frames, Made, TABLE};
+use crate::engine::{Backend, Engine, RunInfo};
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
 use crate::monitor::Monitor;
+use crate::render::store::SweepStore;
 use crate::render::{self, MapPicture, Picture, PictureSpec};
 use crate::spec::{self, AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Stepping};
 
@@ -130,6 +132,8 @@ pub struct SweepJob {
     pub output: PathBuf,
     /// The frames' maps also as one Zarr store (frame, theta2, theta1).
     pub data: Option<PathBuf>,
+    /// Make only frames k with k % COUNT == INDEX (no film): `(INDEX, COUNT)`.
+    pub tile: Option<(u32, u32)>,
 }
 
 /// One frame's parameters and grid.
@@ -189,20 +193,80 @@ pub const ANIMATION: &str = "animation.png";
 /// What a sweep's animation may be: an APNG (lossless) or an MP4.
 pub const FILM_FORMATS: &[Format] = &[Format::Apng, Format::Mp4];
 
-fn frame_path(dir: &Path, k: u32) -> PathBuf {
-    dir.join(frame_name(k))
-}
-
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SweepSummary {
     pub frames: usize,
-    /// Frames kept from an earlier, interrupted run of the same sweep.
-    pub kept: usize,
+    /// Frames computed by this run, and kept from an earlier, interrupted run of the same
+    /// sweep.
+    pub made: u32,
+    pub kept: u32,
+    pub tile: Option<(u32, u32)>,
     pub output: PathBuf,
-    pub animation: PathBuf,
+    /// The animation (None: a tile makes none).
+    pub animation: Option<PathBuf>,
     /// Every file written.
     pub files: Vec<PathBuf>,
     pub notices: Vec<String>,
+}
+
+/// A sweep's frames: each the map of its frame's physics, on the path the engine picks.
+struct SweepFrames<'a> {
+    job: &'a SweepJob,
+    frames: &'a [Frame],
+    engine: &'a Engine,
+    frame_command: &'a dyn Fn(&AnyMap, Backend, &PictureSpec) -> String,
+    store: Option<SweepStore>,
+}
+
+impl SweepFrames<'_> {
+    fn map(&self, k: u32) -> AnyMap {
+        frame_map(self.job, &self.frames[k as usize])
+    }
+
+    fn info(&self, map: &AnyMap) -> RunInfo {
+        self.engine.map_info(map.grid(), map.precision())
+    }
+
+    /// Frame `k`'s map into the store, if there is one.
+    fn store(&self, k: u32, field: &Field) -> Result<()> {
+        match &self.store {
+            Some(s) => s.write_frame(k, field),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Frames for SweepFrames<'_> {
+    fn command(&self, k: u32) -> String {
+        let map = self.map(k);
+        let on = match self.info(&map).path.on_gpu() {
+            true => Backend::Gpu,
+            false => Backend::Cpu,
+        };
+        (self.frame_command)(&map, on, &self.job.picture)
+    }
+
+    /// A frame whose picture is there but not its store's map: the map once more.
+    fn keep(&self, k: u32, _png: &render::Png, monitor: &Monitor) -> Result<bool> {
+        if let Some(s) = &self.store
+            && !s.has_frame(k)?
+        {
+            let field = frame_field(&self.map(k), self.engine, monitor)?;
+            s.write_frame(k, &field)?;
+        }
+        Ok(true)
+    }
+
+    fn make(&self, k: u32, monitor: &Monitor) -> Result<Made> {
+        let map = self.map(k);
+        let field = frame_field(&map, self.engine, monitor)?;
+        self.store(k, &field)?;
+        Ok(Made {
+            picture: frame_picture(self.job, &map, &field)?,
+            info: self.info(&map),
+            text: Vec::new(),
+        })
+    }
 }
 
 /// Runs the sweep; `command` reproduces the whole sweep (it goes into the animation),
@@ -219,6 +283,20 @@ pub fn run(
     // not the varied parameter.
     spec::validate_grid(&job.grid)?;
     let frames = frames(job)?;
+    let set = FrameSet::new(
+        "sweep",
+        &job.output,
+        frames.len() as u32,
+        job.tile,
+        &job.film,
+        FILM_FORMATS,
+    )?;
+    if job.tile.is_some() && job.data.is_some() {
+        return Err(Error::invalid(
+            "tile",
+            "a sweep's store is written by one task: leave out the tile or the data store",
+        ));
+    }
     spec::validate_stepping(&job.stepping)?;
     for (k, f) in frames.iter().enumerate() {
         let checked = spec::validate_grid(&f.grid)
@@ -243,36 +321,22 @@ pub fn run(
     if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
         return Err(Error::invalid("ftle_max", "must be > 0"));
     }
-    // The animation and every frame (a frame kept from an interrupted run is read back).
-    // The film, where it is not the folder's own animation, is no frame (through `./`, `..`
-    // and links alike).
-    let mut names: Vec<String> = (0..frames.len() as u32).map(frame_name).collect();
-    let film = [("film", job.film.path.as_path())];
-    let also: &[_] = match job.film.path == job.output.join(ANIMATION) {
-        true => {
-            names.push(ANIMATION.into());
-            &[]
-        }
-        false => &film,
-    };
-    super::checks::check_directory("output", &job.output, &names, also, &[])?;
-    job.film.validate("film", FILM_FORMATS)?;
+    set.check()?;
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;
     }
     // Every frame has the first's grid (a sweep varies the physics or the fixed start): the
     // first frame's plan says what all of them will (the engine, f64 where f32 runs out, the
     // measure's own notes), in the words a single map uses.
-    let notices = match frame_map(job, &frames[0]) {
+    let mut notices = match frame_map(job, &frames[0]) {
         AnyMap::Flip(spec) => engine.plan(&spec, false)?.notices,
         AnyMap::Lyapunov(spec) => engine.plan(&spec, false)?.notices,
     };
     std::fs::create_dir_all(&job.output)?;
+    let n = frames.len();
+    let values: Vec<f64> = (0..n).map(|k| job.vary.at(progress(k, n))).collect();
     let store = match &job.data {
         Some(path) => {
-            let vary = job.vary;
-            let n = frames.len();
-            let values: Vec<f64> = (0..n).map(|k| vary.at(progress(k, n))).collect();
             let info = crate::render::store::StoreInfo {
                 command: command.clone(),
                 version: env!("CARGO_PKG_VERSION").to_string(),
@@ -286,112 +350,55 @@ pub fn run(
             };
             let quantity = frame_map(job, &frames[0]).quantity();
             let map = (quantity.name, quantity.unit);
-            Some(crate::render::store::SweepStore::create_or_open(
+            let vary = job.vary.param;
+            Some(SweepStore::create_or_open(
                 path,
                 &frames[0].grid,
                 &info,
-                (vary.param.name(), vary.param.unit(), &values),
+                (vary.name(), vary.unit(), &values),
                 map,
             )?)
         }
         None => None,
     };
-    monitor.start("frames", frames.len() as u64);
-    let quiet = monitor.quiet();
-    let mut kept = 0;
-    for (k, frame) in frames.iter().enumerate() {
-        monitor.check()?;
-        let path = frame_path(&job.output, k as u32);
-        let map = frame_map(job, frame);
-        let info = engine.map_info(map.grid(), map.precision());
-        let on = if info.path.on_gpu() {
-            Backend::Gpu
-        } else {
-            Backend::Cpu
-        };
-        let command = frame_command(&map, on, &job.picture);
-        let stored = match &store {
-            Some(s) => s.has_frame(k as u32)?,
-            None => true,
-        };
-        if path.exists() && !stored {
-            // The picture is there but not the store's frame: the map once more.
-            let field = frame_field(&map, engine, &quiet)?;
-            if let Some(s) = &store {
-                s.write_frame(k as u32, &field)?;
-            }
-        }
-        if path.exists() {
-            // Resume: keep a finished frame of the same sweep; refuse to mix sweeps.
-            let old = render::read_png(&path)?;
-            let same = old
-                .text
-                .iter()
-                .any(|(key, text)| key == "chaoscope:command" && *text == command);
-            if !same {
-                return Err(Error::invalid(
-                    "output",
-                    format!(
-                        "{} holds frames of a different sweep; choose another directory",
-                        job.output.display()
-                    ),
-                ));
-            }
-            kept += 1;
-        } else {
-            let field = frame_field(&map, engine, &quiet)?;
-            if let Some(s) = &store {
-                s.write_frame(k as u32, &field)?;
-            }
-            let picture = frame_picture(job, &map, &field)?;
-            let mut meta = render::provenance(command, &info);
-            meta.push(("chaoscope:frame".into(), format!("{k} of {}", frames.len())));
-            render::write_png(&path, picture.width, picture.height, &picture.rgb, &meta)?;
-        }
-        monitor.advance(1);
-    }
-    monitor.finish();
-    // The animation from the frame files (including those of an earlier, interrupted run),
-    // read one at a time.
-    let first = render::read_png(&frame_path(&job.output, 0))?;
-    let animation = job.film.path.clone();
-    let meta = render::provenance(command, &engine.info());
-    let mut files = render::Outputs::new();
-    monitor.start("film", frames.len() as u64);
-    super::film::write(
-        &mut files,
-        &job.film,
-        job.film.format("film", FILM_FORMATS)?,
-        (first.width, first.height),
-        frames.len(),
-        &meta,
-        |k| {
-            monitor.check()?;
-            let png = render::read_png(&frame_path(&job.output, k as u32))?;
-            if (png.width, png.height) != (first.width, first.height) {
-                return Err(Error::format(
-                    &frame_path(&job.output, k as u32),
-                    "a frame of another size than frame 0",
-                ));
-            }
-            monitor.advance(1);
-            Ok(png.rgb)
-        },
-    )?;
-    monitor.finish();
-    files.commit(monitor)?;
-    Ok(SweepSummary {
-        frames: frames.len(),
-        kept,
+    let sweep = SweepFrames {
+        job,
+        frames: &frames,
+        engine,
+        frame_command,
+        store,
+    };
+    let run = set.make(&sweep, monitor)?;
+    notices.extend(run.damaged);
+    let mut summary = SweepSummary {
+        frames: n,
+        made: run.made,
+        kept: run.kept,
+        tile: job.tile,
         output: job.output.clone(),
-        files: (0..frames.len())
-            .map(|k| frame_path(&job.output, k as u32))
-            .chain([animation.clone()])
-            .chain(job.data.clone())
-            .collect(),
-        animation,
+        animation: None,
+        files: run.files,
         notices,
-    })
+    };
+    if job.tile.is_none() {
+        set.encode(
+            &command,
+            &engine.info(),
+            &format!("{},precision,place", job.vary.param.name()),
+            |k, _| {
+                let path = sweep.info(&sweep.map(k)).path;
+                let place = if path.on_gpu() { "gpu" } else { "cpu" };
+                format!("{},{},{place}", values[k as usize], path.precision().name())
+            },
+            monitor,
+        )?;
+        summary.animation = Some(job.film.path.clone());
+        summary
+            .files
+            .extend([job.film.path.clone(), job.output.join(TABLE)]);
+    }
+    summary.files.extend(job.data.clone());
+    Ok(summary)
 }
 
 fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {
@@ -418,7 +425,6 @@ fn frame_map(job: &SweepJob, frame: &Frame) -> AnyMap {
     }
 }
 
-/// One frame's map, on the GPU unless it needs f64 (the engine decides).
 /// One frame's map, planned as every map is ([`Engine::plan`]: the checks of its path).
 fn frame_field(map: &AnyMap, engine: &Engine, monitor: &Monitor) -> Result<Field> {
     let (field, _) = match map {

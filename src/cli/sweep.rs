@@ -5,9 +5,10 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{GridArgs, PhysicalArgs, PictureArgs, StepArgs, backend_parser};
-use super::parse::{one_of, parse_number, parse_point, parse_u32, parse_vary};
+use super::parse::{one_of, parse_number, parse_point, parse_tile, parse_u32, parse_vary};
 use super::{command_line, json, say};
 use crate::app::film::FilmSpec;
+use crate::app::frames::TABLE;
 use crate::app::sweep::{self, MapKind, SweepJob, Vary};
 use crate::engine::{Backend, Engine};
 use crate::error::Result;
@@ -69,6 +70,11 @@ pub struct SweepArgs {
     /// theta1) with the varied parameter as the frame coordinate (--vary sweeps).
     #[arg(long)]
     pub data: Option<PathBuf>,
+    /// Make only part INDEX of COUNT of the frames (frames k with k % COUNT == INDEX) and no
+    /// animation, e.g. --tile $SLURM_ARRAY_TASK_ID/8; the same command without --tile then
+    /// makes the animation from them.
+    #[arg(long, value_parser = parse_tile)]
+    pub tile: Option<(u32, u32)>,
 }
 
 impl SweepArgs {
@@ -136,6 +142,7 @@ impl SweepArgs {
             picture: self.picture.spec(),
             output: self.output.clone(),
             data: self.data.clone(),
+            tile: self.tile,
         })
     }
 }
@@ -151,12 +158,19 @@ pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         monitor,
     )?;
     say("sweep", &s.notices);
-    eprintln!(
-        "{} frames ({} kept from an earlier run) in {} -> {}",
+    let made = format!(
+        "{} frames ({} made, {} kept from an earlier run) in {}",
         s.frames,
+        s.made,
         s.kept,
-        s.output.display(),
-        s.animation.display()
+        s.output.display()
     );
+    match (&s.animation, s.tile) {
+        (Some(film), _) => eprintln!("{made} -> {} and {TABLE}", film.display()),
+        (None, Some((index, count))) => eprintln!(
+            "{made}: tile {index}/{count} done; the same command without --tile makes the animation once every tile is"
+        ),
+        (None, None) => eprintln!("{made}"),
+    }
     json(&s)
 }

@@ -201,7 +201,7 @@ pub fn run(args: &ZoomArgs, monitor: &Monitor) -> Result<serde_json::Value> {
         (Some(film), Some(secs), _) => eprintln!(
             "encoded in {secs:.1} s -> {} ({} and frames.csv in {})",
             film.display(),
-            crate::app::film::frame_name(0),
+            crate::app::frames::frame_name(0),
             s.output.display()
         ),
         (_, _, Some((index, count))) => eprintln!(

@@ -8,16 +8,17 @@
 //! frames out between tasks, and a run without `tile` encodes the film once every frame is
 //! there, with `frames.csv` (each frame's view, precision, place and unresolved share).
 
-use std::io::Write;
+use std::cell::RefCell;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::film::{FilmSpec, Format, frame_name};
-use super::map::{MapJob, check_in_memory, compute};
+use super::film::{FilmSpec, Format};
+use super::frames::{self, FrameSet, Frames, TABLE, text};
+use super::map::{Judged, MapJob, check_in_memory, compute};
 use crate::engine::{Backend, Engine, MapKernels};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::render::{self, MapPicture, Outputs};
+use crate::render::{self, MapPicture};
 use crate::spec::{Grid, Precision};
 
 mod views;
@@ -54,8 +55,6 @@ impl<S> ZoomJob<S> {
 pub const FILM_FORMATS: &[Format] = &[Format::Mp4, Format::Apng];
 /// The film's name in the output folder when no other is named.
 pub const FILM: &str = "zoom.mp4";
-/// The frames' table's name in the output folder.
-pub const TABLE: &str = "frames.csv";
 
 /// One frame as planned: its view, its grid and where and how precisely it runs.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -228,42 +227,87 @@ pub fn switch(plans: &[FramePlan]) -> Option<Switch> {
     })
 }
 
-/// Whether frame `k` is this task's.
-fn mine(tile: Option<(u32, u32)>, k: u32) -> bool {
-    tile.is_none_or(|(index, count)| k % count == index)
-}
-
-/// The text a frame's PNG carries besides its provenance.
+/// The text a zoom's frame carries besides its map's: the zoom's command, the colours'
+/// fixed range, the frame's unresolved share (with the verdict) and its precision.
 const ZOOM_KEY: &str = "chaoscope:zoom";
-const FRAME_KEY: &str = "chaoscope:frame";
 const RANGE_KEY: &str = "chaoscope:zoom-range";
 const UNRESOLVED_KEY: &str = "chaoscope:unresolved";
-const COMMAND_KEY: &str = "chaoscope:command";
-/// The precision the frame ran in (f32 or f64).
 const PRECISION_KEY: &str = "chaoscope:precision";
-/// The frame's pixels' digest ([`digest`]), so that a frame changed since it was written is
-/// made again rather than kept.
-const PIXELS_KEY: &str = "chaoscope:pixels";
-
-/// A frame's pixels as 16 hex digits: FNV-1a over its bytes (stable across Rust versions and
-/// machines, which a resume needs; a checksum against damage, not against intent).
-fn digest(rgb: &[u8]) -> String {
-    let hash = rgb.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    });
-    format!("{hash:016x}")
-}
-
-fn text<'a>(png: &'a render::Png, key: &str) -> Option<&'a str> {
-    png.text
-        .iter()
-        .find(|(k, _)| k == key)
-        .map(|(_, v)| v.as_str())
-}
 
 fn parse_range(s: &str) -> Option<(f32, f32)> {
     let (lo, hi) = s.split_once(':')?;
     Some((lo.parse().ok()?, hi.parse().ok()?))
+}
+
+/// A zoom's frames: each the map of its planned view, in one colour range.
+struct ZoomFrames<'a, S> {
+    job: &'a ZoomJob<S>,
+    plans: &'a [FramePlan],
+    engine: &'a Engine,
+    /// The zoom's command, carried by every frame.
+    command: &'a str,
+    frame_command: &'a dyn Fn(&MapJob<S>) -> String,
+    range: Option<(f32, f32)>,
+    verdict: bool,
+    /// Frame 0, where it was made to find the colours' range.
+    first: RefCell<Option<Judged>>,
+}
+
+impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
+    fn job(&self, k: u32) -> MapJob<S> {
+        let plan = &self.plans[k as usize];
+        MapJob {
+            spec: self.job.map.spec.on_grid(plan.grid),
+            backend: if plan.on_gpu {
+                Backend::Gpu
+            } else {
+                Backend::Cpu
+            },
+            colour_range: self.range,
+            ..self.job.map.clone()
+        }
+    }
+}
+
+impl<S: MapKernels + MapPicture> Frames for ZoomFrames<'_, S> {
+    fn command(&self, k: u32) -> String {
+        (self.frame_command)(&self.job(k))
+    }
+
+    /// A frame without the judgement this run asks for is made again.
+    fn keep(&self, _k: u32, png: &render::Png, _monitor: &Monitor) -> Result<bool> {
+        Ok(!self.verdict || text(png, UNRESOLVED_KEY).is_some())
+    }
+
+    fn make(&self, k: u32, monitor: &Monitor) -> Result<frames::Made> {
+        let this = self.job(k);
+        let computed = match (k, self.first.take()) {
+            (0, Some(m)) => m,
+            _ => compute(&this.spec, self.engine, self.verdict, this.samples, monitor)?,
+        };
+        let (field, mask) = &computed.made;
+        let shown = mask.as_deref().filter(|_| this.files.show_unresolved);
+        let drawn = this.spec.draw(field, &this.picture, self.range, shown)?;
+        let mut text = drawn.picture.metadata();
+        text.extend(drawn.text);
+        text.push((ZOOM_KEY.into(), self.command.to_string()));
+        text.push((
+            PRECISION_KEY.into(),
+            computed.info.path.precision().name().into(),
+        ));
+        if let Some((lo, hi)) = self.range {
+            text.push((RANGE_KEY.into(), format!("{lo}:{hi}")));
+        }
+        if let Some(mask) = mask {
+            let unresolved = 1.0 - crate::verdict::fraction(mask);
+            text.push((UNRESOLVED_KEY.into(), format!("{unresolved}")));
+        }
+        Ok(frames::Made {
+            picture: drawn.picture,
+            info: computed.info,
+            text,
+        })
+    }
 }
 
 /// Runs the zoom on `engine`: this task's frames that are not already there, then (without
@@ -277,200 +321,92 @@ pub fn run<S: MapKernels + MapPicture>(
     frame_command: &dyn Fn(&MapJob<S>) -> String,
     monitor: &Monitor,
 ) -> Result<ZoomSummary> {
-    if let Some((index, count)) = job.tile
-        && (count == 0 || index >= count)
-    {
-        return Err(Error::invalid(
-            "tile",
-            format!("{index}/{count}: INDEX/COUNT with 0 <= INDEX < COUNT"),
-        ));
-    }
+    let set = FrameSet::new(
+        "zoom",
+        &job.output,
+        job.frames,
+        job.tile,
+        &job.film,
+        FILM_FORMATS,
+    )?;
     let plans = plan(job, engine)?;
-    let n = plans.len() as u32;
-    let mut names: Vec<String> = (0..n).map(frame_name).collect();
-    names.push(TABLE.into());
-    // A tile writes frames alone; the whole zoom its film too, which is none of them.
-    let film = [("film", job.film.path.as_path())];
-    let also: &[_] = match job.tile {
-        None => &film,
-        Some(_) => &[],
-    };
-    super::checks::check_directory("output", &job.output, &names, also, &[])?;
-    if job.tile.is_none() {
-        job.film.validate("film", FILM_FORMATS)?;
-    }
+    set.check()?;
     let mut notices = engine.notices();
     let switch = switch(&plans);
     if let Some(s) = &switch {
-        notices.push(format!(
-            "note: from frame {} on (width {:.3e}) the step between starts, {:.1e}, is finer than f32 resolves ({:.1e} there): those frames run in f64 on the {}",
-            s.frame,
-            s.width,
-            s.step,
-            s.f32_finest,
-            if s.on_gpu { "GPU" } else { "CPU" }
+        let grid = &plans[s.frame as usize].grid;
+        notices.push(crate::plan::f64_notice(
+            grid,
+            s.on_gpu,
+            Some((s.frame, s.width)),
         ));
     }
     std::fs::create_dir_all(&job.output)?;
     let verdict = job.wants_verdict();
-    let quiet = monitor.quiet();
     let started = Instant::now();
-    let frame_job = |k: usize, range: Option<(f32, f32)>| MapJob {
-        spec: job.map.spec.on_grid(plans[k].grid),
-        backend: if plans[k].on_gpu {
-            Backend::Gpu
-        } else {
-            Backend::Cpu
-        },
-        colour_range: range,
-        ..job.map.clone()
-    };
-    // A frame of this zoom already there (its own command and, with the verdict, its
-    // judgement), read back; another zoom's is refused.
-    let damaged = std::cell::RefCell::new(std::collections::BTreeSet::new());
-    let kept = |k: usize, range: Option<(f32, f32)>| -> Result<Option<render::Png>> {
-        let path = job.output.join(frame_name(k as u32));
-        if !path.exists() {
-            return Ok(None);
-        }
-        // A frame cut short or otherwise unreadable as a PNG (a run killed as the disk
-        // filled, a bad copy), or whose pixels are no longer those it was written with, is
-        // made again (said in a notice); anything but a file there is refused when written.
-        let png = match render::read_png(&path) {
-            Ok(png) => png,
-            Err(Error::Format(_)) => {
-                damaged.borrow_mut().insert(k);
-                return Ok(None);
-            }
-            Err(e) => return Err(e),
-        };
-        if text(&png, PIXELS_KEY).is_some_and(|d| d != digest(&png.rgb)) {
-            damaged.borrow_mut().insert(k);
-            return Ok(None);
-        }
-        let range = range.or_else(|| text(&png, RANGE_KEY).and_then(parse_range));
-        if text(&png, COMMAND_KEY) != Some(frame_command(&frame_job(k, range)).as_str()) {
-            return Err(Error::invalid(
-                "output",
-                format!(
-                    "{} holds frames of a different zoom; choose another directory",
-                    job.output.display()
-                ),
-            ));
-        }
-        Ok((!verdict || text(&png, UNRESOLVED_KEY).is_some()).then_some(png))
+    let mut frames = ZoomFrames {
+        job,
+        plans: &plans,
+        engine,
+        command: &command,
+        frame_command,
+        range: job.map.colour_range,
+        verdict,
+        first: RefCell::new(None),
     };
     // The colours' range: fixed for every frame (the frames would flicker else): given, or
-    // frame 0's own (read back from its PNG, or computed).
-    let ranged = job.map.spec.ranged();
-    let mut first: Option<super::map::Made<(crate::field::Field, Option<Vec<u8>>)>> = None;
-    let (range, range_from) = match (ranged, job.map.colour_range) {
-        (false, _) => (None, "fixed by the quantity"),
-        (true, Some(r)) => (Some(r), "given"),
+    // frame 0's own (read back from its PNG, whose command is then checked with it, or
+    // computed).
+    let range_from = match (job.map.spec.ranged(), job.map.colour_range) {
+        (false, _) => {
+            frames.range = None;
+            "fixed by the quantity"
+        }
+        (true, Some(_)) => "given",
         (true, None) => {
-            let read = kept(0, None)?.and_then(|png| text(&png, RANGE_KEY).and_then(parse_range));
-            let range = match read {
-                Some(r) => r,
+            let read = set
+                .read(0)?
+                .and_then(|png| text(&png, RANGE_KEY).and_then(parse_range));
+            frames.range = match read {
+                Some(r) => Some(r),
                 None => {
+                    let first = frames.job(0);
                     let made = compute(
-                        &frame_job(0, None).spec,
+                        &first.spec,
                         engine,
                         verdict,
-                        job.map.samples,
-                        &quiet,
+                        first.samples,
+                        &monitor.quiet(),
                     )?;
-                    let drawn = job.map.spec.on_grid(plans[0].grid).draw(
-                        &made.made.0,
-                        &job.map.picture,
-                        None,
-                        None,
-                    )?;
-                    first = Some(made);
-                    drawn
-                        .range
-                        .expect("a ranged quantity's picture has a range")
+                    let drawn = first.spec.draw(&made.made.0, &first.picture, None, None)?;
+                    frames.first = RefCell::new(Some(made));
+                    Some(
+                        drawn
+                            .range
+                            .expect("a ranged quantity's picture has a range"),
+                    )
                 }
             };
-            (Some(range), "frame 0")
+            "frame 0"
         }
     };
-    let todo: Vec<usize> = (0..plans.len())
-        .filter(|&k| mine(job.tile, k as u32))
-        .collect();
-    monitor.start("frames", todo.len() as u64);
-    let (mut made, mut kept_count) = (0, 0);
-    for &k in &todo {
-        monitor.check()?;
-        if kept(k, range)?.is_some() {
-            kept_count += 1;
-            monitor.advance(1);
-            continue;
-        }
-        let this = frame_job(k, range);
-        let computed = match (k, first.take()) {
-            (0, Some(m)) => m,
-            _ => compute(&this.spec, engine, verdict, this.samples, &quiet)?,
-        };
-        let (field, mask) = &computed.made;
-        let shown = mask.as_deref().filter(|_| this.files.show_unresolved);
-        let drawn = this.spec.draw(field, &this.picture, range, shown)?;
-        let mut meta = render::provenance(frame_command(&this), &computed.info);
-        meta.extend(drawn.picture.metadata());
-        meta.extend(drawn.text);
-        meta.push((ZOOM_KEY.into(), command.clone()));
-        meta.push((FRAME_KEY.into(), format!("{k} of {n}")));
-        meta.push((
-            PRECISION_KEY.into(),
-            computed.info.path.precision().name().into(),
-        ));
-        if let Some((lo, hi)) = range {
-            meta.push((RANGE_KEY.into(), format!("{lo}:{hi}")));
-        }
-        if let Some(mask) = mask {
-            let unresolved = 1.0 - crate::verdict::fraction(mask);
-            meta.push((UNRESOLVED_KEY.into(), format!("{unresolved}")));
-        }
-        let picture = &drawn.picture;
-        meta.push((PIXELS_KEY.into(), digest(&picture.rgb)));
-        render::write_png(
-            &job.output.join(frame_name(k as u32)),
-            picture.width,
-            picture.height,
-            &picture.rgb,
-            &meta,
-        )?;
-        made += 1;
-        monitor.advance(1);
-    }
-    monitor.finish();
-    let damaged = damaged.into_inner();
-    if !damaged.is_empty() {
-        let names: Vec<String> = damaged.iter().map(|&k| frame_name(k as u32)).collect();
-        notices.push(format!(
-            "{} frames were damaged (unreadable, or their pixels changed since they were written) and were made again: {}",
-            damaged.len(),
-            names.join(", ")
-        ));
-    }
-    let compute_seconds = started.elapsed().as_secs_f64();
+    let run = set.make(&frames, monitor)?;
+    notices.extend(run.damaged);
     let mut summary = ZoomSummary {
-        frames: n,
-        made,
-        kept: kept_count,
+        frames: job.frames,
+        made: run.made,
+        kept: run.kept,
         tile: job.tile,
         switch,
-        range,
+        range: frames.range,
         range_from,
         unresolved_mean: None,
         unresolved_max: None,
-        compute_seconds,
+        compute_seconds: started.elapsed().as_secs_f64(),
         encode_seconds: None,
         output: job.output.clone(),
         film: None,
-        files: todo
-            .iter()
-            .map(|&k| job.output.join(frame_name(k as u32)))
-            .collect(),
+        files: run.files,
         notices,
         axes: [
             job.map.spec.grid().x.var.name(),
@@ -478,83 +414,42 @@ pub fn run<S: MapKernels + MapPicture>(
         ],
         plans: Vec::new(),
     };
-    if job.tile.is_some() {
-        summary.plans = plans;
-        return Ok(summary);
-    }
-    let encoding = Instant::now();
-    let unresolved = encode(job, &plans, &command, engine, monitor)?;
-    summary.encode_seconds = Some(encoding.elapsed().as_secs_f64());
-    if verdict {
-        summary.unresolved_mean = Some(unresolved.iter().sum::<f64>() / unresolved.len() as f64);
-        summary.unresolved_max = unresolved.iter().copied().reduce(f64::max);
+    if job.tile.is_none() {
+        let encoding = Instant::now();
+        let mut unresolved = Vec::new();
+        set.encode(
+            &command,
+            &engine.info(),
+            "x,y,width,height,step,precision,place,unresolved",
+            |k, png| {
+                let p = &plans[k as usize];
+                let u = text(png, UNRESOLVED_KEY).and_then(|s| s.parse::<f64>().ok());
+                unresolved.extend(u);
+                format!(
+                    "{},{},{:e},{:e},{:e},{},{},{}",
+                    p.x,
+                    p.y,
+                    p.width,
+                    p.height,
+                    p.step,
+                    p.precision,
+                    if p.on_gpu { "gpu" } else { "cpu" },
+                    u.map(|u| u.to_string()).unwrap_or_default()
+                )
+            },
+            monitor,
+        )?;
+        summary.encode_seconds = Some(encoding.elapsed().as_secs_f64());
+        if verdict {
+            summary.unresolved_mean =
+                Some(unresolved.iter().sum::<f64>() / unresolved.len() as f64);
+            summary.unresolved_max = unresolved.iter().copied().reduce(f64::max);
+        }
+        summary.film = Some(job.film.path.clone());
+        summary
+            .files
+            .extend([job.film.path.clone(), job.output.join(TABLE)]);
     }
     summary.plans = plans;
-    summary.film = Some(job.film.path.clone());
-    summary
-        .files
-        .extend([job.film.path.clone(), job.output.join(TABLE)]);
     Ok(summary)
-}
-
-/// The film from the frame files, read one at a time, and frames.csv beside it; returns
-/// each frame's share of unresolved pixels (empty without the verdict).
-fn encode<S>(
-    job: &ZoomJob<S>,
-    plans: &[FramePlan],
-    command: &str,
-    engine: &Engine,
-    monitor: &Monitor,
-) -> Result<Vec<f64>> {
-    let path = |k: usize| job.output.join(frame_name(k as u32));
-    let first = render::read_png(&path(0))?;
-    let size = (first.width, first.height);
-    drop(first);
-    let mut unresolved: Vec<Option<f64>> = Vec::with_capacity(plans.len());
-    let mut files = Outputs::new();
-    monitor.start("film", plans.len() as u64);
-    super::film::write(
-        &mut files,
-        &job.film,
-        job.film.format("film", FILM_FORMATS)?,
-        size,
-        plans.len(),
-        &render::provenance(command.to_string(), &engine.info()),
-        |k| {
-            monitor.check()?;
-            let png = render::read_png(&path(k))?;
-            if (png.width, png.height) != size {
-                return Err(Error::format(
-                    &path(k),
-                    "a frame of another size than frame 0",
-                ));
-            }
-            unresolved.push(text(&png, UNRESOLVED_KEY).and_then(|s| s.parse().ok()));
-            monitor.advance(1);
-            Ok(png.rgb)
-        },
-    )?;
-    monitor.finish();
-    files.write(&job.output.join(TABLE), |w| {
-        writeln!(w, "# {command}")?;
-        writeln!(w, "frame,x,y,width,height,step,precision,place,unresolved")?;
-        for (p, u) in plans.iter().zip(&unresolved) {
-            writeln!(
-                w,
-                "{},{},{},{:e},{:e},{:e},{},{},{}",
-                p.frame,
-                p.x,
-                p.y,
-                p.width,
-                p.height,
-                p.step,
-                p.precision,
-                if p.on_gpu { "gpu" } else { "cpu" },
-                u.map(|u| u.to_string()).unwrap_or_default()
-            )?;
-        }
-        Ok(())
-    })?;
-    files.commit(monitor)?;
-    Ok(unresolved.into_iter().flatten().collect())
 }
