@@ -80,6 +80,11 @@ struct Params {
     x_var: u32,
     y_var: u32,
     seed: u32,
+    // 6, Runge-Kutta's divisor, as data rather than a literal: WGSL lets a compiler multiply
+    // by 1/6 for a division by the constant 6 (Chromium's WebGPU does, one ulp off in 8 % of
+    // cases), while a division by a value it cannot see stays the correctly rounded one that
+    // lavapipe, real GPUs and the CPU compute. So the browser's maps equal the engine's.
+    six: real,
 }
 
 // Set per pipeline (src/gpu/pipeline.rs, src/model.rs `Losses::kinds`): each kind of loss is
@@ -116,11 +121,13 @@ struct Coeffs {
     mass_total: real,
     mass_lower: real,
     bearing: real,
+    // Params `six`.
+    six: real,
 }
 
 fn coeffs_from(p: Params) -> Coeffs {
     return Coeffs(p.a, p.b, p.c, p.p, p.q, p.l1, p.l2, p.joint1, p.joint2, p.drag_bob1,
-        p.drag_bob2, p.drag_rod1, p.drag_rod2, p.g, p.mass_total, p.mass_lower, p.bearing);
+        p.drag_bob2, p.drag_rod1, p.drag_rod2, p.g, p.mass_total, p.mass_lower, p.bearing, p.six);
 }
 
 // src/model.rs BEARING_SMOOTH (rad/s).
@@ -249,7 +256,7 @@ fn rk4_step_with(c: Coeffs, p: Pendulum, k1: Rate, dt: real) -> Pendulum {
     sum = Rate(fma(vec4<real>(2.0), k3.dy, sum.dy), fma(vec4<real>(2.0), k3.du, sum.du));
     let k4 = rate(c, advanced(p, dt, k3));
     sum = Rate(sum.dy + k4.dy, sum.du + k4.du);
-    let next = advanced(p, dt / 6.0, sum);
+    let next = advanced(p, dt / c.six, sum);
     let y = next.y;
     let u = next.u;
     // Back onto the unit circles: 1/sqrt(r2) = (3 - r2) / 2 + O((r2 - 1)^2), and a step moves
@@ -410,7 +417,7 @@ fn pixel_coeffs(p: Params, i: u32) -> Coeffs {
         outer * r.g * r.l2,
         r.l1, r.l2, r.joint1, r.joint2,
         p.drag_bob1, p.drag_bob2, p.drag_rod1, p.drag_rod2,
-        r.g, r.m1 + r.rod1 + lower, lower, p.bearing,
+        r.g, r.m1 + r.rod1 + lower, lower, p.bearing, p.six,
     );
 }
 

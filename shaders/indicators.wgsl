@@ -177,7 +177,7 @@ fn step_vectors_closed(c: Coeffs, t: ptr<function, Tangent>, v: ptr<function, Ve
     s = Vectors(jacobian_times(k4, v0.a + dt * s.a), jacobian_times(k4, v0.b + dt * s.b), jacobian_times(k4, v0.c + dt * s.c), jacobian_times(k4, v0.d + dt * s.d));
     sum = Vectors(sum.a + s.a, sum.b + s.b, sum.c + s.c, sum.d + s.d);
     r = Rate(r.dy + k4.r.dy, r.du + k4.r.du);
-    let w = dt / 6.0;
+    let w = dt / c.six;
     let next = tangent_on_circles(Tangent(p.y + w * r.dy, p.u + w * r.du, vec4<real>()));
     *t = next;
     (*v).a = v0.a + w * sum.a;

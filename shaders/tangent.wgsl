@@ -150,7 +150,7 @@ fn tangent_step(c: Coeffs, t: Tangent, dt: real) -> Tangent {
     sum = tangent_ahead(sum, 2.0, k3);
     let k4 = tangent_rate(c, tangent_ahead(t, dt, k3));
     sum = tangent_ahead(sum, 1.0, k4);
-    return tangent_on_circles(tangent_ahead(t, dt / 6.0, sum));
+    return tangent_on_circles(tangent_ahead(t, dt / c.six, sum));
 }
 
 // Back onto the unit circles after a step, as in rk4_step; the tangent vector as it is.

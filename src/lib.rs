@@ -40,6 +40,7 @@ pub mod tableau;
 pub mod track;
 pub mod verdict;
 pub mod video;
+pub mod web;
 
 pub use error::{Error, Result};
 pub use field::Field;

@@ -105,12 +105,16 @@ const LONG: [(&str, &str); 4] = [
 ];
 
 /// Pictures in docs/ made by a script rather than by one command of the guide.
-const BY_SCRIPT: [(&str, &str); 4] = [
+const BY_SCRIPT: [(&str, &str); 5] = [
     (
         "explorer.png",
         "scripts/explorer-picture (the page in headless Chromium)",
     ),
     ("explorer_plane.png", "scripts/explorer-picture"),
+    (
+        "web.png",
+        "scripts/web-picture (the static page in headless Chromium, WebGPU)",
+    ),
     (
         "twin.png",
         "scripts/forecast-pictures (twin --replicates 48)",

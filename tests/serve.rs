@@ -12,7 +12,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use chaoscope::render::read_png;
-use common::{chaoscope, gpu, png_text};
+use common::{browser_report, browser_tools, chaoscope, gpu, png_text};
 
 /// A running `chaoscope serve --port 0`, killed when dropped.
 struct Server {
@@ -770,33 +770,6 @@ fn a_stored_map_is_served_from_its_pixels_and_computed_below_them() {
     }
 }
 
-/// The Python with selenium that scripts/test installs, and Debian's chromium and its
-/// driver; None (a skip, or a failure under CI=true) without them.
-fn browser_tools() -> Option<String> {
-    let python = std::env::var("CHAOSCOPE_PYTHON").unwrap_or_else(|_| {
-        let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/pyenv/bin/python");
-        venv.to_str().unwrap().to_string()
-    });
-    let has_selenium = Command::new(&python)
-        .args(["-c", "import selenium"])
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    let present = has_selenium
-        && Path::new("/usr/bin/chromium").exists()
-        && Path::new("/usr/bin/chromedriver").exists();
-    if !present {
-        assert_ne!(
-            std::env::var("CI").as_deref(),
-            Ok("true"),
-            "no selenium in {python}, or no /usr/bin/chromium and chromedriver (scripts/test installs them)"
-        );
-        eprintln!("SKIPPED: no selenium, chromium or chromedriver (scripts/test installs them)");
-        return None;
-    }
-    Some(python)
-}
-
 #[test]
 fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
     if gpu().is_none() {
@@ -807,18 +780,8 @@ fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
     };
     let server = Server::start(&["--backend", "gpu"]);
     let dir = tempfile::tempdir().unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser/explore.py");
-    let out = Command::new(python)
-        .arg(script)
-        .arg(format!("{}/", server.url))
-        .arg(dir.path())
-        .stderr(Stdio::inherit())
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "the browser script failed: {report}");
-    eprintln!("browser: {report}");
-    let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let url = format!("{}/", server.url);
+    let report = browser_report(&python, "explore.py", &[url.as_ref(), dir.path().as_ref()]);
 
     // The first screenshot shows a map: many colours inside the map's area, not a blank or
     // an error page.

@@ -21,6 +21,7 @@ pub mod traces;
 pub mod track;
 pub mod trajectory;
 pub mod twin;
+pub mod web;
 pub mod zoom;
 
 pub use crate::error::{check_count, check_within};

@@ -22,6 +22,7 @@ mod traces;
 mod track;
 mod trajectory;
 mod twin;
+mod web;
 mod zoom;
 
 use std::process::ExitCode;
@@ -92,6 +93,9 @@ pub enum Command {
     /// The explorer: a local web page to zoom into flip, divergence and verdict maps computed
     /// on demand, and to watch a clicked pixel's pendulum.
     Serve(serve::ServeArgs),
+    /// The explorer as a folder of static files: a page that computes flip-time maps with
+    /// WebGPU on the viewer's own GPU, to host on any web server or course page.
+    Web(web::WebArgs),
     /// What a Zarr store of a map (flip --data MAP.zarr) still lacks, and which --tile runs
     /// would fill it.
     Status(store::StatusArgs),
@@ -170,6 +174,7 @@ impl Command {
             Command::Forecast(_) => "forecast",
             Command::Twin(_) => "twin",
             Command::Serve(_) => "serve",
+            Command::Web(_) => "web",
             Command::Status(_) => "status",
             Command::Render(_) => "render",
             Command::Info => "info",
@@ -195,6 +200,7 @@ impl Command {
             | Command::Bench(_)
             | Command::Completions { .. }
             | Command::Serve(_)
+            | Command::Web(_)
             | Command::Track(_)
             | Command::Zoom(_)
             | Command::Status(_)
@@ -369,6 +375,7 @@ pub fn run_code(cli: Cli, monitor: &Monitor) -> u8 {
         Command::Forecast(args) => forecast::run(args, monitor),
         Command::Twin(args) => twin::run(args, monitor),
         Command::Serve(args) => serve::run(args, monitor, cli.json),
+        Command::Web(args) => web::run(args, monitor),
         Command::Status(args) => store::status(args, cli.json),
         Command::Render(args) => store::render(args, monitor),
         Command::Info => info::run(cli.json),

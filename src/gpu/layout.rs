@@ -173,13 +173,16 @@ mirrors! {
         x_var: u32,
         y_var: u32,
         seed: u32,
+        /// 6, Runge-Kutta's divisor, as data: a division by a literal may be compiled as a
+        /// multiplication by its reciprocal (Chromium's WebGPU does), one by data stays exact.
+        six: real,
     }
 }
 
 // A uniform buffer's size must be a multiple of 16 bytes; f64's is WGSL's size of the struct
 // (its alignment, 8), the buffer rounded up to 16 bytes.
-const _: () = assert!(std::mem::size_of::<GpuParams>() == 196);
-const _: () = assert!(std::mem::size_of::<GpuParams64>() == 344);
+const _: () = assert!(std::mem::size_of::<GpuParams>() == 200);
+const _: () = assert!(std::mem::size_of::<GpuParams64>() == 352);
 
 /// `new` (physics and step) and `with_grid` (the grid) of a params mirror whose floats are
 /// `$float`, `$eps` its machine epsilon (the margin of the no-flip energy).
@@ -219,6 +222,7 @@ macro_rules! params_constructors {
                 m2: m(p.m2),
                 rod1: m(p.rod1),
                 rod2: m(p.rod2),
+                six: 6.0,
                 ..Default::default()
             }
         }

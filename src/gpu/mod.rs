@@ -19,7 +19,7 @@ pub use flip_time::FlipTimeKernel;
 pub use indicators::IndicatorKernel;
 pub use lyapunov::{JacobianKernel, LyapunovKernel};
 pub use positions::PositionsKernel;
-pub use tiled::STEPS_PER_DISPATCH;
+pub use tiled::{MIN_STEPS, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION};
 pub use trajectory::TrajectoryKernel;
 
 use crate::spec::{Method, Precision};

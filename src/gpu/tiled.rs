@@ -27,7 +27,7 @@ pub const ATTEMPTS_PER_DISPATCH: u32 = 1 << 14;
 
 /// Fewest steps a dispatch takes (its per-pixel bookkeeping, the active list, costs about
 /// a step; spread over a few steps it would rival the steps themselves).
-const MIN_STEPS: u64 = 16;
+pub const MIN_STEPS: u64 = 16;
 
 /// The rows `span` of a grid cut into tiles of whole rows that fit the device: at most
 /// `max_pixels` pixels each.

@@ -6,7 +6,8 @@ use rayon::prelude::*;
 
 use crate::field::Field;
 
-const LUT_SIZE: usize = 1024;
+/// Colours in a colour map's lookup table.
+pub const LUT_SIZE: usize = 1024;
 
 /// How a flip-time map is coloured: log10 of the time in units of the natural time
 /// sqrt(l1/g), from `t_lo` (brightest) to `t_max` (darkest); never flipped in black.
@@ -18,18 +19,9 @@ pub struct FlipColors {
 }
 
 impl FlipColors {
-    /// (from, to) along the gradient: early flips bright, late flips dark. For dark-ended maps
-    /// stop short of the black end so that "never" stays distinct.
-    fn span(&self) -> (f32, f32) {
-        match self.colormap {
-            Colormap::Inferno | Colormap::Magma => (1.0, 0.15),
-            _ => (1.0, 0.0),
-        }
-    }
-
     /// The colour bar: colours from late (bottom) to early (top), ticks at round times.
     pub fn bar(&self) -> (Vec<[u8; 3]>, Vec<(f64, String)>) {
-        let (from, to) = self.span();
+        let (from, to) = self.colormap.flip_span();
         let colors = lut(&*self.colormap.gradient(), to, from);
         let (lo, hi) = (self.t_lo.ln(), self.t_max.ln());
         let mut ticks = Vec::new();
@@ -98,6 +90,15 @@ impl Colormap {
         }
     }
 
+    /// (from, to) along the gradient for flip times: early flips bright, late flips dark.
+    /// Dark-ended maps stop short of the black end so that "never" stays distinct.
+    fn flip_span(self) -> (f32, f32) {
+        match self {
+            Colormap::Inferno | Colormap::Magma => (1.0, 0.15),
+            _ => (1.0, 0.0),
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Colormap::Inferno => "inferno",
@@ -123,11 +124,17 @@ fn lut(gradient: &dyn Gradient, from: f32, to: f32) -> Vec<[u8; 3]> {
         .collect()
 }
 
+/// The flip-time colours of `colormap`, from the earliest flip (first) to the latest (last),
+/// [`LUT_SIZE`] of them: what [`flip_colors`] picks from, and the static explorer too.
+pub fn flip_table(colormap: Colormap) -> Vec<[u8; 3]> {
+    let (from, to) = colormap.flip_span();
+    lut(&*colormap.gradient(), from, to)
+}
+
 /// RGB bytes of a flip-time map: by default inferno from pale yellow (early flips) to dark
 /// purple (late).
 pub fn flip_colors(field: &Field, colors: FlipColors) -> Vec<u8> {
-    let (from, to) = colors.span();
-    let table = lut(&*colors.colormap.gradient(), from, to);
+    let table = flip_table(colors.colormap);
     let (lo, hi) = (colors.t_lo.ln(), colors.t_max.ln());
     let mut rgb = vec![0u8; field.data.len() * 3];
     rgb.par_chunks_mut(3)

@@ -263,3 +263,49 @@ pub fn fuzz_value(rng: &mut fastrand::Rng, good: Option<&str>, traps: &[&str]) -
         (false, _) => None,
     }
 }
+
+/// The Python with selenium that scripts/test installs, and Debian's chromium and its
+/// driver; None (a skip, or a failure under CI=true) without them.
+pub fn browser_tools() -> Option<String> {
+    let python = std::env::var("CHAOSCOPE_PYTHON").unwrap_or_else(|_| {
+        let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/pyenv/bin/python");
+        venv.to_str().unwrap().to_string()
+    });
+    let has_selenium = std::process::Command::new(&python)
+        .args(["-c", "import selenium"])
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    let present = has_selenium
+        && Path::new("/usr/bin/chromium").exists()
+        && Path::new("/usr/bin/chromedriver").exists();
+    if !present {
+        assert_ne!(
+            std::env::var("CI").as_deref(),
+            Ok("true"),
+            "no selenium in {python}, or no /usr/bin/chromium and chromedriver (scripts/test installs them)"
+        );
+        eprintln!("SKIPPED: no selenium, chromium or chromedriver (scripts/test installs them)");
+        return None;
+    }
+    Some(python)
+}
+
+/// Runs tests/browser/`script` with `python` and `args`, and returns the JSON report it
+/// prints (failing with it when the script fails).
+pub fn browser_report(python: &str, script: &str, args: &[&std::ffi::OsStr]) -> serde_json::Value {
+    let out = std::process::Command::new(python)
+        .arg(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/browser")
+                .join(script),
+        )
+        .args(args)
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "the browser script failed: {report}");
+    eprintln!("browser: {report}");
+    serde_json::from_str(&report).unwrap()
+}

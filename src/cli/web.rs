@@ -1,0 +1,66 @@
+//! `chaoscope web`: the explorer as a static site.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::args::PhysicalArgs;
+use super::{command_line, json};
+use crate::app::web::{self, WebJob};
+use crate::error::Result;
+use crate::model::Params;
+use crate::monitor::Monitor;
+use crate::params::{ParamSources, Preset};
+use crate::web::{Pendulum, SiteSpec};
+
+#[derive(Args, Debug, Clone)]
+pub struct WebArgs {
+    /// The folder for the site (index.html, its script, the kernels, manifest.json): serve it
+    /// from any static web host, or `python3 -m http.server -d DIR`.
+    #[arg(long, default_value = "out/web")]
+    pub output: PathBuf,
+    /// A pendulum the page offers first, besides the equal arms and the lab's.
+    #[command(flatten)]
+    pub physical: PhysicalArgs,
+}
+
+impl WebArgs {
+    pub fn job(&self) -> Result<WebJob> {
+        let pendulum = |name: String, params: Params| Pendulum {
+            flags: command_line::physics(&params),
+            name,
+            params,
+        };
+        let mut pendulums = Vec::new();
+        let given = self.physical.sources();
+        if given != ParamSources::default() {
+            let params = given.resolve()?;
+            let flags = command_line::physics(&params);
+            pendulums.push(pendulum(format!("given: {flags}"), params));
+        }
+        pendulums.push(pendulum("equal arms: 1 kg, 1 m".into(), Params::default()));
+        pendulums.push(pendulum(
+            "the lab's (--preset lab)".into(),
+            Preset::Lab.params(),
+        ));
+        Ok(WebJob {
+            site: SiteSpec {
+                pendulums,
+                command: "chaoscope flip --size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}".into(),
+            },
+            output: self.output.clone(),
+        })
+    }
+}
+
+pub fn run(args: &WebArgs, monitor: &Monitor) -> Result<serde_json::Value> {
+    let s = web::run(&args.job()?, monitor)?;
+    eprintln!(
+        "{} files, {:.0} kB -> {} (serve it, e.g. python3 -m http.server -d {}, and open it in a browser with WebGPU)",
+        s.files.len(),
+        s.bytes as f64 / 1e3,
+        s.output.display(),
+        s.output.display()
+    );
+    json(&s)
+}

@@ -1,0 +1,189 @@
+//! The explorer as a folder of static files (`chaoscope web`): a page that computes maps with
+//! WebGPU on the viewer's own GPU. Nothing of the physics is written again for it: its WGSL
+//! is the kernels as [`gpu::shaders::source`] assembles them for the engine (f32: WebGPU has
+//! no f64), the buffers' layouts are read from that WGSL by naga (the `Params` struct's
+//! members, each binding's kind), each pendulum's `Params` are the bytes the engine uploads,
+//! and the colours are the render's own tables. The page's script only drives the kernels as
+//! `src/gpu/flip_time.rs` does: set a tile's fields, dispatch, follow the active list, read
+//! the times back.
+
+use serde_json::{Value, json};
+use wgpu::naga;
+
+use crate::gpu::layout::{GpuParams, GpuPendulum, NEVER, NONFINITE, WORKGROUP_SIZE};
+use crate::gpu::shaders::{Kernel, source};
+use crate::gpu::{MIN_STEPS, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION};
+use crate::model::Params;
+use crate::render::{Colormap, flip_table};
+use crate::spec::{F32_MIN_PIXEL_STEP, Precision, Var};
+
+/// The page, its script and its style.
+const PAGE: &str = include_str!("../assets/web/index.html");
+const SCRIPT: &str = include_str!("../assets/web/explorer.js");
+const STYLE: &str = include_str!("../assets/web/style.css");
+
+/// A pendulum the page offers: its name, its parameters, and their flags in a command line.
+#[derive(Clone, Debug)]
+pub struct Pendulum {
+    pub name: String,
+    pub params: Params,
+    pub flags: String,
+}
+
+/// What the site holds.
+#[derive(Clone, Debug)]
+pub struct SiteSpec {
+    pub pendulums: Vec<Pendulum>,
+    /// The flip map's command line with `{width}`, `{height}`, `{x_min}`, `{x_max}`,
+    /// `{y_min}`, `{y_max}`, `{t_max}`, `{dt}` and `{pendulum}` to fill in: the page shows it
+    /// for its view, the map the command line computes for the same pixels.
+    pub command: String,
+}
+
+/// The kernels the page runs, by the name its script knows them by.
+const KERNELS: [(&str, Kernel); 1] = [("flip_time", Kernel::FlipTime)];
+
+/// The site's files: (path inside the folder, contents).
+pub fn files(spec: &SiteSpec) -> Vec<(String, Vec<u8>)> {
+    let mut files = vec![
+        ("index.html".to_string(), PAGE.as_bytes().to_vec()),
+        ("explorer.js".to_string(), SCRIPT.as_bytes().to_vec()),
+        ("style.css".to_string(), STYLE.as_bytes().to_vec()),
+    ];
+    let mut kernels = serde_json::Map::new();
+    for (name, kernel) in KERNELS {
+        let wgsl = source(kernel, Precision::F32);
+        let path = format!("{name}.wgsl");
+        kernels.insert(name.into(), reflect(&wgsl, &path));
+        files.push((path, wgsl.into_bytes()));
+    }
+    let manifest = manifest(spec, Value::Object(kernels));
+    files.push((
+        "manifest.json".to_string(),
+        serde_json::to_vec_pretty(&manifest).expect("JSON of plain values"),
+    ));
+    files
+}
+
+/// The page's settings: the kernels' layouts, the engine's constants, the pendulums, the
+/// planes' variables, the colours.
+fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
+    let pendulums: Vec<Value> = spec
+        .pendulums
+        .iter()
+        .map(|p| {
+            // dt is the page's to set (the `dt` field); the rest is the engine's upload.
+            let params = GpuParams::new(&p.params, 0.01);
+            let words: Vec<u32> = bytemuck::cast_slice(bytemuck::bytes_of(&params)).to_vec();
+            json!({
+                "name": p.name,
+                "flags": p.flags,
+                "params": words,
+                "losses": p.params.losses.kinds(),
+                // The flip colours' earliest time: the natural time sqrt(l1 / g).
+                "t_lo": (p.params.l1 / p.params.g).sqrt(),
+            })
+        })
+        .collect();
+    let vars: Vec<Value> = [Var::Theta1, Var::Omega1, Var::Theta2, Var::Omega2]
+        .iter()
+        .map(|v| json!({"name": v.name(), "code": v.code(), "angle": v.is_angle()}))
+        .collect();
+    let colours: serde_json::Map<String, Value> = [Colormap::Inferno, Colormap::Viridis]
+        .iter()
+        .map(|&c| {
+            let hex: String = flip_table(c)
+                .iter()
+                .map(|[r, g, b]| format!("{r:02x}{g:02x}{b:02x}"))
+                .collect();
+            (c.name().to_string(), Value::String(hex))
+        })
+        .collect();
+    json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "kernels": kernels,
+        "constants": {
+            "workgroup_size": WORKGROUP_SIZE,
+            "never": NEVER,
+            "nonfinite": NONFINITE,
+            "steps_per_dispatch": STEPS_PER_DISPATCH,
+            "steps_per_invocation": STEPS_PER_INVOCATION,
+            "min_steps": MIN_STEPS,
+            "pendulum_bytes": std::mem::size_of::<GpuPendulum>(),
+            "f32_epsilon": f32::EPSILON,
+            "f32_min_pixel_step": F32_MIN_PIXEL_STEP,
+        },
+        "pendulums": pendulums,
+        "vars": vars,
+        "colours": colours,
+        "command": spec.command,
+    })
+}
+
+/// What the page needs to know of a kernel's WGSL, read from it by naga: its file, its entry
+/// points and overrides, each binding (uniform, or storage and whether read-only), and the
+/// `Params` struct's members (offset and scalar).
+fn reflect(wgsl: &str, path: &str) -> Value {
+    let module = naga::front::wgsl::parse_str(wgsl).expect("the engine's kernels parse");
+    let scalar = |ty: naga::Handle<naga::Type>| match module.types[ty].inner {
+        naga::TypeInner::Scalar(s) => match s.kind {
+            naga::ScalarKind::Float => Some("f32"),
+            naga::ScalarKind::Uint => Some("u32"),
+            naga::ScalarKind::Sint => Some("i32"),
+            _ => None,
+        },
+        _ => None,
+    };
+    let (members, size) = module
+        .types
+        .iter()
+        .find_map(|(_, t)| match (&t.name, &t.inner) {
+            (Some(name), naga::TypeInner::Struct { members, span }) if name == "Params" => {
+                Some((members, *span))
+            }
+            _ => None,
+        })
+        .expect("every kernel has its Params");
+    let fields: serde_json::Map<String, Value> = members
+        .iter()
+        .filter_map(|m| {
+            let kind = scalar(m.ty)?;
+            Some((m.name.clone()?, json!({"offset": m.offset, "type": kind})))
+        })
+        .collect();
+    let bindings: Vec<Value> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| {
+            let b = g.binding.as_ref()?;
+            let kind = match g.space {
+                naga::AddressSpace::Uniform => "uniform",
+                naga::AddressSpace::Storage { access }
+                    if !access.contains(naga::StorageAccess::STORE) =>
+                {
+                    "read-only-storage"
+                }
+                naga::AddressSpace::Storage { .. } => "storage",
+                _ => return None,
+            };
+            Some(json!({"group": b.group, "binding": b.binding, "name": g.name, "type": kind}))
+        })
+        .collect();
+    let entries: Vec<&str> = module
+        .entry_points
+        .iter()
+        .map(|e| e.name.as_str())
+        .collect();
+    let overrides: Vec<&str> = module
+        .overrides
+        .iter()
+        .filter_map(|(_, o)| o.name.as_deref())
+        .collect();
+    json!({
+        "file": path,
+        "entries": entries,
+        "overrides": overrides,
+        "bindings": bindings,
+        "params": {"size": size.next_multiple_of(16), "fields": fields},
+    })
+}

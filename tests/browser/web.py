@@ -1,0 +1,69 @@
+"""Drives the static explorer (`chaoscope web`) in a real headless Chromium with its software
+WebGPU adapter (SwiftShader), through WebDriver (selenium with Debian's chromedriver): loads
+the page, waits for its first map and saves a screenshot, then asks the page for each view's
+flip times (written as little-endian f32s), its command line, and whether f32 resolves it.
+
+Usage: web.py URL SCREENSHOT [OUTDIR VIEWS_JSON]
+  URL: the page, with a view in its hash (default #t_max=10: the whole plane over 10 s).
+  VIEWS_JSON: a list of {"name", "width", "height", "view": {cx, cy, w, t_max, dt, pendulum,
+  x, y}, "times": false to skip the map}; writes OUTDIR/NAME.f32 for each map; prints a
+  report as JSON (timings in seconds).
+"""
+import base64
+import json
+import sys
+import time
+
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.support.ui import WebDriverWait
+
+url, screenshot = sys.argv[1], sys.argv[2]
+out, views = (sys.argv[3], json.loads(sys.argv[4])) if len(sys.argv) > 4 else (None, [])
+options = webdriver.ChromeOptions()
+options.binary_location = "/usr/bin/chromium"
+for flag in ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
+             "--disable-background-networking", "--enable-unsafe-webgpu",
+             "--use-webgpu-adapter=swiftshader"]:
+    options.add_argument(flag)
+driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+driver.set_script_timeout(900)
+report = {"views": {}}
+
+
+def page_call(name, *args):
+    """The page's test hook `name` called with args, awaited."""
+    result = driver.execute_async_script(f"""
+        const done = arguments[arguments.length - 1];
+        Promise.resolve(window.chaoscope.{name}(...Array.from(arguments).slice(0, -1)))
+          .then(done, (e) => done({{error: String(e && e.message || e)}}));""", *args)
+    if isinstance(result, dict) and "error" in result:
+        raise RuntimeError(f"{name}: {result['error']}")
+    return result
+
+
+try:
+    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
+        "width": 1100, "height": 640, "deviceScaleFactor": 1, "mobile": False})
+    driver.get(url if "#" in url else url + "#t_max=10")
+    WebDriverWait(driver, 600, poll_frequency=0.1).until(lambda d: d.execute_script(
+        "return window.chaoscope && (window.chaoscope.views > 0 || window.chaoscope.error)"))
+    for key in ["error", "last", "adapter"]:
+        report[key] = driver.execute_script(f"return window.chaoscope.{key}")
+    report["status"] = driver.find_element("id", "status").text
+    driver.save_screenshot(screenshot)
+    for v in views:
+        name, w, h = v["name"], v["width"], v["height"]
+        report["views"][name] = {"command": page_call("command", v["view"], w, h),
+                                 "resolves": page_call("resolves", v["view"], w, h)}
+        if v.get("times", True):
+            started = time.time()
+            data = page_call("flipTimes", v["view"], w, h)
+            report["views"][name]["seconds"] = time.time() - started
+            report["views"][name]["compute_seconds"] = driver.execute_script(
+                "return window.chaoscope.computeSeconds")
+            with open(f"{out}/{name}.f32", "wb") as f:
+                f.write(base64.b64decode(data))
+finally:
+    driver.quit()
+print(json.dumps(report))
