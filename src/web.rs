@@ -10,12 +10,17 @@
 use serde_json::{Value, json};
 use wgpu::naga;
 
+use crate::field::Field;
 use crate::gpu::layout::{GpuParams, GpuPendulum, NEVER, NONFINITE, WORKGROUP_SIZE};
 use crate::gpu::shaders::{Kernel, source};
-use crate::gpu::{MIN_STEPS, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION};
+use crate::gpu::{
+    LEFT_BELOW, MIN_STEPS, STALLED_BELOW, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION,
+    TANGENT_STEP_COST,
+};
+use crate::measure::{Indicator, Runs};
 use crate::model::Params;
-use crate::render::{Colormap, flip_table};
-use crate::spec::{F32_MIN_PIXEL_STEP, Precision, Var};
+use crate::render::{Colormap, flip_table, ftle_table};
+use crate::spec::{F32_MIN_PIXEL_STEP, LyapunovSpec, Precision, Var};
 
 /// The page, its script and its style.
 const PAGE: &str = include_str!("../assets/web/index.html");
@@ -38,10 +43,23 @@ pub struct SiteSpec {
     /// `{y_min}`, `{y_max}`, `{t_max}`, `{dt}` and `{pendulum}` to fill in: the page shows it
     /// for its view, the map the command line computes for the same pixels.
     pub command: String,
+    /// The same for a divergence-family map, with `{indicator}` for the indicator's name too.
+    pub indicator_command: String,
+    /// A clicked pixel's run as a command line, with `{theta1}`, `{omega1}`, `{theta2}`,
+    /// `{omega2}`, `{t_max}`, `{dt}` and `{pendulum}` to fill in.
+    pub swing_command: String,
 }
 
 /// The kernels the page runs, by the name its script knows them by.
-const KERNELS: [(&str, Kernel); 1] = [("flip_time", Kernel::FlipTime)];
+const KERNELS: [(&str, Kernel); 4] = [
+    ("flip_time", Kernel::FlipTime),
+    ("lyapunov", Kernel::Lyapunov),
+    ("indicators", Kernel::Indicators),
+    ("trajectory", Kernel::Trajectory),
+];
+
+/// The divergence-family maps the page offers beside the flip time.
+const INDICATORS: [Indicator; 2] = [Indicator::Ftle, Indicator::Megno];
 
 /// The site's files: (path inside the folder, contents).
 pub fn files(spec: &SiteSpec) -> Vec<(String, Vec<u8>)> {
@@ -82,6 +100,9 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
                 "losses": p.params.losses.kinds(),
                 // The flip colours' earliest time: the natural time sqrt(l1 / g).
                 "t_lo": (p.params.l1 / p.params.g).sqrt(),
+                // The arms' lengths, to draw a swinging pendulum.
+                "l1": p.params.l1,
+                "l2": p.params.l2,
             })
         })
         .collect();
@@ -89,19 +110,21 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
         .iter()
         .map(|v| json!({"name": v.name(), "code": v.code(), "angle": v.is_angle()}))
         .collect();
-    let colours: serde_json::Map<String, Value> = [Colormap::Inferno, Colormap::Viridis]
+    // The flip time's colour maps (each divergence kind carries its own table).
+    let colours: Vec<(String, Value)> = [Colormap::Inferno, Colormap::Viridis]
         .iter()
-        .map(|&c| {
-            let hex: String = flip_table(c)
-                .iter()
-                .map(|[r, g, b]| format!("{r:02x}{g:02x}{b:02x}"))
-                .collect();
-            (c.name().to_string(), Value::String(hex))
-        })
+        .map(|&c| (c.name().to_string(), Value::String(hex(&flip_table(c)))))
         .collect();
+    let mut kinds = vec![json!({
+        "name": "flip", "label": "flip time", "unit": "s", "kernel": "flip_time",
+        "command": spec.command,
+    })];
+    kinds.extend(INDICATORS.iter().map(|&i| divergence_kind(i, spec)));
+    let colours: serde_json::Map<String, Value> = colours.into_iter().collect();
     json!({
         "version": env!("CARGO_PKG_VERSION"),
         "kernels": kernels,
+        "kinds": kinds,
         "constants": {
             "workgroup_size": WORKGROUP_SIZE,
             "never": NEVER,
@@ -116,13 +139,87 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
         "pendulums": pendulums,
         "vars": vars,
         "colours": colours,
-        "command": spec.command,
+        "swing_command": spec.swing_command,
+    })
+}
+
+/// A colour table as one string of RRGGBB hex.
+fn hex(table: &[[u8; 3]]) -> String {
+    table
+        .iter()
+        .map(|[r, g, b]| format!("{r:02x}{g:02x}{b:02x}"))
+        .collect()
+}
+
+/// What the page needs to map `indicator`, from the measure that computes it: the kernel
+/// and entries the engine runs, the run's setting and measure, a step's cost, how a raw
+/// value is finished and what marks a start that left the numbers, its colours' range.
+fn divergence_kind(indicator: Indicator, spec: &SiteSpec) -> Value {
+    let measure = indicator.measure();
+    let (kernel, init, advance, code, setting, cost, left_below) = match measure.runs(indicator) {
+        Runs::Divergence => (
+            "lyapunov",
+            "tangent_init",
+            "tangent_advance",
+            0,
+            0.0,
+            TANGENT_STEP_COST,
+            STALLED_BELOW,
+        ),
+        Runs::Indicators(g) => (
+            "indicators",
+            "indicator_init",
+            g.entry,
+            g.measure,
+            g.setting,
+            g.cost,
+            LEFT_BELOW,
+        ),
+    };
+    let lyapunov = LyapunovSpec::new(
+        Params::default(),
+        crate::spec::Grid::square(1),
+        crate::spec::Stepping {
+            dt: crate::spec::Stepping::DT,
+            t_max: crate::spec::Stepping::DIVERGENCE_T_MAX,
+        },
+    );
+    // The divergence kernel's log sum is over the run's time (gpu::lyapunov); an indicator's
+    // finish is the raw value or the raw value over the run's time (its `finish`).
+    let per_time = match measure.runs(indicator) {
+        Runs::Divergence => true,
+        Runs::Indicators(_) => measure.finish(indicator, 1.0, 2.0) == 0.5,
+    };
+    // The colours run from 0 to the 99.5th percentile of the map, at least to what a map of
+    // zeros gets (the measure's `default_range`).
+    let zeros = Field {
+        width: 1,
+        height: 1,
+        data: vec![0.0],
+    };
+    let floor = measure.default_range(indicator, &lyapunov, &zeros).1;
+    let quantity = indicator.quantity();
+    json!({
+        "name": indicator.spelled().0,
+        "label": indicator.title(),
+        "unit": quantity.unit,
+        "kernel": kernel,
+        "entries": [init, advance],
+        "measure": code,
+        "setting": setting,
+        "cost": cost,
+        "renorm": lyapunov.renorm,
+        "per_time": per_time,
+        "left_below": left_below,
+        "range": {"quantile": 0.995, "at_least": floor},
+        "table": hex(&ftle_table(Colormap::Magma)),
+        "command": spec.indicator_command.replace("{indicator}", indicator.spelled().0),
     })
 }
 
 /// What the page needs to know of a kernel's WGSL, read from it by naga: its file, its entry
-/// points and overrides, each binding (uniform, or storage and whether read-only), and the
-/// `Params` struct's members (offset and scalar).
+/// points and overrides, each binding (uniform, or storage and whether read-only, and its
+/// array's element size), and the `Params` struct's members (offset and scalar).
 fn reflect(wgsl: &str, path: &str) -> Value {
     let module = naga::front::wgsl::parse_str(wgsl).expect("the engine's kernels parse");
     let scalar = |ty: naga::Handle<naga::Type>| match module.types[ty].inner {
@@ -166,7 +263,15 @@ fn reflect(wgsl: &str, path: &str) -> Value {
                 naga::AddressSpace::Storage { .. } => "storage",
                 _ => return None,
             };
-            Some(json!({"group": b.group, "binding": b.binding, "name": g.name, "type": kind}))
+            // An array's element size: a storage binding's bytes per element.
+            let stride = match module.types[g.ty].inner {
+                naga::TypeInner::Array { stride, .. } => Some(stride),
+                _ => None,
+            };
+            Some(
+                json!({"group": b.group, "binding": b.binding, "name": g.name, "type": kind,
+                "stride": stride}),
+            )
         })
         .collect();
     let entries: Vec<&str> = module

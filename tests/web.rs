@@ -5,10 +5,11 @@
 mod common;
 
 use std::io::{BufRead, BufReader};
+use std::mem::size_of;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
-use chaoscope::gpu::layout::GpuParams;
+use chaoscope::gpu::layout::{GpuIndicatorSlot, GpuLyapunovSlot, GpuParams};
 use chaoscope::gpu::shaders::{Kernel, source};
 use chaoscope::model::Params;
 use chaoscope::params::Preset;
@@ -36,12 +37,30 @@ fn the_site_is_the_engines_own_and_small() {
         .map(|e| e.unwrap().metadata().unwrap().len())
         .sum();
     assert!(bytes < 2_000_000, "{bytes} bytes");
+    // The page's kernels are the engine's, as assembled, and each pixel's slot is the size
+    // of the engine's mirror.
+    for (name, kernel, slot) in [
+        ("flip_time", Kernel::FlipTime, 16),
+        ("lyapunov", Kernel::Lyapunov, size_of::<GpuLyapunovSlot>()),
+        (
+            "indicators",
+            Kernel::Indicators,
+            size_of::<GpuIndicatorSlot>(),
+        ),
+    ] {
+        let k = &m["kernels"][name];
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join(k["file"].as_str().unwrap())).unwrap(),
+            source(kernel, Precision::F32),
+            "{name}"
+        );
+        assert_eq!(
+            k["bindings"][1]["stride"].as_u64(),
+            Some(slot as u64),
+            "{name}"
+        );
+    }
     let k = &m["kernels"]["flip_time"];
-    assert_eq!(
-        std::fs::read_to_string(dir.path().join(k["file"].as_str().unwrap())).unwrap(),
-        source(Kernel::FlipTime, Precision::F32),
-        "the page's kernel is the engine's, as assembled"
-    );
     // Every field the page writes sits where the engine's mirror has it.
     let fields = &k["params"]["fields"];
     macro_rules! offsets {
@@ -137,8 +156,8 @@ impl Drop for StaticServer {
     }
 }
 
-/// The share of pixels on which two flip-time maps agree: both flipped within `tol` s of
-/// each other, or both never, or both NaN.
+/// The share of pixels on which two maps agree: both finite within `tol` of each other (flip
+/// times in s, exponents in 1/s), or both never flipped, or both NaN.
 fn agreement(a: &[f32], b: &[f32], tol: f32) -> f64 {
     let same = a
         .iter()
@@ -181,7 +200,16 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         {"name": "omega", "width": 64, "height": 64,
          "view": {"x": "theta1", "y": "omega1", "cx": 0.5, "cy": 0, "w": 5, "t_max": 10,
                   "dt": 0.01}},
+        {"name": "ftle", "width": 64, "height": 64,
+         "view": {"kind": "ftle", "cx": 0, "cy": 0, "w": turn, "t_max": 10, "dt": 0.01}},
+        {"name": "megno", "width": 64, "height": 48,
+         "view": {"kind": "megno", "cx": 1, "cy": 1, "w": 2, "t_max": 10, "dt": 0.01}},
     ]);
+    // A click's swing: the engine's trajectory kernel, every second step kept at dt 0.01
+    // (about 60 a second).
+    views.as_array_mut().unwrap().push(serde_json::json!({
+        "name": "swing", "width": 64, "height": 64, "times": false,
+        "swing": {"theta1": 1.0, "theta2": 2.0}, "view": {"t_max": 2, "dt": 0.01}}));
     // The page's rule for a view too deep for f32 is the engine's (`Grid::needs_f64`): the
     // widths around the switch on a 512-pixel grid at a point of the boundary.
     let widths = [1e-2, 3e-3, 2e-3, 1.9e-3, 1.5e-3, 1e-3, 1e-4];
@@ -222,6 +250,36 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         let page = &report["views"][format!("w{w:e}")]["resolves"];
         assert_eq!(page.as_bool(), Some(!grid.needs_f64()), "width {w}");
     }
+    let swing = &report["views"]["swing"]["swing"];
+    assert_eq!(swing["seconds"].as_f64(), Some(0.02), "{swing}");
+    let page: Vec<f64> = swing["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let csv = chaoscope()
+        .args("trajectory --theta1 1 --theta2 2 --t-max 2 --dt 0.01 --every 0.02".split(' '))
+        .args(["--backend", "gpu", "--precision", "f32"])
+        .output()
+        .unwrap();
+    let rows: Vec<Vec<f64>> = String::from_utf8_lossy(&csv.stdout)
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(page.len(), 4 * rows.len(), "states kept");
+    for (k, row) in rows.iter().enumerate() {
+        for j in 0..4 {
+            // The same f32 kernel from the same start: equal but for the start's cos and sin,
+            // which the page's JavaScript and the engine's Rust may round an ulp apart.
+            let (a, b) = (page[4 * k + j], row[1 + j]);
+            assert!(
+                (a - b).abs() <= 1e-4,
+                "state {k}, component {j}: {a} against {b}"
+            );
+        }
+    }
     for v in views
         .as_array()
         .unwrap()
@@ -247,11 +305,11 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         assert_eq!(shape, [h, w], "{name}");
         let agree = agreement(&cli, &page, 1e-3);
         let exact = agreement(&cli, &page, 0.0);
-        eprintln!("{name}: {agree:.5} within 1e-3 s or the same class, {exact:.5} exactly");
+        eprintln!("{name}: {agree:.5} within 1e-3 (s, 1/s) or the same class, {exact:.5} exactly");
         // Both run the same WGSL over the same f32 params. Without losses the two software
         // GPUs round every step of the motion alike (RK4's 6 is data: Params `six`) and
         // differ at most in an ulp or two of where a flip falls in its step: the issue's
-        // 1e-3 s holds everywhere. The bearing friction's torques round differently in
+        // 1e-3 s (and 1e-3 /s for the FTLE) holds everywhere. The bearing friction's torques round differently in
         // Chromium's compiler on about a fifth of the evaluations (measured; WGSL allows it),
         // a difference chaos then grows: over 10 s 0.6 % of the lab's pixels part by more.
         let least = if name == "lab" { 0.99 } else { 0.999 };

@@ -20,7 +20,7 @@ let manifest = null;
 let gpu = null;            // { device, layout, module, pipelines: Map }
 let generation = 0;        // bumped by every new view: a computation of an older one stops
 const view = { pendulum: 0, x: "theta1", y: "theta2", cx: 0, cy: 0, w: TURN,
-  t_max: 20, dt: 0.01, colours: "inferno" };
+  t_max: 20, dt: 0.01, colours: "inferno", kind: "flip" };
 
 function say(text, error) {
   statusLine.textContent = text;
@@ -58,7 +58,7 @@ function command(v, g) {
   const values = { width: g.width, height: g.height, x_min: g.x[0], x_max: g.x[1],
     y_min: g.y[0], y_max: g.y[1], t_max: v.t_max, dt: v.dt, pendulum: p.flags,
     x: v.x, y: v.y };
-  return manifest.command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
+  return kindOf(v.kind).command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
 }
 
 // src/spec/mod.rs `Stepping::steps`.
@@ -74,12 +74,13 @@ function readHash() {
   }
   for (const k of ["x", "y"]) if (h.has(k) && varOf(h.get(k))) view[k] = h.get(k);
   if (h.has("colours") && manifest.colours[h.get("colours")]) view.colours = h.get("colours");
+  if (h.has("kind") && kindOf(h.get("kind"))) view.kind = h.get("kind");
   view.pendulum = Math.min(Math.max(0, Math.round(view.pendulum)), manifest.pendulums.length - 1);
 }
 
 function writeHash() {
   const q = new URLSearchParams();
-  for (const k of ["x", "y", "cx", "cy", "w", "t_max", "dt", "pendulum", "colours"]) {
+  for (const k of ["kind", "x", "y", "cx", "cy", "w", "t_max", "dt", "pendulum", "colours"]) {
     q.set(k, String(view[k]));
   }
   history.replaceState(null, "", "#" + q.toString());
@@ -94,13 +95,7 @@ async function startGpu() {
   const device = await adapter.requestDevice({ requiredLimits: {
     maxStorageBufferBindingSize: adapter.limits.maxStorageBufferBindingSize,
     maxBufferSize: adapter.limits.maxBufferSize } });
-  const k = manifest.kernels.flip_time;
-  const code = await (await fetch(k.file)).text();
-  const module = device.createShaderModule({ code });
-  const layout = device.createBindGroupLayout({ entries: k.bindings.map((b) => ({
-    binding: b.binding, visibility: GPUShaderStage.COMPUTE, buffer: { type: b.type } })) });
-  const state = { device, layout, module, kernel: k, pipelines: new Map(),
-    pipelineLayout: device.createPipelineLayout({ bindGroupLayouts: [layout] }) };
+  const state = { device, kernels: new Map(), pipelines: new Map() };
   device.lost.then((info) => {
     // A lost device (a GPU reset, a driver's timeout): the next view starts a new one.
     if (gpu === state) gpu = null;
@@ -113,16 +108,32 @@ async function startGpu() {
   return state;
 }
 
-// flip_init and flip_time for `losses` (the kernel's LOSSES override), early exit on.
-async function pipelines(g, losses) {
-  if (!g.pipelines.has(losses)) {
-    const make = (entry) => g.device.createComputePipelineAsync({
-      layout: g.pipelineLayout,
-      compute: { module: g.module, entryPoint: entry,
-        constants: { LOSSES: losses, EARLY_EXIT: 1 } } });
-    g.pipelines.set(losses, Promise.all([make("flip_init"), make("flip_time")]));
+// A kernel's module and layouts, made on first use: its bindings as manifest.json lists them.
+async function kernelOf(g, name) {
+  if (!g.kernels.has(name)) {
+    g.kernels.set(name, (async () => {
+      const k = manifest.kernels[name];
+      const code = await (await fetch(k.file)).text();
+      const layout = g.device.createBindGroupLayout({ entries: k.bindings.map((b) => ({
+        binding: b.binding, visibility: GPUShaderStage.COMPUTE, buffer: { type: b.type } })) });
+      return { k, layout, module: g.device.createShaderModule({ code }),
+        pipelineLayout: g.device.createPipelineLayout({ bindGroupLayouts: [layout] }) };
+    })());
   }
-  return g.pipelines.get(losses);
+  return g.kernels.get(name);
+}
+
+// The pipelines of `entries` of kernel `name` with the overrides `constants`.
+async function pipelines(g, name, entries, constants) {
+  const key = JSON.stringify([name, entries, constants]);
+  if (!g.pipelines.has(key)) {
+    const kernel = await kernelOf(g, name);
+    const make = (entry) => g.device.createComputePipelineAsync({
+      layout: kernel.pipelineLayout,
+      compute: { module: kernel.module, entryPoint: entry, constants } });
+    g.pipelines.set(key, Promise.all(entries.map(make)));
+  }
+  return g.pipelines.get(key);
 }
 
 // The params uniform: the pendulum's words, then the view's fields by name.
@@ -138,43 +149,17 @@ function paramsOf(p, fields, size) {
   return { bytes, set };
 }
 
-// The flip times of view `v` on a grid `g` (seconds; Infinity: never flipped within t-max;
-// NaN: the integration left the numbers), as the engine's f32 kernel computes them.
-async function flipTimes(v, g, onProgress) {
-  if (!gpu) gpu = await startGpu();
-  const mine = gpu, device = mine.device, k = mine.kernel, c = manifest.constants;
-  const p = manifest.pendulums[v.pendulum];
-  const [init, advance] = await pipelines(mine, p.losses);
-  const pixels = g.width * g.height;
-  // src/spec/grid.rs `point_symmetric`: starts in opposite pairs about the plane's centre
-  // flip at the same time, so the top half (rounded up) is integrated and mirrored.
-  const symmetric = 0.5 * (g.x[0] + g.x[1]) === 0 && 0.5 * (g.y[0] + g.y[1]) === 0;
-  const integrated = symmetric ? Math.ceil(g.height / 2) : g.height;
-  // Tiles of whole rows: memory bounded by the tile, not the view.
-  const rowsPerTile = Math.max(1, Math.min(integrated, Math.floor((1 << 20) / g.width)));
-  const capacity = rowsPerTile * g.width;
-  const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST;
-  const buffer = (size, u) => device.createBuffer({ size: Math.max(16, size), usage: u || usage });
-  const params = buffer(k.params.size, GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST);
-  const states = buffer(capacity * c.pendulum_bytes);
-  const times = buffer(capacity * 4);
-  const lists = [buffer(capacity * 4), buffer(capacity * 4)];
-  const counter = buffer(4);
-  const counterRead = buffer(4, GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST);
-  const timesRead = buffer(capacity * 4, GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST);
-  const byName = { params, states, times, counter };
-  // Bind groups reading list a and writing list b, and the reverse.
-  const bind = (from, to) => device.createBindGroup({ layout: mine.layout,
-    entries: k.bindings.map((b) => ({ binding: b.binding, resource: { buffer:
-      b.name === "active_in" ? from : b.name === "active_out" ? to : byName[b.name] } })) });
-  const aToB = bind(lists[0], lists[1]), bToA = bind(lists[1], lists[0]);
-  const out = new Float32Array(pixels);
-  const total = steps(v.t_max, v.dt);
-  const tMax = Math.fround(v.t_max);
+function kindOf(name) { return manifest.kinds.find((k) => k.name === name); }
+
+// What every kernel's run shares: the params set for view `v` on grid `g` (as
+// src/gpu/layout.rs `with_grid` forms them: in f64, rounded once to f32), the rows to
+// integrate (src/spec/grid.rs `point_symmetric`: starts in opposite pairs about the plane's
+// centre end alike, so the top half, rounded up, is integrated and the rest mirrored as
+// src/field.rs `mirror_below` does), tiles of whole rows that bound memory, buffers.
+function setUp(v, g, k) {
+  const device = gpu.device, p = manifest.pendulums[v.pendulum];
   const u = paramsOf(p, k.params.fields, k.params.size);
   const x0 = g.x[0], x1 = g.x[1], y0 = g.y[0], y1 = g.y[1];
-  // As src/gpu/layout.rs `with_grid` forms them, in f64, rounded once to f32.
-  const fixed = { theta1: 0, omega1: 0, theta2: 0, omega2: 0 };
   u.set("dt", v.dt);
   u.set("x_mid", 0.5 * (x0 + x1));
   u.set("x_half_step", 0.5 * ((x1 - x0) / g.width));
@@ -182,94 +167,228 @@ async function flipTimes(v, g, onProgress) {
   u.set("y_half_step", 0.5 * ((y1 - y0) / g.height));
   u.set("x_var", varOf(v.x).code);
   u.set("y_var", varOf(v.y).code);
-  for (const [name, value] of Object.entries(fixed)) u.set(name, value);
+  for (const name of ["theta1", "omega1", "theta2", "omega2"]) u.set(name, 0);
   u.set("width", g.width);
   u.set("height", g.height);
   u.set("t_max", v.t_max);
-  const workgroups = (n) => {
-    const groups = Math.max(1, Math.ceil(n / c.workgroup_size));
-    const x = Math.min(groups, 65535);
-    return [x, Math.ceil(groups / x)];
+  const symmetric = 0.5 * (x0 + x1) === 0 && 0.5 * (y0 + y1) === 0;
+  const integrated = symmetric ? Math.ceil(g.height / 2) : g.height;
+  const rowsPerTile = Math.max(1, Math.min(integrated, Math.floor((1 << 20) / g.width)));
+  const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST;
+  const made = [];
+  const buffer = (size, use) => {
+    const b = device.createBuffer({ size: Math.max(16, size), usage: use || usage });
+    made.push(b);
+    return b;
   };
-  // One dispatch of `count` invocations; returns how many pixels it left active.
+  return { u, p, integrated, rowsPerTile, capacity: rowsPerTile * g.width, buffer,
+    params: buffer(k.params.size, GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST),
+    free: () => made.forEach((b) => b.destroy()) };
+}
+
+function workgroups(n) {
+  const groups = Math.max(1, Math.ceil(n / manifest.constants.workgroup_size));
+  const x = Math.min(groups, 65535);
+  return [x, Math.ceil(groups / x)];
+}
+
+// Records one dispatch of `count` invocations into a new encoder, after writing the params.
+function encode(s, pipeline, group, count) {
+  const device = gpu.device;
+  device.queue.writeBuffer(s.params, 0, s.u.bytes);
+  const encoder = device.createCommandEncoder();
+  const pass = encoder.beginComputePass();
+  pass.setPipeline(pipeline);
+  pass.setBindGroup(0, group);
+  pass.dispatchWorkgroups(...workgroups(count));
+  pass.end();
+  return encoder;
+}
+
+// `n` f32s of `buffer`, read back.
+async function readF32(s, buffer, n) {
+  const read = s.buffer(n * 4, GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST);
+  const encoder = gpu.device.createCommandEncoder();
+  encoder.copyBufferToBuffer(buffer, 0, read, 0, n * 4);
+  gpu.device.queue.submit([encoder.finish()]);
+  await read.mapAsync(GPUMapMode.READ);
+  const out = new Float32Array(read.getMappedRange(), 0, n).slice();
+  read.unmap();
+  return out;
+}
+
+// The flip times of view `v` on a grid `g` (seconds; Infinity: never flipped within t-max;
+// NaN: the integration left the numbers), as the engine's f32 kernel computes them.
+async function flipTimes(v, g, onProgress) {
+  const c = manifest.constants, kernel = await kernelOf(gpu, "flip_time"), k = kernel.k;
+  const s = setUp(v, g, k);
+  const [init, advance] = await pipelines(gpu, "flip_time", ["flip_init", "flip_time"],
+    { LOSSES: s.p.losses, EARLY_EXIT: 1 });
+  const states = s.buffer(s.capacity * c.pendulum_bytes), times = s.buffer(s.capacity * 4);
+  const lists = [s.buffer(s.capacity * 4), s.buffer(s.capacity * 4)];
+  const counter = s.buffer(4);
+  const counterRead = s.buffer(4, GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST);
+  const byName = { params: s.params, states, times, counter };
+  // Bind groups reading list a and writing list b, and the reverse.
+  const bind = (from, to) => gpu.device.createBindGroup({ layout: kernel.layout,
+    entries: k.bindings.map((b) => ({ binding: b.binding, resource: { buffer:
+      b.name === "active_in" ? from : b.name === "active_out" ? to : byName[b.name] } })) });
+  const aToB = bind(lists[0], lists[1]), bToA = bind(lists[1], lists[0]);
+  // One dispatch; returns how many pixels it left active.
   const dispatch = async (pipeline, group, count) => {
-    device.queue.writeBuffer(params, 0, u.bytes);
-    device.queue.writeBuffer(counter, 0, new Uint32Array([0]));
-    const encoder = device.createCommandEncoder();
-    const pass = encoder.beginComputePass();
-    pass.setPipeline(pipeline);
-    pass.setBindGroup(0, group);
-    pass.dispatchWorkgroups(...workgroups(count));
-    pass.end();
+    gpu.device.queue.writeBuffer(counter, 0, new Uint32Array([0]));
+    const encoder = encode(s, pipeline, group, count);
     encoder.copyBufferToBuffer(counter, 0, counterRead, 0, 4);
-    device.queue.submit([encoder.finish()]);
+    gpu.device.queue.submit([encoder.finish()]);
     await counterRead.mapAsync(GPUMapMode.READ);
     const n = new Uint32Array(counterRead.getMappedRange())[0];
     counterRead.unmap();
     return n;
   };
-  const mineNow = generation;
+  const total = steps(v.t_max, v.dt), tMax = Math.fround(v.t_max);
+  const out = new Float32Array(g.width * g.height), mine = generation;
   try {
-    for (let row0 = 0; row0 < integrated; row0 += rowsPerTile) {
-      const rows = Math.min(rowsPerTile, integrated - row0), n = rows * g.width;
-      u.set("row0", row0); u.set("rows", rows); u.set("count", n);
-      u.set("step0", 0); u.set("steps", 0);
+    for (let row0 = 0; row0 < s.integrated; row0 += s.rowsPerTile) {
+      const rows = Math.min(s.rowsPerTile, s.integrated - row0), n = rows * g.width;
+      s.u.set("row0", row0); s.u.set("rows", rows); s.u.set("count", n);
+      s.u.set("step0", 0); s.u.set("steps", 0);
       let active = await dispatch(init, bToA, n);
       let step0 = 0, forward = true;
       // src/gpu/tiled.rs `time_loop`: each dispatch holds at most steps_per_dispatch
       // pendulum-steps (a driver's watchdog; the browser stays responsive between them).
       while (step0 < total && active > 0) {
-        if (mineNow !== generation) return null;
+        if (mine !== generation) return null;
         const bounded = Math.max(Math.floor(c.steps_per_dispatch / active), c.min_steps);
-        const s = Math.min(bounded, c.steps_per_invocation, total - step0);
-        u.set("step0", step0); u.set("steps", s); u.set("count", active);
+        const steps = Math.min(bounded, c.steps_per_invocation, total - step0);
+        s.u.set("step0", step0); s.u.set("steps", steps); s.u.set("count", active);
         active = await dispatch(advance, forward ? aToB : bToA, active);
         forward = !forward;
-        step0 += s;
+        step0 += steps;
         page.dispatches += 1;
-        onProgress((row0 + rows * step0 / total) / integrated);
+        onProgress((row0 + rows * step0 / total) / s.integrated);
       }
-      const encoder = device.createCommandEncoder();
-      encoder.copyBufferToBuffer(times, 0, timesRead, 0, n * 4);
-      device.queue.submit([encoder.finish()]);
-      await timesRead.mapAsync(GPUMapMode.READ);
-      const t = new Float32Array(timesRead.getMappedRange(), 0, n);
+      const t = await readF32(s, times, n);
       for (let i = 0; i < n; i++) {
         const x = t[i];
         out[row0 * g.width + i] = x === c.nonfinite ? NaN
           : (x === c.never || x > tMax) ? Infinity : x;
       }
-      timesRead.unmap();
     }
-    // src/field.rs `mirror_below`: pixel (col, row) is pixel (width-1-col, height-1-row).
-    for (let i = integrated * g.width; i < pixels; i++) out[i] = out[pixels - 1 - i];
   } finally {
-    for (const b of [params, states, times, ...lists, counter, counterRead, timesRead]) b.destroy();
+    s.free();
   }
+  return mirrored(out, s.integrated * g.width);
+}
+
+// Rows from `start` on filled by point reflection (src/field.rs `mirror_below`).
+function mirrored(out, start) {
+  for (let i = start; i < out.length; i++) out[i] = out[out.length - 1 - i];
   return out;
+}
+
+// A divergence-family map of view `v` (FTLE, MEGNO, ...: kind `kind` of manifest.json) on
+// grid `g`, as src/gpu/lyapunov.rs and indicators.rs drive it: every pixel every step, the
+// steps of a dispatch bounded by their cost; NaN where the run left the numbers.
+async function divergence(kind, v, g, onProgress) {
+  const c = manifest.constants, kernel = await kernelOf(gpu, kind.kernel), k = kernel.k;
+  const s = setUp(v, g, k);
+  const [init, advance] = await pipelines(gpu, kind.kernel, kind.entries,
+    { LOSSES: s.p.losses });
+  // Binding 1: each pixel's slot (its size read from the WGSL); 2: its value.
+  const slotBytes = k.bindings.find((b) => b.binding === 1).stride;
+  const slots = s.buffer(s.capacity * slotBytes), values = s.buffer(s.capacity * 4);
+  const group = gpu.device.createBindGroup({ layout: kernel.layout,
+    entries: k.bindings.map((b) => ({ binding: b.binding,
+      resource: { buffer: [s.params, slots, values][b.binding] } })) });
+  const total = steps(v.t_max, v.dt), tEnd = total * v.dt;
+  // src/spec/map.rs `renorm_steps`.
+  s.u.set("interval", Math.max(1, Math.round(kind.renorm / v.dt)));
+  s.u.set("total_steps", total);
+  s.u.set("setting", kind.setting);
+  s.u.set("measure", kind.measure);
+  const run = async (pipeline, n) => {
+    gpu.device.queue.submit([encode(s, pipeline, group, n).finish()]);
+    await gpu.device.queue.onSubmittedWorkDone();
+  };
+  const out = new Float32Array(g.width * g.height), mine = generation;
+  try {
+    for (let row0 = 0; row0 < s.integrated; row0 += s.rowsPerTile) {
+      const rows = Math.min(s.rowsPerTile, s.integrated - row0), n = rows * g.width;
+      s.u.set("row0", row0); s.u.set("rows", rows); s.u.set("count", n);
+      await run(init, n);
+      for (let step0 = 0; step0 < total;) {
+        if (mine !== generation) return null;
+        const bounded = Math.max(Math.floor(c.steps_per_dispatch / kind.cost / n),
+          Math.floor(c.min_steps / kind.cost));
+        const steps = Math.min(bounded, Math.max(1, Math.floor(c.steps_per_invocation / kind.cost)),
+          total - step0);
+        s.u.set("step0", step0); s.u.set("steps", steps); s.u.set("count", n);
+        await run(advance, n);
+        step0 += steps;
+        page.dispatches += 1;
+        onProgress((row0 + rows * step0 / total) / s.integrated);
+      }
+      const raw = await readF32(s, values, n);
+      for (let i = 0; i < n; i++) {
+        const x = raw[i];
+        out[row0 * g.width + i] = x < kind.left_below ? NaN
+          : kind.per_time ? Math.fround(x / tEnd) : x;
+      }
+    }
+  } finally {
+    s.free();
+  }
+  return mirrored(out, s.integrated * g.width);
+}
+
+// The map of view `v` on grid `g`, of the view's kind.
+async function compute(v, g, onProgress) {
+  if (!gpu) gpu = await startGpu();
+  const kind = kindOf(v.kind);
+  return kind.name === "flip" ? flipTimes(v, g, onProgress) : divergence(kind, v, g, onProgress);
 }
 
 // ---- Drawing ----
 
-function table(name) {
-  const hex = manifest.colours[name], n = hex.length / 6, rgb = new Uint8Array(n * 3);
+// A colour table from its RRGGBB hex string.
+function parseTable(hex) {
+  const n = hex.length / 6, rgb = new Uint8Array(n * 3);
   for (let i = 0; i < n * 3; i++) rgb[i] = parseInt(hex.substr(2 * i, 2), 16);
   return rgb;
 }
 
-// src/render/colormap.rs `flip_colors`: log time from t_lo (brightest) to t-max; never
-// black, NaN green.
-function draw(times, g, v) {
-  const p = manifest.pendulums[v.pendulum], lut = table(v.colours), n = lut.length / 3;
-  const lo = Math.log(p.t_lo), hi = Math.log(v.t_max);
+// How values become colours: a position 0..1 along the colour table (NaN for none).
+// Flip times: src/render/colormap.rs `flip_colors`, log time from t_lo (brightest) to t-max,
+// never black. Divergence maps: `ftle_colors`, linear from 0 to the kind's range: the 99.5th
+// percentile of the map, at least the kind's floor (the measure's `default_range`).
+function scale(kind, values, v) {
+  if (kind.name === "flip") {
+    const t0 = manifest.pendulums[v.pendulum].t_lo, lo = Math.log(t0), hi = Math.log(v.t_max);
+    return { lo: t0, hi: v.t_max, log: true,
+      at: (t) => Number.isFinite(t) ? (Math.log(Math.max(t, t0)) - lo) / (hi - lo) : null };
+  }
+  const finite = values.filter(Number.isFinite).sort((a, b) => a - b);
+  const top = finite.length ? finite[Math.round((finite.length - 1) * kind.range.quantile)] : 0;
+  const hi = Math.max(top, kind.range.at_least);
+  return { lo: 0, hi, log: false, at: (x) => x / hi };
+}
+
+function colourTable(kind, v) {
+  return parseTable(kind.name === "flip" ? manifest.colours[v.colours] : kind.table);
+}
+
+function draw(values, g, v, sc) {
+  const kind = kindOf(v.kind), lut = colourTable(kind, v), n = lut.length / 3;
   const image = new ImageData(g.width, g.height);
-  for (let i = 0; i < times.length; i++) {
-    const t = times[i];
+  for (let i = 0; i < values.length; i++) {
+    const x = values[i];
     let r = 0, gr = 0, b = 0;
-    if (Number.isNaN(t)) { gr = 255; } else if (Number.isFinite(t)) {
-      const u = Math.min(1, Math.max(0, (Math.log(Math.max(t, p.t_lo)) - lo) / (hi - lo)));
-      const j = Math.round(u * (n - 1)) * 3;
-      r = lut[j]; gr = lut[j + 1]; b = lut[j + 2];
+    if (Number.isNaN(x)) { gr = 255; } else {
+      const u = sc.at(x);
+      if (u !== null) {
+        const j = Math.round(Math.min(1, Math.max(0, u)) * (n - 1)) * 3;
+        r = lut[j]; gr = lut[j + 1]; b = lut[j + 2];
+      }
     }
     // Row 0 is the top (y at its maximum), as in the canvas.
     const o = i * 4;
@@ -278,23 +397,30 @@ function draw(times, g, v) {
   canvas.getContext("2d").putImageData(image, 0, 0);
 }
 
-function drawBar() {
+function drawBar(sc) {
+  const kind = kindOf(view.kind);
   const bar = document.getElementById("bar-colours"), ctx = bar.getContext("2d");
-  const lut = table(view.colours), n = lut.length / 3;
+  const lut = colourTable(kind, view), n = lut.length / 3;
   for (let x = 0; x < bar.width; x++) {
     const j = Math.round(x / (bar.width - 1) * (n - 1)) * 3;
     ctx.fillStyle = `rgb(${lut[j]},${lut[j + 1]},${lut[j + 2]})`;
     ctx.fillRect(x, 0, 1, bar.height);
   }
-  const p = manifest.pendulums[view.pendulum], lo = Math.log(p.t_lo), hi = Math.log(view.t_max);
   const ticks = document.getElementById("bar-ticks");
   ticks.replaceChildren();
-  for (const t of [0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500]) {
-    if (t < p.t_lo || t > view.t_max) continue;
-    const s = document.createElement("span");
-    s.style.left = `${100 * (Math.log(t) - lo) / (hi - lo)}%`;
-    s.textContent = String(t);
-    ticks.append(s);
+  document.getElementById("bar-label").textContent = kind.name === "flip"
+    ? "first flip (s): bright early, dark late, black never"
+    : `${kind.label}${kind.unit && kind.unit !== "1" ? ` (${kind.unit})` : ""}, from 0 to the ` +
+      "99.5th percentile of the view; green: left the numbers";
+  if (!sc) return;
+  const marks = sc.log ? [0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500]
+    : [0, 0.25, 0.5, 0.75, 1].map((f) => Number((f * sc.hi).toPrecision(2)));
+  for (const t of marks) {
+    if (t < sc.lo || t > sc.hi) continue;
+    const el = document.createElement("span");
+    el.style.left = `${100 * Math.min(1, sc.at(t))}%`;
+    el.textContent = String(t);
+    ticks.append(el);
   }
 }
 
@@ -304,7 +430,8 @@ let pending = null;
 async function show() {
   const g = grid(view, canvas.width, canvas.height);
   writeHash();
-  drawBar();
+  drawBar(null);
+  form.elements.colours.closest("label").hidden = view.kind !== "flip";
   document.getElementById("command").textContent = command(view, g);
   const mine = ++generation;
   if (!resolves(g)) {
@@ -320,18 +447,22 @@ async function show() {
   progress.hidden = false;
   say("computing on the GPU…");
   try {
-    const times = await flipTimes(view, g, (f) => {
+    const values = await compute(view, g, (f) => {
       progress.firstElementChild.style.width = `${(100 * f).toFixed(1)}%`;
       say(`computing on the GPU… ${(100 * f).toFixed(0)} %`);
     });
-    if (times === null || mine !== generation) return;
-    draw(times, g, view);
+    if (values === null || mine !== generation) return;
+    const kind = kindOf(view.kind), sc = scale(kind, values, view);
+    draw(values, g, view, sc);
+    drawBar(sc);
+    page.shown = values;
     const seconds = (performance.now() - started) / 1000;
-    const flipped = times.filter(Number.isFinite).length / times.length;
+    const finite = values.filter(Number.isFinite).length / values.length;
     page.views += 1;
-    page.last = { seconds, flipped, width: g.width, height: g.height };
+    page.last = { seconds, finite, width: g.width, height: g.height, kind: kind.name };
     say(`${g.width} x ${g.height} pendulums over ${view.t_max} s in ${seconds.toFixed(2)} s ` +
-      `on ${page.adapter}; ${(100 * flipped).toFixed(1)} % flipped.`);
+      `on ${page.adapter}` + (kind.name === "flip"
+        ? `; ${(100 * finite).toFixed(1)} % flipped.` : `: ${kind.label}.`));
   } catch (e) {
     if (mine === generation) say(`Could not compute: ${e.message}`, true);
   } finally {
@@ -401,6 +532,7 @@ function wire() {
     if (t >= 0.1 && t <= 1000) view.t_max = t;
     if (dt >= 1e-4 && dt <= 0.1) view.dt = dt;
     view.colours = f.get("colours");
+    view.kind = f.get("kind");
     later();
   });
   window.addEventListener("resize", () => { if (fit()) later(); });
@@ -415,13 +547,122 @@ function wire() {
   });
 }
 
-// A clicked pixel: its start and its flip time, from the map shown.
-function describe(e) {
+// A clicked pixel: its start, its value in the map shown, and its pendulum swinging, the
+// motion computed by the engine's trajectory kernel (one run, every state kept at about 60 a
+// second) on the GPU, as src/gpu/trajectory.rs drives it.
+async function describe(e) {
   const at = pointAt(e);
-  const box = document.getElementById("pixel");
-  box.hidden = false;
+  const g = grid(view, canvas.width, canvas.height);
+  const col = Math.min(g.width - 1, Math.floor(at.fx * g.width));
+  const row = Math.min(g.height - 1, Math.floor(at.fy * g.height));
+  // The pixel's centre, as the kernels place it (src/spec/grid.rs `Axis::at`).
+  const x = 0.5 * (g.x[0] + g.x[1]) + (2 * col + 1 - g.width) * 0.5 * ((g.x[1] - g.x[0]) / g.width);
+  const y = 0.5 * (g.y[0] + g.y[1]) - (2 * row + 1 - g.height) * 0.5 * ((g.y[1] - g.y[0]) / g.height);
+  const start = { theta1: 0, omega1: 0, theta2: 0, omega2: 0 };
+  start[view.x] = x; start[view.y] = y;
+  const kind = kindOf(view.kind), value = page.shown ? page.shown[row * g.width + col] : NaN;
+  document.getElementById("pixel").hidden = false;
+  const shown = kind.name === "flip"
+    ? (Number.isFinite(value) ? `flips at ${value.toFixed(3)} s` : Number.isNaN(value)
+      ? "left the numbers" : `never flips within ${view.t_max} s`)
+    : `${kind.label} ${value.toPrecision(4)}`;
   document.getElementById("pixel-text").textContent =
-    `${view.x} = ${at.x.toPrecision(6)}, ${view.y} = ${at.y.toPrecision(6)}`;
+    `${view.x} = ${x.toPrecision(6)}, ${view.y} = ${y.toPrecision(6)}: ${shown}`;
+  const values = { theta1: start.theta1, omega1: start.omega1, theta2: start.theta2,
+    omega2: start.omega2, t_max: view.t_max, dt: view.dt,
+    pendulum: manifest.pendulums[view.pendulum].flags };
+  document.getElementById("swing-command").textContent =
+    manifest.swing_command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
+  try {
+    animate(await trajectory(start, view), view);
+  } catch (err) {
+    say(`Could not swing the pendulum: ${err.message}`, true);
+  }
+}
+
+// The states of one run from `start` over the view's t-max, every `stride`-th step.
+async function trajectory(start, v) {
+  if (!gpu) gpu = await startGpu();
+  const c = manifest.constants, kernel = await kernelOf(gpu, "trajectory"), k = kernel.k;
+  const p = manifest.pendulums[v.pendulum];
+  const [pipeline] = await pipelines(gpu, "trajectory", ["trajectory"], { LOSSES: p.losses });
+  const stride = Math.max(1, Math.round(1 / 60 / v.dt));
+  const total = Math.max(stride, Math.floor(steps(v.t_max, v.dt) / stride) * stride);
+  const kept = total / stride + 1;
+  const device = gpu.device, made = [];
+  const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST;
+  const buffer = (size, use) => {
+    const b = device.createBuffer({ size: Math.max(16, size), usage: use || usage });
+    made.push(b);
+    return b;
+  };
+  try {
+    const u = paramsOf(p, k.params.fields, k.params.size);
+    u.set("dt", v.dt); u.set("interval", stride); u.set("count", 1); u.set("total_steps", total);
+    const params = buffer(k.params.size, GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST);
+    const y = [start.theta1, start.omega1, start.theta2, start.omega2];
+    const states = buffer(kept * 16), damping = buffer(16), carried = buffer(32);
+    device.queue.writeBuffer(states, 0, new Float32Array(y));
+    device.queue.writeBuffer(carried, 0, new Float32Array([...y, Math.cos(y[0]),
+      Math.sin(y[0]), Math.cos(y[2]), Math.sin(y[2])]));
+    const byBinding = [params, states, damping, carried];
+    const group = device.createBindGroup({ layout: kernel.layout,
+      entries: k.bindings.map((b) => ({ binding: b.binding,
+        resource: { buffer: byBinding[b.binding] } })) });
+    for (let step0 = 0; step0 < total; step0 += c.steps_per_invocation) {
+      u.set("step0", step0); u.set("steps", Math.min(c.steps_per_invocation, total - step0));
+      device.queue.writeBuffer(params, 0, u.bytes);
+      const encoder = device.createCommandEncoder();
+      const pass = encoder.beginComputePass();
+      pass.setPipeline(pipeline); pass.setBindGroup(0, group); pass.dispatchWorkgroups(1);
+      pass.end();
+      device.queue.submit([encoder.finish()]);
+    }
+    const read = buffer(kept * 16, GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST);
+    const encoder = device.createCommandEncoder();
+    encoder.copyBufferToBuffer(states, 0, read, 0, kept * 16);
+    device.queue.submit([encoder.finish()]);
+    await read.mapAsync(GPUMapMode.READ);
+    const out = new Float32Array(read.getMappedRange()).slice();
+    read.unmap();
+    return { states: out, seconds: stride * v.dt, p };
+  } finally {
+    made.forEach((b) => b.destroy());
+  }
+}
+
+// The pendulum swinging in real time, again and again; the lower bob leaves a trail.
+let swinging = null;
+function animate(run, v) {
+  const swing = document.getElementById("swing"), ctx = swing.getContext("2d");
+  const l1 = run.p.l1, l2 = run.p.l2, scale = 0.45 * swing.width / (l1 + l2);
+  const o = { x: swing.width / 2, y: swing.height / 2 }, n = run.states.length / 4;
+  const at = (k) => {
+    const s = run.states.subarray(4 * k, 4 * k + 4);
+    const b1 = { x: o.x + scale * l1 * Math.sin(s[0]), y: o.y + scale * l1 * Math.cos(s[0]) };
+    return [b1, { x: b1.x + scale * l2 * Math.sin(s[2]), y: b1.y + scale * l2 * Math.cos(s[2]) }];
+  };
+  cancelAnimationFrame(swinging);
+  const t0 = performance.now();
+  const frame = (now) => {
+    const k = Math.floor((now - t0) / 1000 / run.seconds) % n;
+    ctx.fillStyle = "#0b0b0e"; ctx.fillRect(0, 0, swing.width, swing.height);
+    ctx.strokeStyle = "rgba(249,160,63,0.35)"; ctx.beginPath();
+    for (let j = Math.max(0, k - 90); j <= k; j++) {
+      const [, b2] = at(j);
+      if (j === Math.max(0, k - 90)) ctx.moveTo(b2.x, b2.y); else ctx.lineTo(b2.x, b2.y);
+    }
+    ctx.stroke();
+    const [b1, b2] = at(k);
+    ctx.strokeStyle = "#ddd"; ctx.lineWidth = 2; ctx.beginPath();
+    ctx.moveTo(o.x, o.y); ctx.lineTo(b1.x, b1.y); ctx.lineTo(b2.x, b2.y); ctx.stroke();
+    ctx.lineWidth = 1; ctx.fillStyle = "#f9a03f";
+    for (const b of [b1, b2]) { ctx.beginPath(); ctx.arc(b.x, b.y, 6, 0, 2 * Math.PI); ctx.fill(); }
+    document.getElementById("swing-time").textContent = `t = ${(k * run.seconds).toFixed(2)} s`;
+    swinging = requestAnimationFrame(frame);
+  };
+  swinging = requestAnimationFrame(frame);
+  page.swung = { states: n, seconds: run.seconds };
 }
 
 function fillForm() {
@@ -433,11 +674,21 @@ function fillForm() {
   options("x", manifest.vars.map((v) => [v.name, v.name]));
   options("y", manifest.vars.map((v) => [v.name, v.name]));
   options("colours", Object.keys(manifest.colours).map((c) => [c, c]));
+  options("kind", manifest.kinds.map((k) => [k.name, k.label]));
+  form.elements.kind.value = view.kind;
   form.elements.pendulum.value = String(view.pendulum);
   form.elements.x.value = view.x; form.elements.y.value = view.y;
   form.elements.t_max.value = view.t_max; form.elements.dt.value = view.dt;
   form.elements.colours.value = view.colours;
 }
+
+// For tests: the run a click on a pixel with start `start` swings (its kept states, and the
+// seconds between them).
+page.swing = async (start, v) => {
+  const run = await trajectory(Object.assign({ theta1: 0, omega1: 0, theta2: 0, omega2: 0 },
+    start), Object.assign({}, view, v));
+  return { states: Array.from(run.states), seconds: run.seconds };
+};
 
 // For tests: the command line of a view on a width x height grid.
 page.command = (v, width, height) => {
@@ -449,10 +700,12 @@ page.command = (v, width, height) => {
 page.resolves = (v, width, height) => resolves(grid(Object.assign({}, view, v), width, height));
 
 // For tests: the flip times of a view, as base64 of little-endian f32s.
-// `page.computeSeconds` says how long the computation took (without the transfer).
-page.flipTimes = async (v, width, height) => {
+// For tests: the map of a view (its kind's values, as the command line's --data holds them),
+// as base64 of little-endian f32s; `page.computeSeconds` says how long the computation took
+// (without the transfer).
+page.values = async (v, width, height) => {
   const w = Object.assign({}, view, v), started = performance.now();
-  const times = await flipTimes(w, grid(w, width, height), () => {});
+  const times = await compute(w, grid(w, width, height), () => {});
   page.computeSeconds = (performance.now() - started) / 1000;
   let s = "";
   const bytes = new Uint8Array(times.buffer);

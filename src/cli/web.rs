@@ -47,6 +47,8 @@ impl WebArgs {
             site: SiteSpec {
                 pendulums,
                 command: "chaoscope flip --size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}".into(),
+                indicator_command: "chaoscope lyapunov --indicator {indicator} --size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}".into(),
+                swing_command: "chaoscope trajectory --theta1 {theta1} --omega1 {omega1} --theta2 {theta2} --omega2 {omega2} --t-max {t_max} --dt {dt} {pendulum}".into(),
             },
             output: self.output.clone(),
         })

@@ -19,7 +19,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 /// A value below this is the kernel's "left the numbers" (-3e38): NaN.
-const LEFT_BELOW: f64 = -1e38;
+pub const LEFT_BELOW: f64 = -1e38;
 
 /// The entries every measure's kernel starts with.
 const INIT: &str = "indicator_init";

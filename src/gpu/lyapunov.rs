@@ -18,7 +18,7 @@ use crate::monitor::Monitor;
 use crate::spec::{LyapunovSpec, Method, Precision};
 
 /// A tangent step costs about this many plain steps (BENCH.md), so dispatches hold fewer.
-const STEP_COST: u64 = 3;
+pub const STEP_COST: u64 = 3;
 
 const SLOT_BYTES: u64 = std::mem::size_of::<GpuLyapunovSlot>() as u64;
 
@@ -33,7 +33,7 @@ pub struct LyapunovKernel {
 
 /// A run that stalled leaves this log sum (shaders/lyapunov.wgsl STALLED_LOG_SUM, -3e38):
 /// anything below it is read as NaN.
-const STALLED_BELOW: f64 = -1e38;
+pub const STALLED_BELOW: f64 = -1e38;
 
 /// Bytes per pixel of the slot and the log sum, and of the params, in `precision`.
 fn sizes(precision: Precision) -> (u64, u64, u64) {

@@ -16,8 +16,8 @@ use std::sync::OnceLock;
 
 pub use context::{GpuContext, list_adapters, read_buffer};
 pub use flip_time::FlipTimeKernel;
-pub use indicators::IndicatorKernel;
-pub use lyapunov::{JacobianKernel, LyapunovKernel};
+pub use indicators::{IndicatorKernel, LEFT_BELOW};
+pub use lyapunov::{JacobianKernel, LyapunovKernel, STALLED_BELOW, STEP_COST as TANGENT_STEP_COST};
 pub use positions::PositionsKernel;
 pub use tiled::{MIN_STEPS, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION};
 pub use trajectory::TrajectoryKernel;

@@ -1,13 +1,14 @@
 """Drives the static explorer (`chaoscope web`) in a real headless Chromium with its software
 WebGPU adapter (SwiftShader), through WebDriver (selenium with Debian's chromedriver): loads
 the page, waits for its first map and saves a screenshot, then asks the page for each view's
-flip times (written as little-endian f32s), its command line, and whether f32 resolves it.
+map (flip times or a divergence map, written as little-endian f32s), its command line, and whether f32 resolves it.
 
 Usage: web.py URL SCREENSHOT [OUTDIR VIEWS_JSON]
   URL: the page, with a view in its hash (default #t_max=10: the whole plane over 10 s).
-  VIEWS_JSON: a list of {"name", "width", "height", "view": {cx, cy, w, t_max, dt, pendulum,
-  x, y}, "times": false to skip the map}; writes OUTDIR/NAME.f32 for each map; prints a
-  report as JSON (timings in seconds).
+  VIEWS_JSON: a list of {"name", "width", "height", "view": {kind, cx, cy, w, t_max, dt,
+  pendulum, x, y}, "times": false to skip the map, "swing": {theta1, ...} to add the run a
+  click on that start swings}; writes OUTDIR/NAME.f32 for each map; prints a report as JSON
+  (timings in seconds).
 """
 import base64
 import json
@@ -56,9 +57,11 @@ try:
         name, w, h = v["name"], v["width"], v["height"]
         report["views"][name] = {"command": page_call("command", v["view"], w, h),
                                  "resolves": page_call("resolves", v["view"], w, h)}
+        if "swing" in v:
+            report["views"][name]["swing"] = page_call("swing", v["swing"], v["view"])
         if v.get("times", True):
             started = time.time()
-            data = page_call("flipTimes", v["view"], w, h)
+            data = page_call("values", v["view"], w, h)
             report["views"][name]["seconds"] = time.time() - started
             report["views"][name]["compute_seconds"] = driver.execute_script(
                 "return window.chaoscope.computeSeconds")
