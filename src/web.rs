@@ -28,7 +28,7 @@ const SCRIPT: &str = include_str!("../assets/web/explorer.js");
 const STYLE: &str = include_str!("../assets/web/style.css");
 
 /// A pendulum the page offers: its name, its parameters, and their flags in a command line.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Pendulum {
     pub name: String,
     pub params: Params,
@@ -36,7 +36,7 @@ pub struct Pendulum {
 }
 
 /// What the site holds.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SiteSpec {
     pub pendulums: Vec<Pendulum>,
     /// The flip map's command line with `{width}`, `{height}`, `{x_min}`, `{x_max}`,

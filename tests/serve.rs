@@ -770,6 +770,54 @@ fn a_stored_map_is_served_from_its_pixels_and_computed_below_them() {
     }
 }
 
+/// The static explorer under /web/ (its files only), and in a browser without WebGPU its
+/// fall back to this server's explorer with the same map, time and region.
+#[test]
+fn the_static_page_falls_back_to_the_servers_explorer_without_webgpu() {
+    if gpu().is_none() {
+        return;
+    }
+    let server = Server::start(&["--backend", "gpu"]);
+    let (status, _, page) = server.get("/web/");
+    assert_eq!(status, 200);
+    assert!(String::from_utf8_lossy(&page).contains("explorer.js"));
+    assert_eq!(server.get("/web/manifest.json").0, 200);
+    for path in ["/web/../Cargo.toml", "/web/app.js", "/web/x/manifest.json"] {
+        assert_eq!(server.get(path).0, 404, "{path}");
+    }
+    let Some(python) = browser_tools() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let url = format!("{}/web/#kind=ftle&t_max=5&cx=1&cy=1&w=2", server.url);
+    let shot = dir.path().join("fallback.png");
+    let report = browser_report(
+        &python,
+        "web.py",
+        &["--no-webgpu".as_ref(), url.as_ref(), shot.as_ref()],
+    );
+    let location = report["location"].as_str().unwrap();
+    let (page, hash) = location.split_once('#').unwrap();
+    assert_eq!(page, format!("{}/", server.url), "the server's explorer");
+    let keys: Vec<&str> = hash.split('&').collect();
+    for key in [
+        "kind=ftle",
+        "t_max=5",
+        "x=theta1",
+        "x_min=0",
+        "x_max=2",
+        "y=theta2",
+        "y_min=0",
+        "y_max=2",
+    ] {
+        assert!(keys.contains(&key), "{key} in {location}");
+    }
+    // The server's explorer drew its map: many colours, not an empty page.
+    let shot = read_png(&shot).unwrap();
+    let colours: std::collections::HashSet<&[u8]> = shot.rgb.chunks(3).collect();
+    assert!(colours.len() > 200, "{} colours", colours.len());
+}
+
 #[test]
 fn the_page_shows_the_map_and_a_clicked_pendulum_in_chromium() {
     if gpu().is_none() {

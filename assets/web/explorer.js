@@ -715,6 +715,16 @@ page.values = async (v, width, height) => {
   return btoa(s);
 };
 
+// The view in the address of `chaoscope serve`'s own explorer: its region as the plane's
+// range (the explorer fits it to the window), the map and t-max; the server's physics.
+function serverView() {
+  const g = grid(view, canvas.width, canvas.height), q = new URLSearchParams();
+  q.set("kind", view.kind); q.set("t_max", String(view.t_max));
+  q.set("x", view.x); q.set("x_min", String(g.x[0])); q.set("x_max", String(g.x[1]));
+  q.set("y", view.y); q.set("y_min", String(g.y[0])); q.set("y_max", String(g.y[1]));
+  return new URL(`../#${q}`, location.href).href;
+}
+
 async function main() {
   manifest = await (await fetch("manifest.json")).json();
   readHash();
@@ -728,6 +738,14 @@ async function main() {
       .join(" ") || "this GPU";
   } catch (e) {
     page.error = e.message;
+    // Served by `chaoscope serve` (under /web/): its own explorer computes on the server.
+    const server = await fetch("../api/info").then((r) => r.ok, () => false);
+    if (server) {
+      say("This browser offers no WebGPU: the server's explorer computes the view instead…");
+      page.fallback = serverView();
+      location.replace(page.fallback);
+      return;
+    }
     say(e.message === "no-webgpu"
       ? "This browser offers no WebGPU, so the maps cannot be computed here. Chrome, Edge " +
         "and Safari 26 have it; Firefox on Windows too. Or install chaoscope and run " +

@@ -26,33 +26,40 @@ pub struct WebArgs {
 
 impl WebArgs {
     pub fn job(&self) -> Result<WebJob> {
-        let pendulum = |name: String, params: Params| Pendulum {
-            flags: command_line::physics(&params),
-            name,
-            params,
-        };
-        let mut pendulums = Vec::new();
-        let given = self.physical.sources();
-        if given != ParamSources::default() {
-            let params = given.resolve()?;
-            let flags = command_line::physics(&params);
-            pendulums.push(pendulum(format!("given: {flags}"), params));
-        }
-        pendulums.push(pendulum("equal arms: 1 kg, 1 m".into(), Params::default()));
-        pendulums.push(pendulum(
-            "the lab's (--preset lab)".into(),
-            Preset::Lab.params(),
-        ));
         Ok(WebJob {
-            site: SiteSpec {
-                pendulums,
-                command: "chaoscope flip --size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}".into(),
-                indicator_command: "chaoscope lyapunov --indicator {indicator} --size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}".into(),
-                swing_command: "chaoscope trajectory --theta1 {theta1} --omega1 {omega1} --theta2 {theta2} --omega2 {omega2} --t-max {t_max} --dt {dt} {pendulum}".into(),
-            },
+            site: site(&self.physical)?,
             output: self.output.clone(),
         })
     }
+}
+
+/// The static explorer: the equal arms, the lab's and the `physical` flags' pendulum (when
+/// any is given, first), and the command lines its views and clicks fill in.
+pub fn site(physical: &PhysicalArgs) -> Result<SiteSpec> {
+    let pendulum = |name: String, params: Params| Pendulum {
+        flags: command_line::physics(&params),
+        name,
+        params,
+    };
+    let mut pendulums = Vec::new();
+    let given = physical.sources();
+    if given != ParamSources::default() {
+        let params = given.resolve()?;
+        let flags = command_line::physics(&params);
+        pendulums.push(pendulum(format!("given: {flags}"), params));
+    }
+    pendulums.push(pendulum("equal arms: 1 kg, 1 m".into(), Params::default()));
+    pendulums.push(pendulum(
+        "the lab's (--preset lab)".into(),
+        Preset::Lab.params(),
+    ));
+    let plane = "--size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}";
+    Ok(SiteSpec {
+        pendulums,
+        command: format!("chaoscope flip {plane}"),
+        indicator_command: format!("chaoscope lyapunov --indicator {{indicator}} {plane}"),
+        swing_command: "chaoscope trajectory --theta1 {theta1} --omega1 {omega1} --theta2 {theta2} --omega2 {omega2} --t-max {t_max} --dt {dt} {pendulum}".into(),
+    })
 }
 
 pub fn run(args: &WebArgs, monitor: &Monitor) -> Result<serde_json::Value> {

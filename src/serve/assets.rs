@@ -53,3 +53,18 @@ pub fn get(path: &str) -> Response {
         None => (StatusCode::NOT_FOUND, "not found\n").into_response(),
     }
 }
+
+/// The static explorer's file `name` (only names of the site, compared whole), or 404.
+pub fn site_file(site: &[(String, Vec<u8>)], name: &str) -> Response {
+    let kind = match name.rsplit_once('.').map(|(_, ext)| ext) {
+        Some("html") => "text/html; charset=utf-8",
+        Some("js") => "text/javascript; charset=utf-8",
+        Some("css") => "text/css; charset=utf-8",
+        Some("json") => "application/json",
+        _ => "text/plain; charset=utf-8",
+    };
+    match site.iter().find(|(n, _)| n == name) {
+        Some((_, bytes)) => ([(header::CONTENT_TYPE, kind)], bytes.clone()).into_response(),
+        None => (StatusCode::NOT_FOUND, "not found\n").into_response(),
+    }
+}

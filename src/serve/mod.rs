@@ -26,9 +26,9 @@ use std::time::Duration;
 
 use axum::Router;
 use axum::body::Bytes;
-use axum::extract::{Path, Query as AxumQuery};
+use axum::extract::{Path, Query as AxumQuery, State};
 use axum::http::StatusCode;
-use axum::response::Response;
+use axum::response::{Redirect, Response};
 use axum::routing::get;
 use lru::LruCache;
 
@@ -79,6 +79,9 @@ pub struct ServeJob {
     /// A Zarr store's map to show instead (its command fixes the physics): read from the
     /// store down to its own pixels, computed with its settings below them.
     pub store: Option<StoredMap>,
+    /// The static explorer (`chaoscope web`'s site), served under /web/: it computes on the
+    /// viewer's GPU, and falls back to this server's explorer where the browser has no WebGPU.
+    pub site: crate::web::SiteSpec,
 }
 
 /// A store (`flip --data MAP.zarr`) and the map its command describes.
@@ -153,6 +156,8 @@ struct Shared {
     /// What a store's tiles cover (a view's plane otherwise).
     store_world: Option<World>,
     store: Option<(Arc<MapStore>, StoredMap)>,
+    /// The static explorer's files, by name.
+    site: Vec<(String, Vec<u8>)>,
 }
 
 impl Shared {
@@ -215,6 +220,7 @@ pub fn run(
         commands,
         store_world,
         store,
+        site: crate::web::files(&job.site),
     });
     let notices = shared
         .engine
@@ -317,6 +323,12 @@ fn router(shared: S) -> Router {
     Router::new()
         .route("/", get(|| async { assets::page() }))
         .route("/assets/{*path}", get(asset))
+        .route("/web", get(|| async { Redirect::permanent("/web/") }))
+        .route(
+            "/web/",
+            get(|State(s): State<S>| async move { assets::site_file(&s.site, "index.html") }),
+        )
+        .route("/web/{*path}", get(web_file))
         .route("/tile/{z}/{x}/{y}", get(tile))
         .route("/api/info", get(info))
         .route("/api/point", get(point))
@@ -332,6 +344,10 @@ fn router(shared: S) -> Router {
 
 async fn asset(Path(path): Path<String>) -> Response {
     assets::get(&path)
+}
+
+async fn web_file(State(s): State<S>, Path(path): Path<String>) -> Response {
+    assets::site_file(&s.site, &path)
 }
 
 type Params = AxumQuery<Vec<(String, String)>>;

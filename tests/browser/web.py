@@ -3,7 +3,9 @@ WebGPU adapter (SwiftShader), through WebDriver (selenium with Debian's chromedr
 the page, waits for its first map and saves a screenshot, then asks the page for each view's
 map (flip times or a divergence map, written as little-endian f32s), its command line, and whether f32 resolves it.
 
-Usage: web.py URL SCREENSHOT [OUTDIR VIEWS_JSON]
+Usage: web.py [--no-webgpu] URL SCREENSHOT [OUTDIR VIEWS_JSON]
+  --no-webgpu: Chromium without WebGPU; reports where the page went (served by `chaoscope
+  serve`, it goes to the server's explorer) once a map is there.
   URL: the page, with a view in its hash (default #t_max=10: the whole plane over 10 s).
   VIEWS_JSON: a list of {"name", "width", "height", "view": {kind, cx, cy, w, t_max, dt,
   pendulum, x, y}, "times": false to skip the map, "swing": {theta1, ...} to add the run a
@@ -19,13 +21,18 @@ from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.support.ui import WebDriverWait
 
-url, screenshot = sys.argv[1], sys.argv[2]
-out, views = (sys.argv[3], json.loads(sys.argv[4])) if len(sys.argv) > 4 else (None, [])
+args = sys.argv[1:]
+webgpu = args[0] != "--no-webgpu"
+args = args if webgpu else args[1:]
+url, screenshot = args[0], args[1]
+out, views = (args[2], json.loads(args[3])) if len(args) > 3 else (None, [])
 options = webdriver.ChromeOptions()
 options.binary_location = "/usr/bin/chromium"
-for flag in ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
-             "--disable-background-networking", "--enable-unsafe-webgpu",
-             "--use-webgpu-adapter=swiftshader"]:
+flags = ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
+         "--disable-background-networking"]
+flags += ["--enable-unsafe-webgpu", "--use-webgpu-adapter=swiftshader"] if webgpu \
+    else ["--disable-gpu"]
+for flag in flags:
     options.add_argument(flag)
 driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
 driver.set_script_timeout(900)
@@ -47,12 +54,23 @@ try:
     driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
         "width": 1100, "height": 640, "deviceScaleFactor": 1, "mobile": False})
     driver.get(url if "#" in url else url + "#t_max=10")
-    WebDriverWait(driver, 600, poll_frequency=0.1).until(lambda d: d.execute_script(
+    if not webgpu:
+        # The server's explorer (its page object has firstView), or the page's own words.
+        WebDriverWait(driver, 120, poll_frequency=0.1).until(lambda d: d.execute_script(
+            "const p = window.chaoscope; return p && (p.firstView || (p.error && "
+            "!document.getElementById('status').textContent.includes('computes the view')))"))
+        time.sleep(1.0)  # Leaflet fades new tiles in
+        report["location"] = driver.current_url
+        report["status"] = driver.find_element("id", "status").text
+        driver.save_screenshot(screenshot)
+        views = []
+    WebDriverWait(driver, 600, poll_frequency=0.1).until(lambda d: not webgpu or d.execute_script(
         "return window.chaoscope && (window.chaoscope.views > 0 || window.chaoscope.error)"))
-    for key in ["error", "last", "adapter"]:
-        report[key] = driver.execute_script(f"return window.chaoscope.{key}")
-    report["status"] = driver.find_element("id", "status").text
-    driver.save_screenshot(screenshot)
+    if webgpu:
+        for key in ["error", "last", "adapter"]:
+            report[key] = driver.execute_script(f"return window.chaoscope.{key}")
+        report["status"] = driver.find_element("id", "status").text
+        driver.save_screenshot(screenshot)
     for v in views:
         name, w, h = v["name"], v["width"], v["height"]
         report["views"][name] = {"command": page_call("command", v["view"], w, h),
