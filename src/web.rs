@@ -11,7 +11,7 @@ use serde_json::{Value, json};
 use wgpu::naga;
 
 use crate::field::Field;
-use crate::gpu::layout::{GpuParams, GpuPendulum, NEVER, NONFINITE, WORKGROUP_SIZE};
+use crate::gpu::layout::{GpuParams, GpuPendulum, NEVER, NONFINITE, WORKGROUP_SIZE, mass_scale};
 use crate::gpu::shaders::{Kernel, source};
 use crate::gpu::{
     LEFT_BELOW, MIN_STEPS, STALLED_BELOW, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION,
@@ -27,12 +27,33 @@ const PAGE: &str = include_str!("../assets/web/index.html");
 const SCRIPT: &str = include_str!("../assets/web/explorer.js");
 const STYLE: &str = include_str!("../assets/web/style.css");
 
-/// A pendulum the page offers: its name, its parameters, and their flags in a command line.
+/// A pendulum the page offers: its name, its parameters, and their flags in a command line
+/// beside each set of parameter axes the page may show: keyed by the axes' names, sorted and
+/// joined by commas ("" for a plane of the start, "g", "m1,m2/m1"), what they set left out.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pendulum {
     pub name: String,
     pub params: Params,
-    pub flags: String,
+    pub flags: Vec<(String, String)>,
+}
+
+/// The sets of parameter axes a plane may have (none, one, or two that set different
+/// values), each as its names sorted: the keys of [`Pendulum::flags`].
+pub fn parameter_axes() -> Vec<Vec<Var>> {
+    let params: Vec<Var> = Var::ALL.into_iter().filter(|v| !v.is_state()).collect();
+    let mut sets = vec![vec![]];
+    for (i, &a) in params.iter().enumerate() {
+        sets.push(vec![a]);
+        for &b in &params[i + 1..] {
+            if !a.overlaps(b) {
+                sets.push(vec![a, b]);
+            }
+        }
+    }
+    for set in &mut sets {
+        set.sort_by_key(|v| v.name());
+    }
+    sets
 }
 
 /// What the site holds.
@@ -93,9 +114,16 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
             // dt is the page's to set (the `dt` field); the rest is the engine's upload.
             let params = GpuParams::new(&p.params, 0.01);
             let words: Vec<u32> = bytemuck::cast_slice(bytemuck::bytes_of(&params)).to_vec();
+            let flags: serde_json::Map<String, Value> = p
+                .flags
+                .iter()
+                .map(|(k, v)| (k.clone(), Value::String(v.clone())))
+                .collect();
             json!({
                 "name": p.name,
-                "flags": p.flags,
+                "flags": flags,
+                // The scale of everything measured in mass on the GPU (src/gpu/layout.rs).
+                "mass_scale": mass_scale(&p.params),
                 "params": words,
                 "losses": p.params.losses.kinds(),
                 // The flip colours' earliest time: the natural time sqrt(l1 / g).
@@ -106,9 +134,14 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
             })
         })
         .collect();
-    let vars: Vec<Value> = [Var::Theta1, Var::Omega1, Var::Theta2, Var::Omega2]
+    let vars: Vec<Value> = Var::ALL
         .iter()
-        .map(|v| json!({"name": v.name(), "code": v.code(), "angle": v.is_angle()}))
+        .map(|v| {
+            let r = v.default_range();
+            json!({"name": v.name(), "code": v.code(), "unit": v.unit(), "angle": v.is_angle(),
+                "state": v.is_state(), "mass": v.is_mass(), "writes": v.writes(),
+                "range": [r.min, r.max]})
+        })
         .collect();
     // The flip time's colour maps (each divergence kind carries its own table).
     let colours: Vec<(String, Value)> = [Colormap::Inferno, Colormap::Viridis]

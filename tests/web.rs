@@ -188,8 +188,9 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     let server = StaticServer::start(&root);
     let turn = std::f64::consts::TAU;
     // The whole plane over 20 s (chaos grows any difference in the arithmetic), a deep view
-    // into the boundary, the lab's pendulum (its losses compiled in) and the (theta1, omega1)
-    // plane.
+    // into the boundary, the lab's pendulum (its losses compiled in), the (theta1, omega1)
+    // plane, parameter planes (the mass ratio; m1, in the engine's mass scale, of the lab's
+    // pendulum), the FTLE and MEGNO.
     let mut views = serde_json::json!([
         {"name": "whole", "width": 128, "height": 128,
          "view": {"cx": 0, "cy": 0, "w": turn, "t_max": 20, "dt": 0.01}},
@@ -200,6 +201,12 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         {"name": "omega", "width": 64, "height": 64,
          "view": {"x": "theta1", "y": "omega1", "cx": 0.5, "cy": 0, "w": 5, "t_max": 10,
                   "dt": 0.01}},
+        {"name": "ratio", "width": 64, "height": 48,
+         "view": {"x": "theta1", "y": "m2/m1", "cx": 0, "cy": 1.55, "w": turn, "h": 2.9,
+                  "t_max": 10, "dt": 0.01}},
+        {"name": "mass", "width": 48, "height": 64,
+         "view": {"x": "m1", "y": "theta2", "cx": 1.05, "cy": 0, "w": 1.9, "h": turn,
+                  "t_max": 10, "dt": 0.01, "pendulum": 1}},
         {"name": "ftle", "width": 64, "height": 64,
          "view": {"kind": "ftle", "cx": 0, "cy": 0, "w": turn, "t_max": 10, "dt": 0.01}},
         {"name": "megno", "width": 64, "height": 48,

@@ -19,7 +19,7 @@ const TURN = 2 * Math.PI;
 let manifest = null;
 let gpu = null;            // { device, layout, module, pipelines: Map }
 let generation = 0;        // bumped by every new view: a computation of an older one stops
-const view = { pendulum: 0, x: "theta1", y: "theta2", cx: 0, cy: 0, w: TURN,
+const view = { pendulum: 0, x: "theta1", y: "theta2", cx: 0, cy: 0, w: TURN, h: TURN,
   t_max: 20, dt: 0.01, colours: "inferno", kind: "flip" };
 
 function say(text, error) {
@@ -29,11 +29,22 @@ function say(text, error) {
 
 // ---- The view ----
 
-// The grid of the view on a canvas of width x height pixels: each axis's range.
+// The grid of the view on a canvas of width x height pixels: each axis's range (the view's
+// width along x and height along y about its centre).
 function grid(v, width, height) {
-  const h = v.w * height / width;
   return { width, height, xVar: v.x, yVar: v.y,
-    x: [v.cx - v.w / 2, v.cx + v.w / 2], y: [v.cy - h / 2, v.cy + h / 2] };
+    x: [v.cx - v.w / 2, v.cx + v.w / 2], y: [v.cy - v.h / 2, v.cy + v.h / 2] };
+}
+
+// The parameters along the view's axes, by name, sorted: a key of a pendulum's flags.
+function parameterAxes(v) {
+  return [v.x, v.y].filter((name) => !varOf(name).state).sort().join(",");
+}
+
+// Whether the two axes set the same value (src/spec/var.rs `overlaps`): no plane.
+function overlapping(v) {
+  const a = varOf(v.x).writes, b = varOf(v.y).writes;
+  return a.some((w) => b.includes(w));
 }
 
 // src/spec/grid.rs `Axis::finest_step`: 16 ulp of the axis's largest value (angles: of pi
@@ -56,7 +67,7 @@ function resolves(g) {
 function command(v, g) {
   const p = manifest.pendulums[v.pendulum];
   const values = { width: g.width, height: g.height, x_min: g.x[0], x_max: g.x[1],
-    y_min: g.y[0], y_max: g.y[1], t_max: v.t_max, dt: v.dt, pendulum: p.flags,
+    y_min: g.y[0], y_max: g.y[1], t_max: v.t_max, dt: v.dt, pendulum: p.flags[parameterAxes(v)],
     x: v.x, y: v.y };
   return kindOf(v.kind).command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
 }
@@ -69,10 +80,19 @@ function steps(t_max, dt) {
 
 function readHash() {
   const h = new URLSearchParams(location.hash.slice(1));
-  for (const k of ["cx", "cy", "w", "t_max", "dt", "pendulum"]) {
+  for (const k of ["cx", "cy", "w", "h", "t_max", "dt", "pendulum"]) {
     if (h.has(k) && Number.isFinite(Number(h.get(k)))) view[k] = Number(h.get(k));
   }
-  for (const k of ["x", "y"]) if (h.has(k) && varOf(h.get(k))) view[k] = h.get(k);
+  // An axis named without its region gets its variable's whole range; a width without a
+  // height, a square view.
+  for (const k of ["x", "y"]) {
+    if (h.has(k) && varOf(h.get(k))) {
+      view[k] = h.get(k);
+      const [c, size] = k === "x" ? ["cx", "w"] : ["cy", "h"];
+      if (!h.has(c) && !h.has(size)) wholeAxis(k);
+    }
+  }
+  if (h.has("w") && !h.has("h")) view.h = view.w;
   if (h.has("colours") && manifest.colours[h.get("colours")]) view.colours = h.get("colours");
   if (h.has("kind") && kindOf(h.get("kind"))) view.kind = h.get("kind");
   view.pendulum = Math.min(Math.max(0, Math.round(view.pendulum)), manifest.pendulums.length - 1);
@@ -80,7 +100,7 @@ function readHash() {
 
 function writeHash() {
   const q = new URLSearchParams();
-  for (const k of ["kind", "x", "y", "cx", "cy", "w", "t_max", "dt", "pendulum", "colours"]) {
+  for (const k of ["kind", "x", "y", "cx", "cy", "w", "h", "t_max", "dt", "pendulum", "colours"]) {
     q.set(k, String(view[k]));
   }
   history.replaceState(null, "", "#" + q.toString());
@@ -160,18 +180,20 @@ function setUp(v, g, k) {
   const device = gpu.device, p = manifest.pendulums[v.pendulum];
   const u = paramsOf(p, k.params.fields, k.params.size);
   const x0 = g.x[0], x1 = g.x[1], y0 = g.y[0], y1 = g.y[1];
+  // An axis measured in mass in the engine's mass scale.
+  const sx = varOf(v.x).mass ? p.mass_scale : 1, sy = varOf(v.y).mass ? p.mass_scale : 1;
   u.set("dt", v.dt);
-  u.set("x_mid", 0.5 * (x0 + x1));
-  u.set("x_half_step", 0.5 * ((x1 - x0) / g.width));
-  u.set("y_mid", 0.5 * (y0 + y1));
-  u.set("y_half_step", 0.5 * ((y1 - y0) / g.height));
+  u.set("x_mid", 0.5 * (x0 + x1) * sx);
+  u.set("x_half_step", 0.5 * ((x1 - x0) / g.width) * sx);
+  u.set("y_mid", 0.5 * (y0 + y1) * sy);
+  u.set("y_half_step", 0.5 * ((y1 - y0) / g.height) * sy);
   u.set("x_var", varOf(v.x).code);
   u.set("y_var", varOf(v.y).code);
   for (const name of ["theta1", "omega1", "theta2", "omega2"]) u.set(name, 0);
   u.set("width", g.width);
   u.set("height", g.height);
   u.set("t_max", v.t_max);
-  const symmetric = 0.5 * (x0 + x1) === 0 && 0.5 * (y0 + y1) === 0;
+  const symmetric = 0.5 * (x0 + x1) === 0 && 0.5 * (y0 + y1) === 0 && parameterAxes(v) === "";
   const integrated = symmetric ? Math.ceil(g.height / 2) : g.height;
   const rowsPerTile = Math.max(1, Math.min(integrated, Math.floor((1 << 20) / g.width)));
   const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST;
@@ -181,7 +203,11 @@ function setUp(v, g, k) {
     made.push(b);
     return b;
   };
-  return { u, p, integrated, rowsPerTile, capacity: rowsPerTile * g.width, buffer,
+  // A parameter along an axis: each pixel forms its own coefficients (PER_PIXEL, set only
+  // when on, as src/gpu/pipeline.rs `Variants` does).
+  const constants = { LOSSES: p.losses };
+  if (parameterAxes(v) !== "") constants.PER_PIXEL = 1;
+  return { u, p, integrated, rowsPerTile, capacity: rowsPerTile * g.width, buffer, constants,
     params: buffer(k.params.size, GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST),
     free: () => made.forEach((b) => b.destroy()) };
 }
@@ -223,7 +249,7 @@ async function flipTimes(v, g, onProgress) {
   const c = manifest.constants, kernel = await kernelOf(gpu, "flip_time"), k = kernel.k;
   const s = setUp(v, g, k);
   const [init, advance] = await pipelines(gpu, "flip_time", ["flip_init", "flip_time"],
-    { LOSSES: s.p.losses, EARLY_EXIT: 1 });
+    Object.assign({ EARLY_EXIT: 1 }, s.constants));
   const states = s.buffer(s.capacity * c.pendulum_bytes), times = s.buffer(s.capacity * 4);
   const lists = [s.buffer(s.capacity * 4), s.buffer(s.capacity * 4)];
   const counter = s.buffer(4);
@@ -292,8 +318,7 @@ function mirrored(out, start) {
 async function divergence(kind, v, g, onProgress) {
   const c = manifest.constants, kernel = await kernelOf(gpu, kind.kernel), k = kernel.k;
   const s = setUp(v, g, k);
-  const [init, advance] = await pipelines(gpu, kind.kernel, kind.entries,
-    { LOSSES: s.p.losses });
+  const [init, advance] = await pipelines(gpu, kind.kernel, kind.entries, s.constants);
   // Binding 1: each pixel's slot (its size read from the WGSL); 2: its value.
   const slotBytes = k.bindings.find((b) => b.binding === 1).stride;
   const slots = s.buffer(s.capacity * slotBytes), values = s.buffer(s.capacity * 4);
@@ -433,7 +458,15 @@ async function show() {
   drawBar(null);
   form.elements.colours.closest("label").hidden = view.kind !== "flip";
   document.getElementById("command").textContent = command(view, g);
+  const span = (name, r) => `${name} from ${r[0].toPrecision(5)} to ${r[1].toPrecision(5)} ` +
+    `${varOf(name).unit}`;
+  document.getElementById("extent").textContent =
+    `${span(view.x, g.x)} (left to right); ${span(view.y, g.y)} (bottom to top).`;
   const mine = ++generation;
+  if (overlapping(view)) {
+    say(`${view.x} and ${view.y} set the same value: pick two axes that do not.`, true);
+    return;
+  }
   if (!resolves(g)) {
     deepNote.hidden = false;
     deepNote.textContent = "This view is deeper than f32 resolves (neighbouring pixels would " +
@@ -503,7 +536,7 @@ function wire() {
     const at = pointAt(e), k = Math.pow(1.0015, e.deltaY);
     view.cx = at.x + (view.cx - at.x) * k;
     view.cy = at.y + (view.cy - at.y) * k;
-    view.w *= k;
+    view.w *= k; view.h *= k;
     later();
   }, { passive: false });
   let drag = null;
@@ -517,7 +550,7 @@ function wire() {
     if (Math.abs(dx) + Math.abs(dy) > 3) drag.moved = true;
     canvas.style.transform = `translate(${dx}px, ${dy}px)`;
     view.cx = drag.cx - dx / box.width * view.w;
-    view.cy = drag.cy + dy / box.height * view.w * canvas.height / canvas.width;
+    view.cy = drag.cy + dy / box.height * view.h;
   });
   canvas.addEventListener("pointerup", (e) => {
     canvas.style.transform = "";
@@ -527,7 +560,9 @@ function wire() {
   form.addEventListener("change", () => {
     const f = new FormData(form);
     view.pendulum = Number(f.get("pendulum"));
-    view.x = f.get("x"); view.y = f.get("y");
+    for (const a of ["x", "y"]) {
+      if (view[a] !== f.get(a)) { view[a] = f.get(a); wholeAxis(a); }
+    }
     const t = Number(f.get("t_max")), dt = Number(f.get("dt"));
     if (t >= 0.1 && t <= 1000) view.t_max = t;
     if (dt >= 1e-4 && dt <= 0.1) view.dt = dt;
@@ -538,13 +573,19 @@ function wire() {
   window.addEventListener("resize", () => { if (fit()) later(); });
   canvas.addEventListener("dblclick", (e) => {
     const at = pointAt(e);
-    view.cx = at.x; view.cy = at.y; view.w /= 2;
+    view.cx = at.x; view.cy = at.y; view.w /= 2; view.h /= 2;
     later();
   });
   document.getElementById("reset").addEventListener("click", () => {
-    Object.assign(view, { cx: 0, cy: 0, w: TURN });
+    wholeAxis("x"); wholeAxis("y");
     later();
   });
+}
+
+// Axis `a` ("x" or "y") over its variable's default range.
+function wholeAxis(a) {
+  const r = varOf(view[a]).range, [c, size] = a === "x" ? ["cx", "w"] : ["cy", "h"];
+  view[c] = 0.5 * (r[0] + r[1]); view[size] = r[1] - r[0];
 }
 
 // A clicked pixel: its start, its value in the map shown, and its pendulum swinging, the
@@ -568,10 +609,19 @@ async function describe(e) {
     : `${kind.label} ${value.toPrecision(4)}`;
   document.getElementById("pixel-text").textContent =
     `${view.x} = ${x.toPrecision(6)}, ${view.y} = ${y.toPrecision(6)}: ${shown}`;
+  const swing = document.getElementById("swing-command");
+  document.getElementById("swing").hidden = parameterAxes(view) !== "";
+  if (parameterAxes(view) !== "") {
+    // The swing runs the pendulum's own parameters: a parameter plane's pixel has others.
+    swing.textContent = "";
+    document.getElementById("swing-time").textContent =
+      "A pixel of a parameter plane is a pendulum of its own: its command above computes it.";
+    return;
+  }
   const values = { theta1: start.theta1, omega1: start.omega1, theta2: start.theta2,
     omega2: start.omega2, t_max: view.t_max, dt: view.dt,
-    pendulum: manifest.pendulums[view.pendulum].flags };
-  document.getElementById("swing-command").textContent =
+    pendulum: manifest.pendulums[view.pendulum].flags[""] };
+  swing.textContent =
     manifest.swing_command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
   try {
     animate(await trajectory(start, view), view);
@@ -671,8 +721,9 @@ function fillForm() {
     s.replaceChildren(...items.map(([value, text]) => new Option(text, value)));
   };
   options("pendulum", manifest.pendulums.map((p, i) => [String(i), p.name]));
-  options("x", manifest.vars.map((v) => [v.name, v.name]));
-  options("y", manifest.vars.map((v) => [v.name, v.name]));
+  const axes = manifest.vars.map((v) => [v.name, `${v.name} (${v.unit})`]);
+  options("x", axes);
+  options("y", axes);
   options("colours", Object.keys(manifest.colours).map((c) => [c, c]));
   options("kind", manifest.kinds.map((k) => [k.name, k.label]));
   form.elements.kind.value = view.kind;
@@ -682,29 +733,34 @@ function fillForm() {
   form.elements.colours.value = view.colours;
 }
 
+// The page's view with `v`'s settings (a width without a height: a square view).
+function viewOf(v) {
+  return Object.assign({}, view, "w" in v && !("h" in v) ? { h: v.w } : {}, v);
+}
+
 // For tests: the run a click on a pixel with start `start` swings (its kept states, and the
 // seconds between them).
 page.swing = async (start, v) => {
   const run = await trajectory(Object.assign({ theta1: 0, omega1: 0, theta2: 0, omega2: 0 },
-    start), Object.assign({}, view, v));
+    start), viewOf(v));
   return { states: Array.from(run.states), seconds: run.seconds };
 };
 
 // For tests: the command line of a view on a width x height grid.
 page.command = (v, width, height) => {
-  const w = Object.assign({}, view, v);
+  const w = viewOf(v);
   return command(w, grid(w, width, height));
 };
 
 // For tests: whether f32 resolves a view's pixel step on a width x height grid.
-page.resolves = (v, width, height) => resolves(grid(Object.assign({}, view, v), width, height));
+page.resolves = (v, width, height) => resolves(grid(viewOf(v), width, height));
 
 // For tests: the flip times of a view, as base64 of little-endian f32s.
 // For tests: the map of a view (its kind's values, as the command line's --data holds them),
 // as base64 of little-endian f32s; `page.computeSeconds` says how long the computation took
 // (without the transfer).
 page.values = async (v, width, height) => {
-  const w = Object.assign({}, view, v), started = performance.now();
+  const w = viewOf(v), started = performance.now();
   const times = await compute(w, grid(w, width, height), () => {});
   page.computeSeconds = (performance.now() - started) / 1000;
   let s = "";

@@ -30,14 +30,14 @@ pub fn params(p: &Params) -> String {
     params_on(p, &[])
 }
 
-/// The flags that reproduce `p` beside axes (or a sweep) that vary `along`: what they set is
-/// left out (given with them, it would be refused), a pair's part they set given as 0.
 /// The flags of a pendulum's parameters, as every command takes them.
 pub fn physics(p: &Params) -> String {
     params_on(p, &[])
 }
 
-fn params_on(p: &Params, along: &[Var]) -> String {
+/// The flags that reproduce `p` beside axes (or a sweep) that vary `along`: what they set is
+/// left out (given with them, it would be refused), a pair's part they set given as 0.
+pub fn params_on(p: &Params, along: &[Var]) -> String {
     let set = |name: &str| along.iter().any(|v| v.writes().contains(&name));
     let mut out = [
         ("m1", p.m1),

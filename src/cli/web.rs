@@ -37,7 +37,13 @@ impl WebArgs {
 /// any is given, first), and the command lines its views and clicks fill in.
 pub fn site(physical: &PhysicalArgs) -> Result<SiteSpec> {
     let pendulum = |name: String, params: Params| Pendulum {
-        flags: command_line::physics(&params),
+        flags: crate::web::parameter_axes()
+            .into_iter()
+            .map(|axes| {
+                let key: Vec<&str> = axes.iter().map(|v| v.name()).collect();
+                (key.join(","), command_line::params_on(&params, &axes))
+            })
+            .collect(),
         name,
         params,
     };

@@ -263,7 +263,7 @@ macro_rules! params_constructors {
 }
 
 /// The power of two nearest 1 / A that the GPU's mass-measured values are scaled by.
-pub(crate) fn mass_scale(p: &Params) -> f64 {
+pub fn mass_scale(p: &Params) -> f64 {
     (-p.inertia().a.log2().round()).exp2()
 }
 
