@@ -139,7 +139,8 @@ impl Engine {
             return Ok((field, None));
         };
         let agree = |spec: &S, a: &Field, b: &Field| {
-            verdict::grid_mask(spec.grid(), a, b, spec.quantity().vouch)
+            let vouch = spec.quantity().vouch;
+            verdict::grid_mask(spec.grid(), a, b, |x, y| vouch.agrees(x, y))
         };
         let mut mask = vec![1u8; field.data.len()];
         for (k, c) in checked.iter().enumerate() {

@@ -24,19 +24,71 @@ pub fn within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
 
 /// Whether two flip times (s; inf = never) agree.
 pub fn flip_times_agree(a: f32, b: f32) -> bool {
-    times_within(a, b, FLIP_RELATIVE, FLIP_ABSOLUTE)
+    FLIP_TIME.agree.agrees(a, b)
 }
 
 /// Whether two exponents (1/s) agree.
 pub fn exponents_agree(a: f32, b: f32) -> bool {
-    within(a, b, FTLE_RELATIVE, FTLE_ABSOLUTE)
+    FTLE.agree.agrees(a, b)
 }
 
-/// [`within`] for times where +inf is "never": two nevers agree, a never and a time do not.
-pub fn times_within(a: f32, b: f32, relative: f64, absolute: f64) -> bool {
-    match a.is_infinite() || b.is_infinite() {
-        true => a == b,
-        false => within(a, b, relative, absolute),
+/// How closely two values of one pixel must lie to agree: within `relative` of the larger
+/// or `absolute`, whichever is larger ([`within`]; NaN never agrees). Where the value is a
+/// time, +inf is "never" (`never` says what never happens) and two nevers agree. Its words
+/// are made from its numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerance {
+    pub relative: f64,
+    pub absolute: f64,
+    /// The absolute tolerance's unit in words, with its space (" s", " /s"; "" for none).
+    pub unit: &'static str,
+    /// What never happens where a time is +inf ("flipping"); None: not a time.
+    pub never: Option<&'static str>,
+}
+
+impl Tolerance {
+    pub const fn new(relative: f64, absolute: f64, unit: &'static str) -> Self {
+        Tolerance {
+            relative,
+            absolute,
+            unit,
+            never: None,
+        }
+    }
+
+    /// The same for a time, +inf meaning that `what` never happens.
+    pub const fn time(self, what: &'static str) -> Self {
+        Tolerance {
+            never: Some(what),
+            ..self
+        }
+    }
+
+    pub fn agrees(&self, a: f32, b: f32) -> bool {
+        match self.never.is_some() && (a.is_infinite() || b.is_infinite()) {
+            true => a == b,
+            false => within(a, b, self.relative, self.absolute),
+        }
+    }
+
+    /// The tolerance alone: "1 % or 0.02 s", "0.5 decades".
+    pub fn words(&self) -> String {
+        let absolute = format!("{}{}", self.absolute, self.unit);
+        match self.relative {
+            0.0 => absolute,
+            // In whole hundredths of a percent, so 0.1 reads 10, not 10.000000000000002.
+            r => format!("{} % or {absolute}", (r * 1e4).round() / 100.0),
+        }
+    }
+
+    /// The rule for `value` ("a flip time"): "a flip time within 1 % or 0.02 s (both never
+    /// flipping agrees; NaN never does)".
+    pub fn rule(&self, value: &str) -> String {
+        let nan = match self.never {
+            Some(what) => format!("both never {what} agrees; NaN never does"),
+            None => "NaN never agrees".into(),
+        };
+        format!("{value} within {} ({nan})", self.words())
     }
 }
 
@@ -47,20 +99,18 @@ pub struct Quantity {
     pub name: &'static str,
     /// Its unit (a store's `units` attribute).
     pub unit: &'static str,
-    /// Whether two values of one pixel agree: the accuracy a resolved pixel is promised.
-    pub agree: fn(f32, f32) -> bool,
-    /// The rule in words: "the same map ... gives <agreement>".
-    pub agreement: &'static str,
-    /// The tolerance alone, in a few words.
-    pub tolerance: &'static str,
+    /// One value of it in words, for its rules ("a flip time", "log10 SALI").
+    pub value: &'static str,
+    /// When two values of one pixel agree: the accuracy a resolved pixel is promised.
+    pub agree: Tolerance,
     /// The verdict's rule: two runs at different steps must agree this closely for the map
     /// to vouch that the pixel is right within `agree`. Where chaos can make two runs of a
     /// start diverge and still land within `agree` by chance (a finite-time exponent of a
     /// diverged orbit is a draw from a spread of about 0.1 /s), this is a fifth of it.
-    pub vouch: fn(f32, f32) -> bool,
-    /// `vouch` in words, and its tolerance alone.
-    pub vouching: &'static str,
-    pub vouch_tolerance: &'static str,
+    pub vouch: Tolerance,
+    /// A class per pixel (its code): two values agree when they are equal, and the rules
+    /// say so in the flip kind's words.
+    pub classes: bool,
     /// The pixels the summary counts (flipped, chaotic).
     pub counted: fn(f32) -> bool,
     /// The summary's key for their share.
@@ -69,16 +119,52 @@ pub struct Quantity {
     pub counted_rule: &'static str,
 }
 
+impl Quantity {
+    /// Its accuracy rule in words: "the same map ... gives <agreement>".
+    pub fn agreement(&self) -> String {
+        self.rule(&self.agree)
+    }
+
+    /// The verdict's rule in words.
+    pub fn vouching(&self) -> String {
+        self.rule(&self.vouch)
+    }
+
+    /// The verdict's tolerance alone, in a few words.
+    pub fn vouch_tolerance(&self) -> String {
+        match self.classes {
+            true => format!("its class and {}", FLIP_TOLERANCE.words()),
+            false => self.vouch.words(),
+        }
+    }
+
+    fn rule(&self, tolerance: &Tolerance) -> String {
+        match self.classes {
+            true => format!(
+                "{} at a flip time within {}, or neither flipping (NaN never agrees)",
+                self.value,
+                FLIP_TOLERANCE.words()
+            ),
+            false => tolerance.rule(self.value),
+        }
+    }
+}
+
+/// Flip times agree within 1 % or 0.02 s, two nevers too.
+const FLIP_TOLERANCE: Tolerance =
+    Tolerance::new(FLIP_RELATIVE, FLIP_ABSOLUTE, " s").time("flipping");
+
+/// Classes agree when equal (a tolerance of nothing; two nevers too).
+const CLASS: Tolerance = Tolerance::new(0.0, 0.0, "").time("flipping");
+
 /// The time until either arm first flips over (s; +inf = never within t-max).
 pub const FLIP_TIME: Quantity = Quantity {
     name: "flip time",
     unit: "s",
-    agree: flip_times_agree,
-    agreement: "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
-    tolerance: "1 % or 0.02 s",
-    vouch: flip_times_agree,
-    vouching: "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)",
-    vouch_tolerance: "1 % or 0.02 s",
+    value: "a flip time",
+    agree: FLIP_TOLERANCE,
+    vouch: FLIP_TOLERANCE,
+    classes: false,
     counted: f32::is_finite,
     counted_as: "flipped",
     counted_rule: "a flip within t-max",
@@ -88,12 +174,10 @@ pub const FLIP_TIME: Quantity = Quantity {
 pub const FTLE: Quantity = Quantity {
     name: "finite-time Lyapunov exponent",
     unit: "1/s",
-    agree: exponents_agree,
-    agreement: "an exponent within 5 % or 0.02 /s (NaN never agrees)",
-    tolerance: "5 % or 0.02 /s",
-    vouch: |a, b| within(a, b, 0.01, 0.004),
-    vouching: "an exponent within 1 % or 0.004 /s (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.004 /s",
+    value: "an exponent",
+    agree: Tolerance::new(FTLE_RELATIVE, FTLE_ABSOLUTE, " /s"),
+    vouch: Tolerance::new(0.01, 0.004, " /s"),
+    classes: false,
     counted: |x| x > CHAOTIC_FTLE,
     counted_as: "chaotic",
     counted_rule: "FTLE > 0.5 /s",
@@ -104,12 +188,10 @@ pub const FTLE: Quantity = Quantity {
 pub const FLIP_KIND: Quantity = Quantity {
     name: "first flip: arm and direction",
     unit: "class (0 never, 1 upper +, 2 upper -, 3 lower +, 4 lower -)",
-    agree: |a, b| a == b,
-    agreement: "the same arm flipping first the same way at a flip time within 1 % or 0.02 s, or neither flipping (NaN never agrees)",
-    tolerance: "its class and 1 % or 0.02 s",
-    vouch: |a, b| a == b,
-    vouching: "the same arm flipping first the same way at a flip time within 1 % or 0.02 s, or neither flipping (NaN never agrees)",
-    vouch_tolerance: "its class and 1 % or 0.02 s",
+    value: "the same arm flipping first the same way",
+    agree: CLASS,
+    vouch: CLASS,
+    classes: true,
     counted: |x| x.is_finite() && x != FlipKind::Never.code(),
     counted_as: "flipped",
     counted_rule: "a flip within t-max",
@@ -187,5 +269,23 @@ mod tests {
         assert!(!flip_times_agree(20.0, 20.25));
         assert!(exponents_agree(1.0, 1.04) && !exponents_agree(1.0, 1.1));
         assert!(exponents_agree(0.0, 0.015) && !exponents_agree(f32::NAN, 1.0));
+    }
+
+    /// The rules' words are made from their numbers, as the maps' files state them.
+    #[test]
+    fn the_rules_words_are_made_from_their_numbers() {
+        assert_eq!(
+            FLIP_TIME.vouching(),
+            "a flip time within 1 % or 0.02 s (both never flipping agrees; NaN never does)"
+        );
+        assert_eq!(FTLE.vouch_tolerance(), "1 % or 0.004 /s");
+        assert_eq!(
+            FTLE.agreement(),
+            "an exponent within 5 % or 0.02 /s (NaN never agrees)"
+        );
+        assert_eq!(
+            FLIP_KIND.vouching(),
+            "the same arm flipping first the same way at a flip time within 1 % or 0.02 s, or neither flipping (NaN never agrees)"
+        );
     }
 }

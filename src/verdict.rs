@@ -16,7 +16,7 @@ pub fn rule<S: MapSpec>(spec: &S, finer: &S) -> String {
     format!(
         "resolved: the same map {} gives {}",
         rule_short(spec, finer),
-        spec.quantity().vouching
+        spec.quantity().vouching()
     )
 }
 
@@ -55,7 +55,7 @@ pub fn check_step(spec: &impl MapSpec, verdict: bool) -> crate::error::Result<()
 }
 
 /// 1 where `map` and `finer` agree by `agree`, else 0; the layout of the maps.
-pub fn mask(map: &Field, finer: &Field, agree: fn(f32, f32) -> bool) -> Vec<u8> {
+pub fn mask(map: &Field, finer: &Field, agree: impl Fn(f32, f32) -> bool) -> Vec<u8> {
     map.data
         .iter()
         .zip(&finer.data)
@@ -66,7 +66,12 @@ pub fn mask(map: &Field, finer: &Field, agree: fn(f32, f32) -> bool) -> Vec<u8> 
 /// The verdict on a map over `grid`: [`mask`], except that no pixel is resolved on a grid
 /// finer than f64 resolves (neighbouring pixels start from the same numbers: the map no
 /// longer measures the starts it names).
-pub fn grid_mask(grid: &Grid, map: &Field, finer: &Field, agree: fn(f32, f32) -> bool) -> Vec<u8> {
+pub fn grid_mask(
+    grid: &Grid,
+    map: &Field,
+    finer: &Field,
+    agree: impl Fn(f32, f32) -> bool,
+) -> Vec<u8> {
     let mut out = mask(map, finer, agree);
     if grid.beyond_f64() {
         out.fill(0);

@@ -409,7 +409,8 @@ fn gpu_maps_equal_the_cpu_twin_on_every_indicator() {
                 ..s
             },
         );
-        let agree = s.quantity().agree;
+        let tolerance = s.quantity().agree;
+        let agree = |a: f32, b: f32| tolerance.agrees(a, b);
         let agreeing = |map: &Field| {
             map.data
                 .iter()
@@ -727,7 +728,8 @@ fn the_verdict_vouches_only_for_pixels_a_converged_reference_confirms() {
             engine.map(&fine, &quiet).unwrap()
         };
         let (reference, check) = (at(0.00125), at(0.000625));
-        let agree = s.quantity().agree;
+        let tolerance = s.quantity().agree;
+        let agree = |a: f32, b: f32| tolerance.agrees(a, b);
         let (mut vouched, mut right) = (0, 0);
         for (((&m, &r), &c), &vouch) in map
             .data
@@ -801,7 +803,7 @@ fn with_losses_the_gpu_indicators_equal_the_cpu_twin() {
                 .data
                 .iter()
                 .zip(&c.data)
-                .filter(|(a, b)| (s.quantity().agree)(**a, **b))
+                .filter(|(a, b)| s.quantity().agree.agrees(**a, **b))
                 .count();
             eprintln!(
                 "{name} {indicator:?}: median {:.1e}, agreeing {agreeing} of 256",

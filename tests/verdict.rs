@@ -281,7 +281,8 @@ fn the_divergence_verdict_compares_with_f64() {
     let finest = run("finest", &["--precision", "f64", "--dt", "0.0025"]);
     let (_, mask) = read_mask(&mask_path);
     // The verdict's own rule (a fifth of the accuracy rule: quantity::FTLE.vouch).
-    let agree = chaoscope::quantity::FTLE.vouch;
+    let vouch = chaoscope::quantity::FTLE.vouch;
+    let agree = |a: f32, b: f32| vouch.agrees(a, b);
     let expected: Vec<u8> = (0..map.len())
         .map(|i| (agree(map[i], finer[i]) && agree(finer[i], finest[i])) as u8)
         .collect();

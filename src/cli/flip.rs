@@ -175,7 +175,7 @@ pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
             &format!(
                 "the same map {} within {}",
                 s.rule,
-                job.spec.quantity().vouch_tolerance
+                job.spec.quantity().vouch_tolerance()
             )
         ),
         s.output.display()

@@ -326,7 +326,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
                 super::flip::nan_note(s.nan),
                 super::flip::resolved_note(
                     s.resolved,
-                    &format!("the same map {} within {}", s.rule, q.vouch_tolerance)
+                    &format!("the same map {} within {}", s.rule, q.vouch_tolerance())
                 ),
                 match s.range {
                     // A store has no picture, so no colour range.

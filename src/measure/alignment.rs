@@ -6,7 +6,7 @@ use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Run
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::gpu::layout::NEVER;
-use crate::quantity::{Quantity, times_within};
+use crate::quantity::{Quantity, Tolerance};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 /// Which alignment index of normalised tangent vectors.
@@ -57,20 +57,14 @@ pub const ALIGNMENT_DECADES: f64 = 0.5;
 /// t, far slower than 1e-4 within a map's minutes of simulated time.
 pub const ALIGNED_LOG10: f32 = -4.0;
 
-fn alignments_agree(a: f32, b: f32) -> bool {
-    ((a - b) as f64).abs() <= ALIGNMENT_DECADES
-}
-
 /// log10 SALI at t-max, or where it fell below the threshold.
 pub const SALI: Quantity = Quantity {
     name: "log10 SALI",
     unit: "1 (log10)",
-    agree: alignments_agree,
-    agreement: "log10 SALI within 0.5 (NaN never agrees)",
-    tolerance: "0.5 decades",
-    vouch: |a, b| ((a - b) as f64).abs() <= 0.1,
-    vouching: "log10 SALI within 0.1 (NaN never agrees)",
-    vouch_tolerance: "0.1 decades",
+    value: "log10 SALI",
+    agree: Tolerance::new(0.0, ALIGNMENT_DECADES, " decades"),
+    vouch: Tolerance::new(0.0, 0.1, " decades"),
+    classes: false,
     // The map counts the starts below its threshold (spec::LyapunovSpec::counted).
     counted: |x| x <= ALIGNED_LOG10,
     counted_as: "chaotic",
@@ -80,8 +74,7 @@ pub const SALI: Quantity = Quantity {
 /// log10 GALI_k at t-max, or where it fell below the threshold: SALI's rules.
 pub const GALI: Quantity = Quantity {
     name: "log10 GALI",
-    agreement: "log10 GALI within 0.5 (NaN never agrees)",
-    vouching: "log10 GALI within 0.1 (NaN never agrees)",
+    value: "log10 GALI",
     counted_rule: "log10 GALI <= -4",
     ..SALI
 };
@@ -90,12 +83,10 @@ pub const GALI: Quantity = Quantity {
 pub const ALIGNMENT_TIME: Quantity = Quantity {
     name: "time to alignment",
     unit: "s",
-    agree: |a, b| times_within(a, b, 0.05, 0.1),
-    agreement: "a time within 5 % or 0.1 s (both never aligning agrees; NaN never does)",
-    tolerance: "5 % or 0.1 s",
-    vouch: |a, b| times_within(a, b, 0.01, 0.02),
-    vouching: "a time within 1 % or 0.02 s (both never aligning agrees; NaN never does)",
-    vouch_tolerance: "1 % or 0.02 s",
+    value: "a time",
+    agree: Tolerance::new(0.05, 0.1, " s").time("aligning"),
+    vouch: Tolerance::new(0.01, 0.02, " s").time("aligning"),
+    classes: false,
     counted: f32::is_finite,
     counted_as: "chaotic",
     counted_rule: "aligned within t-max",

@@ -5,7 +5,7 @@ use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Run
 use crate::error::{Error, Result};
 use crate::field::Field;
 use crate::model::Params;
-use crate::quantity::{Quantity, within};
+use crate::quantity::{Quantity, Tolerance};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 /// The exponents p a Lagrangian descriptor takes.
@@ -17,12 +17,10 @@ pub struct Descriptor;
 pub const DESCRIPTOR: Quantity = Quantity {
     name: "Lagrangian descriptor",
     unit: "sum of |f_i|^p s",
-    agree: |a, b| within(a, b, 0.01, 1e-3),
-    agreement: "M within 1 % (NaN never agrees)",
-    tolerance: "1 %",
-    vouch: |a, b| within(a, b, 0.002, 2e-4),
-    vouching: "M within 0.2 % (NaN never agrees)",
-    vouch_tolerance: "0.2 %",
+    value: "M",
+    agree: Tolerance::new(0.01, 1e-3, ""),
+    vouch: Tolerance::new(0.002, 2e-4, ""),
+    classes: false,
     counted: f32::is_finite,
     counted_as: "finite",
     counted_rule: "M finite",

@@ -5,7 +5,7 @@
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::Result;
 use crate::field::Field;
-use crate::quantity::{Quantity, within};
+use crate::quantity::{Quantity, Tolerance};
 use crate::spec::{LyapunovSpec, MapKindEntry};
 
 pub struct Growth;
@@ -17,12 +17,10 @@ pub const CHAOTIC_MEGNO: f32 = 4.0;
 pub const MEGNO: Quantity = Quantity {
     name: "MEGNO",
     unit: "1",
-    agree: |a, b| within(a, b, 0.1, 0.2),
-    agreement: "<Y> within 10 % or 0.2 (NaN never agrees)",
-    tolerance: "10 % or 0.2",
-    vouch: |a, b| within(a, b, 0.02, 0.04),
-    vouching: "<Y> within 2 % or 0.04 (NaN never agrees)",
-    vouch_tolerance: "2 % or 0.04",
+    value: "<Y>",
+    agree: Tolerance::new(0.1, 0.2, ""),
+    vouch: Tolerance::new(0.02, 0.04, ""),
+    classes: false,
     counted: |x| x > CHAOTIC_MEGNO,
     counted_as: "chaotic",
     counted_rule: "<Y> > 4",
@@ -36,12 +34,10 @@ pub const CHAOTIC_FLI: f32 = 5.0;
 pub const FLI: Quantity = Quantity {
     name: "fast Lyapunov indicator",
     unit: "1 (log10)",
-    agree: |a, b| within(a, b, 0.05, 0.1),
-    agreement: "an FLI within 5 % or 0.1 (NaN never agrees)",
-    tolerance: "5 % or 0.1",
-    vouch: |a, b| within(a, b, 0.01, 0.02),
-    vouching: "an FLI within 1 % or 0.02 (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.02",
+    value: "an FLI",
+    agree: Tolerance::new(0.05, 0.1, ""),
+    vouch: Tolerance::new(0.01, 0.02, ""),
+    classes: false,
     counted: |x| x > CHAOTIC_FLI,
     counted_as: "chaotic",
     counted_rule: "FLI > 5",

@@ -11,7 +11,7 @@ use crate::cpu::{TANGENT_START, derivative, norm, tangent_step};
 use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
-use crate::quantity::{Quantity, within};
+use crate::quantity::{Quantity, Tolerance};
 use crate::spec::{LyapunovSpec, MapKindEntry};
 
 pub struct Ofli;
@@ -21,12 +21,10 @@ pub const OFLI: Quantity = Quantity {
     name: "orthogonal fast Lyapunov indicator",
     unit: "1 (log10)",
     // As the FLI's: it is the FLI less log10 of the cosine-free part, of the same scale.
-    agree: |a, b| within(a, b, 0.05, 0.1),
-    agreement: "an OFLI within 5 % or 0.1 (NaN never agrees)",
-    tolerance: "5 % or 0.1",
-    vouch: |a, b| within(a, b, 0.01, 0.02),
-    vouching: "an OFLI within 1 % or 0.02 (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.02",
+    value: "an OFLI",
+    agree: Tolerance::new(0.05, 0.1, ""),
+    vouch: Tolerance::new(0.01, 0.02, ""),
+    classes: false,
     counted: |x| x > CHAOTIC_FLI,
     counted_as: "chaotic",
     counted_rule: "OFLI > 5",

@@ -12,7 +12,7 @@ use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Run
 use crate::cpu::{TANGENT_START, norm, tangent_step};
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::quantity::{Quantity, within};
+use crate::quantity::{Quantity, Tolerance};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 pub struct Rli;
@@ -40,12 +40,10 @@ pub const RLI: Quantity = Quantity {
     unit: "1 (log10)",
     // In chaos the two orbits part after ln(1/delta)/λ and their L differ by O(λ) as they
     // go: round-off moves the mean by tens of percent (0.2 in log10) where that happens.
-    agree: |a, b| within(a, b, 0.0, 0.3),
-    agreement: "log10 RLI within 0.3 (NaN never agrees)",
-    tolerance: "0.3",
-    vouch: |a, b| within(a, b, 0.0, 0.1),
-    vouching: "log10 RLI within 0.1 (NaN never agrees)",
-    vouch_tolerance: "0.1",
+    value: "log10 RLI",
+    agree: Tolerance::new(0.0, 0.3, ""),
+    vouch: Tolerance::new(0.0, 0.1, ""),
+    classes: false,
     counted: |x| x > CHAOTIC_RLI,
     counted_as: "chaotic",
     counted_rule: "log10 RLI > -3",

@@ -4,7 +4,7 @@
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::quantity::{FTLE, FTLE_ABSOLUTE, Quantity, within};
+use crate::quantity::{FTLE, FTLE_ABSOLUTE, Quantity, Tolerance};
 use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 pub struct Spectrum;
@@ -24,12 +24,10 @@ pub const EXPONENT_SUM: Quantity = Quantity {
     unit: "1/s",
     // Its scale is the volume change over t (ln 2 / t at most for equal masses), not the
     // exponents': 0.005 /s absolute.
-    agree: |a, b| within(a, b, 0.05, 0.005),
-    agreement: "a sum within 5 % or 0.005 /s (NaN never agrees)",
-    tolerance: "5 % or 0.005 /s",
-    vouch: |a, b| within(a, b, 0.01, 0.001),
-    vouching: "a sum within 1 % or 0.001 /s (NaN never agrees)",
-    vouch_tolerance: "1 % or 0.001 /s",
+    value: "a sum",
+    agree: Tolerance::new(0.05, 0.005, " /s"),
+    vouch: Tolerance::new(0.01, 0.001, " /s"),
+    classes: false,
     counted: |x| x < -FTLE_ABSOLUTE as f32,
     counted_as: "contracting",
     counted_rule: "sum < -0.02 /s",
