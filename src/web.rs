@@ -19,6 +19,7 @@ use crate::gpu::{
 };
 use crate::measure::{Indicator, Runs};
 use crate::model::Params;
+use crate::quantity::Quantity;
 use crate::render::{Colormap, flip_table, ftle_table};
 use crate::spec::{F32_MIN_PIXEL_STEP, LyapunovSpec, Precision, Var};
 
@@ -151,6 +152,7 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
     let mut kinds = vec![json!({
         "name": "flip", "label": "flip time", "unit": "s", "kernel": "flip_time",
         "command": spec.command,
+        "vouch": vouch(&crate::quantity::FLIP_TIME),
     })];
     kinds.extend(INDICATORS.iter().map(|&i| divergence_kind(i, spec)));
     let colours: serde_json::Map<String, Value> = colours.into_iter().collect();
@@ -168,12 +170,22 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
             "pendulum_bytes": std::mem::size_of::<GpuPendulum>(),
             "f32_epsilon": f32::EPSILON,
             "f32_min_pixel_step": F32_MIN_PIXEL_STEP,
+            // The coarsest step the verdict vouches at (src/verdict.rs).
+            "verdict_dt_max": crate::verdict::LARGEST_VOUCHED_DT,
         },
         "pendulums": pendulums,
         "vars": vars,
         "colours": colours,
         "swing_command": spec.swing_command,
     })
+}
+
+/// The verdict's rule of `quantity`: the tolerance two runs at different steps must keep, and
+/// its words.
+fn vouch(quantity: &Quantity) -> Value {
+    let t = quantity.vouch;
+    json!({"relative": t.relative, "absolute": t.absolute, "time": t.never.is_some(),
+        "words": quantity.vouching()})
 }
 
 /// A colour table as one string of RRGGBB hex.
@@ -245,6 +257,7 @@ fn divergence_kind(indicator: Indicator, spec: &SiteSpec) -> Value {
         "per_time": per_time,
         "left_below": left_below,
         "range": {"quantile": 0.995, "at_least": floor},
+        "vouch": vouch(quantity),
         "table": hex(&ftle_table(Colormap::Magma)),
         "command": spec.indicator_command.replace("{indicator}", indicator.spelled().0),
     })

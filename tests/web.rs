@@ -212,6 +212,10 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         {"name": "megno", "width": 64, "height": 48,
          "view": {"kind": "megno", "cx": 1, "cy": 1, "w": 2, "t_max": 10, "dt": 0.01}},
     ]);
+    // The verdict in f32: the same map at half and a quarter of the step.
+    views.as_array_mut().unwrap().push(serde_json::json!({
+        "name": "judged", "width": 64, "height": 64, "times": false, "verdict": true,
+        "view": {"cx": 0, "cy": 0, "w": turn, "t_max": 20, "dt": 0.01}}));
     // A click's swing: the engine's trajectory kernel, every second step kept at dt 0.01
     // (about 60 a second).
     views.as_array_mut().unwrap().push(serde_json::json!({
@@ -257,6 +261,40 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         let page = &report["views"][format!("w{w:e}")]["resolves"];
         assert_eq!(page.as_bool(), Some(!grid.needs_f64()), "width {w}");
     }
+    // The page's verdict is the engine's rule on a GPU without f64 (src/plan.rs): the command
+    // line's f32 maps at dt, dt/2 and dt/4, each agreeing with the next within the flip
+    // time's vouching tolerance.
+    let command = report["views"]["judged"]["command"].as_str().unwrap();
+    let at = |dt: &str| -> Vec<f32> {
+        let npy = dir.path().join(format!("judged_{dt}.npy"));
+        let mut words: Vec<&str> = command.split_whitespace().skip(1).collect();
+        let k = words.iter().position(|w| *w == "--dt").unwrap();
+        words[k + 1] = dt;
+        chaoscope()
+            .args(&words)
+            .args(["--backend", "gpu", "--precision", "f32", "--output"])
+            .arg(dir.path().join("judged.png"))
+            .arg("--data")
+            .arg(&npy)
+            .assert()
+            .success();
+        read_npy(&npy).1
+    };
+    let (map, half, quarter) = (at("0.01"), at("0.005"), at("0.0025"));
+    let vouch = chaoscope::quantity::FLIP_TIME.vouch;
+    let page = std::fs::read(dir.path().join("judged.mask")).unwrap();
+    let same = (0..map.len())
+        .filter(|&i| {
+            let resolved = vouch.agrees(map[i], half[i]) && vouch.agrees(half[i], quarter[i]);
+            resolved == (page[i] == 1)
+        })
+        .count() as f64
+        / map.len() as f64;
+    let resolved = page.iter().filter(|&&m| m == 1).count() as f64 / page.len() as f64;
+    eprintln!("verdict: {resolved:.4} resolved, {same:.5} as the command line's f32 maps judge");
+    // The maps differ by ulps of a flip time at most: a pixel's verdict turns only where the
+    // runs part by the tolerance to within those ulps.
+    assert!(same >= 0.999, "{same}");
     let swing = &report["views"]["swing"]["swing"];
     assert_eq!(swing["seconds"].as_f64(), Some(0.02), "{swing}");
     let page: Vec<f64> = swing["states"]

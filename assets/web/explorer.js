@@ -20,7 +20,7 @@ let manifest = null;
 let gpu = null;            // { device, layout, module, pipelines: Map }
 let generation = 0;        // bumped by every new view: a computation of an older one stops
 const view = { pendulum: 0, x: "theta1", y: "theta2", cx: 0, cy: 0, w: TURN, h: TURN,
-  t_max: 20, dt: 0.01, colours: "inferno", kind: "flip" };
+  t_max: 20, dt: 0.01, colours: "inferno", kind: "flip", verdict: false };
 
 function say(text, error) {
   statusLine.textContent = text;
@@ -95,6 +95,7 @@ function readHash() {
   if (h.has("w") && !h.has("h")) view.h = view.w;
   if (h.has("colours") && manifest.colours[h.get("colours")]) view.colours = h.get("colours");
   if (h.has("kind") && kindOf(h.get("kind"))) view.kind = h.get("kind");
+  view.verdict = h.get("verdict") === "1";
   view.pendulum = Math.min(Math.max(0, Math.round(view.pendulum)), manifest.pendulums.length - 1);
 }
 
@@ -103,6 +104,7 @@ function writeHash() {
   for (const k of ["kind", "x", "y", "cx", "cy", "w", "h", "t_max", "dt", "pendulum", "colours"]) {
     q.set(k, String(view[k]));
   }
+  if (view.verdict) q.set("verdict", "1");
   history.replaceState(null, "", "#" + q.toString());
 }
 
@@ -366,6 +368,30 @@ async function divergence(kind, v, g, onProgress) {
   return mirrored(out, s.integrated * g.width);
 }
 
+// src/quantity.rs `Tolerance::agrees`: within the relative tolerance of the larger or the
+// absolute one (in f64, as the engine compares); a time's nevers agree; NaN never does.
+function agrees(t, a, b) {
+  if (t.time && (a === Infinity || b === Infinity)) return a === b;
+  return Math.abs(a - b) <= Math.max(t.relative * Math.max(Math.abs(a), Math.abs(b)), t.absolute);
+}
+
+// The verdict on `values`, the map of view `v` on grid `g` (src/plan.rs `planned_map` on a GPU
+// without f64, the browser's case): the same map at half the step and at a quarter, 1 where
+// each agrees with the next within the kind's vouching tolerance, else 0.
+async function verdictOf(values, v, g, onProgress) {
+  const t = kindOf(v.kind).vouch;
+  const half = await compute(Object.assign({}, v, { dt: v.dt / 2 }), g, (f) => onProgress(f / 3));
+  if (half === null) return null;
+  const quarter = await compute(Object.assign({}, v, { dt: v.dt / 4 }), g,
+    (f) => onProgress((1 + 2 * f) / 3));
+  if (quarter === null) return null;
+  const mask = new Uint8Array(values.length);
+  for (let i = 0; i < values.length; i++) {
+    mask[i] = agrees(t, values[i], half[i]) && agrees(t, half[i], quarter[i]) ? 1 : 0;
+  }
+  return mask;
+}
+
 // The map of view `v` on grid `g`, of the view's kind.
 async function compute(v, g, onProgress) {
   if (!gpu) gpu = await startGpu();
@@ -402,13 +428,13 @@ function colourTable(kind, v) {
   return parseTable(kind.name === "flip" ? manifest.colours[v.colours] : kind.table);
 }
 
-function draw(values, g, v, sc) {
+function draw(values, g, v, sc, mask) {
   const kind = kindOf(v.kind), lut = colourTable(kind, v), n = lut.length / 3;
   const image = new ImageData(g.width, g.height);
   for (let i = 0; i < values.length; i++) {
     const x = values[i];
     let r = 0, gr = 0, b = 0;
-    if (Number.isNaN(x)) { gr = 255; } else {
+    if (mask && !mask[i]) { r = gr = b = 128; } else if (Number.isNaN(x)) { gr = 255; } else {
       const u = sc.at(x);
       if (u !== null) {
         const j = Math.round(Math.min(1, Math.max(0, u)) * (n - 1)) * 3;
@@ -485,17 +511,35 @@ async function show() {
       say(`computing on the GPU… ${(100 * f).toFixed(0)} %`);
     });
     if (values === null || mine !== generation) return;
+    let mask = null;
+    if (view.verdict && view.dt <= manifest.constants.verdict_dt_max * (1 + 1e-9)) {
+      say("the verdict: the same map at half and a quarter of the step…");
+      mask = await verdictOf(values, view, g, (f) => {
+        progress.firstElementChild.style.width = `${(100 * f).toFixed(1)}%`;
+      });
+      if (mask === null || mine !== generation) return;
+    }
     const kind = kindOf(view.kind), sc = scale(kind, values, view);
-    draw(values, g, view, sc);
+    draw(values, g, view, sc, mask);
     drawBar(sc);
     page.shown = values;
     const seconds = (performance.now() - started) / 1000;
     const finite = values.filter(Number.isFinite).length / values.length;
     page.views += 1;
     page.last = { seconds, finite, width: g.width, height: g.height, kind: kind.name };
+    let judged = "";
+    if (mask) {
+      const resolved = mask.reduce((a, m) => a + m, 0) / mask.length;
+      page.last.resolved = resolved;
+      judged = ` ${(100 * resolved).toFixed(1)} % resolved (grey: not): the same map at half ` +
+        `and a quarter of the step gives ${kind.vouch.words}, in f32.`;
+    } else if (view.verdict) {
+      judged = ` No verdict above dt = ${manifest.constants.verdict_dt_max} s: the runs at ` +
+        "smaller steps are not trusted to settle a pixel there.";
+    }
     say(`${g.width} x ${g.height} pendulums over ${view.t_max} s in ${seconds.toFixed(2)} s ` +
       `on ${page.adapter}` + (kind.name === "flip"
-        ? `; ${(100 * finite).toFixed(1)} % flipped.` : `: ${kind.label}.`));
+        ? `; ${(100 * finite).toFixed(1)} % flipped.` : `: ${kind.label}.`) + judged);
   } catch (e) {
     if (mine === generation) say(`Could not compute: ${e.message}`, true);
   } finally {
@@ -568,6 +612,7 @@ function wire() {
     if (dt >= 1e-4 && dt <= 0.1) view.dt = dt;
     view.colours = f.get("colours");
     view.kind = f.get("kind");
+    view.verdict = f.get("verdict") === "on";
     later();
   });
   window.addEventListener("resize", () => { if (fit()) later(); });
@@ -727,6 +772,7 @@ function fillForm() {
   options("colours", Object.keys(manifest.colours).map((c) => [c, c]));
   options("kind", manifest.kinds.map((k) => [k.name, k.label]));
   form.elements.kind.value = view.kind;
+  form.elements.verdict.checked = view.verdict;
   form.elements.pendulum.value = String(view.pendulum);
   form.elements.x.value = view.x; form.elements.y.value = view.y;
   form.elements.t_max.value = view.t_max; form.elements.dt.value = view.dt;
@@ -750,6 +796,17 @@ page.swing = async (start, v) => {
 page.command = (v, width, height) => {
   const w = viewOf(v);
   return command(w, grid(w, width, height));
+};
+
+// For tests: the verdict on a view's map (1 resolved, 0 not), as base64 of bytes.
+page.verdict = async (v, width, height) => {
+  const w = viewOf(v), g = grid(w, width, height);
+  const mask = await verdictOf(await compute(w, g, () => {}), w, g, () => {});
+  let s = "";
+  for (let i = 0; i < mask.length; i += 0x8000) {
+    s += String.fromCharCode.apply(null, mask.subarray(i, i + 0x8000));
+  }
+  return btoa(s);
 };
 
 // For tests: whether f32 resolves a view's pixel step on a width x height grid.

@@ -9,7 +9,8 @@ Usage: web.py [--no-webgpu] URL SCREENSHOT [OUTDIR VIEWS_JSON]
   URL: the page, with a view in its hash (default #t_max=10: the whole plane over 10 s).
   VIEWS_JSON: a list of {"name", "width", "height", "view": {kind, cx, cy, w, t_max, dt,
   pendulum, x, y}, "times": false to skip the map, "swing": {theta1, ...} to add the run a
-  click on that start swings}; writes OUTDIR/NAME.f32 for each map; prints a report as JSON
+  click on that start swings, "verdict": true to add the verdict's mask as OUTDIR/NAME.mask,
+  a byte a pixel}; writes OUTDIR/NAME.f32 for each map; prints a report as JSON
   (timings in seconds).
 """
 import base64
@@ -77,6 +78,12 @@ try:
                                  "resolves": page_call("resolves", v["view"], w, h)}
         if "swing" in v:
             report["views"][name]["swing"] = page_call("swing", v["swing"], v["view"])
+        if v.get("verdict"):
+            started = time.time()
+            data = page_call("verdict", v["view"], w, h)
+            report["views"][name]["verdict_seconds"] = time.time() - started
+            with open(f"{out}/{name}.mask", "wb") as f:
+                f.write(base64.b64decode(data))
         if v.get("times", True):
             started = time.time()
             data = page_call("values", v["view"], w, h)
