@@ -801,13 +801,17 @@ page.command = (v, width, height) => {
 // For tests: the verdict on a view's map (1 resolved, 0 not), as base64 of bytes.
 page.verdict = async (v, width, height) => {
   const w = viewOf(v), g = grid(w, width, height);
-  const mask = await verdictOf(await compute(w, g, () => {}), w, g, () => {});
+  return base64(await verdictOf(await compute(w, g, () => {}), w, g, () => {}));
+};
+
+// Bytes as base64 (in slices: a spread of millions of arguments overflows the stack).
+function base64(bytes) {
   let s = "";
-  for (let i = 0; i < mask.length; i += 0x8000) {
-    s += String.fromCharCode.apply(null, mask.subarray(i, i + 0x8000));
+  for (let i = 0; i < bytes.length; i += 0x8000) {
+    s += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
   }
   return btoa(s);
-};
+}
 
 // For tests: whether f32 resolves a view's pixel step on a width x height grid.
 page.resolves = (v, width, height) => resolves(grid(viewOf(v), width, height));
@@ -820,12 +824,7 @@ page.values = async (v, width, height) => {
   const w = viewOf(v), started = performance.now();
   const times = await compute(w, grid(w, width, height), () => {});
   page.computeSeconds = (performance.now() - started) / 1000;
-  let s = "";
-  const bytes = new Uint8Array(times.buffer);
-  for (let i = 0; i < bytes.length; i += 0x8000) {
-    s += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
-  }
-  return btoa(s);
+  return base64(new Uint8Array(times.buffer));
 };
 
 // The view in the address of `chaoscope serve`'s own explorer: its region as the plane's
