@@ -38,13 +38,12 @@ pub enum Error {
         command: String,
     },
     /// A program a run needs (FFmpeg for films) is not installed.
-    #[error(
-        "{what} needs {tool}: install FFmpeg (on Debian: {})",
-        crate::video::INSTALL
-    )]
+    #[error("{what} needs {tool}: install FFmpeg (on Debian: {install})")]
     MissingTool {
         tool: &'static str,
         what: &'static str,
+        /// How to install it, as the room that runs it says.
+        install: &'static str,
     },
     /// The GPU reported an error (validation, out of memory, lost device).
     #[error("GPU error: {0}")]

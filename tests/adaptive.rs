@@ -10,7 +10,7 @@ use chaoscope::gpu::{FlipTimeKernel, GpuContext, TrajectoryKernel};
 use chaoscope::model::{Params, State};
 use chaoscope::monitor::Monitor;
 use chaoscope::spec::{EnsembleSpec, FlipSpec, Grid, Integrator, Keep, Precision, Range, Stepping};
-use common::chaoscope;
+use common::{argv, chaoscope};
 
 /// The two adaptive pairs at tolerance `tol`.
 fn pairs(tol: f64) -> [Integrator; 2] {
@@ -275,14 +275,7 @@ fn adaptive_flags() {
         "--rtol",
     );
     err(
-        &[
-            "--integrator",
-            "dp54",
-            "--rtol",
-            "1e-15",
-            "--precision",
-            "f64",
-        ],
+        &argv("--integrator dp54 --rtol 1e-15 --precision f64"),
         "--rtol",
     );
     err(&["--accurate", "--precision", "f32"], "--precision");
@@ -301,19 +294,7 @@ fn adaptive_flags() {
     );
     // DOP853's map records its pair and reads back to the same picture.
     let command = recorded_command(
-        &[
-            "flip",
-            "--size",
-            "16",
-            "--t-max",
-            "3",
-            "--integrator",
-            "dop853",
-            "--precision",
-            "f64",
-            "--rtol",
-            "1e-8",
-        ],
+        &argv("flip --size 16 --t-max 3 --integrator dop853 --precision f64 --rtol 1e-8"),
         &out,
     );
     assert!(
@@ -321,14 +302,7 @@ fn adaptive_flags() {
         "{command}"
     );
     err(
-        &[
-            "--integrator",
-            "dop853",
-            "--rtol",
-            "1e-6",
-            "--backend",
-            "gpu",
-        ],
+        &argv("--integrator dop853 --rtol 1e-6 --backend gpu"),
         "--rtol",
     );
 }

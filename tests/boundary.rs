@@ -204,21 +204,7 @@ fn boundary_runs_end_to_end_and_its_command_reproduces_it() {
     let png = dir.path().join("b.png");
     let csv = dir.path().join("b.csv");
     let out = common::chaoscope()
-        .args([
-            "boundary",
-            "--t-max",
-            "3",
-            "--pairs",
-            "512",
-            "--levels",
-            "4",
-            "--eps",
-            "1e-3:1e-1",
-            "--class",
-            "flipped",
-            "--json",
-            "--output",
-        ])
+        .args("boundary --t-max 3 --pairs 512 --levels 4 --eps 1e-3:1e-1 --class flipped --json --output".split(' '))
         .arg(&png)
         .arg("--data")
         .arg(&csv)

@@ -90,20 +90,10 @@ fn trajectory_csv_has_the_columns_and_reads_back_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("t.csv");
     chaoscope()
-        .args([
-            "trajectory",
-            "--theta1",
-            "pi/2",
-            "--theta2",
-            "-0.5",
-            "--omega1",
-            "-1",
-            "--t-max",
-            "1",
-            "--every",
-            "0.1",
-            "--output",
-        ])
+        .args(
+            "trajectory --theta1 pi/2 --theta2 -0.5 --omega1 -1 --t-max 1 --every 0.1 --output"
+                .split(' '),
+        )
         .arg(&csv)
         .assert()
         .success();
@@ -148,15 +138,7 @@ fn trajectory_csv_has_the_columns_and_reads_back_exactly() {
         "no losses, nothing dissipated"
     );
     chaoscope()
-        .args([
-            "trajectory",
-            "--theta1",
-            "1",
-            "--theta2",
-            "1",
-            "--every",
-            "0.015",
-        ])
+        .args("trajectory --theta1 1 --theta2 1 --every 0.015".split(' '))
         .assert()
         .code(2)
         .stderr(predicate::str::contains("--every"));
@@ -283,16 +265,7 @@ fn lyapunov_bad_values_exit_2_and_name_the_flag() {
     ];
     for (args, flag) in cases {
         chaoscope()
-            .args([
-                "lyapunov",
-                "--size",
-                "8",
-                "--t-max",
-                "2",
-                "--backend",
-                "cpu",
-                "--output",
-            ])
+            .args("lyapunov --size 8 --t-max 2 --backend cpu --output".split(' '))
             .arg(&out)
             .args(*args)
             .assert()
@@ -375,17 +348,7 @@ fn json_summaries_on_stdout() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("j.png");
     let out = chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "16",
-            "--t-max",
-            "2",
-            "--backend",
-            "cpu",
-            "--json",
-            "--output",
-        ])
+        .args("flip --size 16 --t-max 2 --backend cpu --json --output".split(' '))
         .arg(&png)
         .assert()
         .success()
@@ -422,15 +385,7 @@ fn json_summaries_on_stdout() {
     // colour range.
     let store = dir.path().join("l.zarr");
     let out = chaoscope()
-        .args([
-            "lyapunov",
-            "--size",
-            "16",
-            "--t-max",
-            "1",
-            "--backend",
-            "cpu",
-        ])
+        .args("lyapunov --size 16 --t-max 1 --backend cpu".split(' '))
         .args(["--json", "--data"])
         .arg(&store)
         .assert()
@@ -488,15 +443,7 @@ fn f32_asked_of_the_cpu_is_said_to_run_in_f64() {
     }
     // trajectory runs on the CPU by default.
     let out = chaoscope()
-        .args([
-            "trajectory",
-            "--theta1",
-            "1",
-            "--theta2",
-            "1",
-            "--t-max",
-            "0.1",
-        ])
+        .args("trajectory --theta1 1 --theta2 1 --t-max 0.1".split(' '))
         .args(["--precision", "f32", "--output"])
         .arg(dir.path().join("t.csv"))
         .output()
@@ -512,16 +459,7 @@ fn trajectory_and_boundary_say_what_they_did() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("t.csv");
     common::chaoscope()
-        .args([
-            "trajectory",
-            "--theta1",
-            "1",
-            "--theta2",
-            "1",
-            "--t-max",
-            "1",
-            "--output",
-        ])
+        .args("trajectory --theta1 1 --theta2 1 --t-max 1 --output".split(' '))
         .arg(&csv)
         .assert()
         .success()

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use chaoscope::model::State;
 use chaoscope::params::Preset;
 use chaoscope::track::synth::{Scene, film};
-use common::chaoscope;
+use common::{argv, chaoscope};
 
 /// Names as a user may type them, each with what FFmpeg would make of it as written.
 const NAMES: [&str; 13] = [
@@ -163,14 +163,7 @@ fn films_are_read_by_their_names_alone() {
             .success();
         let out = format!("{}.out", name.trim_end_matches(".mp4"));
         chaoscope_in(dir.path())
-            .args([
-                "forecast",
-                "track.csv",
-                "--window",
-                "0.5:1.5",
-                "--members",
-                "100",
-            ])
+            .args("forecast track.csv --window 0.5:1.5 --members 100".split(' '))
             // The film is of the lab's apparatus, too short to find its moments from.
             .args(["--preset", "lab", "--held-out", "0"])
             .args(["--candidates", "256", "--backend", "cpu"])
@@ -217,19 +210,7 @@ fn films_are_written_to_their_names_alone() {
             ),
             (
                 "traces",
-                vec![
-                    "traces",
-                    "--theta1",
-                    "1",
-                    "--theta2",
-                    "1",
-                    "--exposure",
-                    "0.2",
-                    "--size",
-                    "32",
-                    "--output",
-                    "traces.png",
-                ],
+                argv("traces --theta1 1 --theta2 1 --exposure 0.2 --size 32 --output traces.png"),
                 "traces.png",
                 (32, 32),
             ),
@@ -355,14 +336,7 @@ fn what_is_no_film_is_refused_naming_the_film() {
     for bad in ["folder.mp4", "fifo.mp4", "text.mp4", "empty.mp4"] {
         let runs: [Vec<&str>; 2] = [
             vec!["track", bad, "--l1", "0.30", "--output", "again.csv"],
-            vec![
-                "forecast",
-                "track.csv",
-                "--window",
-                "0.5:1.5",
-                "--members",
-                "100",
-            ],
+            argv("forecast track.csv --window 0.5:1.5 --members 100"),
         ];
         for (k, words) in runs.iter().enumerate() {
             let mut c = chaoscope_in(d);

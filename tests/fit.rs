@@ -233,15 +233,7 @@ fn a_given_joint_damping_is_refused() {
     chaoscope()
         .arg("fit")
         .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv"))
-        .args([
-            "--preset",
-            "lab",
-            "--candidates",
-            "256",
-            "--backend",
-            "cpu",
-            "--params",
-        ])
+        .args("--preset lab --candidates 256 --backend cpu --params".split(' '))
         .arg(&file)
         .arg("--output")
         .arg(dir.path().join("out"))
@@ -436,16 +428,7 @@ fn any_pendulum_is_fitted_by_its_own_moments() {
         s["verdict"]
     );
     chaoscope()
-        .args([
-            "trajectory",
-            "--theta1",
-            "2",
-            "--theta2",
-            "2.6",
-            "--t-max",
-            "1",
-            "--params",
-        ])
+        .args("trajectory --theta1 2 --theta2 2.6 --t-max 1 --params".split(' '))
         .arg(&model)
         .arg("--output")
         .arg(dir.path().join("trajectory.csv"))

@@ -227,15 +227,7 @@ fn a_sweep_of_flip_kinds() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sweep");
     chaoscope()
-        .args([
-            "sweep",
-            "--map",
-            "flip-kind",
-            "--vary",
-            "m2=1:2",
-            "--frames",
-            "2",
-        ])
+        .args("sweep --map flip-kind --vary m2=1:2 --frames 2".split(' '))
         .args(["--size", "24", "--t-max", "5", "--output"])
         .arg(&out)
         .assert()

@@ -506,15 +506,7 @@ fn forecast_refuses_bad_input() {
             .arg("forecast")
             .arg(&csv)
             .args(*args)
-            .args([
-                "--preset",
-                "lab",
-                "--backend",
-                "cpu",
-                "--candidates",
-                "64",
-                "--output",
-            ])
+            .args("--preset lab --backend cpu --candidates 64 --output".split(' '))
             .arg(&out)
             .assert()
             .code(2);
@@ -545,21 +537,7 @@ fn forecast_of_the_lab_run() {
     chaoscope()
         .arg("forecast")
         .arg(lab_csv())
-        .args([
-            "--preset",
-            "lab",
-            "--window",
-            "0.6:2.1",
-            "--tolerance",
-            "0.03",
-            "--members",
-            "500",
-            "--candidates",
-            "1024",
-            "--backend",
-            "cpu",
-            "--output",
-        ])
+        .args("--preset lab --window 0.6:2.1 --tolerance 0.03 --members 500 --candidates 1024 --backend cpu --output".split(' '))
         .arg(dir.path())
         .assert()
         .success();

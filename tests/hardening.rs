@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use chaoscope::model::State;
 use chaoscope::params::Preset;
 use chaoscope::spec::{Stepping, largest_stable_dt, speed_bound};
-use common::{chaoscope, png_text, read_npy};
+use common::{argv, chaoscope, png_text, read_npy};
 use predicates::prelude::*;
 
 #[test]
@@ -120,99 +120,38 @@ fn ctrl_c_and_sigterm_stop_long_commands_without_leaving_files() {
     let cases: Vec<(&str, Vec<&str>, bool)> = vec![
         (
             "TERM",
-            vec![
-                "traces",
-                "--theta1",
-                "2",
-                "--theta2",
-                "2",
-                "--runs",
-                "100000",
-                "--backend",
-                "cpu",
-                "--output",
-                "@/a.png",
-                "--film",
-                "@/a.gif",
-            ],
+            argv(
+                "traces --theta1 2 --theta2 2 --runs 100000 --backend cpu --output @/a.png --film @/a.gif",
+            ),
             false,
         ),
         (
             "INT",
-            vec![
-                "zoom",
-                "--to",
-                "-1.689,0.742,1e-3",
-                "--frames",
-                "50",
-                "--output",
-                "@/z",
-                "flip",
-                "--size",
-                "128",
-                "--backend",
-                "cpu",
-            ],
+            argv(
+                "zoom --to -1.689,0.742,1e-3 --frames 50 --output @/z flip --size 128 --backend cpu",
+            ),
             true,
         ),
         (
             "INT",
-            vec![
-                "phase",
-                "--runs",
-                "100000",
-                "--backend",
-                "cpu",
-                "--output",
-                "@/a.png",
-            ],
+            argv("phase --runs 100000 --backend cpu --output @/a.png"),
             false,
         ),
         (
             "TERM",
-            vec![
-                "lyapunov",
-                "--theta1",
-                "2",
-                "--theta2",
-                "2",
-                "--dt",
-                "1e-4",
-                "--t-max",
-                "1000",
-                "--backend",
-                "cpu",
-                "--output",
-                "@/a.csv",
-            ],
+            argv(
+                "lyapunov --theta1 2 --theta2 2 --dt 1e-4 --t-max 1000 --backend cpu --output @/a.csv",
+            ),
             false,
         ),
         (
             "INT",
-            vec![
-                "flip",
-                "--size",
-                "600",
-                "--t-max",
-                "30",
-                "--backend",
-                "cpu",
-                "--output",
-                "@/a.png",
-            ],
+            argv("flip --size 600 --t-max 30 --backend cpu --output @/a.png"),
             false,
         ),
         (
             "TERM",
-            vec![
-                "lyapunov",
-                "--size",
-                "200",
-                "--backend",
-                "cpu",
-                "--output",
-                "@/a.png",
-            ],
+            argv("lyapunov --size 200 --backend cpu --output @/a.png"),
             false,
         ),
         (
@@ -233,65 +172,23 @@ fn ctrl_c_and_sigterm_stop_long_commands_without_leaving_files() {
         ),
         (
             "TERM",
-            vec![
-                "sweep",
-                "--vary",
-                "g=5:15",
-                "--frames",
-                "50",
-                "--size",
-                "128",
-                "--backend",
-                "cpu",
-                "--output",
-                "@/s",
-            ],
+            argv("sweep --vary g=5:15 --frames 50 --size 128 --backend cpu --output @/s"),
             true,
         ),
         (
             "INT",
-            vec![
-                "lyapunov",
-                "--theta1",
-                "2",
-                "--theta2",
-                "2",
-                "--dt",
-                "1e-4",
-                "--t-max",
-                "1000",
-                "--backend",
-                "gpu",
-                "--output",
-                "@/a.csv",
-            ],
+            argv(
+                "lyapunov --theta1 2 --theta2 2 --dt 1e-4 --t-max 1000 --backend gpu --output @/a.csv",
+            ),
             false,
         ),
         // Stopped while FFmpeg encodes the film (600 frames of 720 px: some 10 s): FFmpeg is
         // stopped too, and its half film removed.
         (
             "INT",
-            vec![
-                "traces",
-                "--theta1",
-                "2",
-                "--theta2",
-                "2",
-                "--runs",
-                "3",
-                "--exposure",
-                "20",
-                "--size",
-                "720",
-                "--fps",
-                "30",
-                "--backend",
-                "cpu",
-                "--output",
-                "@/a.png",
-                "--film",
-                "@/a.mp4",
-            ],
+            argv(
+                "traces --theta1 2 --theta2 2 --runs 3 --exposure 20 --size 720 --fps 30 --backend cpu --output @/a.png --film @/a.mp4",
+            ),
             false,
         ),
     ];
@@ -351,15 +248,7 @@ fn an_unstable_step_is_refused_naming_dt_and_the_limit() {
         vec!["flip", "--dt", "2", "--t-max", "4"],
         vec!["flip", "--omega1", "1e6"],
         vec!["lyapunov", "--preset", "lab", "--joint-damping", "2"],
-        vec![
-            "trajectory",
-            "--theta1",
-            "1",
-            "--theta2",
-            "1",
-            "--dt",
-            "0.5",
-        ],
+        argv("trajectory --theta1 1 --theta2 1 --dt 0.5"),
     ] {
         chaoscope()
             .args(&args)
@@ -452,18 +341,10 @@ fn maps_finer_than_f32_run_in_f64_with_a_note() {
     let dir = tempfile::tempdir().unwrap();
     let (png, npy) = (dir.path().join("z.png"), dir.path().join("z.npy"));
     let assert = chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "64x4",
-            "--theta1",
-            "2.4:2.400001",
-            "--theta2",
-            "2:2.000001",
-            "--t-max",
-            "5",
-            "--output",
-        ])
+        .args(
+            "flip --size 64x4 --theta1 2.4:2.400001 --theta2 2:2.000001 --t-max 5 --output"
+                .split(' '),
+        )
         .arg(&png)
         .arg("--data")
         .arg(&npy)
@@ -607,15 +488,7 @@ fn bad_inputs_are_refused_naming_their_flag() {
     chaoscope()
         .arg("fit")
         .arg(&bom)
-        .args([
-            "--preset",
-            "lab",
-            "--candidates",
-            "64",
-            "--backend",
-            "cpu",
-            "--output",
-        ])
+        .args("--preset lab --candidates 64 --backend cpu --output".split(' '))
         .arg(&out)
         .assert()
         .success();
@@ -868,15 +741,7 @@ fn small_findings_of_the_audit() {
     assert!(!npy.exists(), "nothing written");
     chaoscope()
         .args(["flip", "--size", "8", "--t-max", "1", "--backend", "cpu"])
-        .args([
-            "--integrator",
-            "dp54",
-            "--rtol",
-            "1",
-            "--precision",
-            "f64",
-            "--output",
-        ])
+        .args("--integrator dp54 --rtol 1 --precision f64 --output".split(' '))
         .arg(dir.path().join("y.png"))
         .assert()
         .code(2)

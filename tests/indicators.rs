@@ -6,6 +6,8 @@
 
 mod common;
 
+use common::argv;
+
 use chaoscope::cpu;
 use chaoscope::engine::Engine;
 use chaoscope::field::Field;
@@ -526,14 +528,7 @@ fn the_command_line_refuses_a_flag_of_another_indicator_naming_it() {
         ),
         // f32 on the GPU cannot see an alignment index below its round-off.
         (
-            vec![
-                "--indicator",
-                "sali",
-                "--threshold",
-                "1e-8",
-                "--backend",
-                "gpu",
-            ],
+            argv("--indicator sali --threshold 1e-8 --backend gpu"),
             "--threshold",
         ),
         (vec!["--indicator", "megno", "--accurate"], "--accurate"),
@@ -564,15 +559,7 @@ fn an_indicator_map_writes_its_values_and_a_single_start_its_running_columns() {
     let dir = tempfile::tempdir().unwrap();
     let npy = dir.path().join("m.npy");
     let out = common::chaoscope()
-        .args([
-            "lyapunov",
-            "--size",
-            "12",
-            "--t-max",
-            "3",
-            "--indicator",
-            "megno",
-        ])
+        .args("lyapunov --size 12 --t-max 3 --indicator megno".split(' '))
         .args(["--backend", "cpu", "--json", "--output"])
         .arg(dir.path().join("m.png"))
         .arg("--data")
@@ -654,15 +641,7 @@ fn the_spectrum_of_one_run_is_each_exponents_map_and_the_command_writes_it_with_
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("spectrum.npy");
     let out = common::chaoscope()
-        .args([
-            "lyapunov",
-            "--size",
-            "9x6",
-            "--t-max",
-            "2",
-            "--indicator",
-            "exponent",
-        ])
+        .args("lyapunov --size 9x6 --t-max 2 --indicator exponent".split(' '))
         .args(["--exponent", "3", "--output"])
         .arg(dir.path().join("l3.png"))
         .arg("--data")

@@ -54,23 +54,23 @@ macro_rules! rust_offsets {
     };
 }
 
+/// The members of a `Params` mirror, in the WGSL struct's order, with their offsets.
+macro_rules! params_offsets {
+    ($ty:ty) => {
+        rust_offsets!($ty;
+            a, b, c, p, q, l1, l2, dt, x_mid, x_half_step, y_mid, y_half_step, omega1, omega2,
+            no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
+            mass_total, mass_lower, bearing, theta1, theta2, m1, m2, rod1, rod2, eps,
+            width, height, rows, row0, step0, steps, count, interval, total_steps,
+            setting, rtol, atol, t_max, measure, x_var, y_var, seed, six)
+    };
+}
+
 #[test]
 fn params_struct_matches_its_rust_mirror() {
-    let rust = rust_offsets!(GpuParams;
-        a, b, c, p, q, l1, l2, dt, x_mid, x_half_step, y_mid, y_half_step,
-        omega1,
-        omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
-        mass_total, mass_lower, bearing, theta1, theta2, m1, m2, rod1, rod2, eps,
-        width, height, rows, row0, step0, steps, count, interval, total_steps,
-        setting, rtol, atol, t_max, measure, x_var, y_var, seed, six);
+    let rust = params_offsets!(GpuParams);
     // The f64 mirror's explicit padding (_pad_a) is implicit in WGSL.
-    let rust64 = rust_offsets!(GpuParams64;
-        a, b, c, p, q, l1, l2, dt, x_mid, x_half_step, y_mid, y_half_step,
-        omega1,
-        omega2, no_flip_energy, joint1, joint2, drag_bob1, drag_bob2, drag_rod1, drag_rod2, g,
-        mass_total, mass_lower, bearing, theta1, theta2, m1, m2, rod1, rod2, eps,
-        width, height, rows, row0, step0, steps, count, interval, total_steps,
-        setting, rtol, atol, t_max, measure, x_var, y_var, seed, six);
+    let rust64 = params_offsets!(GpuParams64);
     for (name, source) in all_shaders() {
         let (wgsl, span) = wgsl_struct(&module(&name, &source), "Params");
         let (rust, size) = if name.ends_with("_f64") {

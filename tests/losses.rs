@@ -246,21 +246,12 @@ fn divergence_maps_carry_the_damping_on_both_paths() {
     let mut p = Params::default();
     p.losses.joint1 = 0.1;
     p.losses.joint2 = 0.1;
-    let spec = chaoscope::spec::LyapunovSpec {
-        params: p,
-        grid: Grid::square(40),
-        stepping: Stepping {
-            dt: 0.01,
-            t_max: 10.0,
-        },
-        method: chaoscope::spec::Method::Tangent,
-        renorm: 0.1,
-        use_symmetry: true,
-        precision: chaoscope::spec::Precision::F32,
-        band: None,
-        integrator: chaoscope::spec::Integrator::Rk4,
-        indicator: chaoscope::spec::Indicator::Ftle,
+    // The default divergence map (tangent, RK4, f32): the FTLE.
+    let stepping = Stepping {
+        dt: 0.01,
+        t_max: 10.0,
     };
+    let spec = chaoscope::spec::LyapunovSpec::new(p, Grid::square(40), stepping);
     let c = cpu::ftle_map(&spec, &Monitor::hidden()).unwrap();
     let g = gpu::LyapunovKernel::new(&ctx, spec.method)
         .run(&ctx, &spec, &Monitor::hidden())
@@ -353,15 +344,7 @@ fn presets_files_and_flags_combine_and_bad_keys_are_named() {
     .unwrap();
     let csv = dir.path().join("t.csv");
     chaoscope()
-        .args([
-            "trajectory",
-            "--theta1",
-            "1",
-            "--theta2",
-            "1",
-            "--t-max",
-            "0.1",
-        ])
+        .args("trajectory --theta1 1 --theta2 1 --t-max 0.1".split(' '))
         .args(["--preset", "lab", "--params"])
         .arg(&file)
         .args(["--m2", "0.4", "--output"])
@@ -409,15 +392,7 @@ fn presets_files_and_flags_combine_and_bad_keys_are_named() {
             .stderr(predicate::str::contains("--params").and(predicate::str::contains(key)));
     }
     chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "4",
-            "--backend",
-            "cpu",
-            "--joint-damping",
-            "-1",
-        ])
+        .args("flip --size 4 --backend cpu --joint-damping -1".split(' '))
         .arg("--output")
         .arg(dir.path().join("x.png"))
         .assert()

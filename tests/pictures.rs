@@ -84,6 +84,18 @@ fn colormaps_are_selectable() {
     assert!(text(&b, "chaoscope:command").contains("--colormap viridis"));
 }
 
+/// The frames of the GIF at `path`.
+fn gif_frames(path: &Path) -> u32 {
+    let mut decoder = gif::DecodeOptions::new()
+        .read_info(std::fs::File::open(path).unwrap())
+        .unwrap();
+    let mut frames = 0;
+    while decoder.read_next_frame().unwrap().is_some() {
+        frames += 1;
+    }
+    frames
+}
+
 fn frame_count(path: &Path) -> u32 {
     let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
     let reader = png::Decoder::new(file).read_info().unwrap();
@@ -326,15 +338,7 @@ fn traces_bad_values_exit_2_and_name_the_flag() {
         (&["--size", "8"][..], "--size"),
     ] {
         chaoscope()
-            .args([
-                "traces",
-                "--theta1",
-                "1",
-                "--theta2",
-                "1",
-                "--backend",
-                "cpu",
-            ])
+            .args("traces --theta1 1 --theta2 1 --backend cpu".split(' '))
             .args(args)
             .arg("--output")
             .arg(dir.path().join("t.png"))
@@ -350,28 +354,14 @@ fn the_traces_animation_has_the_asked_frames() {
     let dir = tempfile::tempdir().unwrap();
     let gif_path = dir.path().join("t.gif");
     chaoscope()
-        .args([
-            "traces",
-            "--theta1",
-            "2",
-            "--theta2",
-            "1",
-            "--exposure",
-            "1.2",
-        ])
+        .args("traces --theta1 2 --theta2 1 --exposure 1.2".split(' '))
         .args(["--size", "120", "--backend", "cpu", "--output"])
         .arg(dir.path().join("t.png"))
         .arg("--gif")
         .arg(&gif_path)
         .assert()
         .success();
-    let mut decoder = gif::DecodeOptions::new()
-        .read_info(std::fs::File::open(&gif_path).unwrap())
-        .unwrap();
-    let mut frames = 0;
-    while decoder.read_next_frame().unwrap().is_some() {
-        frames += 1;
-    }
+    let frames = gif_frames(&gif_path);
     // 25 frames a second of exposure.
     assert_eq!(frames, 30);
 }
@@ -437,26 +427,8 @@ fn many_releases_stream_through_bounded_memory() {
     let (npy, gif_path) = (dir.path().join("r.npy"), dir.path().join("r.gif"));
     // 2500 runs of 500 steps: the CPU takes 2^20 pendulum-steps a chunk, 2097 runs.
     chaoscope()
-        .args([
-            "traces",
-            "--theta1",
-            "2.4",
-            "--theta2",
-            "2",
-            "--runs",
-            "2500",
-            "--exposure",
-            "0.5",
-        ])
-        .args([
-            "--spread",
-            "0.01",
-            "--size",
-            "64",
-            "--backend",
-            "cpu",
-            "--output",
-        ])
+        .args("traces --theta1 2.4 --theta2 2 --runs 2500 --exposure 0.5".split(' '))
+        .args("--spread 0.01 --size 64 --backend cpu --output".split(' '))
         .arg(dir.path().join("r.png"))
         .arg("--data")
         .arg(&npy)
@@ -480,12 +452,6 @@ fn many_releases_stream_through_bounded_memory() {
             );
         }
     }
-    let mut decoder = gif::DecodeOptions::new()
-        .read_info(std::fs::File::open(&gif_path).unwrap())
-        .unwrap();
-    let mut frames = 0;
-    while decoder.read_next_frame().unwrap().is_some() {
-        frames += 1;
-    }
+    let frames = gif_frames(&gif_path);
     assert_eq!(frames, 13, "25 frames a second of exposure");
 }

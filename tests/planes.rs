@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::argv;
+
 use chaoscope::engine::{Backend, Engine, MapKernels};
 use chaoscope::field::Field;
 use chaoscope::model::Params;
@@ -313,14 +315,7 @@ fn bad_axes_are_refused_naming_the_flag() {
         (&["--x", "theta2", "--y", "theta2"], "--y"),
         (&["--x", "m2=1:2", "--y", "m2/m1=1:2"], "--y"),
         (
-            &[
-                "--x",
-                "omega1=-5:5",
-                "--y",
-                "omega2=-5:5",
-                "--theta2",
-                "0:1",
-            ],
+            &argv("--x omega1=-5:5 --y omega2=-5:5 --theta2 0:1"),
             "--theta2",
         ),
         (&["--x", "omega1=-5:5", "--omega1", "2"], "--omega1"),
@@ -344,15 +339,7 @@ fn supersampling_reduces_the_finer_map_and_one_sample_is_the_plain_map() {
         let data = dir.path().join(format!("{name}.npy"));
         let resolved = dir.path().join(format!("{name}-resolved.npy"));
         common::chaoscope()
-            .args([
-                "flip",
-                "--t-max",
-                "6",
-                "--backend",
-                "cpu",
-                "--theta1",
-                "1:3",
-            ])
+            .args("flip --t-max 6 --backend cpu --theta1 1:3".split(' '))
             .args(args)
             .arg("--data")
             .arg(&data)

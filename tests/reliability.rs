@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use chaoscope::spec::{AxisAsked, PlaneAsked, Var};
-use common::chaoscope;
+use common::{argv, chaoscope};
 
 fn lab() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab_table1.csv")
@@ -55,49 +55,17 @@ fn words(s: &[&str]) -> Vec<String> {
 fn output_flags(store: &Path) -> Vec<(Vec<String>, &'static str, &'static str)> {
     let lab = lab().display().to_string();
     let map = words(&["flip", "--size", "8", "--t-max", "1", "--backend", "cpu"]);
-    let lyap = words(&[
-        "lyapunov",
-        "--size",
-        "8",
-        "--t-max",
-        "1",
-        "--backend",
-        "cpu",
-    ]);
-    let spectrum = words(&[
-        "lyapunov",
-        "--size",
-        "8",
-        "--t-max",
-        "1",
-        "--indicator",
-        "exponent-sum",
-        "--backend",
-        "cpu",
-    ]);
+    let lyap = words(&argv("lyapunov --size 8 --t-max 1 --backend cpu"));
+    let spectrum = words(&argv(
+        "lyapunov --size 8 --t-max 1 --indicator exponent-sum --backend cpu",
+    ));
     let point = words(&["lyapunov", "--theta1", "1", "--theta2", "1", "--t-max", "1"]);
-    let trajectory = words(&[
-        "trajectory",
-        "--theta1",
-        "1",
-        "--theta2",
-        "1",
-        "--t-max",
-        "1",
-    ]);
+    let trajectory = words(&argv("trajectory --theta1 1 --theta2 1 --t-max 1"));
     let boundary = words(&["boundary", "--pairs", "16", "--levels", "3", "--t-max", "1"]);
     let sweep = words(&["sweep", "--vary", "g=5:10", "--frames", "2", "--size", "8"]);
-    let traces = words(&[
-        "traces",
-        "--theta1",
-        "1",
-        "--theta2",
-        "1",
-        "--exposure",
-        "0.2",
-        "--size",
-        "32",
-    ]);
+    let traces = words(&argv(
+        "traces --theta1 1 --theta2 1 --exposure 0.2 --size 32",
+    ));
     let phase = words(&["phase", "--t-max", "0.5", "--size", "32"]);
     let fit = words(&["fit", &lab, "--preset", "lab"]);
     let forecast = words(&["forecast", &lab, "--preset", "lab"]);
@@ -138,16 +106,7 @@ fn no_output_replaces_what_is_not_a_regular_file() {
     let dir = tempfile::tempdir().unwrap();
     let store = dir.path().join("s.zarr");
     chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "8",
-            "--t-max",
-            "1",
-            "--backend",
-            "cpu",
-            "--data",
-        ])
+        .args("flip --size 8 --t-max 1 --backend cpu --data".split(' '))
         .arg(&store)
         .assert()
         .success();
@@ -271,17 +230,9 @@ fn every_read_is_bounded() {
 fn no_two_files_of_a_run_are_one() {
     let dir = tempfile::tempdir().unwrap();
     let at = |n: &str| dir.path().join(n).display().to_string();
-    let spectrum = words(&[
-        "lyapunov",
-        "--indicator",
-        "exponent-sum",
-        "--size",
-        "4",
-        "--t-max",
-        "1",
-        "--backend",
-        "cpu",
-    ]);
+    let spectrum = words(&argv(
+        "lyapunov --indicator exponent-sum --size 4 --t-max 1 --backend cpu",
+    ));
     let line = |base: &[String], extra: &[&str]| [base, &words(extra)[..]].concat();
     refused(
         &line(
@@ -662,15 +613,7 @@ fn render_refuses_a_picture_larger_than_the_process_may_hold() {
     let store = dir.path().join("big.zarr");
     // One chunk of the 65536^2 map is computed: the store exists, its picture is 40 GB.
     chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "65536",
-            "--t-max",
-            "0.1",
-            "--backend",
-            "cpu",
-        ])
+        .args("flip --size 65536 --t-max 0.1 --backend cpu".split(' '))
         .args(["--tile", "1/16384", "--data"])
         .arg(&store)
         .assert()
@@ -711,19 +654,7 @@ fn messages_name_settings_as_the_commands_flags() {
             "take --dt 0.01 or finer",
         ),
         (
-            vec![
-                "lyapunov",
-                "--size",
-                "8",
-                "--t-max",
-                "1",
-                "--indicator",
-                "sali",
-                "--threshold",
-                "1e-8",
-                "--backend",
-                "gpu",
-            ],
+            argv("lyapunov --size 8 --t-max 1 --indicator sali --threshold 1e-8 --backend gpu"),
             "take --precision f64",
         ),
     ] {

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use chaoscope::cli::{Cli, Job, LyapunovJob};
 use clap::Parser;
-use common::{chaoscope, png_text};
+use common::{argv, chaoscope, png_text};
 
 /// The job of a command line, with its output paths cleared (they are not part of the
 /// stored command).
@@ -97,71 +97,14 @@ fn flip_maps_round_trip() {
     let d = |n: &str| dir.path().join(n);
     for (k, extra) in [
         vec!["--size", "40x24", "--t-max", "3", "--theta2", "-3:3"],
-        vec![
-            "--size",
-            "16",
-            "--t-max",
-            "2",
-            "--preset",
-            "lab",
-            "--no-symmetry",
-            "--annotate",
-        ],
-        vec![
-            "--size",
-            "12",
-            "--t-max",
-            "2",
-            "--full",
-            "--colormap",
-            "viridis",
-            "--omega1",
-            "-1",
-        ],
+        argv("--size 16 --t-max 2 --preset lab --no-symmetry --annotate"),
+        argv("--size 12 --t-max 2 --full --colormap viridis --omega1 -1"),
         vec!["--size", "10", "--t-max", "2", "--precision", "f64"],
         vec!["--size", "10", "--t-max", "3", "--accurate"],
         vec!["--size", "6", "--t-max", "2", "--samples", "2"],
-        vec![
-            "--size",
-            "12x8",
-            "--t-max",
-            "2",
-            "--x",
-            "theta1",
-            "--y",
-            "omega1=-3:3",
-            "--theta2",
-            "0.5",
-            "--omega2",
-            "0.25",
-            "--annotate",
-        ],
-        vec![
-            "--size",
-            "10",
-            "--t-max",
-            "2",
-            "--x",
-            "m2/m1=0.5:2",
-            "--y",
-            "l2/l1=0.5:2",
-            "--theta1",
-            "2",
-            "--theta2",
-            "2.5",
-            "--m1",
-            "0.8",
-        ],
-        vec![
-            "--size",
-            "10",
-            "--t-max",
-            "3",
-            "--integrator",
-            "dp54",
-            "--atol",
-            "1e-4",
-        ],
+        argv("--size 12x8 --t-max 2 --x theta1 --y omega1=-3:3 --theta2 0.5 --omega2 0.25 --annotate"),
+        argv("--size 10 --t-max 2 --x m2/m1=0.5:2 --y l2/l1=0.5:2 --theta1 2 --theta2 2.5 --m1 0.8"),
+        argv("--size 10 --t-max 3 --integrator dp54 --atol 1e-4"),
     ]
     .into_iter()
     .enumerate()
@@ -213,23 +156,9 @@ fn lyapunov_maps_and_points_round_trip() {
     );
     let (png, png2) = (d("c.png"), d("d.png"));
     round_trip(
-        &[
-            "lyapunov",
-            "--size",
-            "8",
-            "--t-max",
-            "1",
-            "--backend",
-            "cpu",
-            "--method",
-            "twin",
-            "--eps",
-            "1e-6",
-            "--joint-damping",
-            "0.01,0.02",
-            "--colour-range",
-            "0.1:0.75",
-        ],
+        &argv(
+            "lyapunov --size 8 --t-max 1 --backend cpu --method twin --eps 1e-6 --joint-damping 0.01,0.02 --colour-range 0.1:0.75",
+        ),
         &[Path::new("--output"), &png],
         || png_text(&png, "chaoscope:command"),
         &[Path::new("--output"), &png2],
@@ -301,22 +230,9 @@ fn trajectories_round_trip() {
     let dir = tempfile::tempdir().unwrap();
     let (csv, csv2) = (dir.path().join("a.csv"), dir.path().join("b.csv"));
     round_trip(
-        &[
-            "trajectory",
-            "--theta1",
-            "1",
-            "--theta2",
-            "-2",
-            "--omega2",
-            "0.5",
-            "--t-max",
-            "1",
-            "--every",
-            "0.05",
-            "--air-drag",
-            "--m2",
-            "0.5",
-        ],
+        &argv(
+            "trajectory --theta1 1 --theta2 -2 --omega2 0.5 --t-max 1 --every 0.05 --air-drag --m2 0.5",
+        ),
         &[Path::new("--output"), &csv],
         || first_line(&csv),
         &[Path::new("--output"), &csv2],
@@ -325,19 +241,7 @@ fn trajectories_round_trip() {
     if common::gpu().is_some_and(|c| c.has_f64()) {
         let (csv, csv2) = (dir.path().join("c.csv"), dir.path().join("d.csv"));
         round_trip(
-            &[
-                "trajectory",
-                "--theta1",
-                "1",
-                "--theta2",
-                "2",
-                "--t-max",
-                "0.5",
-                "--backend",
-                "gpu",
-                "--precision",
-                "f64",
-            ],
+            &argv("trajectory --theta1 1 --theta2 2 --t-max 0.5 --backend gpu --precision f64"),
             &[Path::new("--output"), &csv],
             || first_line(&csv),
             &[Path::new("--output"), &csv2],
@@ -352,23 +256,9 @@ fn traces_and_phase_portraits_round_trip() {
     let d = |n: &str| dir.path().join(n);
     let (png, png2, npy, npy2) = (d("t.png"), d("t2.png"), d("t.npy"), d("t2.npy"));
     round_trip(
-        &[
-            "traces",
-            "--theta1",
-            "2.4",
-            "--theta2",
-            "2",
-            "--exposure",
-            "0.5",
-            "--size",
-            "64",
-            "--runs",
-            "4",
-            "--spread",
-            "2cm",
-            "--backend",
-            "cpu",
-        ],
+        &argv(
+            "traces --theta1 2.4 --theta2 2 --exposure 0.5 --size 64 --runs 4 --spread 2cm --backend cpu",
+        ),
         &[Path::new("--output"), &png, Path::new("--data"), &npy],
         || png_text(&png, "chaoscope:command"),
         &[Path::new("--output"), &png2, Path::new("--data"), &npy2],
@@ -376,25 +266,9 @@ fn traces_and_phase_portraits_round_trip() {
     );
     let (png, png2) = (d("p.png"), d("p2.png"));
     round_trip(
-        &[
-            "phase",
-            "--theta1",
-            "1",
-            "--theta2",
-            "1.5",
-            "--t-max",
-            "2",
-            "--size",
-            "64",
-            "--runs",
-            "2",
-            "--spread",
-            "0.02",
-            "--colormap",
-            "magma",
-            "--backend",
-            "cpu",
-        ],
+        &argv(
+            "phase --theta1 1 --theta2 1.5 --t-max 2 --size 64 --runs 2 --spread 0.02 --colormap magma --backend cpu",
+        ),
         &[Path::new("--output"), &png],
         || png_text(&png, "chaoscope:command"),
         &[Path::new("--output"), &png2],
@@ -413,21 +287,9 @@ fn traces_and_phase_portraits_round_trip() {
     if common::gpu().is_some_and(|c| c.has_f64()) {
         let (png, png2) = (d("f.png"), d("f2.png"));
         round_trip(
-            &[
-                "traces",
-                "--theta1",
-                "2",
-                "--theta2",
-                "2",
-                "--exposure",
-                "0.3",
-                "--size",
-                "32",
-                "--backend",
-                "gpu",
-                "--precision",
-                "f64",
-            ],
+            &argv(
+                "traces --theta1 2 --theta2 2 --exposure 0.3 --size 32 --backend gpu --precision f64",
+            ),
             &[Path::new("--output"), &png],
             || png_text(&png, "chaoscope:command"),
             &[Path::new("--output"), &png2],
@@ -556,23 +418,9 @@ fn forecasts_round_trip() {
     );
     let (c, d) = (dir.path().join("c"), dir.path().join("d"));
     round_trip(
-        &[
-            "twin",
-            "--sigma",
-            "2mm",
-            "--rate",
-            "50",
-            "--replicates",
-            "1",
-            "--duration",
-            "1.5",
-            "--members",
-            "100",
-            "--candidates",
-            "256",
-            "--backend",
-            "cpu",
-        ],
+        &argv(
+            "twin --sigma 2mm --rate 50 --replicates 1 --duration 1.5 --members 100 --candidates 256 --backend cpu",
+        ),
         &[Path::new("--output"), &c],
         stored(&c),
         &[Path::new("--output"), &d],

@@ -211,15 +211,7 @@ fn tiles_equal_the_pixels_of_the_map_commands() {
         chaoscope()
             .args(flags)
             .args(tile_ranges(z, x, y))
-            .args([
-                "--size",
-                "256",
-                "--m2",
-                "1.5",
-                "--backend",
-                "gpu",
-                "--output",
-            ])
+            .args("--size 256 --m2 1.5 --backend gpu --output".split(' '))
             .arg(&out)
             .assert()
             .success();
@@ -236,17 +228,7 @@ fn tiles_equal_the_pixels_of_the_map_commands() {
     let (_, _, tile) = rgb_of_bytes(&body, dir.path(), "mask.png");
     let mask = dir.path().join("mask.npy");
     chaoscope()
-        .args([
-            "flip",
-            "--t-max",
-            "6",
-            "--size",
-            "256",
-            "--m2",
-            "1.5",
-            "--backend",
-            "gpu",
-        ])
+        .args("flip --t-max 6 --size 256 --m2 1.5 --backend gpu".split(' '))
         .args(tile_ranges(1, 1, 1))
         .arg("--output")
         .arg(dir.path().join("m.png"))
@@ -372,15 +354,7 @@ fn a_store_of_any_plane_is_served_with_its_axes() {
     let store = dir.path().join("plane.zarr");
     chaoscope()
         .args(["flip", "--size", "64", "--t-max", "3", "--backend", "gpu"])
-        .args([
-            "--x",
-            "theta1",
-            "--y",
-            "omega1=-4:4",
-            "--theta2",
-            "0.3",
-            "--data",
-        ])
+        .args("--x theta1 --y omega1=-4:4 --theta2 0.3 --data".split(' '))
         .arg(&store)
         .assert()
         .success();
@@ -738,16 +712,7 @@ fn a_stored_map_is_served_from_its_pixels_and_computed_below_them() {
     let g = world.tile_grid(4, 5, 3, 256).unwrap();
     let out = dir.path().join("deep_flip.png");
     chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "256",
-            "--t-max",
-            "6",
-            "--backend",
-            "gpu",
-            "--theta1",
-        ])
+        .args("flip --size 256 --t-max 6 --backend gpu --theta1".split(' '))
         .arg(format!("{}:{}", g.x.range.min, g.x.range.max))
         .arg("--theta2")
         .arg(format!("{}:{}", g.y.range.min, g.y.range.max))
@@ -1292,24 +1257,8 @@ fn a_divergence_tile_refuses_an_f32_tolerance_below_the_floor_as_the_cli_does() 
     assert_eq!(ran.as_deref(), Some("f64"));
     let dir = tempfile::tempdir().unwrap();
     let out = chaoscope()
-        .args([
-            "lyapunov",
-            "--size",
-            "16",
-            "--t-max",
-            "0.5",
-            "--integrator",
-            "dp54",
-        ])
-        .args([
-            "--rtol",
-            "1e-9",
-            "--precision",
-            "f32",
-            "--backend",
-            "gpu",
-            "--output",
-        ])
+        .args("lyapunov --size 16 --t-max 0.5 --integrator dp54".split(' '))
+        .args("--rtol 1e-9 --precision f32 --backend gpu --output".split(' '))
         .arg(dir.path().join("never.png"))
         .output()
         .unwrap();

@@ -10,7 +10,7 @@ use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use chaoscope::render::store::MapStore;
-use common::{chaoscope, png_text, read_npy};
+use common::{argv, chaoscope, png_text, read_npy};
 
 fn backend() -> &'static str {
     if common::gpu().is_some() {
@@ -462,17 +462,7 @@ fn the_verdict_goes_into_the_store() {
 fn sweeps_go_into_one_store() {
     let dir = tempfile::tempdir().unwrap();
     let (out, store) = (dir.path().join("sweep"), dir.path().join("sweep.zarr"));
-    let sweep = [
-        "sweep",
-        "--vary",
-        "m2/m1=0.5:2",
-        "--frames",
-        "3",
-        "--size",
-        "48x32",
-        "--t-max",
-        "4",
-    ];
+    let sweep = argv("sweep --vary m2/m1=0.5:2 --frames 3 --size 48x32 --t-max 4");
     chaoscope()
         .args(sweep)
         .args(["--backend", backend(), "--output"])

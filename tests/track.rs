@@ -569,14 +569,7 @@ fn the_forecast_is_drawn_back_onto_the_film() {
     chaoscope()
         .arg("forecast")
         .arg(&csv)
-        .args([
-            "--window",
-            "0.8:2.3",
-            "--members",
-            "300",
-            "--candidates",
-            "1024",
-        ])
+        .args("--window 0.8:2.3 --members 300 --candidates 1024".split(' '))
         .args(["--preset", "lab", "--backend", "cpu", "--video"])
         .arg(&film)
         .arg("--output")

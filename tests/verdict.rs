@@ -47,21 +47,10 @@ fn map_with_verdict(dir: &Path, backend: &str, extra: &[&str]) -> (Vec<f32>, Vec
 fn reference(dir: &Path) -> Vec<f32> {
     let npy = dir.join("reference.npy");
     chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "32",
-            "--t-max",
-            "30",
-            "--integrator",
-            "dp54",
-            "--rtol",
-            "1e-12",
-            "--dt",
-            "0.05",
-            "--backend",
-            "cpu",
-        ])
+        .args(
+            "flip --size 32 --t-max 30 --integrator dp54 --rtol 1e-12 --dt 0.05 --backend cpu"
+                .split(' '),
+        )
         .arg("--output")
         .arg(dir.join("reference.png"))
         .arg("--data")
@@ -165,16 +154,7 @@ fn divergence_maps_have_a_verdict_and_points_refuse_one() {
     let dir = tempfile::tempdir().unwrap();
     let mask = dir.path().join("m.npy");
     chaoscope()
-        .args([
-            "lyapunov",
-            "--size",
-            "16",
-            "--t-max",
-            "5",
-            "--backend",
-            "cpu",
-            "--output",
-        ])
+        .args("lyapunov --size 16 --t-max 5 --backend cpu --output".split(' '))
         .arg(dir.path().join("l.png"))
         .arg("--resolved")
         .arg(&mask)
@@ -199,20 +179,7 @@ fn the_verdict_resolves_nothing_finer_than_f64() {
     let dir = tempfile::tempdir().unwrap();
     let mask = dir.path().join("m.npy");
     chaoscope()
-        .args([
-            "flip",
-            "--size",
-            "8",
-            "--t-max",
-            "3",
-            "--backend",
-            "cpu",
-            "--theta1",
-            "2:2.00000000000001",
-            "--theta2",
-            "1:1.00000000000001",
-            "--output",
-        ])
+        .args("flip --size 8 --t-max 3 --backend cpu --theta1 2:2.00000000000001 --theta2 1:1.00000000000001 --output".split(' '))
         .arg(dir.path().join("m.png"))
         .arg("--resolved")
         .arg(&mask)
@@ -257,15 +224,7 @@ fn the_divergence_verdict_compares_with_f64() {
     let run = |name: &str, extra: &[&str]| {
         let npy = dir.path().join(format!("{name}.npy"));
         chaoscope()
-            .args([
-                "lyapunov",
-                "--size",
-                "48",
-                "--t-max",
-                "20",
-                "--backend",
-                "gpu",
-            ])
+            .args("lyapunov --size 48 --t-max 20 --backend gpu".split(' '))
             .args(extra)
             .arg("--output")
             .arg(dir.path().join(format!("{name}.png")))
@@ -296,23 +255,8 @@ fn the_divergence_verdict_compares_with_f64() {
 fn the_divergence_summary_states_the_adaptive_rule() {
     let dir = tempfile::tempdir().unwrap();
     chaoscope()
-        .args([
-            "lyapunov",
-            "--size",
-            "8",
-            "--t-max",
-            "2",
-            "--backend",
-            "cpu",
-        ])
-        .args([
-            "--integrator",
-            "dp54",
-            "--rtol",
-            "1e-6",
-            "--show-unresolved",
-            "--output",
-        ])
+        .args("lyapunov --size 8 --t-max 2 --backend cpu".split(' '))
+        .args("--integrator dp54 --rtol 1e-6 --show-unresolved --output".split(' '))
         .arg(dir.path().join("l.png"))
         .assert()
         .success()

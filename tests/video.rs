@@ -13,17 +13,7 @@ use common::chaoscope;
 /// frames counted by decoding, duration (s), and the container's comment.
 fn ffprobe(path: &Path) -> (String, String, u32, u32, u64, f64, String) {
     let o = std::process::Command::new("ffprobe")
-        .args([
-            "-v",
-            "error",
-            "-select_streams",
-            "v:0",
-            "-count_frames",
-            "-show_entries",
-            "stream=codec_name,pix_fmt,width,height,nb_read_frames,duration:format_tags=comment",
-            "-of",
-            "json",
-        ])
+        .args("-v error -select_streams v:0 -count_frames -show_entries stream=codec_name,pix_fmt,width,height,nb_read_frames,duration:format_tags=comment -of json".split(' '))
         .arg(path)
         .output()
         .unwrap();
@@ -53,16 +43,7 @@ fn a_sweep_films_its_frames_as_an_mp4() {
     let (out, film) = (dir.path().join("sweep"), dir.path().join("sweep.mp4"));
     chaoscope()
         .args(["sweep", "--vary", "g=5:15", "--frames", "6", "--fps", "12"])
-        .args([
-            "--size",
-            "64x42",
-            "--t-max",
-            "4",
-            "--backend",
-            "cpu",
-            "--crf",
-            "10",
-        ])
+        .args("--size 64x42 --t-max 4 --backend cpu --crf 10".split(' '))
         .arg("--output")
         .arg(&out)
         .arg("--film")
@@ -237,17 +218,7 @@ fn film_settings_are_checked_and_a_missing_ffmpeg_is_named() {
     let film = dir.path().join("t.mp4");
     let o = chaoscope()
         .env("PATH", dir.path())
-        .args([
-            "traces",
-            "--theta1",
-            "2",
-            "--theta2",
-            "2",
-            "--runs",
-            "2",
-            "--exposure",
-            "0.5",
-        ])
+        .args("traces --theta1 2 --theta2 2 --runs 2 --exposure 0.5".split(' '))
         .args(["--size", "32", "--backend", "cpu", "--output"])
         .arg(dir.path().join("t.png"))
         .arg("--film")
@@ -284,22 +255,7 @@ fn a_phones_hevc_mov_decodes_upright_with_its_own_times() {
     let o = std::process::Command::new("ffmpeg")
         .args(["-v", "error", "-i"])
         .arg(&film)
-        .args([
-            "-frames:v",
-            "90",
-            "-vf",
-            "settb=1/600,setpts='(N/30+floor(N/3)/60)/TB'",
-            "-fps_mode",
-            "passthrough",
-            "-c:v",
-            "libx265",
-            "-x265-params",
-            "log-level=error",
-            "-crf",
-            "22",
-            "-video_track_timescale",
-            "600",
-        ])
+        .args("-frames:v 90 -vf settb=1/600,setpts='(N/30+floor(N/3)/60)/TB' -fps_mode passthrough -c:v libx265 -x265-params log-level=error -crf 22 -video_track_timescale 600".split(' '))
         .arg(&mov)
         .output()
         .unwrap();
@@ -628,16 +584,7 @@ fn one_ctrl_c_stops_a_film_whose_ffmpeg_stalled() {
     // 3 MB frames: a stalled FFmpeg's pipe fills with the first.
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_chaoscope"))
         .args(["traces", "--theta1", "2", "--theta2", "2.5", "--runs", "2"])
-        .args([
-            "--exposure",
-            "60",
-            "--fps",
-            "30",
-            "--size",
-            "1001",
-            "--backend",
-            "cpu",
-        ])
+        .args("--exposure 60 --fps 30 --size 1001 --backend cpu".split(' '))
         .arg("--output")
         .arg(dir.path().join("t.png"))
         .arg("--film")
@@ -706,16 +653,7 @@ fn a_film_cut_short_or_joined_is_refused() {
     let made = std::process::Command::new("ffmpeg")
         .args(["-v", "error", "-y", "-i"])
         .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/test_film.mp4"))
-        .args([
-            "-t",
-            "2",
-            "-c",
-            "copy",
-            "-bsf:v",
-            "h264_mp4toannexb",
-            "-f",
-            "mpegts",
-        ])
+        .args("-t 2 -c copy -bsf:v h264_mp4toannexb -f mpegts".split(' '))
         .arg(&piece)
         .status()
         .unwrap();

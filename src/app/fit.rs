@@ -74,6 +74,16 @@ pub struct FitSummary {
 /// The fitted model as a parameter file, in the output folder.
 pub const MODEL_FILE: &str = "model.toml";
 
+/// The files a fit writes into its folder.
+const FILES: [&str; 6] = [
+    "positions.png",
+    "energy.png",
+    "phase.png",
+    "derived.csv",
+    "summary.json",
+    MODEL_FILE,
+];
+
 /// Runs the fit; `command` reproduces it and goes into summary.json.
 pub fn run(
     job: &FitJob,
@@ -97,14 +107,7 @@ pub fn run(
     super::checks::check_directory(
         "output",
         &job.output,
-        &[
-            "positions.png",
-            "energy.png",
-            "phase.png",
-            "derived.csv",
-            "summary.json",
-            MODEL_FILE,
-        ],
+        &FILES,
         &[],
         &super::checks::tracked_inputs(&job.file, &job.params),
     )?;
@@ -343,17 +346,7 @@ pub fn run(
             plots::EnergyUnit::GravityMoment => "P",
         },
         output: out.clone(),
-        files: [
-            "positions.png",
-            "energy.png",
-            "phase.png",
-            "derived.csv",
-            "summary.json",
-            MODEL_FILE,
-        ]
-        .iter()
-        .map(|f| out.join(f))
-        .collect(),
+        files: FILES.iter().map(|f| out.join(f)).collect(),
         notices,
     })
 }

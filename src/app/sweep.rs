@@ -297,30 +297,7 @@ pub fn run(
             "a sweep's store is written by one task: leave out the tile or the data store",
         ));
     }
-    spec::validate_stepping(&job.stepping)?;
-    for (k, f) in frames.iter().enumerate() {
-        let checked = spec::validate_grid(&f.grid)
-            .and_then(|()| spec::validate_stability(&f.params, &job.stepping))
-            .and_then(|()| spec::validate_plane(&f.params, &f.grid, &job.stepping));
-        // A frame the varied parameter made impossible is the range's fault (--vary).
-        if let Err(Error::InvalidSpec { field, reason }) = checked {
-            return Err(Error::invalid(
-                "vary",
-                format!(
-                    "at frame {k} ({} = {:e}): {field}: {reason}",
-                    job.vary.param.name(),
-                    job.vary.at(progress(k, frames.len()))
-                ),
-            ));
-        }
-        checked?;
-    }
-    if let AnyMap::Lyapunov(spec) = frame_map(job, &frames[0]) {
-        spec.validate()?;
-    }
-    if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
-        return Err(Error::invalid("ftle_max", "must be > 0"));
-    }
+    check_frames(job, &frames)?;
     set.check()?;
     if let Some(data) = &job.data {
         super::check_extension("data", data, "zarr")?;
@@ -335,32 +312,7 @@ pub fn run(
     std::fs::create_dir_all(&job.output)?;
     let n = frames.len();
     let values: Vec<f64> = (0..n).map(|k| job.vary.at(progress(k, n))).collect();
-    let store = match &job.data {
-        Some(path) => {
-            let info = crate::render::store::StoreInfo {
-                command: command.clone(),
-                version: env!("CARGO_PKG_VERSION").to_string(),
-                tiles: 1,
-                mirrored: false,
-                resolved: false,
-                identity: serde_json::json!({
-                    "frames": frames.iter().map(|f| frame_map(job, f)).collect::<Vec<_>>(),
-                    "backend": job.backend.name(),
-                }),
-            };
-            let quantity = frame_map(job, &frames[0]).quantity();
-            let map = (quantity.name, quantity.unit);
-            let vary = job.vary.param;
-            Some(SweepStore::create_or_open(
-                path,
-                &frames[0].grid,
-                &info,
-                (vary.name(), vary.unit(), &values),
-                map,
-            )?)
-        }
-        None => None,
-    };
+    let store = open_store(job, &frames, &values, &command)?;
     let sweep = SweepFrames {
         job,
         frames: &frames,
@@ -399,6 +351,71 @@ pub fn run(
     }
     summary.files.extend(job.data.clone());
     Ok(summary)
+}
+
+/// Every frame's checks: the stepping once, each frame's plane, stability and grid (an
+/// impossible frame is the varied range's fault, named `vary`), the divergence map's own.
+fn check_frames(job: &SweepJob, frames: &[Frame]) -> Result<()> {
+    spec::validate_stepping(&job.stepping)?;
+    for (k, f) in frames.iter().enumerate() {
+        let checked = spec::validate_grid(&f.grid)
+            .and_then(|()| spec::validate_stability(&f.params, &job.stepping))
+            .and_then(|()| spec::validate_plane(&f.params, &f.grid, &job.stepping));
+        if let Err(Error::InvalidSpec { field, reason }) = checked {
+            return Err(Error::invalid(
+                "vary",
+                format!(
+                    "at frame {k} ({} = {:e}): {field}: {reason}",
+                    job.vary.param.name(),
+                    job.vary.at(progress(k, frames.len()))
+                ),
+            ));
+        }
+        checked?;
+    }
+    if let AnyMap::Lyapunov(spec) = frame_map(job, &frames[0]) {
+        spec.validate()?;
+    }
+    if !(job.ftle_max.is_finite() && job.ftle_max > 0.0) {
+        return Err(Error::invalid("ftle_max", "must be > 0"));
+    }
+    Ok(())
+}
+
+/// The sweep's Zarr store, when asked for: made, or opened to resume; the varied
+/// parameter's `values` its frame coordinate.
+fn open_store(
+    job: &SweepJob,
+    frames: &[Frame],
+    values: &[f64],
+    command: &str,
+) -> Result<Option<SweepStore>> {
+    Ok(match &job.data {
+        Some(path) => {
+            let info = crate::render::store::StoreInfo {
+                command: command.to_string(),
+                version: env!("CARGO_PKG_VERSION").to_string(),
+                tiles: 1,
+                mirrored: false,
+                resolved: false,
+                identity: serde_json::json!({
+                    "frames": frames.iter().map(|f| frame_map(job, f)).collect::<Vec<_>>(),
+                    "backend": job.backend.name(),
+                }),
+            };
+            let quantity = frame_map(job, &frames[0]).quantity();
+            let map = (quantity.name, quantity.unit);
+            let vary = job.vary.param;
+            Some(SweepStore::create_or_open(
+                path,
+                &frames[0].grid,
+                &info,
+                (vary.name(), vary.unit(), values),
+                map,
+            )?)
+        }
+        None => None,
+    })
 }
 
 fn lyapunov_spec(job: &SweepJob, frame: &Frame) -> LyapunovSpec {

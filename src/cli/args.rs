@@ -37,6 +37,24 @@ pub fn engine_then<J>(
     Ok((engine, job))
 }
 
+/// Where a command that runs trajectories or ensembles runs them, and in what precision.
+#[derive(Args, Debug, Clone)]
+pub struct LentEngineArgs {
+    /// auto, gpu or cpu (f64).
+    #[arg(long, default_value = "auto", value_parser = backend_parser())]
+    pub backend: Backend,
+    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
+    /// [default: f32]
+    #[arg(long, value_parser = one_of(&crate::spec::Precision::ALL, crate::spec::Precision::name))]
+    pub precision: Option<crate::spec::Precision>,
+}
+
+impl LentEngineArgs {
+    pub fn lent(&self) -> crate::Result<Engine> {
+        lent_engine(self.precision, self.backend)
+    }
+}
+
 /// The engine a command that runs trajectories or ensembles lends its run: in the precision
 /// asked (f32 unless given), made once for the command ([`f32_on_the_cpu`]'s note first).
 pub fn lent_engine(

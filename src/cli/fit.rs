@@ -4,14 +4,12 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{PhysicalArgs, TrackedUnitsArgs, backend_parser};
-use super::parse::{one_of, parse_length, parse_number, parse_usize};
+use super::args::{LentEngineArgs, PhysicalArgs, TrackedUnitsArgs};
+use super::parse::{parse_length, parse_number, parse_usize};
 use super::{command_line, json, say};
 use crate::app::fit::{self, FitJob};
-use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
-use crate::spec::Precision;
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_args(super::args::tracked_model_help))]
@@ -46,13 +44,8 @@ pub struct FitArgs {
     pub velocity_error: f64,
     #[command(flatten)]
     pub physical: PhysicalArgs,
-    /// auto, gpu or cpu (f64).
-    #[arg(long, default_value = "auto", value_parser = backend_parser())]
-    pub backend: Backend,
-    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    /// [default: f32]
-    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Option<Precision>,
+    #[command(flatten)]
+    pub engine: LentEngineArgs,
 }
 
 impl FitArgs {
@@ -67,15 +60,15 @@ impl FitArgs {
             candidates: self.candidates,
             velocity_error: self.velocity_error,
             params: self.physical.sources(),
-            backend: self.backend,
-            precision: self.precision.unwrap_or_default(),
+            backend: self.engine.backend,
+            precision: self.engine.precision.unwrap_or_default(),
         }
     }
 }
 
 pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
-    let engine = super::args::lent_engine(args.precision, job.backend)?;
+    let engine = args.engine.lent()?;
     let s = fit::run(&job, &engine, command_line::fit(&job), monitor)?;
     say("fit", &s.notices);
     let agrees = match s.verdict.follows {

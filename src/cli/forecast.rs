@@ -4,15 +4,13 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{PhysicalArgs, TrackedUnitsArgs, backend_parser};
-use super::parse::{one_of, parse_length, parse_u64, parse_usize, parse_window};
+use super::args::{LentEngineArgs, PhysicalArgs, TrackedUnitsArgs};
+use super::parse::{parse_length, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
 use crate::app::forecast::{self, ForecastJob, fmt_time};
-use crate::engine::Backend;
 use crate::error::Result;
 use crate::fit::outcome::ForecastSettings;
 use crate::monitor::Monitor;
-use crate::spec::Precision;
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_args(super::args::tracked_model_help))]
@@ -62,13 +60,8 @@ pub struct ForecastArgs {
     pub held_out: usize,
     #[command(flatten)]
     pub physical: PhysicalArgs,
-    /// auto, gpu or cpu (f64).
-    #[arg(long, default_value = "auto", value_parser = backend_parser())]
-    pub backend: Backend,
-    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    /// [default: f32]
-    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Option<Precision>,
+    #[command(flatten)]
+    pub engine: LentEngineArgs,
 }
 
 impl ForecastArgs {
@@ -88,15 +81,15 @@ impl ForecastArgs {
             },
             params: self.physical.sources(),
             video: self.video.clone(),
-            backend: self.backend,
-            precision: self.precision.unwrap_or_default(),
+            backend: self.engine.backend,
+            precision: self.engine.precision.unwrap_or_default(),
         }
     }
 }
 
 pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
-    let engine = super::args::lent_engine(args.precision, job.backend)?;
+    let engine = args.engine.lent()?;
     let s = forecast::run(&job, &engine, command_line::forecast(&job), monitor)?;
     say("forecast", &s.notices);
     if !s.verdict.follows {

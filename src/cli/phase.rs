@@ -4,16 +4,15 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{PhysicalArgs, StepArgs, backend_parser, colormap_parser};
-use super::parse::{one_of, parse_number, parse_spread, parse_u32};
+use super::args::{LentEngineArgs, PhysicalArgs, StepArgs, colormap_parser};
+use super::parse::{parse_number, parse_spread, parse_u32};
 use super::{command_line, json, say};
 use crate::app::phase::{self, PhaseJob};
-use crate::engine::Backend;
 use crate::error::Result;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::render::Colormap;
-use crate::spec::{Precision, Spread};
+use crate::spec::Spread;
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("60")))]
@@ -48,13 +47,8 @@ pub struct PhaseArgs {
     pub single: bool,
     #[command(flatten)]
     pub physical: PhysicalArgs,
-    /// auto, gpu or cpu (f64).
-    #[arg(long, default_value = "auto", value_parser = backend_parser())]
-    pub backend: Backend,
-    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    /// [default: f32]
-    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Option<Precision>,
+    #[command(flatten)]
+    pub engine: LentEngineArgs,
     /// Colour map of the densities (default inferno).
     #[arg(long, value_parser = colormap_parser())]
     pub colormap: Option<Colormap>,
@@ -78,8 +72,8 @@ impl PhaseArgs {
             stepping: self.step.stepping(),
             size: self.size,
             single: self.single,
-            backend: self.backend,
-            precision: self.precision.unwrap_or_default(),
+            backend: self.engine.backend,
+            precision: self.engine.precision.unwrap_or_default(),
             colormap: self.colormap,
             output: self.output.clone(),
         })
@@ -88,7 +82,7 @@ impl PhaseArgs {
 
 pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
-    let engine = super::args::lent_engine(args.precision, job.backend)?;
+    let engine = args.engine.lent()?;
     let s = phase::run(&job, &engine, command_line::phase(&job), monitor)?;
     say("phase", &s.notices);
     eprintln!("phase portrait -> {}", s.output.display());

@@ -4,15 +4,14 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{PhysicalArgs, StartArgs, backend_parser};
-use super::parse::{one_of, parse_number, parse_spread, parse_u32};
+use super::args::{LentEngineArgs, PhysicalArgs, StartArgs};
+use super::parse::{parse_number, parse_spread, parse_u32};
 use super::{command_line, json, say};
 use crate::app::film::FilmSpec;
 use crate::app::traces::{self, TracesJob};
-use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
-use crate::spec::{Precision, Spread, Stepping};
+use crate::spec::{Spread, Stepping};
 
 #[derive(Args, Debug, Clone)]
 pub struct TracesArgs {
@@ -35,13 +34,8 @@ pub struct TracesArgs {
     pub size: u32,
     #[command(flatten)]
     pub physical: PhysicalArgs,
-    /// auto, gpu or cpu (f64).
-    #[arg(long, default_value = "auto", value_parser = backend_parser())]
-    pub backend: Backend,
-    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    /// [default: f32]
-    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Option<Precision>,
+    #[command(flatten)]
+    pub engine: LentEngineArgs,
     /// PNG to write.
     #[arg(long, default_value = "out/traces.png")]
     pub output: PathBuf,
@@ -74,8 +68,8 @@ impl TracesArgs {
                 t_max: self.exposure,
             },
             size: self.size,
-            backend: self.backend,
-            precision: self.precision.unwrap_or_default(),
+            backend: self.engine.backend,
+            precision: self.engine.precision.unwrap_or_default(),
             output: self.output.clone(),
             film: self.film.clone().map(|path| FilmSpec {
                 path,
@@ -89,7 +83,7 @@ impl TracesArgs {
 
 pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
-    let engine = super::args::lent_engine(args.precision, job.backend)?;
+    let engine = args.engine.lent()?;
     let s = traces::run(&job, &engine, command_line::traces(&job), monitor)?;
     say("traces", &s.notices);
     eprintln!(

@@ -4,17 +4,15 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::args::{PhysicalArgs, backend_parser};
-use super::parse::{one_of, parse_length, parse_number, parse_u64, parse_usize, parse_window};
+use super::args::{LentEngineArgs, PhysicalArgs};
+use super::parse::{parse_length, parse_number, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
 use crate::app::twin::{self, TwinJob};
-use crate::engine::Backend;
 use crate::error::Result;
 use crate::fit::outcome::ForecastSettings;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::params::Preset;
-use crate::spec::Precision;
 
 /// The truth's joint damping (N m s) unless --joint-damping is given: the size `fit` finds
 /// on the lab's data.
@@ -68,13 +66,8 @@ pub struct TwinArgs {
     pub candidates: usize,
     #[command(flatten)]
     pub physical: PhysicalArgs,
-    /// auto, gpu or cpu (f64).
-    #[arg(long, default_value = "auto", value_parser = backend_parser())]
-    pub backend: Backend,
-    /// The GPU's precision, f32 or f64 (an adapter with f64); the CPU is always f64.
-    /// [default: f32]
-    #[arg(long, value_parser = one_of(&Precision::ALL, Precision::name))]
-    pub precision: Option<Precision>,
+    #[command(flatten)]
+    pub engine: LentEngineArgs,
 }
 
 impl TwinArgs {
@@ -107,15 +100,15 @@ impl TwinArgs {
                 omega2: self.omega2,
             },
             params,
-            backend: self.backend,
-            precision: self.precision.unwrap_or_default(),
+            backend: self.engine.backend,
+            precision: self.engine.precision.unwrap_or_default(),
         }
     }
 }
 
 pub fn run(args: &TwinArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
-    let engine = super::args::lent_engine(args.precision, job.backend)?;
+    let engine = args.engine.lent()?;
     let s = twin::run(&job, &engine, command_line::twin(&job), monitor)?;
     say("twin", &s.notices);
     for l in &s.slopes {

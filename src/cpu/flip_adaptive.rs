@@ -38,13 +38,7 @@ pub fn flip_time_adaptive(
 
 /// The adaptive flip-time map of `spec` (its integrator must be adaptive), rows in parallel.
 pub fn flip_map_adaptive(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(
-        &spec.grid,
-        &spec.params,
-        spec.row_span(),
-        monitor,
-        |p, start| {
-            flip_time_adaptive(p, start, &spec.stepping, spec.integrator, spec.early_exit).0 as f32
-        },
-    )
+    map_pixels(spec, monitor, |p, start| {
+        flip_time_adaptive(p, start, &spec.stepping, spec.integrator, spec.early_exit).0 as f32
+    })
 }

@@ -12,18 +12,12 @@ use crate::spec::FlipSpec;
 /// The flip-kind map of `spec` ([`FlipKind`]'s codes; NaN where the state left the numbers),
 /// rows in parallel.
 pub fn flip_kind_map(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(
-        &spec.grid,
-        &spec.params,
-        spec.row_span(),
-        monitor,
-        |p, start| {
-            let flip = first_flip(p, start, &spec.stepping, spec.early_exit);
-            match (flip.time.is_nan(), flip.arm) {
-                (true, _) => f32::NAN,
-                (false, None) => FlipKind::Never.code(),
-                (false, Some((arm, way))) => FlipKind::of(arm, way).code(),
-            }
-        },
-    )
+    map_pixels(spec, monitor, |p, start| {
+        let flip = first_flip(p, start, &spec.stepping, spec.early_exit);
+        match (flip.time.is_nan(), flip.arm) {
+            (true, _) => f32::NAN,
+            (false, None) => FlipKind::Never.code(),
+            (false, Some((arm, way))) => FlipKind::of(arm, way).code(),
+        }
+    })
 }

@@ -76,11 +76,7 @@ pub fn flip_time(p: &Params, start: State, stepping: &Stepping, early_exit: bool
 
 /// The flip-time map of `spec` (s, +inf = never flipped), rows in parallel.
 pub fn flip_map(spec: &FlipSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(
-        &spec.grid,
-        &spec.params,
-        spec.row_span(),
-        monitor,
-        |p, start| flip_time(p, start, &spec.stepping, spec.early_exit) as f32,
-    )
+    map_pixels(spec, monitor, |p, start| {
+        flip_time(p, start, &spec.stepping, spec.early_exit) as f32
+    })
 }

@@ -330,19 +330,13 @@ pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]
 
 /// The map of `spec`'s indicator, rows in parallel.
 pub fn indicator_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(
-        &spec.grid,
-        &spec.params,
-        spec.row_span(),
-        monitor,
-        |p, start| {
-            let spec = LyapunovSpec {
-                params: *p,
-                ..*spec
-            };
-            indicator_run(&spec, start, None, &mut |_, _| {}).expect("never cancelled") as f32
-        },
-    )
+    map_pixels(spec, monitor, |p, start| {
+        let spec = LyapunovSpec {
+            params: *p,
+            ..*spec
+        };
+        indicator_run(&spec, start, None, &mut |_, _| {}).expect("never cancelled") as f32
+    })
 }
 
 #[cfg(test)]

@@ -201,17 +201,11 @@ pub fn lyapunov_spectrum(spec: &LyapunovSpec, start: State) -> [f64; 4] {
 
 /// The FTLE map of `spec` (1/s at t-max), rows in parallel.
 pub fn ftle_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<Field> {
-    map_pixels(
-        &spec.grid,
-        &spec.params,
-        spec.row_span(),
-        monitor,
-        |p, start| {
-            let spec = LyapunovSpec {
-                params: *p,
-                ..*spec
-            };
-            ftle(&spec, start).last() as f32
-        },
-    )
+    map_pixels(spec, monitor, |p, start| {
+        let spec = LyapunovSpec {
+            params: *p,
+            ..*spec
+        };
+        ftle(&spec, start).last() as f32
+    })
 }

@@ -31,7 +31,7 @@ use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, Positions, State};
 use crate::monitor::Monitor;
-use crate::spec::{Grid, RowSpan};
+use crate::spec::MapSpec;
 
 /// Angular accelerations (rad/s^2) from the Lagrange equations M(q) q'' = f(q, q') + tau:
 ///
@@ -354,17 +354,16 @@ pub fn positions(p: &Params, start: State, dt: f64, steps: u32, times: &[f64]) -
     out
 }
 
-/// A map over the rows `span` of `grid`: `value(parameters, start)` for every pixel of its
-/// rows, each with its own parameters where an axis varies one (`params` elsewhere), the
-/// rest mirrored from them when the span is the whole grid; rows in parallel on all cores,
+/// `spec`'s map over the rows it integrates: `value(parameters, start)` for every pixel of
+/// them, each with its own parameters where an axis varies one (the spec's elsewhere), the
+/// rest mirrored from them when its span is the whole grid; rows in parallel on all cores,
 /// with progress and interruption.
 pub fn map_pixels(
-    grid: &Grid,
-    params: &Params,
-    span: RowSpan,
+    spec: &impl MapSpec,
     monitor: &Monitor,
     value: impl Fn(&Params, State) -> f32 + Sync,
 ) -> Result<Field> {
+    let (grid, params, span) = (spec.grid(), &spec.params(), spec.row_span());
     let mut field = Field::new(grid.width, span.field_rows(grid), 0.0);
     monitor.start("cpu", span.count as u64);
     let computed = span.count as usize * grid.width as usize;

@@ -272,14 +272,7 @@ impl FlipTimeKernel {
             (FlipMeasure::Time, Integrator::Dp54 { .. }) => &self.adaptive,
             (FlipMeasure::Time, Integrator::Dop853 { .. }) => &self.dop853,
         };
-        let [init, advance] = variants.get(
-            ctx,
-            spec.params.losses.kinds(),
-            spec.early_exit,
-            spec.grid.varies_params(),
-        ) else {
-            unreachable!("two entry points")
-        };
+        let [init, advance] = variants.map_pair(ctx, &spec.params, &spec.grid, spec.early_exit);
         let total_steps = spec.stepping.steps();
         let tiling = Tiling::new(grid.width, spec.row_span(), max_pixels);
         let bufs = self.buffers(ctx, tiling.capacity(), adaptive);

@@ -4,10 +4,7 @@
 
 use super::context::{GpuContext, read_buffer};
 use super::layout::{Real, Run, RunParams, TileParams, read_reals, with_real};
-use super::pipeline::{
-    Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer_of,
-    storage_buffer,
-};
+use super::pipeline::{MapBuffers, Variants, dispatch_and_wait, kernel_module, layouts};
 use super::shaders::Kernel;
 use super::tiled::{TileWork, Tiling, catch_up, map_tiles, max_pixels, time_loop};
 use crate::error::Result;
@@ -134,14 +131,7 @@ impl IndicatorKernel {
                 ..Run::default()
             });
         let variants = self.variants(advance);
-        let [init, advance] = variants.get(
-            ctx,
-            spec.params.losses.kinds(),
-            false,
-            spec.grid.varies_params(),
-        ) else {
-            unreachable!("two entry points")
-        };
+        let [init, advance] = variants.map_pair(ctx, &spec.params, &spec.grid, false);
         let slot = size_of::<R::IndicatorSlot>() as u64;
         let value_bytes = size_of::<R>() as u64;
         let tiling = Tiling::new(
@@ -150,14 +140,18 @@ impl IndicatorKernel {
             max_pixels(ctx, slot, slot + value_bytes),
         );
         let capacity = tiling.capacity();
-        let params_buf = params_buffer_of(ctx, size_of::<R::Params>() as u64);
-        let states = storage_buffer(ctx, "indicator states", capacity * slot);
-        let values = storage_buffer(ctx, "indicator values", capacity * value_bytes);
-        let bind = bind_group(
+        let MapBuffers {
+            params: params_buf,
+            slots: states,
+            values,
+            bind,
+        } = MapBuffers::new(
             ctx,
             "indicators",
             &self.layout,
-            &[&params_buf, &states, &values],
+            size_of::<R::Params>() as u64,
+            capacity,
+            (slot, value_bytes),
         );
         let dispatch = |pipeline: &wgpu::ComputePipeline, params: &R::Params| {
             ctx.queue

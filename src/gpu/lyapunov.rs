@@ -6,8 +6,8 @@ use super::layout::{
     GpuLyapunovSlot, GpuParams, Real, Run, RunParams, TileParams, read_reals, with_real,
 };
 use super::pipeline::{
-    Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer,
-    params_buffer_of, storage_buffer,
+    MapBuffers, Variants, bind_group, dispatch_and_wait, kernel_module, layouts, params_buffer,
+    storage_buffer,
 };
 use super::shaders::Kernel;
 use super::tiled::{TileWork, Tiling, catch_up, map_tiles, max_pixels, time_loop};
@@ -155,14 +155,7 @@ impl LyapunovKernel {
             }
             (_, false) => &self.pipelines,
         };
-        let [init, advance] = variants.get(
-            ctx,
-            spec.params.losses.kinds(),
-            false,
-            spec.grid.varies_params(),
-        ) else {
-            unreachable!("two entry points")
-        };
+        let [init, advance] = variants.map_pair(ctx, &spec.params, &spec.grid, false);
         let total_steps = spec.stepping.steps();
         let interval = spec.renorm_steps();
         // The adaptive kernel's dispatches count renormalisation windows, each about
@@ -177,14 +170,18 @@ impl LyapunovKernel {
         let tiling = Tiling::new(grid.width, spec.row_span(), max_pixels);
         let capacity = tiling.capacity();
         let (slot, sum_bytes, params_bytes) = sizes(self.precision);
-        let params_buf = params_buffer_of(ctx, params_bytes);
-        let states = storage_buffer(ctx, "states", capacity * slot);
-        let log_sums = storage_buffer(ctx, "log sums", capacity * sum_bytes);
-        let bind = bind_group(
+        let MapBuffers {
+            params: params_buf,
+            slots: states,
+            values: log_sums,
+            bind,
+        } = MapBuffers::new(
             ctx,
             "lyapunov",
             &self.layout,
-            &[&params_buf, &states, &log_sums],
+            params_bytes,
+            capacity,
+            (slot, sum_bytes),
         );
         let dispatch = |pipeline: &wgpu::ComputePipeline, params: &dyn TileParamsBytes| {
             ctx.queue.write_buffer(&params_buf, 0, params.bytes());

@@ -112,6 +112,55 @@ impl Variants {
     }
 }
 
+impl Variants {
+    /// The (setup, advance) pipelines of a map of `params` over `grid` (its losses, whether
+    /// its pixels have their own parameters) with the switch `on`.
+    pub fn map_pair(
+        &self,
+        ctx: &GpuContext,
+        params: &crate::model::Params,
+        grid: &crate::spec::Grid,
+        on: bool,
+    ) -> [&wgpu::ComputePipeline; 2] {
+        match self.get(ctx, params.losses.kinds(), on, grid.varies_params()) {
+            [init, advance] => [init, advance],
+            _ => unreachable!("a map's kernel has two entry points"),
+        }
+    }
+}
+
+/// A map kernel's buffers for a tile of pixels, bound in the kernel's order: its params, each
+/// pixel's slot and each pixel's value.
+pub struct MapBuffers {
+    pub params: wgpu::Buffer,
+    pub slots: wgpu::Buffer,
+    pub values: wgpu::Buffer,
+    pub bind: wgpu::BindGroup,
+}
+
+impl MapBuffers {
+    /// For `capacity` pixels of `slot` and `value` bytes each, params of `params_bytes`.
+    pub fn new(
+        ctx: &GpuContext,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        params_bytes: u64,
+        capacity: u64,
+        (slot, value): (u64, u64),
+    ) -> Self {
+        let params = params_buffer_of(ctx, params_bytes);
+        let slots = storage_buffer(ctx, &format!("{label} slots"), capacity * slot);
+        let values = storage_buffer(ctx, &format!("{label} values"), capacity * value);
+        let bind = bind_group(ctx, label, layout, &[&params, &slots, &values]);
+        MapBuffers {
+            params,
+            slots,
+            values,
+            bind,
+        }
+    }
+}
+
 /// A bind group layout of one uniform (binding 0) and storage buffers (1, 2, ...), each
 /// read-only or not, and the pipeline layout holding it.
 pub fn layouts(

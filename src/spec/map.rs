@@ -116,15 +116,11 @@ impl FlipSpec {
     /// spelt out for flip maps.
     pub fn accurate(self) -> Self {
         let (precision, integrator, dt) = ACCURATE;
-        FlipSpec {
-            precision,
-            integrator,
-            stepping: Stepping {
-                dt,
-                ..self.stepping
-            },
-            ..self
-        }
+        let stepping = Stepping {
+            dt,
+            ..self.stepping
+        };
+        self.restepped(stepping, integrator, precision)
     }
 
     /// Rows to integrate: the band's, or all from the top, or the top half when the other
@@ -240,15 +236,11 @@ impl LyapunovSpec {
     pub fn accurate(self) -> Self {
         let (precision, integrator, largest) = ACCURATE_FTLE;
         let dt = self.renorm / (self.renorm / largest).ceil().max(1.0);
-        LyapunovSpec {
-            precision,
-            integrator,
-            stepping: Stepping {
-                dt,
-                ..self.stepping
-            },
-            ..self
-        }
+        let stepping = Stepping {
+            dt,
+            ..self.stepping
+        };
+        self.restepped(stepping, integrator, precision)
     }
 
     /// Whether the tangent map's point symmetry applies (see `use_symmetry`).
@@ -381,6 +373,9 @@ impl MapSpec for AnyMap {
     fn mirrors(&self) -> bool {
         on_any!(self, s => s.mirrors())
     }
+    fn row_span(&self) -> RowSpan {
+        on_any!(self, s => s.row_span())
+    }
     fn validate(&self) -> Result<()> {
         on_any!(self, s => MapSpec::validate(s))
     }
@@ -423,6 +418,8 @@ pub trait MapSpec: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     fn integrator(&self) -> Integrator;
     /// Whether a point-symmetric grid's bottom half is the top half mirrored.
     fn mirrors(&self) -> bool;
+    /// The rows a run integrates and the field it gives.
+    fn row_span(&self) -> RowSpan;
     /// Every field in range (the f64 tolerances; the f32 GPU's are checked once the engine
     /// has picked the path).
     fn validate(&self) -> Result<()>;
@@ -476,6 +473,9 @@ macro_rules! map_spec_fields {
         }
         fn mirrors(&self) -> bool {
             $t::mirrors(self)
+        }
+        fn row_span(&self) -> RowSpan {
+            $t::row_span(self)
         }
         fn validate(&self) -> Result<()> {
             $t::validate(self)

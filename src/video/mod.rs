@@ -115,6 +115,7 @@ fn spawn(
         std::io::ErrorKind::NotFound => Error::MissingTool {
             tool: program,
             what,
+            install: INSTALL,
         },
         _ => Error::Io(e),
     })?;
@@ -179,6 +180,7 @@ pub fn require(program: &'static str, what: &'static str) -> Result<()> {
         false => Err(Error::MissingTool {
             tool: program,
             what,
+            install: INSTALL,
         }),
     }
 }

@@ -309,3 +309,8 @@ pub fn browser_report(python: &str, script: &str, args: &[&std::ffi::OsStr]) -> 
     eprintln!("browser: {report}");
     serde_json::from_str(&report).unwrap()
 }
+
+/// A command line's words, written as one line: `argv("flip --size 8")`.
+pub fn argv(line: &str) -> Vec<&str> {
+    line.split(' ').collect()
+}

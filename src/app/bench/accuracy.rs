@@ -36,14 +36,16 @@ pub(super) fn accurate_problem(
 /// The converged reference of the accurate-map problem: the f64 CPU's DP54 at rtol 1e-12
 /// (at 256^2 and 30 s the GPU's f64 DP54 at 1e-12 agrees with it on every pixel).
 pub(super) fn accurate_reference(args: &BenchJob, monitor: &Monitor) -> Result<Field> {
-    let tight = Integrator::Dp54 {
-        rtol: 1e-12,
-        atol: 1e-12,
-    };
-    cpu::flip_map_adaptive(
-        &accurate_problem(args, Precision::F64, tight, 0.05),
-        monitor,
-    )
+    let spec = accurate_problem(args, Precision::F64, converged(1e-12), 0.05);
+    cpu::flip_map_adaptive(&spec, monitor)
+}
+
+/// DP54 at `tolerance` relative and absolute: a converged reference's steps.
+fn converged(tolerance: f64) -> Integrator {
+    Integrator::Dp54 {
+        rtol: tolerance,
+        atol: tolerance,
+    }
 }
 
 /// The fraction of `map`'s pixels that match `reference` (the verdict's agreement rule).
@@ -174,12 +176,8 @@ pub fn ftle_accuracy_size(args: &BenchJob) -> u32 {
 
 /// The converged divergence map: the f64 CPU's DP54 at rtol 1e-11.
 pub(super) fn ftle_reference(args: &BenchJob, monitor: &Monitor) -> Result<Field> {
-    let tight = Integrator::Dp54 {
-        rtol: 1e-11,
-        atol: 1e-11,
-    };
     cpu::ftle_map(
-        &ftle_accuracy_spec(args, Precision::F64, tight, 0.1),
+        &ftle_accuracy_spec(args, Precision::F64, converged(1e-11), 0.1),
         monitor,
     )
 }

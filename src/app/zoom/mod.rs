@@ -269,6 +269,49 @@ impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
     }
 }
 
+impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
+    /// The colours' range, fixed for every frame (the frames would flicker else): given, or
+    /// frame 0's own (read back from its PNG, whose command is then checked with it, or
+    /// computed, that frame kept for the run); returns where it came from.
+    fn fix_range(&mut self, set: &FrameSet, monitor: &Monitor) -> Result<&'static str> {
+        let job = self.job;
+        Ok(match (job.map.spec.ranged(), job.map.colour_range) {
+            (false, _) => {
+                self.range = None;
+                "fixed by the quantity"
+            }
+            (true, Some(_)) => "given",
+            (true, None) => {
+                let read = set
+                    .read(0)?
+                    .and_then(|png| text(&png, RANGE_KEY).and_then(parse_range));
+                self.range = match read {
+                    Some(r) => Some(r),
+                    None => {
+                        let first = self.job(0);
+                        let quiet = monitor.quiet();
+                        let made = compute(
+                            &first.spec,
+                            self.engine,
+                            self.verdict,
+                            first.samples,
+                            &quiet,
+                        )?;
+                        let drawn = first.spec.draw(&made.made.0, &first.picture, None, None)?;
+                        self.first = RefCell::new(Some(made));
+                        Some(
+                            drawn
+                                .range
+                                .expect("a ranged quantity's picture has a range"),
+                        )
+                    }
+                };
+                "frame 0"
+            }
+        })
+    }
+}
+
 impl<S: MapKernels + MapPicture> Frames for ZoomFrames<'_, S> {
     fn command(&self, k: u32) -> String {
         (self.frame_command)(&self.job(k))
@@ -354,42 +397,7 @@ pub fn run<S: MapKernels + MapPicture>(
         verdict,
         first: RefCell::new(None),
     };
-    // The colours' range: fixed for every frame (the frames would flicker else): given, or
-    // frame 0's own (read back from its PNG, whose command is then checked with it, or
-    // computed).
-    let range_from = match (job.map.spec.ranged(), job.map.colour_range) {
-        (false, _) => {
-            frames.range = None;
-            "fixed by the quantity"
-        }
-        (true, Some(_)) => "given",
-        (true, None) => {
-            let read = set
-                .read(0)?
-                .and_then(|png| text(&png, RANGE_KEY).and_then(parse_range));
-            frames.range = match read {
-                Some(r) => Some(r),
-                None => {
-                    let first = frames.job(0);
-                    let made = compute(
-                        &first.spec,
-                        engine,
-                        verdict,
-                        first.samples,
-                        &monitor.quiet(),
-                    )?;
-                    let drawn = first.spec.draw(&made.made.0, &first.picture, None, None)?;
-                    frames.first = RefCell::new(Some(made));
-                    Some(
-                        drawn
-                            .range
-                            .expect("a ranged quantity's picture has a range"),
-                    )
-                }
-            };
-            "frame 0"
-        }
-    };
+    let range_from = frames.fix_range(&set, monitor)?;
     let run = set.make(&frames, monitor)?;
     notices.extend(run.damaged);
     let mut summary = ZoomSummary {
