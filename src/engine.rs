@@ -38,64 +38,7 @@ impl Backend {
     }
 }
 
-/// The path a run takes: a type, so that what depends on it (the f32 tolerance floor, the
-/// words in the PNG and the summary) is decided once, from it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Path {
-    /// The f64 CPU reference.
-    Cpu,
-    /// A GPU kernel in this precision.
-    Gpu(Precision),
-    /// Read back from a Zarr store (`render`).
-    Store,
-}
-
-impl Path {
-    /// The path in the PNG metadata's words: "cpu", "gpu", "gpu f64", "zarr store".
-    pub fn name(self) -> &'static str {
-        match self {
-            Path::Cpu => "cpu",
-            Path::Gpu(precision) => precision.gpu_path_name(),
-            Path::Store => "zarr store",
-        }
-    }
-
-    pub fn on_gpu(self) -> bool {
-        matches!(self, Path::Gpu(_))
-    }
-
-    /// The precision the arithmetic runs in (the CPU's, and a store's maps', is f64).
-    pub fn precision(self) -> Precision {
-        match self {
-            Path::Gpu(precision) => precision,
-            Path::Cpu | Path::Store => Precision::F64,
-        }
-    }
-}
-
-/// Which path a run took, for the user and the PNG metadata.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RunInfo {
-    pub path: Path,
-    pub adapter: Option<String>,
-}
-
-impl RunInfo {
-    pub const CPU: RunInfo = RunInfo {
-        path: Path::Cpu,
-        adapter: None,
-    };
-
-    /// The path in the PNG metadata's words ([`Path::name`]).
-    pub fn backend(&self) -> &'static str {
-        self.path.name()
-    }
-
-    /// Where it ran, in words: the adapter's name or "the CPU".
-    pub fn place(&self) -> &str {
-        self.adapter.as_deref().unwrap_or("the CPU")
-    }
-}
+pub use crate::field::{Path, RunInfo};
 
 /// How each quantity's map runs on either path: the kernels' table, one impl a quantity.
 pub trait MapKernels: MapSpec {

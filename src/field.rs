@@ -1,4 +1,8 @@
-//! What the paths return, whichever made it: maps ([`Field`]) and convergence runs.
+//! What the paths return, whichever made it: maps ([`Field`]) and convergence runs, and
+//! which path made them ([`RunInfo`]): the ground floor the engine, the render and the files
+//! all stand on.
+
+use crate::spec::Precision;
 
 /// A 2-D grid of f32 values, row-major, row 0 at the top of the image (theta2 at its maximum),
 /// column 0 at theta1's minimum.
@@ -76,5 +80,64 @@ mod tests {
         };
         g.mirror_below(2);
         assert_eq!(g.data, [1.0, 2.0, 3.0, 4.0, 4.0, 3.0, 2.0, 1.0]);
+    }
+}
+
+/// The path a run takes: a type, so that what depends on it (the f32 tolerance floor, the
+/// words in the PNG and the summary) is decided once, from it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    /// The f64 CPU reference.
+    Cpu,
+    /// A GPU kernel in this precision.
+    Gpu(Precision),
+    /// Read back from a Zarr store (`render`).
+    Store,
+}
+
+impl Path {
+    /// The path in the PNG metadata's words: "cpu", "gpu", "gpu f64", "zarr store".
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::Cpu => "cpu",
+            Path::Gpu(precision) => precision.gpu_path_name(),
+            Path::Store => "zarr store",
+        }
+    }
+
+    pub fn on_gpu(self) -> bool {
+        matches!(self, Path::Gpu(_))
+    }
+
+    /// The precision the arithmetic runs in (the CPU's, and a store's maps', is f64).
+    pub fn precision(self) -> Precision {
+        match self {
+            Path::Gpu(precision) => precision,
+            Path::Cpu | Path::Store => Precision::F64,
+        }
+    }
+}
+
+/// Which path a run took, for the user and the PNG metadata.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunInfo {
+    pub path: Path,
+    pub adapter: Option<String>,
+}
+
+impl RunInfo {
+    pub const CPU: RunInfo = RunInfo {
+        path: Path::Cpu,
+        adapter: None,
+    };
+
+    /// The path in the PNG metadata's words ([`Path::name`]).
+    pub fn backend(&self) -> &'static str {
+        self.path.name()
+    }
+
+    /// Where it ran, in words: the adapter's name or "the CPU".
+    pub fn place(&self) -> &str {
+        self.adapter.as_deref().unwrap_or("the CPU")
     }
 }

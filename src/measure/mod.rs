@@ -168,16 +168,7 @@ pub struct GpuEntry {
 /// A tangent step costs about this many plain steps, per vector.
 pub const TANGENT_COST: u64 = 3;
 
-/// How a map of the measure is drawn: its title, colour bar label and unit, and whether its
-/// low values are the chaotic ones (the colours then run the other way, so that chaos is
-/// bright in every map).
-pub struct Look {
-    pub title: String,
-    pub label: String,
-    pub unit: &'static str,
-    /// Low values chaotic (alignment indices and their times).
-    pub reversed: bool,
-}
+pub use crate::render::Look;
 
 /// One start's run on the CPU: the spec, the start, where the columns go at every
 /// renormalisation (`sample(t, columns)`) and the progress tick (`tick(steps done)`).

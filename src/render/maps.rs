@@ -1,10 +1,9 @@
 //! Maps as pictures: bare (one pixel a pendulum) or annotated with axes, colour bar and
 //! title; and the PNG text chunks that say how a picture was made.
 
-use crate::engine::RunInfo;
 use crate::error::{Error, Result};
 use crate::field::Field;
-use crate::measure::Look;
+use crate::field::RunInfo;
 use crate::model::Params;
 use crate::spec::{AnyMap, FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapKind, MapSpec, on_any};
 
@@ -42,6 +41,17 @@ impl Picture {
             None => Vec::new(),
         }
     }
+}
+
+/// How a map of the measure is drawn: its title, colour bar label and unit, and whether its
+/// low values are the chaotic ones (the colours then run the other way, so that chaos is
+/// bright in every map).
+pub struct Look {
+    pub title: String,
+    pub label: String,
+    pub unit: &'static str,
+    /// Low values chaotic (alignment indices and their times).
+    pub reversed: bool,
 }
 
 /// PNG text chunks that let an image be reproduced from itself: the version, the command

@@ -24,6 +24,6 @@ pub use files::{
 };
 pub use legend::legend;
 pub use maps::{
-    Drawn, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, default_range, flip_picture,
+    Drawn, Look, MapPicture, Picture, PictureSpec, UNRESOLVED_RGB, default_range, flip_picture,
     lyapunov_bar, lyapunov_picture, provenance,
 };
