@@ -81,7 +81,7 @@ const KERNELS: [(&str, Kernel); 4] = [
 ];
 
 /// The divergence-family maps the page offers beside the flip time.
-const INDICATORS: [Indicator; 2] = [Indicator::Ftle, Indicator::Megno];
+const INDICATORS: [Indicator; 3] = [Indicator::Ftle, Indicator::Megno, Indicator::Fli];
 
 /// The site's files: (path inside the folder, contents).
 pub fn files(spec: &SiteSpec) -> Vec<(String, Vec<u8>)> {

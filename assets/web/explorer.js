@@ -461,7 +461,8 @@ function drawBar(sc) {
   ticks.replaceChildren();
   document.getElementById("bar-label").textContent = kind.name === "flip"
     ? "first flip (s): bright early, dark late, black never"
-    : `${kind.label}${kind.unit && kind.unit !== "1" ? ` (${kind.unit})` : ""}, from 0 to the ` +
+    : `${kind.label}${kind.unit && !kind.unit.startsWith("1") ? ` (${kind.unit})` : ""}, ` +
+      "from 0 to the " +
       "99.5th percentile of the view; green: left the numbers";
   if (!sc) return;
   const marks = sc.log ? [0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500]
