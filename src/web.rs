@@ -127,8 +127,8 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
                 "mass_scale": mass_scale(&p.params),
                 "params": words,
                 "losses": p.params.losses.kinds(),
-                // The flip colours' earliest time: the natural time sqrt(l1 / g).
-                "t_lo": (p.params.l1 / p.params.g).sqrt(),
+                // The flip colours' earliest time.
+                "t_lo": crate::render::FlipColors::t_lo(&p.params),
                 // The arms' lengths, to draw a swinging pendulum.
                 "l1": p.params.l1,
                 "l2": p.params.l2,

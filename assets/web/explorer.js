@@ -6,7 +6,7 @@
 // address's hash, so a link opens the same view.
 "use strict";
 
-const page = { ready: false, error: null, views: 0, lost: 0, last: null, dispatches: 0 };
+const page = { ready: false, error: null, views: 0, lost: 0, last: null };
 window.chaoscope = page;   // for tests and the curious
 
 const canvas = document.getElementById("map");
@@ -282,17 +282,13 @@ async function flipTimes(v, g, onProgress) {
       s.u.set("step0", 0); s.u.set("steps", 0);
       let active = await dispatch(init, bToA, n);
       let step0 = 0, forward = true;
-      // src/gpu/tiled.rs `time_loop`: each dispatch holds at most steps_per_dispatch
-      // pendulum-steps (a driver's watchdog; the browser stays responsive between them).
       while (step0 < total && active > 0) {
         if (mine !== generation) return null;
-        const bounded = Math.max(Math.floor(c.steps_per_dispatch / active), c.min_steps);
-        const steps = Math.min(bounded, c.steps_per_invocation, total - step0);
+        const steps = stepsFor(active, 1, total - step0);
         s.u.set("step0", step0); s.u.set("steps", steps); s.u.set("count", active);
         active = await dispatch(advance, forward ? aToB : bToA, active);
         forward = !forward;
         step0 += steps;
-        page.dispatches += 1;
         onProgress((row0 + rows * step0 / total) / s.integrated);
       }
       const t = await readF32(s, times, n);
@@ -308,6 +304,17 @@ async function flipTimes(v, g, onProgress) {
   return mirrored(out, s.integrated * g.width);
 }
 
+// The steps of the next dispatch of `active` pixels, each step costing `cost` plain steps,
+// `left` steps to go (src/gpu/tiled.rs `time_loop`): at most steps_per_dispatch
+// pendulum-steps (a driver's watchdog; the browser stays responsive between dispatches),
+// at least min_steps, at most steps_per_invocation (lavapipe's loop limit) a pixel.
+function stepsFor(active, cost, left) {
+  const c = manifest.constants;
+  const bounded = Math.max(Math.floor(c.steps_per_dispatch / cost / active),
+    Math.floor(c.min_steps / cost));
+  return Math.min(bounded, Math.max(1, Math.floor(c.steps_per_invocation / cost)), left);
+}
+
 // Rows from `start` on filled by point reflection (src/field.rs `mirror_below`).
 function mirrored(out, start) {
   for (let i = start; i < out.length; i++) out[i] = out[out.length - 1 - i];
@@ -318,7 +325,7 @@ function mirrored(out, start) {
 // grid `g`, as src/gpu/lyapunov.rs and indicators.rs drive it: every pixel every step, the
 // steps of a dispatch bounded by their cost; NaN where the run left the numbers.
 async function divergence(kind, v, g, onProgress) {
-  const c = manifest.constants, kernel = await kernelOf(gpu, kind.kernel), k = kernel.k;
+  const kernel = await kernelOf(gpu, kind.kernel), k = kernel.k;
   const s = setUp(v, g, k);
   const [init, advance] = await pipelines(gpu, kind.kernel, kind.entries, s.constants);
   // Binding 1: each pixel's slot (its size read from the WGSL); 2: its value.
@@ -345,14 +352,10 @@ async function divergence(kind, v, g, onProgress) {
       await run(init, n);
       for (let step0 = 0; step0 < total;) {
         if (mine !== generation) return null;
-        const bounded = Math.max(Math.floor(c.steps_per_dispatch / kind.cost / n),
-          Math.floor(c.min_steps / kind.cost));
-        const steps = Math.min(bounded, Math.max(1, Math.floor(c.steps_per_invocation / kind.cost)),
-          total - step0);
+        const steps = stepsFor(n, kind.cost, total - step0);
         s.u.set("step0", step0); s.u.set("steps", steps); s.u.set("count", n);
         await run(advance, n);
         step0 += steps;
-        page.dispatches += 1;
         onProgress((row0 + rows * step0 / total) / s.integrated);
       }
       const raw = await readF32(s, values, n);

@@ -309,7 +309,6 @@ pub fn run(
         AnyMap::Flip(spec) => engine.plan(&spec, false)?.notices,
         AnyMap::Lyapunov(spec) => engine.plan(&spec, false)?.notices,
     };
-    std::fs::create_dir_all(&job.output)?;
     let n = frames.len();
     let values: Vec<f64> = (0..n).map(|k| job.vary.at(progress(k, n))).collect();
     let store = open_store(job, &frames, &values, &command)?;

@@ -19,6 +19,12 @@ pub struct FlipColors {
 }
 
 impl FlipColors {
+    /// The earliest time the colours tell apart for a pendulum `p` (its brightest): the
+    /// natural time sqrt(l1 / g).
+    pub fn t_lo(p: &crate::model::Params) -> f64 {
+        (p.l1 / p.g).sqrt()
+    }
+
     /// The colour bar: colours from late (bottom) to early (top), ticks at round times.
     pub fn bar(&self) -> (Vec<[u8; 3]>, Vec<(f64, String)>) {
         let (from, to) = self.colormap.flip_span();

@@ -28,7 +28,7 @@ pub fn legend(kind: MapKind) -> String {
     let drawn = match entry.indicator {
         // The flip times' colours run from the fastest flip to t-max.
         None => {
-            let t_lo = (flip.params.l1 / flip.params.g).sqrt() as f32;
+            let t_lo = super::FlipColors::t_lo(&flip.params) as f32;
             let field = Field {
                 width: 2,
                 height: 1,

@@ -230,7 +230,7 @@ pub fn flip_picture(
         return flip_kind_picture(field, spec, picture, unresolved);
     }
     let colors = FlipColors {
-        t_lo: (spec.params.l1 / spec.params.g).sqrt(),
+        t_lo: FlipColors::t_lo(&spec.params),
         t_max: spec.stepping.t_max,
         colormap: picture.colormap.unwrap_or(Colormap::Inferno),
     };

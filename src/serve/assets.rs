@@ -55,7 +55,7 @@ pub fn get(path: &str) -> Response {
 }
 
 /// The static explorer's file `name` (only names of the site, compared whole), or 404.
-pub fn site_file(site: &[(String, Vec<u8>)], name: &str) -> Response {
+pub fn site_file(site: &[(String, axum::body::Bytes)], name: &str) -> Response {
     let kind = match name.rsplit_once('.').map(|(_, ext)| ext) {
         Some("html") => "text/html; charset=utf-8",
         Some("js") => "text/javascript; charset=utf-8",

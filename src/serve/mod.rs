@@ -156,8 +156,8 @@ struct Shared {
     /// What a store's tiles cover (a view's plane otherwise).
     store_world: Option<World>,
     store: Option<(Arc<MapStore>, StoredMap)>,
-    /// The static explorer's files, by name.
-    site: Vec<(String, Vec<u8>)>,
+    /// The static explorer's files, by name (shared by every answer, not copied).
+    site: Vec<(String, Bytes)>,
 }
 
 impl Shared {
@@ -220,7 +220,10 @@ pub fn run(
         commands,
         store_world,
         store,
-        site: crate::web::files(&job.site),
+        site: crate::web::files(&job.site)
+            .into_iter()
+            .map(|(name, bytes)| (name, Bytes::from(bytes)))
+            .collect(),
     });
     let notices = shared
         .engine

@@ -258,7 +258,7 @@ pub(super) async fn legend(AxumState(shared): AxumState<S>, AxumQuery(q): Params
         }
         Kind::FLIP | Kind::Resolved => {
             let colors = render::FlipColors {
-                t_lo: (view.params.l1 / view.params.g).sqrt(),
+                t_lo: render::FlipColors::t_lo(&view.params),
                 t_max: view.stepping.t_max,
                 colormap: view.colormap.unwrap_or(render::Colormap::Inferno),
             };

@@ -267,9 +267,7 @@ impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
             ..self.job.map.clone()
         }
     }
-}
 
-impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
     /// The colours' range, fixed for every frame (the frames would flicker else): given, or
     /// frame 0's own (read back from its PNG, whose command is then checked with it, or
     /// computed, that frame kept for the run); returns where it came from.
@@ -298,7 +296,7 @@ impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
                             &quiet,
                         )?;
                         let drawn = first.spec.draw(&made.made.0, &first.picture, None, None)?;
-                        self.first = RefCell::new(Some(made));
+                        *self.first.get_mut() = Some(made);
                         Some(
                             drawn
                                 .range
@@ -384,7 +382,6 @@ pub fn run<S: MapKernels + MapPicture>(
             Some((s.frame, s.width)),
         ));
     }
-    std::fs::create_dir_all(&job.output)?;
     let verdict = job.wants_verdict();
     let started = Instant::now();
     let mut frames = ZoomFrames {
