@@ -138,10 +138,12 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
     let vars: Vec<Value> = Var::ALL
         .iter()
         .map(|v| {
-            let r = v.default_range();
-            json!({"name": v.name(), "code": v.code(), "unit": v.unit(), "angle": v.is_angle(),
+            let (r, l) = (v.default_range(), v.limits());
+            // An unbounded side is null (JSON has no infinity).
+            let side = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
+            json!({"name": v.name(), "symbol": v.symbol(), "code": v.code(), "unit": v.unit(), "angle": v.is_angle(),
                 "state": v.is_state(), "mass": v.is_mass(), "writes": v.writes(),
-                "range": [r.min, r.max]})
+                "range": [r.min, r.max], "limits": [side(l.min), side(l.max)]})
         })
         .collect();
     // The flip time's colour maps (each divergence kind carries its own table).

@@ -231,6 +231,21 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
             "name": format!("w{w:e}"), "width": 512, "height": 512, "times": false,
             "view": {"cx": 1.9, "cy": 2.6, "w": w}}));
     }
+    // A lost device (here Chromium's GPU process killed, as a GPU reset would end it): the
+    // page computes its view again on a new device, and the maps it makes after are the
+    // command line's still.
+    views.as_array_mut().unwrap().push(serde_json::json!({
+        "name": "after_loss", "width": 64, "height": 64, "lose_device": true,
+        "view": {"cx": 1, "cy": 0.5, "w": 2, "t_max": 10, "dt": 0.01}}));
+    // A view panned past the turn: the page keeps the angles within -pi:pi, as the command
+    // line does (the generic check below runs its command); a parameter plane reaching below
+    // its range (Var::limits) is refused in words.
+    views.as_array_mut().unwrap().push(serde_json::json!({
+        "name": "panned", "width": 48, "height": 48,
+        "view": {"cx": 3, "cy": -2.5, "w": 4, "t_max": 5, "dt": 0.01}}));
+    views.as_array_mut().unwrap().push(serde_json::json!({
+        "name": "negative", "width": 16, "height": 16, "refused": true, "times": false,
+        "view": {"x": "theta1", "y": "m2/m1", "cx": 0, "cy": 0, "w": 2, "h": 2, "t_max": 1}}));
     let shot = dir.path().join("page.png");
     let views_json = views.to_string();
     let report = browser_report(
@@ -246,6 +261,15 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     assert!(report["error"].is_null(), "{report}");
     assert!(
         report["adapter"].as_str().unwrap().contains("swiftshader"),
+        "{report}"
+    );
+    assert_eq!(report["gpu_processes_killed"], 1, "{report}");
+    assert_eq!(report["lost"], 1, "{report}");
+    let refusal = report["views"]["negative"]["refused"]
+        .as_str()
+        .unwrap_or_default();
+    assert!(
+        refusal.contains("m2/m1 from -1.0000 to 1.0000 leaves its range (1e-30 to 1e+30)"),
         "{report}"
     );
 

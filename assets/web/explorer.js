@@ -47,6 +47,37 @@ function overlapping(v) {
   return a.some((w) => b.includes(w));
 }
 
+// The values axis `name` may take (src/spec/var.rs `limits`); null: no bound.
+function limitsOf(name) {
+  const [lo, hi] = varOf(name).limits;
+  return [lo === null ? -Infinity : lo, hi === null ? Infinity : hi];
+}
+
+// View `v` with its angle axes within the turn the engine accepts (a start beyond pi has
+// already flipped): zooming out stops at the whole turn, panning at its edge.
+function confine(v) {
+  for (const [name, c, size] of [[v.x, "cx", "w"], [v.y, "cy", "h"]]) {
+    if (!varOf(name).angle) continue;
+    const [lo, hi] = limitsOf(name);
+    v[size] = Math.min(v[size], hi - lo);
+    v[c] = Math.min(Math.max(v[c], lo + v[size] / 2), hi - v[size] / 2);
+  }
+  return v;
+}
+
+// The first of grid `g`'s axes that leaves the values the engine accepts, in words; null
+// if none does.
+function outside(g) {
+  for (const [name, r] of [[g.xVar, g.x], [g.yVar, g.y]]) {
+    const [lo, hi] = limitsOf(name), unit = varOf(name).unit === "1" ? "" : ` ${varOf(name).unit}`;
+    if (r[0] < lo || r[1] > hi) {
+      return `${name} from ${r[0].toPrecision(5)} to ${r[1].toPrecision(5)}${unit} leaves ` +
+        `its range (${lo} to ${hi}${unit}): pan or zoom in.`;
+    }
+  }
+  return null;
+}
+
 // src/spec/grid.rs `Axis::finest_step`: 16 ulp of the axis's largest value (angles: of pi
 // at least, where they flip).
 function finestStep(range, angle) {
@@ -112,14 +143,21 @@ function writeHash() {
 
 async function startGpu() {
   if (!navigator.gpu) throw new Error("no-webgpu");
-  const adapter = await navigator.gpu.requestAdapter();
+  // After a loss the browser may take a moment to offer an adapter again (its GPU process
+  // restarting): a few tries, a second apart.
+  let adapter = await navigator.gpu.requestAdapter();
+  for (let tries = 0; !adapter && page.lost > 0 && tries < 10; tries++) {
+    await new Promise((wake) => setTimeout(wake, 1000));
+    adapter = await navigator.gpu.requestAdapter();
+  }
   if (!adapter) throw new Error("no-webgpu");
   const device = await adapter.requestDevice({ requiredLimits: {
     maxStorageBufferBindingSize: adapter.limits.maxStorageBufferBindingSize,
     maxBufferSize: adapter.limits.maxBufferSize } });
   const state = { device, kernels: new Map(), pipelines: new Map() };
   device.lost.then((info) => {
-    // A lost device (a GPU reset, a driver's timeout): the next view starts a new one.
+    // A lost device (a GPU reset, a driver's timeout, the browser's GPU process gone): the
+    // view in progress fails, and is computed again on a new device.
     if (gpu === state) gpu = null;
     page.lost += 1;
     if (info.reason !== "destroyed") {
@@ -128,6 +166,17 @@ async function startGpu() {
     }
   });
   return state;
+}
+
+// The GPU, started anew when there is none (the first view, or after a loss); callers that
+// come while one starts share it.
+let starting = null;
+async function ready() {
+  if (!gpu) {
+    starting = starting || startGpu().finally(() => { starting = null; });
+    gpu = await starting;
+  }
+  return gpu;
 }
 
 // A kernel's module and layouts, made on first use: its bindings as manifest.json lists them.
@@ -397,7 +446,9 @@ async function verdictOf(values, v, g, onProgress) {
 
 // The map of view `v` on grid `g`, of the view's kind.
 async function compute(v, g, onProgress) {
-  if (!gpu) gpu = await startGpu();
+  const beyond = outside(g);
+  if (beyond) throw new Error(beyond);
+  await ready();
   const kind = kindOf(v.kind);
   return kind.name === "flip" ? flipTimes(v, g, onProgress) : divergence(kind, v, g, onProgress);
 }
@@ -449,6 +500,56 @@ function draw(values, g, v, sc, mask) {
     image.data[o] = r; image.data[o + 1] = gr; image.data[o + 2] = b; image.data[o + 3] = 255;
   }
   canvas.getContext("2d").putImageData(image, 0, 0);
+  drawAxes(g);
+}
+
+// Round values along [lo, hi] to label an axis: about five, at 1, 2 or 5 times a power of
+// ten; on an angle axis spanning most of a turn, multiples of pi/4 or pi/2 named so.
+function ticks(lo, hi, angle) {
+  const span = hi - lo, out = [];
+  if (angle && span > 2.5) {
+    const quarters = span > 3 ? 2 : 1, step = quarters * Math.PI / 4;
+    for (let k = Math.ceil(lo / step - 1e-9); k * step <= hi + 1e-9; k++) {
+      const q = k * quarters, sign = q < 0 ? "−" : "";
+      const [n, d] = q % 4 === 0 ? [Math.abs(q) / 4, 1] : q % 2 === 0 ? [Math.abs(q) / 2, 2]
+        : [Math.abs(q), 4];
+      const text = q === 0 ? "0" : `${sign}${n === 1 ? "" : n}π${d === 1 ? "" : "/" + d}`;
+      out.push([k * step, text]);
+    }
+    return out;
+  }
+  const raw = span / 5, power = Math.pow(10, Math.floor(Math.log10(raw))), f = raw / power;
+  const step = (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * power;
+  const digits = Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
+  for (let k = Math.ceil(lo / step); k * step <= hi; k++) {
+    out.push([k * step, (k * step).toFixed(digits).replace(/^-/, "−")]);
+  }
+  return out;
+}
+
+// The map's axes: ticks with their values along the bottom and left edges, and the
+// variables' names.
+function drawAxes(g) {
+  const side = canvas.getBoundingClientRect().width, left = canvas.offsetLeft;
+  const place = (id, values, at) => {
+    const box = document.getElementById(id);
+    box.replaceChildren(...values.map(([value, text]) => {
+      const label = document.createElement("span");
+      label.textContent = text;
+      Object.assign(label.style, at(value));
+      return label;
+    }));
+  };
+  const [x0, x1] = g.x, [y0, y1] = g.y;
+  place("x-ticks", ticks(x0, x1, varOf(g.xVar).angle),
+    (x) => ({ left: `${left + (x - x0) / (x1 - x0) * side}px`, top: `${side}px` }));
+  place("y-ticks", ticks(y0, y1, varOf(g.yVar).angle),
+    (y) => ({ left: `${left}px`, top: `${(y1 - y) / (y1 - y0) * side}px` }));
+  const name = (v) => `${varOf(v).symbol}${varOf(v).unit === "1" ? "" : ` (${varOf(v).unit})`}`;
+  Object.assign(document.getElementById("x-name"), { textContent: name(g.xVar) }).style.cssText =
+    `left: ${left + side / 2}px; top: ${side + 20}px`;
+  Object.assign(document.getElementById("y-name"), { textContent: name(g.yVar) }).style.cssText =
+    `left: 9px; top: ${side / 2}px`;
 }
 
 function drawBar(sc) {
@@ -483,6 +584,7 @@ function drawBar(sc) {
 
 let pending = null;
 async function show() {
+  confine(view);
   const g = grid(view, canvas.width, canvas.height);
   writeHash();
   drawBar(null);
@@ -555,7 +657,8 @@ async function show() {
 // most 1024 a side: the work grows with the pixels).
 function fit() {
   const box = document.getElementById("view");
-  const side = Math.max(64, Math.min(box.clientWidth, box.clientHeight) - 16);
+  // Room for the axes' labels (#frame's padding) and a margin.
+  const side = Math.max(64, Math.min(box.clientWidth - 86, box.clientHeight - 54));
   const pixels = Math.min(1024, Math.round(side * (window.devicePixelRatio || 1)));
   canvas.style.width = canvas.style.height = `${side}px`;
   if (canvas.width !== pixels) {
@@ -681,7 +784,7 @@ async function describe(e) {
 
 // The states of one run from `start` over the view's t-max, every `stride`-th step.
 async function trajectory(start, v) {
-  if (!gpu) gpu = await startGpu();
+  await ready();
   const c = manifest.constants, kernel = await kernelOf(gpu, "trajectory"), k = kernel.k;
   const p = manifest.pendulums[v.pendulum];
   const [pipeline] = await pipelines(gpu, "trajectory", ["trajectory"], { LOSSES: p.losses });
@@ -785,7 +888,7 @@ function fillForm() {
 
 // The page's view with `v`'s settings (a width without a height: a square view).
 function viewOf(v) {
-  return Object.assign({}, view, "w" in v && !("h" in v) ? { h: v.w } : {}, v);
+  return confine(Object.assign({}, view, "w" in v && !("h" in v) ? { h: v.w } : {}, v));
 }
 
 // For tests: the run a click on a pixel with start `start` swings (its kept states, and the
@@ -848,7 +951,7 @@ async function main() {
   fit();
   wire();
   try {
-    gpu = await startGpu();
+    await ready();
     const info = gpu.device.adapterInfo || {};
     page.adapter = [info.vendor, info.architecture, info.description].filter(Boolean)
       .join(" ") || "this GPU";

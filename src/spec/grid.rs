@@ -388,6 +388,34 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_limits_are_what_the_engine_accepts() {
+        for v in Var::ALL {
+            let (r, l) = (v.default_range(), v.limits());
+            assert!(l.min <= r.min && r.max <= l.max, "{}", v.name());
+            let (mut p, mut s) = (Params::default(), State::default());
+            // A parameter at its lower limit passes the parameters' check; half of a positive
+            // one's fails. (Below a zero limit, a negative rod may still pass as an
+            // equivalent pendulum, which the explorer does not offer.)
+            if !v.is_state() {
+                v.set(l.min, &mut p, &mut s);
+                assert!(crate::params::validate(&p).is_ok(), "{}", v.name());
+                if l.min > 0.0 {
+                    v.set(l.min / 2.0, &mut p, &mut s);
+                    assert!(crate::params::validate(&p).is_err(), "{}", v.name());
+                }
+            }
+        }
+        // An angle axis at the turn's ends passes, beyond them fails.
+        let plane = |min: f64, max: f64| Grid {
+            x: Axis::new(Var::Theta1, min, max),
+            ..Grid::square(8)
+        };
+        let l = Var::Theta1.limits();
+        assert!(plane(l.min, l.max).validate_axes().is_ok());
+        assert!(plane(l.min - 1e-3, l.max).validate_axes().is_err());
+    }
+
+    #[test]
     fn codes_put_the_state_first() {
         let state: Vec<_> = Var::ALL.iter().filter(|v| v.is_state()).collect();
         assert_eq!(

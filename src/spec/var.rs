@@ -121,6 +121,37 @@ impl Var {
         super::Range { min, max }
     }
 
+    /// The values an axis may take in an explorer: a turn for angles (a start beyond pi has
+    /// already flipped), any speed (the step's stability bounds those, per plane), and a
+    /// parameter's own range ([`crate::params::RANGES`]; a ratio takes its numerator's, as
+    /// over a denominator of 1). The command line accepts these; of what lies beyond a
+    /// parameter's range it takes only an equivalent pendulum's negative masses.
+    pub fn limits(self) -> super::Range {
+        use std::f64::consts::PI;
+        let field = match self {
+            Var::Theta1 | Var::Theta2 => return super::Range { min: -PI, max: PI },
+            Var::Omega1 | Var::Omega2 => {
+                return super::Range {
+                    min: f64::NEG_INFINITY,
+                    max: f64::INFINITY,
+                };
+            }
+            Var::M1 => "m1",
+            Var::M2 | Var::MassRatio => "m2",
+            Var::L1 => "l1",
+            Var::L2 | Var::LengthRatio => "l2",
+            Var::G => "g",
+            Var::Damping | Var::Joint1 | Var::Joint2 => "joint_damping",
+            Var::Rod1 | Var::Rod2 => "rod_mass",
+        };
+        let (_, min, max) = crate::params::RANGES
+            .iter()
+            .find(|r| r.0 == field)
+            .copied()
+            .expect("every parameter axis has a range");
+        super::Range { min, max }
+    }
+
     pub fn is_angle(self) -> bool {
         matches!(self, Var::Theta1 | Var::Theta2)
     }

@@ -15,6 +15,8 @@ Usage: web.py [--no-webgpu] URL SCREENSHOT [OUTDIR VIEWS_JSON]
 """
 import base64
 import json
+import os
+import signal
 import sys
 import time
 
@@ -51,6 +53,30 @@ def page_call(name, *args):
     return result
 
 
+def kill_gpu_process():
+    """Kills this browser's GPU process (a descendant of our chromedriver, never another
+    test's browser); returns how many processes it killed."""
+    parent = {}
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                parent[int(pid)] = int(f.read().rsplit(")", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):
+            pass
+    mine, killed = {driver.service.process.pid}, 0
+    for _ in range(4):  # chromedriver -> chromium -> its children
+        mine |= {pid for pid, up in parent.items() if up in mine}
+    for pid in mine:
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                if b"--type=gpu-process" in f.read():
+                    os.kill(pid, signal.SIGKILL)
+                    killed += 1
+        except OSError:
+            pass
+    return killed
+
+
 try:
     driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
         "width": 1100, "height": 640, "deviceScaleFactor": 1, "mobile": False})
@@ -74,6 +100,15 @@ try:
         driver.save_screenshot(screenshot)
     for v in views:
         name, w, h = v["name"], v["width"], v["height"]
+        if v.get("lose_device"):
+            views_before, lost_before = driver.execute_script(
+                "return [window.chaoscope.views, window.chaoscope.lost]")
+            report["gpu_processes_killed"] = kill_gpu_process()
+            WebDriverWait(driver, 300, poll_frequency=0.1).until(lambda d: d.execute_script(
+                f"const p = window.chaoscope; return p.lost > {lost_before} && "
+                f"p.views > {views_before}"))
+            report["lost"] = driver.execute_script("return window.chaoscope.lost")
+            report["status_after_loss"] = driver.find_element("id", "status").text
         report["views"][name] = {"command": page_call("command", v["view"], w, h),
                                  "resolves": page_call("resolves", v["view"], w, h)}
         if "swing" in v:
@@ -84,6 +119,13 @@ try:
             report["views"][name]["verdict_seconds"] = time.time() - started
             with open(f"{out}/{name}.mask", "wb") as f:
                 f.write(base64.b64decode(data))
+        if v.get("refused"):
+            try:
+                page_call("values", v["view"], w, h)
+                report["views"][name]["refused"] = None
+            except RuntimeError as e:
+                report["views"][name]["refused"] = str(e)
+            continue
         if v.get("times", True):
             started = time.time()
             data = page_call("values", v["view"], w, h)
