@@ -278,6 +278,52 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     let colours: std::collections::HashSet<&[u8]> = shot.rgb.chunks(3).collect();
     assert!(colours.len() > 200, "{} colours", colours.len());
 
+    // "Save PNG": the map shown, carrying the command line's provenance chunks; its command
+    // run on the command line draws the same picture.
+    let file = std::fs::File::open(dir.path().join("shown.png")).unwrap();
+    let saved = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let text: std::collections::HashMap<String, String> = saved
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .map(|c| (c.keyword.clone(), c.text.clone()))
+        .collect();
+    let (w, h) = (saved.info().width, saved.info().height);
+    assert_eq!(text["chaoscope:backend"], "gpu", "{text:?}");
+    assert!(
+        text["chaoscope:adapter"].contains("swiftshader"),
+        "{text:?}"
+    );
+    let shown = &text["chaoscope:command"];
+    assert!(
+        shown.starts_with(&format!("chaoscope flip --size {w}x{h} ")),
+        "{shown}"
+    );
+    let cli_png = dir.path().join("shown_cli.png");
+    let words: Vec<&str> = shown.split_whitespace().skip(1).collect();
+    chaoscope()
+        .args(&words)
+        .args(["--backend", "gpu", "--precision", "f32", "--output"])
+        .arg(&cli_png)
+        .assert()
+        .success();
+    let cli = chaoscope::render::read_png(&cli_png).unwrap();
+    let mut reader = saved;
+    let mut rgba = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut rgba).unwrap();
+    let same = rgba
+        .chunks(4)
+        .zip(cli.rgb.chunks(3))
+        .filter(|(a, b)| a[..3] == b[..])
+        .count() as f64
+        / (w * h) as f64;
+    eprintln!("saved PNG: {same:.5} of its pixels the command line's");
+    // The same flip times (all within 1e-3 s above) through the same colour table: a pixel
+    // differs only where an ulp of a time crosses a colour's edge.
+    assert!(same >= 0.999, "{same}");
+
     for w in widths {
         let grid = Grid {
             x: Axis::new(Var::Theta1, 1.9 - w / 2.0, 1.9 + w / 2.0),

@@ -501,6 +501,38 @@ function draw(values, g, v, sc, mask) {
   }
   canvas.getContext("2d").putImageData(image, 0, 0);
   drawAxes(g);
+  page.shownCommand = command(v, g);
+}
+
+// The map shown as a PNG that says how to make it again: the command line's text chunks
+// (src/render/maps.rs `provenance`: the version, the command, the path, the adapter).
+async function mapPng() {
+  const blob = await new Promise((done) => canvas.toBlob(done, "image/png"));
+  const png = new Uint8Array(await blob.arrayBuffer());
+  const text = [["Software", `chaoscope ${manifest.version}`],
+    ["chaoscope:command", page.shownCommand], ["chaoscope:backend", "gpu"],
+    ["chaoscope:adapter", `${page.adapter} (WebGPU, in a browser)`]];
+  // tEXt is Latin-1: anything else becomes "?".
+  const latin1 = (t) => Array.from(t, (ch) => (ch.charCodeAt(0) < 256 ? ch.charCodeAt(0) : 63));
+  const chunks = text.map(([key, value]) => {
+    const data = [...latin1(key), 0, ...latin1(value)], n = data.length;
+    const body = new Uint8Array([116, 69, 88, 116, ...data]);  // "tEXt" and its data
+    const crc = crc32(body);
+    return new Uint8Array([n >>> 24, (n >>> 16) & 255, (n >>> 8) & 255, n & 255, ...body,
+      crc >>> 24, (crc >>> 16) & 255, (crc >>> 8) & 255, crc & 255]);
+  });
+  // After the signature (8 bytes) and IHDR (25).
+  return new Blob([png.subarray(0, 33), ...chunks, png.subarray(33)], { type: "image/png" });
+}
+
+// PNG's CRC-32 of `bytes`.
+function crc32(bytes) {
+  let c = ~0;
+  for (const b of bytes) {
+    c ^= b;
+    for (let k = 0; k < 8; k++) c = (c >>> 1) ^ (0xedb88320 & -(c & 1));
+  }
+  return ~c >>> 0;
 }
 
 // Round values along [lo, hi] to label an axis: about five, at 1, 2 or 5 times a power of
@@ -728,6 +760,14 @@ function wire() {
     view.cx = at.x; view.cy = at.y; view.w /= 2; view.h /= 2;
     later();
   });
+  document.getElementById("save").addEventListener("click", async () => {
+    if (!page.shownCommand) return;
+    const link = document.createElement("a");
+    link.href = URL.createObjectURL(await mapPng());
+    link.download = `chaoscope-${view.kind}.png`;
+    link.click();
+    setTimeout(() => URL.revokeObjectURL(link.href), 10000);
+  });
   document.getElementById("reset").addEventListener("click", () => {
     wholeAxis("x"); wholeAxis("y");
     later();
@@ -919,6 +959,9 @@ function base64(bytes) {
   }
   return btoa(s);
 }
+
+// For tests: the PNG "Save PNG" downloads, as base64.
+page.png = async () => base64(new Uint8Array(await (await mapPng()).arrayBuffer()));
 
 // For tests: whether f32 resolves a view's pixel step on a width x height grid.
 page.resolves = (v, width, height) => resolves(grid(viewOf(v), width, height));

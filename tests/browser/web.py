@@ -1,7 +1,8 @@
 """Drives the static explorer (`chaoscope web`) in a real headless Chromium with its software
 WebGPU adapter (SwiftShader), through WebDriver (selenium with Debian's chromedriver): loads
 the page, waits for its first map and saves a screenshot, then asks the page for each view's
-map (flip times or a divergence map, written as little-endian f32s), its command line, and whether f32 resolves it.
+map (flip times or a divergence map, written as little-endian f32s), its command line, and whether f32 resolves it;
+with OUTDIR, saves the first map as "Save PNG" downloads it, as OUTDIR/shown.png.
 
 Usage: web.py [--no-webgpu] URL SCREENSHOT [OUTDIR VIEWS_JSON]
   --no-webgpu: Chromium without WebGPU; reports where the page went (served by `chaoscope
@@ -98,6 +99,10 @@ try:
             report[key] = driver.execute_script(f"return window.chaoscope.{key}")
         report["status"] = driver.find_element("id", "status").text
         driver.save_screenshot(screenshot)
+        if out and not report["error"]:
+            # The map shown, as "Save PNG" downloads it.
+            with open(f"{out}/shown.png", "wb") as f:
+                f.write(base64.b64decode(page_call("png")))
     for v in views:
         name, w, h = v["name"], v["width"], v["height"]
         if v.get("lose_device"):
