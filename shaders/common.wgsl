@@ -135,21 +135,30 @@ const BEARING_SMOOTH: real = 0.01;
 
 // sgn(w) smoothed over BEARING_SMOOTH.
 fn smooth_sign(w: real) -> real {
-    return w * inverseSqrt(w * w + BEARING_SMOOTH * BEARING_SMOOTH);
+    return w * inverseSqrt(fma(w, w, BEARING_SMOOTH * BEARING_SMOOTH));
 }
 
-// Bearing friction torques for angular accelerations alpha (src/cpu `bearing_torques`): the
-// loads on the pivot and the middle joint from the mass-weighted accelerations and gravity.
-fn bearing_torques(c: Coeffs, w1: real, w2: real, c1: real, s1: real, c2: real, s2: real, alpha: vec2<real>) -> vec2<real> {
-    let arm1 = vec2<real>(alpha.x * c1 - w1 * w1 * s1, alpha.x * s1 + w1 * w1 * c1);
-    let arm2 = vec2<real>(alpha.y * c2 - w2 * w2 * s2, alpha.y * s2 + w2 * w2 * c2);
+// `force` plus the bearing friction torques for angular accelerations alpha (src/cpu
+// `bearing_torques`): the loads on the pivot and the middle joint from the mass-weighted
+// accelerations and gravity. Every product that meets a sum goes through an explicit fma:
+// left to themselves, compilers fuse or factor such sums each their own way (Mesa's and
+// Chromium's do, differently), and a map of the lab's pendulum would depend on the GPU's
+// compiler, not only on its arithmetic.
+fn with_bearing_torques(c: Coeffs, w1: real, w2: real, c1: real, s1: real, c2: real, s2: real, alpha: vec2<real>, force: vec2<real>) -> vec2<real> {
+    let ww1 = w1 * w1;
+    let ww2 = w2 * w2;
+    let arm1 = vec2<real>(fma(alpha.x, c1, -ww1 * s1), fma(alpha.x, s1, ww1 * c1));
+    let arm2 = vec2<real>(fma(alpha.y, c2, -ww2 * s2), fma(alpha.y, s2, ww2 * c2));
     let s_1 = c.p / c.g;
     let s_2 = c.q / c.g;
-    let pivot = length(s_1 * arm1 + s_2 * arm2 + vec2<real>(0.0, c.mass_total * c.g));
-    let joint = length(c.mass_lower * c.l1 * arm1 + s_2 * arm2 + vec2<real>(0.0, c.mass_lower * c.g));
-    let t_pivot = c.bearing * pivot * smooth_sign(w1);
-    let t_joint = c.bearing * joint * smooth_sign(w2 - w1);
-    return vec2<real>(-t_pivot + t_joint, -t_joint);
+    let k = c.mass_lower * c.l1;
+    let pv = vec2<real>(fma(s_1, arm1.x, s_2 * arm2.x), fma(s_1, arm1.y, fma(s_2, arm2.y, c.mass_total * c.g)));
+    let jv = vec2<real>(fma(k, arm1.x, s_2 * arm2.x), fma(k, arm1.y, fma(s_2, arm2.y, c.mass_lower * c.g)));
+    let pivot = c.bearing * sqrt(fma(pv.x, pv.x, pv.y * pv.y));
+    let joint = c.bearing * sqrt(fma(jv.x, jv.x, jv.y * jv.y));
+    let sign_joint = smooth_sign(w2 - w1);
+    // force + (-t_pivot + t_joint, -t_joint), t = load * sgn(relative speed).
+    return vec2<real>(fma(joint, sign_joint, fma(-pivot, smooth_sign(w1), force.x)), fma(-joint, sign_joint, force.y));
 }
 
 // Speeds are smoothed in the drag law, |v| -> sqrt(v^2 + V_SMOOTH^2) (src/cpu V_SMOOTH).
@@ -225,15 +234,16 @@ fn rate(c: Coeffs, p: Pendulum) -> Rate {
     let f2 = fma(csd * w1, w1, fma(-c.q, s2, tau.y));
     let ccd = c.c * cd;
     let inv_det = 1.0 / fma(-ccd, ccd, c.a * c.b);
-    var a1 = fma(c.b, f1, -ccd * f2) * inv_det;
-    var a2 = fma(c.a, f2, -ccd * f1) * inv_det;
+    var force = vec2<real>(f1, f2);
     if has_bearings() {
         // As on the CPU: loads from the accelerations without bearing friction, then the
-        // friction torques added through the same (linear) solve.
-        let b = bearing_torques(c, w1, w2, c1, s1, c2, s2, vec2<real>(a1, a2));
-        a1 += fma(c.b, b.x, -ccd * b.y) * inv_det;
-        a2 += fma(c.a, b.y, -ccd * b.x) * inv_det;
+        // friction torques through the same (linear) solve, added to the forces before it
+        // (a1 k + b1 k would be factored into (a1 + b1) k by some compilers, not others).
+        let free = vec2<real>(fma(c.b, f1, -ccd * f2), fma(c.a, f2, -ccd * f1)) * inv_det;
+        force = with_bearing_torques(c, w1, w2, c1, s1, c2, s2, free, force);
     }
+    let a1 = fma(c.b, force.x, -ccd * force.y) * inv_det;
+    let a2 = fma(c.a, force.y, -ccd * force.x) * inv_det;
     return Rate(vec4<real>(w1, a1, w2, a2), vec4<real>(-w1 * s1, w1 * c1, -w2 * s2, w2 * c2));
 }
 

@@ -97,12 +97,18 @@ fn adaptive_flip_times_match_the_f64_cpu() {
     }
     // With rods and every loss (compiled into the kernel by kind): the same, with a larger
     // constant (bearing friction turns over 0.01 rad/s; measured with rods: 4.3e-3, 8.7e-5,
-    // 4.8e-7 s at rtol 1e-6, 1e-8, 1e-10; the lab's faster arms 2.1e-6 s at 1e-10).
-    for (params, pair) in [common::rods_and_every_loss(), common::lab_with_every_loss()]
-        .into_iter()
-        .flat_map(|p| pairs(1e-10).map(|i| (p, i)))
+    // 4.8e-7 s at rtol 1e-6, 1e-8, 1e-10). The lab's faster arms pass a turn where DP54's
+    // step sequence forks: a 1e-15 rad change of the starts moves one pixel's flip time by
+    // 0 .. 1.1e-5 s on the GPU (0.5 .. 1.9e-6 s on the CPU twin; measured), so 3e-5 s there.
+    let rtol = 1e-10;
+    let dp54_bound = |lab: bool| if lab { 3e-5 } else { 5e4 * rtol + 4.8e-7 };
+    for (lab, params, pair) in [
+        (false, common::rods_and_every_loss()),
+        (true, common::lab_with_every_loss()),
+    ]
+    .into_iter()
+    .flat_map(|(lab, p)| pairs(rtol).map(move |i| (lab, p, i)))
     {
-        let rtol = 1e-10;
         let s = FlipSpec {
             params,
             ..spec_with(32, 10.0, pair, Precision::F64)
@@ -115,7 +121,7 @@ fn adaptive_flip_times_match_the_f64_cpu() {
         // 1e-13 run agree to 3e-7 s). So 1e-3 s for DOP853 with every loss.
         let allowed = match pair {
             Integrator::Dop853 { .. } => 1e-3,
-            _ => 5e4 * rtol + 4.8e-7,
+            _ => dp54_bound(lab),
         };
         assert!(
             worst <= allowed && classes == 0,

@@ -423,14 +423,12 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         let agree = agreement(&cli, &page, 1e-3);
         let exact = agreement(&cli, &page, 0.0);
         eprintln!("{name}: {agree:.5} within 1e-3 (s, 1/s) or the same class, {exact:.5} exactly");
-        // Both run the same WGSL over the same f32 params. Without losses the two software
-        // GPUs round every step of the motion alike (RK4's 6 is data: Params `six`) and
-        // differ at most in an ulp or two of where a flip falls in its step: the issue's
-        // 1e-3 s (and 1e-3 /s for the FTLE) holds everywhere. The bearing friction's torques round differently in
-        // Chromium's compiler on about a fifth of the evaluations (measured; WGSL allows it),
-        // a difference chaos then grows: over 10 s 0.6 % of the lab's pixels part by more.
-        let least = if name == "lab" { 0.99 } else { 0.999 };
-        assert!(agree >= least, "{name}: {agree}");
+        // Both run the same WGSL over the same f32 params. The two software GPUs round
+        // every step of the motion alike (RK4's 6 is data: Params `six`; the bearing
+        // friction's sums are explicit fmas) and differ at most in an ulp or two of where a
+        // flip falls in its step: the 1e-3 s (and 1e-3 /s for the FTLE) holds
+        // everywhere, the lab's pendulum with its losses included.
+        assert!(agree >= 0.999, "{name}: {agree}");
         assert!(
             report["views"][name]["resolves"].as_bool().unwrap(),
             "{name}"
