@@ -502,6 +502,7 @@ function draw(values, g, v, sc, mask) {
   canvas.getContext("2d").putImageData(image, 0, 0);
   drawAxes(g);
   page.shownCommand = command(v, g);
+  document.getElementById("save").hidden = false;
 }
 
 // The map shown as a PNG that says how to make it again: the command line's text chunks
