@@ -11,6 +11,11 @@ fn dmul(a: vec2<real>, b: vec2<real>) -> vec2<real> {
     return vec2<real>(a.x * b.x, fma(a.x, b.y, a.y * b.x));
 }
 
+// a b + c, each part rounded once where the plain numbers' fma is.
+fn dfma(a: vec2<real>, b: vec2<real>, c: vec2<real>) -> vec2<real> {
+    return vec2<real>(fma(a.x, b.x, c.x), fma(a.x, b.y, fma(a.y, b.x, c.y)));
+}
+
 fn drecip(a: vec2<real>) -> vec2<real> {
     let r = 1.0 / a.x;
     return vec2<real>(r, -a.y * r * r);
@@ -52,31 +57,37 @@ fn dual_loss_torques(c: Coeffs, w1: vec2<real>, w2: vec2<real>, cd: vec2<real>) 
 // smooth_sign of common.wgsl: w / sqrt(w^2 + s^2), derivative s^2 / (w^2 + s^2)^(3/2).
 fn dsmooth_sign(w: vec2<real>) -> vec2<real> {
     let s2 = BEARING_SMOOTH * BEARING_SMOOTH;
-    let r = inverseSqrt(w.x * w.x + s2);
+    let r = inverseSqrt(fma(w.x, w.x, s2));
     return vec2<real>(w.x * r, s2 * r * r * r * w.y);
 }
 
 // |(x, y)| of dual components.
 fn dlength(x: vec2<real>, y: vec2<real>) -> vec2<real> {
-    return dsqrt(dmul(x, x) + dmul(y, y));
+    return dsqrt(dfma(x, x, dmul(y, y)));
 }
 
-// `bearing_torques` of common.wgsl in dual numbers.
-fn dual_bearing_torques(c: Coeffs, w1: vec2<real>, w2: vec2<real>, c1: vec2<real>, s1: vec2<real>, c2: vec2<real>, s2: vec2<real>, a1: vec2<real>, a2: vec2<real>) -> array<vec2<real>, 2> {
+// `with_bearing_torques` of common.wgsl in dual numbers: the forces plus the bearing
+// friction torques for accelerations (a1, a2), each product that meets a sum an explicit
+// fma, as there.
+fn dual_with_bearing_torques(c: Coeffs, w1: vec2<real>, w2: vec2<real>, c1: vec2<real>, s1: vec2<real>, c2: vec2<real>, s2: vec2<real>, a1: vec2<real>, a2: vec2<real>, force1: vec2<real>, force2: vec2<real>) -> array<vec2<real>, 2> {
     let w1sq = dmul(w1, w1);
     let w2sq = dmul(w2, w2);
-    let arm1x = dmul(a1, c1) - dmul(w1sq, s1);
-    let arm1y = dmul(a1, s1) + dmul(w1sq, c1);
-    let arm2x = dmul(a2, c2) - dmul(w2sq, s2);
-    let arm2y = dmul(a2, s2) + dmul(w2sq, c2);
-    let s_1 = c.p / c.g;
-    let s_2 = c.q / c.g;
-    let low = c.mass_lower * c.l1;
-    let pivot = dlength(s_1 * arm1x + s_2 * arm2x, s_1 * arm1y + s_2 * arm2y + dconst(c.mass_total * c.g));
-    let joint = dlength(low * arm1x + s_2 * arm2x, low * arm1y + s_2 * arm2y + dconst(c.mass_lower * c.g));
-    let t_pivot = c.bearing * dmul(pivot, dsmooth_sign(w1));
-    let t_joint = c.bearing * dmul(joint, dsmooth_sign(w2 - w1));
-    return array<vec2<real>, 2>(-t_pivot + t_joint, -t_joint);
+    let arm1x = dfma(a1, c1, -dmul(w1sq, s1));
+    let arm1y = dfma(a1, s1, dmul(w1sq, c1));
+    let arm2x = dfma(a2, c2, -dmul(w2sq, s2));
+    let arm2y = dfma(a2, s2, dmul(w2sq, c2));
+    let s_1 = vec2<real>(c.p / c.g);
+    let s_2 = vec2<real>(c.q / c.g);
+    let low = vec2<real>(c.mass_lower * c.l1);
+    let pivot = dlength(fma(s_1, arm1x, s_2 * arm2x), fma(s_1, arm1y, fma(s_2, arm2y, dconst(c.mass_total * c.g))));
+    let joint = dlength(fma(low, arm1x, s_2 * arm2x), fma(low, arm1y, fma(s_2, arm2y, dconst(c.mass_lower * c.g))));
+    let sign_joint = dsmooth_sign(w2 - w1);
+    let t_joint = c.bearing * joint;
+    // force + (-t_pivot + t_joint, -t_joint), t = load * sgn(relative speed).
+    return array<vec2<real>, 2>(
+        dfma(t_joint, sign_joint, dfma(-c.bearing * pivot, dsmooth_sign(w1), force1)),
+        dfma(-t_joint, sign_joint, force2),
+    );
 }
 
 fn dual_lower_arm_drag(c: Coeffs, w1: vec2<real>, w2: vec2<real>, cd: vec2<real>, s: real) -> array<vec2<real>, 2> {
@@ -116,17 +127,23 @@ fn tangent_rate(c: Coeffs, t: Tangent) -> Tangent {
         tau2 = tau[1];
     }
     let csd = c.c * sd;
-    let f1 = -dmul(dmul(csd, w2), w2) - c.p * s1 + tau1;
-    let f2 = dmul(dmul(csd, w1), w1) - c.q * s2 + tau2;
+    // As in `rate`, each product that meets a sum an explicit fma.
+    let f1 = dfma(-dmul(csd, w2), w2, fma(vec2<real>(-c.p), s1, tau1));
+    let f2 = dfma(dmul(csd, w1), w1, fma(vec2<real>(-c.q), s2, tau2));
     let ccd = c.c * cd;
     let inv_det = drecip(dconst(c.a * c.b) - dmul(ccd, ccd));
-    var a1 = dmul(c.b * f1 - dmul(ccd, f2), inv_det);
-    var a2 = dmul(c.a * f2 - dmul(ccd, f1), inv_det);
+    var force1 = f1;
+    var force2 = f2;
     if has_bearings() {
-        let b = dual_bearing_torques(c, w1, w2, c1, s1, c2, s2, a1, a2);
-        a1 += dmul(c.b * b[0] - dmul(ccd, b[1]), inv_det);
-        a2 += dmul(c.a * b[1] - dmul(ccd, b[0]), inv_det);
+        // As in `rate`: the torques added to the forces before the solve.
+        let free1 = dmul(c.b * f1 - dmul(ccd, f2), inv_det);
+        let free2 = dmul(c.a * f2 - dmul(ccd, f1), inv_det);
+        let f = dual_with_bearing_torques(c, w1, w2, c1, s1, c2, s2, free1, free2, f1, f2);
+        force1 = f[0];
+        force2 = f[1];
     }
+    let a1 = dmul(c.b * force1 - dmul(ccd, force2), inv_det);
+    let a2 = dmul(c.a * force2 - dmul(ccd, force1), inv_det);
     return Tangent(
         vec4<real>(w1.x, a1.x, w2.x, a2.x),
         // d/dt (cos, sin) = omega (-sin, cos)

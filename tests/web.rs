@@ -190,7 +190,7 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     // The whole plane over 20 s (chaos grows any difference in the arithmetic), a deep view
     // into the boundary, the lab's pendulum (its losses compiled in), the (theta1, omega1)
     // plane, parameter planes (the mass ratio; m1, in the engine's mass scale, of the lab's
-    // pendulum), the FTLE, MEGNO and the FLI.
+    // pendulum), the FTLE (of the lab's pendulum too: the tangent's losses), MEGNO and the FLI.
     let mut views = serde_json::json!([
         {"name": "whole", "width": 128, "height": 128,
          "view": {"cx": 0, "cy": 0, "w": turn, "t_max": 20, "dt": 0.01}},
@@ -211,6 +211,9 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
          "view": {"kind": "ftle", "cx": 0, "cy": 0, "w": turn, "t_max": 10, "dt": 0.01}},
         {"name": "megno", "width": 64, "height": 48,
          "view": {"kind": "megno", "cx": 1, "cy": 1, "w": 2, "t_max": 10, "dt": 0.01}},
+        {"name": "lab_ftle", "width": 48, "height": 48,
+         "view": {"kind": "ftle", "cx": 0, "cy": 0, "w": turn, "t_max": 10, "dt": 0.005,
+                  "pendulum": 1}},
         {"name": "fli", "width": 48, "height": 48,
          "view": {"kind": "fli", "cx": 0, "cy": 0, "w": turn, "t_max": 5, "dt": 0.01}},
     ]);
