@@ -141,9 +141,9 @@ fn smooth_sign(w: real) -> real {
 // `force` plus the bearing friction torques for angular accelerations alpha (src/cpu
 // `bearing_torques`): the loads on the pivot and the middle joint from the mass-weighted
 // accelerations and gravity. Every product that meets a sum goes through an explicit fma:
-// left to themselves, compilers fuse or factor such sums each their own way (Mesa's and
-// Chromium's do, differently), and a map of the lab's pendulum would depend on the GPU's
-// compiler, not only on its arithmetic.
+// left to themselves, compilers may fuse or factor such sums each their own way (the plain
+// form rounded apart in Mesa and in Chromium: measured), and a map of the lab's pendulum
+// would depend on the GPU's compiler, not only on its arithmetic.
 fn with_bearing_torques(c: Coeffs, w1: real, w2: real, c1: real, s1: real, c2: real, s2: real, alpha: vec2<real>, force: vec2<real>) -> vec2<real> {
     let ww1 = w1 * w1;
     let ww2 = w2 * w2;
@@ -238,7 +238,7 @@ fn rate(c: Coeffs, p: Pendulum) -> Rate {
     if has_bearings() {
         // As on the CPU: loads from the accelerations without bearing friction, then the
         // friction torques through the same (linear) solve, added to the forces before it
-        // (a1 k + b1 k would be factored into (a1 + b1) k by some compilers, not others).
+        // (a1 k + b1 k may be factored into (a1 + b1) k by one compiler and not another).
         let free = vec2<real>(fma(c.b, f1, -ccd * f2), fma(c.a, f2, -ccd * f1)) * inv_det;
         force = with_bearing_torques(c, w1, w2, c1, s1, c2, s2, free, force);
     }
