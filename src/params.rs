@@ -329,14 +329,18 @@ pub const RANGES: [(&str, f64, f64); 13] = [
     ("bearing_radius", 0.0, 1.0),
 ];
 
+/// The range [`RANGES`] gives `field` (lowest, highest); 0..f64::MAX for one it does not
+/// name.
+pub fn range_of(field: &str) -> (f64, f64) {
+    RANGES
+        .iter()
+        .find(|r| r.0 == field)
+        .map_or((0.0, f64::MAX), |r| (r.1, r.2))
+}
+
 /// `v` within the range [`RANGES`] gives `field`, else an error naming it and the range.
 fn in_range(field: &'static str, v: f64) -> Result<()> {
-    let (_, lo, hi) =
-        RANGES
-            .iter()
-            .find(|r| r.0 == field)
-            .copied()
-            .unwrap_or((field, 0.0, f64::MAX));
+    let (lo, hi) = range_of(field);
     if (lo..=hi).contains(&v) {
         Ok(())
     } else {

@@ -170,6 +170,19 @@ fn agreement(a: &[f32], b: &[f32], tol: f32) -> f64 {
     same as f64 / a.len() as f64
 }
 
+/// Runs a command line the page gave (its words after `chaoscope`) on the command line's f32
+/// GPU path, writing its picture to `png` and, with `npy`, its map.
+fn run_on_the_command_line(words: &[&str], png: &Path, npy: Option<&Path>) {
+    let mut cli = chaoscope();
+    cli.args(words)
+        .args(["--backend", "gpu", "--precision", "f32", "--output"])
+        .arg(png);
+    if let Some(npy) = npy {
+        cli.arg("--data").arg(npy);
+    }
+    cli.assert().success();
+}
+
 fn read_f32(path: &Path) -> Vec<f32> {
     bytemuck::pod_collect_to_vec(&std::fs::read(path).unwrap())
 }
@@ -306,12 +319,7 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     );
     let cli_png = dir.path().join("shown_cli.png");
     let words: Vec<&str> = shown.split_whitespace().skip(1).collect();
-    chaoscope()
-        .args(&words)
-        .args(["--backend", "gpu", "--precision", "f32", "--output"])
-        .arg(&cli_png)
-        .assert()
-        .success();
+    run_on_the_command_line(&words, &cli_png, None);
     let cli = chaoscope::render::read_png(&cli_png).unwrap();
     let mut reader = saved;
     let mut rgba = vec![0; reader.output_buffer_size().unwrap()];
@@ -345,14 +353,7 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         let mut words: Vec<&str> = command.split_whitespace().skip(1).collect();
         let k = words.iter().position(|w| *w == "--dt").unwrap();
         words[k + 1] = dt;
-        chaoscope()
-            .args(&words)
-            .args(["--backend", "gpu", "--precision", "f32", "--output"])
-            .arg(dir.path().join("judged.png"))
-            .arg("--data")
-            .arg(&npy)
-            .assert()
-            .success();
+        run_on_the_command_line(&words, &dir.path().join("judged.png"), Some(&npy));
         read_npy(&npy).1
     };
     let (map, half, quarter) = (at("0.01"), at("0.005"), at("0.0025"));
@@ -411,14 +412,8 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         // The view's own command line, run on the command line's f32 GPU path.
         let npy: PathBuf = dir.path().join(format!("{name}.npy"));
         let words: Vec<&str> = command.split_whitespace().skip(1).collect();
-        chaoscope()
-            .args(&words)
-            .args(["--backend", "gpu", "--precision", "f32", "--data"])
-            .arg(&npy)
-            .arg("--output")
-            .arg(dir.path().join(format!("{name}.png")))
-            .assert()
-            .success();
+        let png = dir.path().join(format!("{name}.png"));
+        run_on_the_command_line(&words, &png, Some(&npy));
         let (shape, cli) = read_npy(&npy);
         let page = read_f32(&dir.path().join(format!("{name}.f32")));
         let (w, h) = (v["width"].as_u64().unwrap(), v["height"].as_u64().unwrap());

@@ -144,11 +144,7 @@ impl Var {
             Var::Damping | Var::Joint1 | Var::Joint2 => "joint_damping",
             Var::Rod1 | Var::Rod2 => "rod_mass",
         };
-        let (_, min, max) = crate::params::RANGES
-            .iter()
-            .find(|r| r.0 == field)
-            .copied()
-            .expect("every parameter axis has a range");
+        let (min, max) = crate::params::range_of(field);
         super::Range { min, max }
     }
 
