@@ -90,6 +90,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 candidates: 65_536,
                 // The model is the truth here: no model error to measure.
                 held_out: 0,
+                ahead: None,
+                in_sample: false,
             },
             params: ParamSources {
                 preset: Some(Preset::Lab),

@@ -151,6 +151,10 @@ struct ParamsFile {
     bearing_radius: Option<f64>,
     air_drag: Option<AirDragFile>,
     moments: Option<MomentsFile>,
+    /// What `fit` learned of the pendulum beyond its model, for a forecast
+    /// (`fit::calibration`, which reads and checks it).
+    #[allow(dead_code)]
+    calibration: Option<toml::Value>,
 }
 
 /// A pendulum stated by its moments over the upper arm's gravity moment P, as `fit` writes

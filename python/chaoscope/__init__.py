@@ -336,6 +336,8 @@ def fit(
     window: Optional[float] = None,
     tolerance: Optional[float] = None,
     candidates: int = 65536,
+    held_out: int = 16,
+    lead: float = 1.0,
     velocity_error: float = 0.1,
     m1: Optional[float] = None,
     m2: Optional[float] = None,
@@ -365,7 +367,10 @@ def fit(
     ``start`` (s; default the second row) agrees with the data within ``tolerance`` (m;
     default 6 % of the reach), its ``candidates`` fitted over ``window`` s (default four of
     the motion's own times); plots, derived.csv, summary.json and model.toml (the model as a
-    parameter file, ``params_file=`` reads it back) go to ``output``. The model: a
+    parameter file, ``params_file=`` reads it back) go to ``output``. model.toml also holds the
+    calibration a :func:`forecast` of another launch carries (``held_out`` stretches of the
+    recording, each fitted and followed ``lead`` s past its end: the model's own error by
+    lead and the tracking error; ``held_out=0``: none). The model: a
     ``preset`` or ``params_file`` where given, else the pendulum's own moments found from its
     motion; the joint damping is what the fit finds. ``summary["verdict"]`` says whether the
     model follows the data in the window; where it does not, :class:`ModelWarning` is raised
@@ -472,6 +477,8 @@ def forecast(
     frame_rate: Optional[float] = None,
     before_release: bool = False,
     window: Optional[Pair] = None,
+    ahead: Optional[float] = None,
+    in_sample: bool = False,
     members: int = 10000,
     seed: int = 1,
     tolerance: Optional[float] = None,
@@ -500,19 +507,23 @@ def forecast(
 ) -> xr.Dataset:
     """An ensemble forecast of a camera-tracked run (``chaoscope forecast``; ``file`` and its
     units as :func:`fit`): the model's state, joint damping, pivot, scale and lower arm
-    fitted on ``window`` = (start, end) in s (default: from the second row, four of the
-    motion's own times), then
-    ``members`` drawn from the fit's covariance (``seed``) and integrated to the data's end,
-    the bands at least as wide as the model's own error measured on ``held_out`` other
-    windows of the recording.
+    fitted on ``window`` = (start, end) in s (default: from the second row, a calibration's
+    length, else four of the motion's own times over the window's own rows), then
+    ``members`` drawn from the fit's covariance (``seed``) and integrated to the data's end
+    (or ``ahead`` s past the window, whether or not rows exist there), the bands at least as
+    wide as the model's own error: a calibration's (``params_file`` written by :func:`fit`),
+    else measured on ``held_out`` windows of the recording before this one. Nothing is
+    learned from the rows after the window: they are only scored (``in_sample=True`` learns
+    from every row, and every output says so).
     Returns an ``xarray.Dataset`` over ``time`` (s): ``model`` and ``measurement`` (the
     model's band with the tracking error, ``tracking_error`` m or the fit's residuals)
     quantiles of the positions (m) by ``coordinate`` (x1, y1, x2, y2) and ``quantile``
     (0.05 .. 0.95),
     ``spread_lower`` (m, the lower bob's RMS spread) and ``ftle`` (1/s, along the fitted
-    orbit); ``attrs`` hold the horizons (the spread past ``tolerance`` m, default 6 % of the
-    reach; the data leaving
-    the 90 % band), the summary.json and the reproducing command. forecast.png, bands.csv and
+    orbit); ``attrs`` hold the horizon (s after the window: when the median is expected to
+    leave the pendulum by ``tolerance`` m, default 5 % of the reach; summary.json has its
+    quartiles), the spread's and the data's, ``sample`` ("out of sample" unless
+    ``in_sample``), the summary.json and the reproducing command. forecast.png, bands.csv and
     summary.json go to ``output``, and with ``video`` (the film :func:`track` read) the
     forecast drawn on its frames, overlay.mp4. The model as :func:`fit` finds it; where it
     does not follow the data in the window, :class:`ModelWarning` is raised as a warning,
@@ -570,6 +581,8 @@ def _bands(out: Path) -> xr.Dataset:
         attrs={
             "command": summary["command"],
             "model_follows": int(follows),
+            "horizon": _nan(horizon["headline"]["lead"] if follows else None),
+            "sample": summary["sample"],
             "spread_horizon": _nan(horizon["spread"] if follows else None),
             "data_horizon": _nan(horizon["data"] if follows else None),
             "lyapunov_exponent": summary["lyapunov"]["exponent"],

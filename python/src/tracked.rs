@@ -31,6 +31,10 @@ pub fn fit<'py>(
         window: k.get("window")?,
         tolerance: k.get("tolerance")?,
         candidates: k.whole("candidates")?.unwrap_or(65536),
+        held_out: k
+            .whole("held_out")?
+            .unwrap_or(chaoscope::app::fit::CALIBRATION_WINDOWS),
+        lead: k.or("lead", chaoscope::app::fit::CALIBRATION_LEAD)?,
         velocity_error: k.or("velocity_error", 0.1)?,
         params: k.sources()?,
         backend: k.backend()?,
@@ -71,6 +75,8 @@ pub fn forecast<'py>(
             held_out: k
                 .whole("held_out")?
                 .unwrap_or(chaoscope::fit::model_error::HELD_OUT),
+            ahead: k.get("ahead")?,
+            in_sample: k.or("in_sample", false)?,
         },
         params: k.sources()?,
         backend: k.backend()?,

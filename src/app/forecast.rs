@@ -8,9 +8,10 @@ use serde_json::json;
 
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
-use crate::fit::forecast::{self, Forecast, QUANTILES};
+use crate::fit::calibration::Calibration;
+use crate::fit::forecast::{self, Forecast, Headline, QUANTILES};
 use crate::fit::forecast_plot::{self, Marks};
-use crate::fit::outcome::{ForecastSettings, fit_and_forecast, fit_json};
+use crate::fit::outcome::{ForecastSettings, Learning, fit_and_forecast, fit_json, learned_rows};
 use crate::fit::read_frames;
 use crate::fit::verdict::Verdict;
 use crate::fit::window::TrackRows;
@@ -40,6 +41,15 @@ pub struct ForecastJob {
 
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct ForecastSummary {
+    /// Whether the forecast learned from the rows after its window ([`IN_SAMPLE`]).
+    pub in_sample: bool,
+    /// The one answer to "how long does the model predict the pendulum": the lead at which
+    /// the median is expected to leave it by the tolerance, with its quartiles.
+    pub headline: Headline,
+    /// How long the median followed the data within the tolerance (s after the window's
+    /// end; a lower bound where the data ended first).
+    pub median_follows_for: Option<f64>,
+    pub followed_to_data_end: bool,
     pub window: (f64, f64),
     /// The lower bob's spread (m) that ends the horizon.
     pub tolerance: f64,
@@ -93,6 +103,30 @@ pub fn run(
     )?;
     super::checks::check_units(&job.units)?;
     let read = read_frames(&job.file, &job.units)?;
+    // A calibration that `fit` wrote beside the model, unless in sample (where the file
+    // itself teaches everything).
+    let calibration = match &job.params.params {
+        Some(path) if !job.settings.in_sample => Calibration::read("params", path)?,
+        _ => None,
+    };
+    // The window, before anything is learned: it says which rows may teach.
+    let (window, window_from) = match (job.settings.window, &calibration) {
+        (Some(w), _) => (w, "given"),
+        (None, Some(c)) => (
+            (read[1].t, read[1].t + c.window),
+            "the calibration's length",
+        ),
+        (None, None) => (
+            own_window(&read)?,
+            "four of the motion's own times, over the window's own rows",
+        ),
+    };
+    let learn = learned_rows(
+        &read.iter().map(|f| f.t).collect::<Vec<_>>(),
+        window,
+        job.settings.in_sample,
+    )
+    .max(1);
     // Where the track lies in the film, and that the film is the one it was tracked from,
     // before any work: only a CSV `track` wrote says.
     let mut film_notice = None;
@@ -111,12 +145,32 @@ pub fn run(
         }
         None => None,
     };
-    // The pivot, arm lengths and model as `fit` finds them.
-    let tracked = crate::fit::pendulum::tracked_model(&read, &job.params, &job.units)?;
+    // The pivot, arm lengths and model as `fit` finds them, from the rows that may teach.
+    let scale = calibration
+        .as_ref()
+        .and_then(|c| c.pixels_per_metre)
+        .map(|[v, e]| (v, e));
+    let tracked = crate::fit::pendulum::tracked_model_from(
+        &read,
+        learn,
+        &job.params,
+        &job.units,
+        scale,
+    )
+    .map_err(|e| match e {
+        Error::InvalidSpec { field: "params", reason } if !job.settings.in_sample => Error::invalid(
+            "params",
+            format!(
+                "{reason} (a forecast learns only from the rows up to its window's end: calibrate once with `fit` on a longer recording of this pendulum and give its model.toml as [[params]])"
+            ),
+        ),
+        e => e,
+    })?;
     let mut notices = engine.notices();
     notices.push(tracked.source.describe_model(&tracked.params));
     notices.extend(film_notice);
     notices.extend(tracked.notices.iter().cloned());
+    let provenance = provenance(job, &tracked, learn, window_from, calibration.as_ref());
     let crate::fit::pendulum::Tracked {
         frames,
         t,
@@ -126,18 +180,37 @@ pub fn run(
         params,
         ..
     } = tracked;
-    let (settings, end) = (job.settings, t[t.len() - 1]);
+    let settings = ForecastSettings {
+        window: Some(window),
+        ..job.settings
+    };
+    let end = t[t.len() - 1];
     let track = TrackRows {
         t: &t,
         data: &data,
         angles: &angle,
     };
-    let o = fit_and_forecast(&track, &params, &settings, end, engine, monitor)?;
+    let learning = Learning {
+        calibration: calibration.as_ref(),
+    };
+    let o = fit_and_forecast(&track, &params, &settings, learning, end, engine, monitor)?;
     notices.push(o.verdict.describe());
+    if job.settings.in_sample {
+        notices.push(IN_SAMPLE.into());
+    }
+    if let Some(c) = &calibration {
+        let measured = c.model_error.step * c.model_error.m50.len() as f64;
+        if forecast_lead(&o) > measured + 1e-9 {
+            notices.push(format!(
+                "the calibration measured the model's own error to {measured:.2} s after a window; past that its last value is held, so the bands there are not calibrated (calibrate with a longer [[lead]])"
+            ));
+        }
+    }
     let f = &o.forecast;
+    let headline = f.headline();
     let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
     let (data_after, data_lt) = o.after_window(o.data_horizon);
-
+    let forecast_end = f.times.last().copied().unwrap_or(end);
     let out = &job.output;
     let mut files = Outputs::new();
     // Long enough to see the bands open and the data part, short enough to read.
@@ -146,7 +219,9 @@ pub fn run(
         .into_iter()
         .chain(o.data_horizon)
         .fold(f.window_end, f64::max);
-    let until = (last_horizon + 3.0).max(f.window_end + 3.0).min(end);
+    let until = (last_horizon + 3.0)
+        .max(f.window_end + 3.0)
+        .min(forecast_end);
     forecast_plot::forecast(
         &mut files,
         &out.join("forecast.png"),
@@ -158,17 +233,26 @@ pub fn run(
             tolerance: o.tolerance,
             until,
             title: format!(
-                "{}: fit {:.3}..{:.3} s, {} members; spread > {:.3} m {}; data leave the 90 % band {}",
+                "{}{}: fit {:.3}..{:.3} s, {} members; horizon {} (median within {:.1} mm){}",
                 job.file
                     .file_name()
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default(),
+                if job.settings.in_sample {
+                    " (in sample)"
+                } else {
+                    ""
+                },
                 o.window.0,
                 o.window.1,
                 settings.members,
-                o.tolerance,
-                short_time(f.spread_horizon),
-                short_time(o.data_horizon),
+                describe_headline(&headline),
+                1e3 * o.tolerance,
+                match (o.scores.median_follows_for, o.scores.followed_to_data_end) {
+                    (Some(l), false) => format!("; on the data {l:.2} s"),
+                    (Some(l), true) => format!("; on the data over {l:.2} s"),
+                    (None, _) => String::new(),
+                },
             ),
         },
     )?;
@@ -184,7 +268,15 @@ pub fn run(
     };
     let summary = json!({
         "command": command,
+        "sample": if job.settings.in_sample { "in sample" } else { "out of sample" },
         "file": job.file.display().to_string(),
+        "learned_from": provenance,
+        "scored": {
+            "rule": "only rows after the window's end, up to the forecast's end",
+            "rows": o.scores.rows,
+            "from": t.iter().find(|&&x| x > f.window_end + 1e-9),
+            "to": o.scores.last_lead.map(|l| f.window_end + l),
+        },
         "pivot": [pivot.x, pivot.y],
         "parameters": crate::params::to_json(&o.fit.params),
         "fit": fit_json(&o.fit),
@@ -196,9 +288,13 @@ pub fn run(
             "tracking_error": o.tracking_error,
             "tracking_error_from": if settings.tracking_error.is_some() { "the tracking error given" } else { "the fit's residuals" },
             "backend": o.fit.backend, "precision": job.precision.name(),
-            "step": f.dt, "end": end,
+            "step": f.dt, "end": forecast_end, "data_end": end,
         },
         "horizon": {
+            "headline": headline,
+            "headline_rule": "the lead after the window's end at which the members' median is expected to leave the pendulum by more than the tolerance: each member is one pendulum the data allow (the model's own error added, each member its share), and the lead at which it first lies farther than the tolerance from the median is one draw; the median of the draws, with their quartiles",
+            "median_on_the_data": o.scores.median_follows_for,
+            "median_on_the_data_is_lower_bound": o.scores.followed_to_data_end,
             "tolerance": o.tolerance,
             "spread": f.spread_horizon, "spread_after_window": spread_after,
             "spread_lyapunov_times": spread_lt,
@@ -239,6 +335,10 @@ pub fn run(
     }
     files.commit(monitor)?;
     Ok(ForecastSummary {
+        in_sample: job.settings.in_sample,
+        headline,
+        median_follows_for: o.scores.median_follows_for,
+        followed_to_data_end: o.scores.followed_to_data_end,
         window: o.window,
         tolerance: o.tolerance,
         members: settings.members,
@@ -249,7 +349,7 @@ pub fn run(
         data_horizon_lyapunov_times: data_lt,
         lyapunov_exponent: f.lyapunov,
         data_coverage: o.data_coverage,
-        scores: o.scores,
+        scores: o.scores.clone(),
         verdict: o.verdict,
         output: out.clone(),
         files: ["forecast.png", "bands.csv", "summary.json"]
@@ -264,9 +364,146 @@ pub fn run(
 /// The forecast drawn on the film (`--video`), in the output folder.
 pub const OVERLAY: &str = "overlay.mp4";
 
-/// "at 2.31 s", or "beyond the data": short enough for a title.
-fn short_time(t: Option<f64>) -> String {
-    t.map_or("beyond the data".into(), |t| format!("at {t:.2} s"))
+/// How far past its window's end (s) a forecast runs.
+fn forecast_lead(o: &crate::fit::outcome::Outcome) -> f64 {
+    let f = &o.forecast;
+    f.times.last().copied().unwrap_or(f.window_end) - f.window_end
+}
+
+/// What every output of a forecast that learned from its future says.
+pub const IN_SAMPLE: &str = "in sample: the pivot, the arms, the model and its errors were learned from every row of the file, the rows this forecast is scored on included; its scores flatter it";
+
+/// The headline horizon in words: "0.42 s (0.31-0.58 s)", with "over" where the members
+/// outlast the forecast.
+pub fn describe_headline(h: &Headline) -> String {
+    let at = |v: Option<f64>| v.map_or(format!("over {:.2}", h.forecast_to), |v| format!("{v:.2}"));
+    format!(
+        "{} s ({}-{} s)",
+        at(h.lead),
+        at(h.lower_quartile),
+        at(h.upper_quartile)
+    )
+}
+
+/// The window when none is given and no calibration says its length: from the second row,
+/// four of the motion's own times (1/RMS of the upper arm's angular velocity) and at least
+/// five rows, the motion measured over the window's own rows: the rows are taken one by one
+/// until they span four of the motion time they show.
+fn own_window(read: &[crate::fit::TrackedRow]) -> Result<(f64, f64)> {
+    use crate::fit::window::{WINDOW_ROWS, WINDOW_TIMES};
+    let n = read.len();
+    let t: Vec<f64> = read.iter().map(|f| f.t).collect();
+    let step = forecast::cadence(&t);
+    // The window's length from the first k rows, and whether those rows span it.
+    let length = |k: usize| -> Option<f64> {
+        let pivot = crate::fit::fit_pivot(&read[..k]).ok()?;
+        let angles = crate::fit::angles(&read[..k], (pivot.x, pivot.y));
+        let rows = TrackRows {
+            t: &t[..k],
+            data: &[],
+            angles: &angles,
+        };
+        let w = (WINDOW_TIMES * rows.motion_time()).max(WINDOW_ROWS as f64 * step);
+        w.is_finite().then_some(w)
+    };
+    let spans = |k: usize| length(k).is_some_and(|w| t[1] + w <= t[k - 1] + 1e-9);
+    // Doubling to rows that span their window, then the fewest that do.
+    let mut k = (WINDOW_ROWS + 2).min(n);
+    while !spans(k) {
+        if k == n {
+            return Err(Error::invalid(
+                "window",
+                format!(
+                    "the file's {n} rows do not span four of the motion's own times: give the window, or a calibration ([[params]] written by `fit`) and [[ahead]]"
+                ),
+            ));
+        }
+        k = (2 * k).min(n);
+    }
+    let (mut lo, mut hi) = (k / 2, k);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        match spans(mid) {
+            true => hi = mid,
+            false => lo = mid,
+        }
+    }
+    let w = length(hi).expect("spans");
+    Ok((t[1], t[1] + w))
+}
+
+/// Which rows (file, times) taught each part of the forecast, and from where.
+fn provenance(
+    job: &ForecastJob,
+    tracked: &crate::fit::pendulum::Tracked,
+    learn: usize,
+    window_from: &str,
+    calibration: Option<&Calibration>,
+) -> serde_json::Value {
+    let file = job.file.display().to_string();
+    let rows = json!({
+        "file": file, "from": tracked.t[0], "to": tracked.t[learn - 1], "count": learn,
+    });
+    let calibrated = |what: &str| {
+        calibration.map(|c| {
+            json!({ "from": format!("the calibration in {}", job.params.params.as_ref().map(|p| p.display().to_string()).unwrap_or_default()),
+                    "recording": c.file, "span": c.span, "what": what })
+        })
+    };
+    let from_rows = match job.settings.in_sample {
+        true => "this file's rows, all of them (in sample)",
+        false => "this file's rows up to the window's end (`rows`)",
+    };
+    let these_rows = |what: &str| json!({ "from": from_rows, "what": what });
+    let model = match tracked.source {
+        crate::fit::pendulum::ModelSource::Given => json!({
+            "from": match (&job.params.params, job.params.preset) {
+                (Some(p), _) => format!("the parameter file {}", p.display()),
+                (None, Some(p)) => format!("the preset {}", p.name()),
+                (None, None) => "the values given".into(),
+            },
+            "what": "the model (its joint damping fitted in the window)",
+        }),
+        crate::fit::pendulum::ModelSource::Identified => {
+            these_rows("the moments, found from the motion")
+        }
+    };
+    let scale = match (
+        job.units.pixels_per_metre,
+        calibration.and_then(|c| c.pixels_per_metre),
+    ) {
+        (Some(crate::fit::data::PixelScale::FromMotion), Some(_)) => {
+            calibrated("the metre scale (from the recording's motion)")
+        }
+        (Some(crate::fit::data::PixelScale::FromMotion), None) => {
+            Some(these_rows("the metre scale, from the motion"))
+        }
+        _ => None,
+    };
+    let tracking = match (job.settings.tracking_error, calibration) {
+        (Some(e), _) => json!({ "from": "given", "value": e }),
+        (None, Some(_)) => calibrated("the tracking error (the held-out fits' residuals)").into(),
+        (None, None) => json!({ "from": "the window fit's residuals" }),
+    };
+    let model_error = match calibration {
+        Some(_) => calibrated("the model's own error by lead (held-out stretches)").into(),
+        None if job.settings.held_out == 0 => json!({ "from": "none measured (held_out 0)" }),
+        None => these_rows(match job.settings.in_sample {
+            true => "held-out windows spread over the whole file",
+            false => "held-out windows before the forecast's window",
+        }),
+    };
+    json!({
+        "sample": if job.settings.in_sample { "in sample" } else { "out of sample" },
+        "rows": rows,
+        "window": window_from,
+        "geometry": these_rows("the pivot, the arm lengths and the middle joint"),
+        "scale": scale,
+        "model": model,
+        "fit": these_rows("the state, joint damping, pivot offset, scale and lower arm in the window"),
+        "tracking_error": tracking,
+        "model_error": model_error,
+    })
 }
 
 /// "at 2.31 s", or "never (to the data's end)".

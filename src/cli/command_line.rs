@@ -468,13 +468,15 @@ fn units(u: &crate::fit::data::Units) -> String {
 
 pub fn fit(job: &FitJob) -> String {
     format!(
-        "chaoscope fit {}{}{}{}{} --candidates {} --velocity-error {}{} --backend {}",
+        "chaoscope fit {}{}{}{}{} --candidates {} --held-out {} --lead {} --velocity-error {}{} --backend {}",
         word(&job.file),
         units(&job.units),
         given("start", job.start),
         given("window", job.window),
         given("tolerance", job.tolerance),
         job.candidates,
+        job.held_out,
+        job.lead,
         job.velocity_error,
         sources(&job.params),
         job.backend.name()
@@ -487,13 +489,19 @@ pub fn forecast(job: &ForecastJob) -> String {
         .tracking_error
         .map_or(String::new(), |e| format!(" --tracking-error {e}"));
     format!(
-        "chaoscope forecast {}{}{} --members {} --seed {}{}{noise} --candidates {} --held-out {}{} --backend {}",
+        "chaoscope forecast {}{}{}{}{} --members {} --seed {}{}{noise} --candidates {} --held-out {}{} --backend {}",
         word(&job.file),
         units(&job.units),
         given(
             "window",
             job.settings.window.map(|(a, b)| format!("{a}:{b}"))
         ),
+        given("ahead", job.settings.ahead),
+        if job.settings.in_sample {
+            " --in-sample"
+        } else {
+            ""
+        },
         job.settings.members,
         job.settings.seed,
         given("tolerance", job.settings.tolerance),

@@ -39,6 +39,16 @@ pub struct FitArgs {
     /// Size of the candidate ensemble of the model fit.
     #[arg(long, default_value = "65536", value_parser = parse_usize, allow_hyphen_values = true)]
     pub candidates: usize,
+    /// Stretches of the recording held out to calibrate forecasts (0 to 64): the model
+    /// fitted on each (as long as --window), how far the data depart from it by the lead
+    /// since its end, written with the tracking error into model.toml's [calibration] for
+    /// `forecast --params`. 0: no calibration.
+    #[arg(long, default_value_t = crate::app::fit::CALIBRATION_WINDOWS, value_parser = parse_usize, allow_hyphen_values = true)]
+    pub held_out: usize,
+    /// How far past each held-out stretch its departure is measured (s, 0.05 to 60): the
+    /// longest lead a calibrated forecast's bands are measured for.
+    #[arg(long, default_value_t = crate::app::fit::CALIBRATION_LEAD, value_parser = parse_number, allow_hyphen_values = true)]
+    pub lead: f64,
     /// Velocity error (m/s) of each mass, for the energy error bars (the report: 0.1).
     #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
     pub velocity_error: f64,
@@ -58,6 +68,8 @@ impl FitArgs {
             window: self.window,
             tolerance: self.tolerance,
             candidates: self.candidates,
+            held_out: self.held_out,
+            lead: self.lead,
             velocity_error: self.velocity_error,
             params: self.physical.sources(),
             backend: self.engine.backend,

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{LentEngineArgs, PhysicalArgs, TrackedUnitsArgs};
-use super::parse::{parse_length, parse_u64, parse_usize, parse_window};
+use super::parse::{parse_length, parse_number, parse_u64, parse_usize, parse_window};
 use super::{command_line, json, say};
-use crate::app::forecast::{self, ForecastJob, fmt_time};
+use crate::app::forecast::{self, ForecastJob};
 use crate::error::Result;
 use crate::fit::outcome::ForecastSettings;
 use crate::monitor::Monitor;
@@ -31,18 +31,30 @@ pub struct ForecastArgs {
     #[command(flatten)]
     pub units: TrackedUnitsArgs,
     /// The fit window START:END (s): the state at its first row and the joint damping are
-    /// fitted to the rows within it; the forecast runs from its end to the data's end
-    /// [default: from the second row, four of the motion's own times (1/RMS of the upper
-    /// arm's angular velocity), at least five rows]
+    /// fitted to the rows within it; the forecast runs from its end to the data's end (or
+    /// --ahead past it). Nothing is learned from the rows after it: they are only scored
+    /// [default: the calibration's length (--params written by fit), else four of the
+    /// motion's own times (1/RMS of the upper arm's angular velocity, over the window's own
+    /// rows), at least five rows; from the second row]
     #[arg(long, value_parser = parse_window, allow_hyphen_values = true)]
     pub window: Option<(f64, f64)>,
+    /// Forecast this far past the window's end (s, at most 600), whether or not rows exist
+    /// there: the bands go on at the data's cadence; rows there are scored [default: to the
+    /// data's end].
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub ahead: Option<f64>,
+    /// Learn from every row of the file, the rows after the window included (the pivot, the
+    /// arms, the model, the tracking and model errors): every output then says "in sample".
+    #[arg(long)]
+    pub in_sample: bool,
     /// Ensemble members drawn from the fit's uncertainty (state, damping, pivot).
     #[arg(long, default_value = "10000", value_parser = parse_usize, allow_hyphen_values = true)]
     pub members: usize,
     /// Seed of the draws: the same seed, the same forecast.
     #[arg(long, default_value = "1", value_parser = parse_u64, allow_hyphen_values = true)]
     pub seed: u64,
-    /// The lower bob's spread that ends the horizon (m, or with a unit: 3cm) [default: 6 %
+    /// How far the median may lie from the lower mass and still follow it: the horizon, the
+    /// spread and the scores (m, or with a unit: 3cm) [default: 5 %
     /// of the reach l1 + l2]
     #[arg(long, value_parser = parse_length, allow_hyphen_values = true)]
     pub tolerance: Option<f64>,
@@ -52,10 +64,11 @@ pub struct ForecastArgs {
     /// Candidates of the fit's ensemble search.
     #[arg(long, default_value = "65536", value_parser = parse_usize, allow_hyphen_values = true)]
     pub candidates: usize,
-    /// Windows of the same recording held out to measure the model's own error: the model
-    /// fitted on each, how far the data depart from it by the time since its end; the
-    /// bands are at least that wide. 0: the bands hold the tracking error and the fit's
-    /// uncertainty alone.
+    /// Windows of the same recording held out to measure the model's own error (0 to 64):
+    /// the model fitted on each, how far the data depart from it by the time since its end;
+    /// the bands are at least that wide. They lie before the forecast's window (over the
+    /// whole file with --in-sample); a calibration (--params written by fit) takes their
+    /// place. 0: the bands hold the tracking error and the fit's uncertainty alone.
     #[arg(long, default_value_t = crate::fit::model_error::HELD_OUT, value_parser = parse_usize, allow_hyphen_values = true)]
     pub held_out: usize,
     #[command(flatten)]
@@ -78,6 +91,8 @@ impl ForecastArgs {
                 tracking_error: self.tracking_error,
                 candidates: self.candidates,
                 held_out: self.held_out,
+                ahead: self.ahead,
+                in_sample: self.in_sample,
             },
             params: self.physical.sources(),
             video: self.video.clone(),
@@ -100,18 +115,20 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
         );
         return json(&s);
     }
-    let lt = |v: Option<f64>| v.map_or(String::new(), |v| format!(" ({v:.1} Lyapunov times)"));
+    let on_data = match (s.median_follows_for, s.followed_to_data_end) {
+        (Some(l), false) => format!("; on the data the median followed for {l:.2} s"),
+        (Some(l), true) => format!("; on the data the median followed to the data's end, {l:.2} s"),
+        (None, _) => "; no rows after the window to score".into(),
+    };
     eprintln!(
-        "fit {:.4}..{:.4} s, {} members, tracking error {:.1} mm; horizon: spread > {:.4} m {}{}, data out of the 90 % band {}{}; FTLE along the orbit {:.2} 1/s -> {}",
+        "{}fit {:.4}..{:.4} s, {} members, tracking error {:.2} mm; horizon {} after the window (the median within {:.1} mm of the pendulum; the members' quartiles){on_data}; FTLE along the orbit {:.2} 1/s -> {}",
+        if s.in_sample { "IN SAMPLE: " } else { "" },
         s.window.0,
         s.window.1,
         s.members,
         s.tracking_error * 1e3,
-        s.tolerance,
-        fmt_time(s.spread_horizon),
-        lt(s.spread_horizon_lyapunov_times),
-        fmt_time(s.data_horizon),
-        lt(s.data_horizon_lyapunov_times),
+        forecast::describe_headline(&s.headline),
+        s.tolerance * 1e3,
         s.lyapunov_exponent,
         s.output.display()
     );

@@ -91,6 +91,8 @@ impl TwinArgs {
                 candidates: self.candidates,
                 // The model is the truth here: no model error to measure.
                 held_out: 0,
+                ahead: None,
+                in_sample: false,
             },
             duration: self.duration,
             start: State {

@@ -36,6 +36,44 @@ pub struct ForecastSpec {
     pub end: f64,
     /// The data's times, to evaluate the bands at besides the regular ones.
     pub data_times: Vec<f64>,
+    /// The data's step between rows (s): past the last row the bands go on at it.
+    pub cadence: f64,
+    /// The model's own error (held-out windows or a calibration), which widens the
+    /// measurement bands ([`Forecast::widen`]) and each member's departure ([`departed`]).
+    pub model_error: Option<super::model_error::ModelError>,
+}
+
+/// A forecast's tolerance unless given: 5 % of the reach l1 + l2 of `p`. One tolerance
+/// judges everything a forecast says: the headline horizon, the ensemble's spread, and how
+/// long the median followed the data.
+pub fn default_tolerance(p: &crate::model::Params) -> f64 {
+    TOLERANCE_SHARE * (p.l1 + p.l2)
+}
+
+/// [`default_tolerance`]'s share of the reach.
+pub const TOLERANCE_SHARE: f64 = 0.05;
+
+/// The data's step between rows (s): the median of the steps of `t` (0 for one row).
+pub fn cadence(t: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    super::quantiles::median(&mut steps).unwrap_or(0.0)
+}
+
+/// The headline horizon: how long the members' median is expected to stay within the
+/// tolerance of the pendulum, with its uncertainty. Each member stands for a pendulum the
+/// data allow; the lead at which its lower mass first lies farther than the tolerance from
+/// the median is one draw of the horizon. Their quartiles are the horizon's uncertainty.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Headline {
+    /// The members' median lead (s after the window's end) and its quartiles; None where
+    /// more than half the members (a quarter, three quarters) never leave it before the
+    /// forecast's end.
+    pub lead: Option<f64>,
+    pub lower_quartile: Option<f64>,
+    pub upper_quartile: Option<f64>,
+    /// The tolerance (m) and the forecast's last lead (s): a horizon past it is unknown.
+    pub tolerance: f64,
+    pub forecast_to: f64,
 }
 
 /// The quantiles ([`QUANTILES`]) of the four coordinates x1, y1, x2, y2 at one time.
@@ -65,6 +103,10 @@ pub struct Forecast {
     pub model_error: Option<super::model_error::ModelError>,
     /// When the model's own error alone first passes the tolerance ([`Forecast::widen`]).
     pub model_horizon: Option<f64>,
+    /// Per member, the first band time at which its lower mass lies farther than the
+    /// tolerance from the members' median (None: not before the end).
+    pub departures: Vec<Option<f64>>,
+    pub tolerance: f64,
 }
 
 impl Forecast {
@@ -74,13 +116,14 @@ impl Forecast {
     /// its state's uncertainty spreads, the bands say so. No band reaches past where the
     /// masses can be: `reach` (m) from the pivot for the upper (l1) and the lower (l1 + l2).
     ///
-    /// `velocity` is the fitted orbit's at every band time (m/s), which carries the model's
-    /// lag to this orbit; the model's own horizon is the first time the lower mass's 90 %
-    /// half-width from it (its two coordinates' in quadrature) passes `tolerance`.
+    /// `own` is `error`'s 50 % and 90 % half-widths at every band time on the fitted orbit
+    /// ([`super::model_error::ModelError::at`], its velocity carrying the model's lag); the
+    /// model's own horizon is the first time the lower mass's 90 % half-width (its two
+    /// coordinates' in quadrature) passes `tolerance`.
     pub fn widen(
         &mut self,
         error: super::model_error::ModelError,
-        velocity: &[[f64; 4]],
+        own: &[([f64; 4], [f64; 4])],
         reach: (f64, f64),
         tolerance: f64,
     ) {
@@ -89,7 +132,7 @@ impl Forecast {
             if lead <= 1e-9 {
                 continue;
             }
-            let (half50, half90) = error.at(lead, &velocity[k]);
+            let (half50, half90) = own[k];
             if self.model_horizon.is_none() && half90[2].hypot(half90[3]) > tolerance {
                 self.model_horizon = Some(t);
             }
@@ -106,6 +149,31 @@ impl Forecast {
             }
         }
         self.model_error = Some(error);
+    }
+
+    /// The headline horizon ([`Headline`]) from the members' departures from the median.
+    pub fn headline(&self) -> Headline {
+        let end = self.times.last().copied().unwrap_or(self.window_end);
+        let mut leads: Vec<f64> = self
+            .departures
+            .iter()
+            .map(|d| d.map_or(f64::INFINITY, |t| t - self.window_end))
+            .collect();
+        leads.sort_by(f64::total_cmp);
+        let at = |q: f64| {
+            if leads.is_empty() {
+                return None;
+            }
+            let k = ((q * leads.len() as f64).ceil() as usize).clamp(1, leads.len()) - 1;
+            leads[k].is_finite().then_some(leads[k])
+        };
+        Headline {
+            lead: at(0.5),
+            lower_quartile: at(0.25),
+            upper_quartile: at(0.75),
+            tolerance: self.tolerance,
+            forecast_to: end - self.window_end,
+        }
     }
 
     /// Index of the band at time `t` (one of `times`).
@@ -231,12 +299,21 @@ pub fn effective_freedom(fit: &WindowFit) -> f64 {
     (fit.dof as f64 / fit.correlation.inflation.max(1.0)).max(3.0)
 }
 
-/// The bands' times: every [`BAND_STEP`] from `t0` to `end`, and the data's times between.
-pub fn band_times(t0: f64, end: f64, data: &[f64]) -> Vec<f64> {
+/// The bands' times: every [`BAND_STEP`] from `t0` to `end`, the data's times between, and
+/// past the data's last row the times a row would have at the data's `cadence` (s; 0:
+/// none), so that a forecast past the data has its bands where the next rows will lie.
+pub fn band_times(t0: f64, end: f64, data: &[f64], cadence: f64) -> Vec<f64> {
     let n = ((end - t0) / BAND_STEP).floor() as usize;
     let mut times: Vec<f64> = (0..=n).map(|k| t0 + k as f64 * BAND_STEP).collect();
     times.push(end);
     times.extend(data.iter().filter(|&&x| x >= t0 - 1e-9 && x <= end + 1e-9));
+    if let Some(&last) = data.last()
+        && cadence > 0.0
+        && end > last + cadence * 0.5
+    {
+        let past = ((end - last) / cadence + 1e-9).floor() as usize;
+        times.extend((1..=past).map(|k| last + k as f64 * cadence));
+    }
     times.sort_by(f64::total_cmp);
     times.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
     times
@@ -266,7 +343,21 @@ pub fn forecast(
         pivots,
         clamped,
     } = draw_members(fit, spec.members, spec.seed);
-    let times = band_times(fit.t0, spec.end, &spec.data_times);
+    let times = band_times(fit.t0, spec.end, &spec.data_times, spec.cadence);
+    // The model's own error along the fitted orbit at each band time: its 50 % and 90 %
+    // half-widths per coordinate (zero where none was measured, and up to the window's end).
+    let velocity = match spec.model_error {
+        Some(_) => fit.velocities(&times),
+        None => Vec::new(),
+    };
+    let own: Vec<([f64; 4], [f64; 4])> = times
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| match &spec.model_error {
+            Some(e) if t > window_end + 1e-9 => e.at(t - window_end, &velocity[k]),
+            _ => ([0.0; 4], [0.0; 4]),
+        })
+        .collect();
     let m = spec.members;
     let (dt, steps) = stepping(fit.t0, spec.end);
     let since_start: Vec<f64> = times.iter().map(|t| t - fit.t0).collect();
@@ -275,6 +366,7 @@ pub fn forecast(
     // chunk, else from the chunks gathered.
     let mut stats = Vec::new();
     let mut gathered: Option<Vec<f32>> = None;
+    let mut departures = Vec::new();
     let ensemble = EnsembleSpec::new(fit.params, &starts, dt, steps)
         .damped(&damping)
         .keeping(Keep::At(&since_start));
@@ -283,6 +375,7 @@ pub fn forecast(
         let n = v.len() / (4 * times.len());
         if n == m {
             stats = bands(v, &pivots, spec);
+            departures = departed(v, &pivots, &stats, &times, window_end, &own, spec);
             return Ok(());
         }
         let values = gathered.get_or_insert_with(|| vec![0f32; times.len() * 4 * m]);
@@ -294,13 +387,14 @@ pub fn forecast(
     monitor.check()?;
     if let Some(values) = gathered {
         stats = bands(&values, &pivots, spec);
+        departures = departed(&values, &pivots, &stats, &times, window_end, &own, spec);
     }
     let model: Vec<Band> = stats.iter().map(|s| s.0).collect();
     let observed: Vec<Band> = stats.iter().map(|s| s.1).collect();
     let spread: Vec<f64> = stats.iter().map(|s| s.2).collect();
     let spread_horizon = crossing(&times, &spread, window_end, spec.tolerance);
     let (ftle, lyapunov) = ftle_along(fit, window_end, spec.end, dt, &times);
-    Ok(Forecast {
+    let mut forecast = Forecast {
         t0: fit.t0,
         window_end,
         times,
@@ -314,7 +408,62 @@ pub fn forecast(
         dt,
         model_error: None,
         model_horizon: None,
-    })
+        departures,
+        tolerance: spec.tolerance,
+    };
+    if let Some(error) = &spec.model_error {
+        let p = &fit.params;
+        forecast.widen(error.clone(), &own, (p.l1, p.l1 + p.l2), spec.tolerance);
+    }
+    Ok(forecast)
+}
+
+/// Per member, the first band time after `after` at which its lower mass (moved by its
+/// pivot) lies farther than the tolerance from the members' median (`stats`' model bands):
+/// one draw each of when the median would leave a pendulum the data allow. The model's own
+/// error (`own`: its 50 % half-widths per coordinate by band time) is added in quadrature,
+/// each member with its own share of it: the model's error persists along an orbit (a lag
+/// that grows), so a member draws once how far out in that error's distribution its
+/// pendulum lies (|z| of a normal, whose median is 0.6745 of its standard deviation). A
+/// member whose position is not finite has left.
+fn departed(
+    values: &[f32],
+    pivots: &[(f64, f64)],
+    stats: &[(Band, Band, f64)],
+    times: &[f64],
+    after: f64,
+    own: &[([f64; 4], [f64; 4])],
+    spec: &ForecastSpec,
+) -> Vec<Option<f64>> {
+    let m = pivots.len();
+    let tolerance = spec.tolerance;
+    let mut rng = Pcg64::seed_from_u64(spec.seed ^ 0x6a09_e667_f3bc_c908);
+    let severity: Vec<f64> = (0..m)
+        .map(|_| {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            z.abs() / 0.6745
+        })
+        .collect();
+    let mut out = vec![None; m];
+    for (k, (&t, v)) in times.iter().zip(values.chunks(4 * m)).enumerate() {
+        if t <= after + 1e-9 {
+            continue;
+        }
+        let median = (stats[k].0[2][2], stats[k].0[3][2]);
+        let model = own[k].0[2].hypot(own[k].0[3]);
+        for (j, slot) in out.iter_mut().enumerate().filter(|(_, s)| s.is_none()) {
+            let x = v[2 * m + j] as f64 + pivots[j].0;
+            let y = v[3 * m + j] as f64 + pivots[j].1;
+            let off = (x - median.0)
+                .hypot(y - median.1)
+                .hypot(severity[j] * model);
+            // A NaN position (a member that blew up) has left.
+            if off.is_nan() || off > tolerance {
+                *slot = Some(t);
+            }
+        }
+    }
+    out
 }
 
 /// The model's and a measurement's bands and the lower bob's spread at each time of
@@ -478,18 +627,40 @@ pub fn data_horizon(
 
 /// How the forecast did against the data after its window: how long the members' median
 /// follows the lower mass within `within` (m, the distance), and the share of the lower
-/// mass's coordinates inside their measurement's 90 % band to the data's end.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+/// mass's coordinates inside their measurement's 90 % band, over all the rows scored and by
+/// lead. Only rows after the window are scored; a median that is not a number never follows.
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Scores {
     pub within: f64,
-    /// Seconds after the window's end until the median first strays past `within`.
-    pub median_follows_for: f64,
+    /// Seconds after the window's end until the median first strays past `within`; where it
+    /// never strays, the last row's lead and `followed_to_data_end` (a lower bound). None
+    /// where no row lies after the window.
+    pub median_follows_for: Option<f64>,
+    pub followed_to_data_end: bool,
+    /// Rows scored, and the lead (s) of the last.
+    pub rows: usize,
+    pub last_lead: Option<f64>,
     pub lower_in_band: Option<f64>,
+    /// The lower mass's coordinates inside their 90 % band by lead: each bin holds the rows
+    /// whose lead is at most its `to` (s) and more than the bin before's.
+    pub by_lead: Vec<LeadCoverage>,
 }
+
+/// One lead bin of [`Scores::by_lead`].
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct LeadCoverage {
+    pub to: f64,
+    pub coordinates: usize,
+    pub inside: Option<f64>,
+}
+
+/// The lead bins' upper ends (s) of [`Scores::by_lead`].
+pub const SCORED_LEADS: [f64; 6] = [0.05, 0.1, 0.2, 0.3, 0.5, 1.0];
 
 pub fn scores(forecast: &Forecast, t: &[f64], data: &[[f64; 4]], within: f64) -> Scores {
     let mut follows_for = None;
-    let (mut inside, mut all) = (0usize, 0usize);
+    let (mut inside, mut all, mut rows, mut last_lead) = (0usize, 0usize, 0usize, None);
+    let mut by_lead: Vec<(usize, usize)> = vec![(0, 0); SCORED_LEADS.len()];
     for (i, &ti) in t.iter().enumerate() {
         if ti <= forecast.window_end + 1e-9 {
             continue;
@@ -497,21 +668,42 @@ pub fn scores(forecast: &Forecast, t: &[f64], data: &[[f64; 4]], within: f64) ->
         let Some(k) = forecast.index(ti) else {
             continue;
         };
+        let lead = ti - forecast.window_end;
+        rows += 1;
+        last_lead = Some(lead);
         let (m, q) = (&forecast.model[k], &forecast.observed[k]);
         let off = (data[i][2] - m[2][2]).hypot(data[i][3] - m[3][2]);
-        if follows_for.is_none() && off > within {
-            follows_for = Some(ti - forecast.window_end);
+        // A median that is not a number never follows.
+        if follows_for.is_none() && (off.is_nan() || off > within) {
+            follows_for = Some(lead);
         }
+        let bin = SCORED_LEADS.iter().position(|&to| lead <= to + 1e-9);
         for c in 2..4 {
+            let hit = (q[c][0]..=q[c][4]).contains(&data[i][c]) as usize;
             all += 1;
-            inside += (q[c][0]..=q[c][4]).contains(&data[i][c]) as usize;
+            inside += hit;
+            if let Some(b) = bin {
+                by_lead[b].0 += 1;
+                by_lead[b].1 += hit;
+            }
         }
     }
-    let end = t.last().copied().unwrap_or(forecast.window_end);
     Scores {
         within,
-        median_follows_for: follows_for.unwrap_or(end - forecast.window_end),
+        median_follows_for: follows_for.or(last_lead),
+        followed_to_data_end: follows_for.is_none() && last_lead.is_some(),
+        rows,
+        last_lead,
         lower_in_band: (all > 0).then(|| inside as f64 / all as f64),
+        by_lead: SCORED_LEADS
+            .iter()
+            .zip(by_lead)
+            .map(|(&to, (n, hit))| LeadCoverage {
+                to,
+                coordinates: n,
+                inside: (n > 0).then(|| hit as f64 / n as f64),
+            })
+            .collect(),
     }
 }
 

@@ -2,6 +2,7 @@
 //! and arm lengths, angles, velocities and energies with error bars, the energy decay laws, and
 //! the model's state and damping fitted to the positions. `app::fit` puts it together.
 
+pub mod calibration;
 pub mod data;
 pub mod forecast;
 pub mod forecast_plot;

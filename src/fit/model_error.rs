@@ -29,7 +29,8 @@ use crate::model::Params;
 use crate::monitor::Monitor;
 
 /// Quantiles of the departure of fitted orbits from the data, by lead time.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ModelError {
     /// The width of a lead bin (s); bin k holds leads from k step to (k + 1) step.
     pub step: f64,
@@ -49,6 +50,9 @@ pub struct ModelError {
     /// out).
     pub windows: Vec<(f64, f64)>,
     pub unfollowed: usize,
+    /// The tracking error (m per coordinate) the followed windows' fits showed, their median:
+    /// what a forecast that learns it from a calibration takes.
+    pub tracking_error: f64,
 }
 
 impl ModelError {
@@ -89,8 +93,11 @@ pub const HELD_OUT: usize = 8;
 /// Which windows to hold out and how far to follow them.
 #[derive(Clone, Copy, Debug)]
 pub struct HeldOut {
-    /// The forecast's own window (s): the held-out ones are as long and clear of it.
-    pub window: (f64, f64),
+    /// The windows' length (s): the forecast's own.
+    pub length: f64,
+    /// The forecast's own window (s), which the held-out ones keep clear of (a calibration
+    /// has none).
+    pub avoid: Option<(f64, f64)>,
     /// How many windows, spread evenly over the recording.
     pub windows: usize,
     /// How far past each window's end its fitted orbit is followed (s).
@@ -109,14 +116,14 @@ pub fn estimate(
     monitor: &Monitor,
 ) -> Result<Option<ModelError>> {
     let HeldOut {
-        window,
+        length,
+        avoid,
         windows: held_out,
         lead,
         candidates,
     } = *held;
     let t = track.t;
     let (first, last) = (t[1], t[t.len() - 1]);
-    let length = window.1 - window.0;
     // Each window needs some lead after it: a quarter of its own length at least.
     let latest = last - length - 0.25 * length;
     if held_out == 0 || latest <= first {
@@ -139,8 +146,9 @@ pub fn estimate(
     // past it (or dropped where there is no room).
     let starts: Vec<f64> = (0..held_out)
         .map(|k| first + (latest - first) * (k as f64 + 0.5) / held_out as f64)
-        .filter(|&s| s + length <= window.0 || s >= window.1)
+        .filter(|&s| avoid.is_none_or(|window| s + length <= window.0 || s >= window.1))
         .collect();
+    let mut tracking_errors = Vec::new();
     let reach = p.l1 + p.l2;
     for s in starts {
         monitor.check()?;
@@ -153,6 +161,7 @@ pub fn estimate(
             unfollowed += 1;
             continue;
         }
+        tracking_errors.push(fit.tracking_error);
         let end = t[fit.row0 + fit.rows - 1];
         let after: Vec<usize> = (fit.row0 + fit.rows..t.len())
             .take_while(|&i| t[i] - end <= lead)
@@ -238,6 +247,7 @@ pub fn estimate(
         m90: Vec::with_capacity(bins),
         windows,
         unfollowed,
+        tracking_error: super::quantiles::median(&mut tracking_errors).unwrap_or(f64::NAN),
     };
     // A bin with no rows (a gap) takes the one before it.
     let (mut lag, mut lag_model) = ([0.0; 2], [0.0; 2]);

@@ -4,6 +4,7 @@
 
 use serde_json::json;
 
+use super::calibration::Calibration;
 use super::forecast::{self, Forecast, ForecastSpec, band_times, most_members};
 use super::verdict::Verdict;
 use super::window::{FITTED, TrackRows, WindowFit, fit_window};
@@ -60,9 +61,25 @@ pub struct ForecastSettings {
     /// Candidates of the fit's ensemble search.
     pub candidates: usize,
     /// Windows of the same recording held out to measure the model's own error (0: none;
-    /// the bands then hold the tracking error and the fit's uncertainty alone).
+    /// the bands then hold the tracking error and the fit's uncertainty alone). Unless in
+    /// sample, they lie before the forecast's window; a calibration's model error takes
+    /// their place.
     pub held_out: usize,
+    /// How far past the window's end to forecast (s), whether or not rows exist there.
+    /// None: to the data's end.
+    pub ahead: Option<f64>,
+    /// Learn from every row of the file, the rows after the window included (the held-out
+    /// windows spread over the whole recording): every output then says "in sample".
+    pub in_sample: bool,
 }
+
+/// The most held-out windows: each is a whole fit (a few seconds), and past some dozens the
+/// bands' widths no longer move (Student's t at 64 windows is within 1 % of the normal).
+pub const MOST_HELD_OUT: usize = 64;
+
+/// The farthest a forecast runs past its window (s): a chaotic pendulum's forecast holds
+/// for a few seconds; an ahead of minutes only fills the bands' memory.
+pub const MOST_AHEAD: f64 = 600.0;
 
 impl ForecastSettings {
     /// Checks the settings every forecast shares (the window against the data, later).
@@ -79,19 +96,41 @@ impl ForecastSettings {
         if let Some(e) = self.tracking_error {
             check_within("tracking_error", e, 0.0, 0.1)?;
         }
+        if let Some(ahead) = self.ahead {
+            check_within("ahead", ahead, 1e-3, MOST_AHEAD)?;
+        }
+        check_count("held_out", self.held_out as u64, 0, MOST_HELD_OUT as u64)?;
         check_count("candidates", self.candidates as u64, 64, 4_000_000)
+    }
+}
+
+/// What a forecast may learn from besides the rows up to its window's end (all rows, in
+/// sample): a calibration made on another recording, or another stretch of this one.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Learning<'a> {
+    pub calibration: Option<&'a Calibration>,
+}
+
+/// The rows of `t` a forecast with `window` learns from: those up to its end (to a
+/// microsecond), or all of them in sample.
+pub fn learned_rows(t: &[f64], window: (f64, f64), in_sample: bool) -> usize {
+    match in_sample {
+        true => t.len(),
+        false => t.partition_point(|&x| x <= window.1 + 1e-6),
     }
 }
 
 /// Candidates of each held-out window's search: the model's error needs each fit found, not
 /// the last digit of its state.
-const HELD_OUT_CANDIDATES: usize = 4096;
+pub const HELD_OUT_CANDIDATES: usize = 4096;
 
-/// Fits `p` to the `track` in the settings' window and forecasts to `end` (s).
+/// Fits `p` to the `track` in the settings' window and forecasts to `end` (s; the data's
+/// end) or the settings' `ahead` past the window, learning only what `learning` allows.
 pub fn fit_and_forecast(
     track: &TrackRows,
     p: &Params,
     settings: &ForecastSettings,
+    learning: Learning,
     end: f64,
     engine: &Engine,
     monitor: &Monitor,
@@ -103,17 +142,33 @@ pub fn fit_and_forecast(
         .unwrap_or_else(|| (t[1], t[1] + track.default_window()));
     let tolerance = settings
         .tolerance
-        .unwrap_or_else(|| TrackRows::default_tolerance(p));
+        .unwrap_or_else(|| forecast::default_tolerance(p));
     let (a, b) = window;
-    if !(a.is_finite() && b.is_finite() && a < b && a >= first - 1e-6 && b < last) {
+    // With `ahead` the window may end at the last row: the forecast runs past the data.
+    let before_last = settings.ahead.is_some() || b < last;
+    if !(a.is_finite()
+        && b.is_finite()
+        && a < b
+        && a >= first - 1e-6
+        && b <= last + 1e-6
+        && before_last)
+    {
         return Err(Error::invalid(
             "window",
             format!(
-                "{a}:{b} must be START:END with START < END within the data's times {first}..{last} s, END before the last row (the forecast runs past it)"
+                "{a}:{b} must be START:END with START < END within the data's times {first}..{last} s, END before the last row (the forecast runs past it) unless [[ahead]] says how far to forecast"
             ),
         ));
     }
-    let times = band_times(a, end, t).len();
+    // What the fit and its errors may learn from: the rows up to the window's end.
+    let learned = learned_rows(t, window, settings.in_sample).max(1);
+    let learn = TrackRows {
+        t: &t[..learned],
+        data: &data[..learned],
+        angles: &track.angles[..learned],
+    };
+    let end = settings.ahead.map_or(end, |ahead| b + ahead);
+    let times = band_times(a, end, t, forecast::cadence(learn.t)).len();
     let most = most_members(times);
     if settings.members > most {
         return Err(Error::invalid(
@@ -126,8 +181,30 @@ pub fn fit_and_forecast(
             ),
         ));
     }
-    let fit = fit_window(track, p, window, settings.candidates, engine, monitor)?;
-    let tracking_error = settings.tracking_error.unwrap_or(fit.tracking_error);
+    let fit = fit_window(&learn, p, window, settings.candidates, engine, monitor)?;
+    // The window ends at its last row.
+    let window_end = t[fit.row0 + fit.rows - 1];
+    let end = settings.ahead.map_or(end, |ahead| window_end + ahead);
+    let tracking_error = settings.tracking_error.unwrap_or_else(|| {
+        learning
+            .calibration
+            .map_or(fit.tracking_error, |c| c.tracking_error)
+    });
+    let lead = end - window_end;
+    let held = crate::fit::model_error::HeldOut {
+        length: b - a,
+        avoid: Some(window),
+        windows: settings.held_out,
+        lead,
+        candidates: settings.candidates.min(HELD_OUT_CANDIDATES),
+    };
+    // The model's own error: a calibration's, else the held-out windows' (each fitted
+    // orbit followed as far as this forecast's lead: a model's lag keeps growing on a
+    // pendulum that is not chaotic, and a shorter reach would hold its last value on).
+    let model_error = match learning.calibration {
+        Some(c) => Some(c.model_error.clone()),
+        None => crate::fit::model_error::estimate(&learn, p, &held, engine, monitor)?,
+    };
     let spec = ForecastSpec {
         members: settings.members,
         seed: settings.seed,
@@ -135,29 +212,15 @@ pub fn fit_and_forecast(
         tracking_error,
         end,
         data_times: t.to_vec(),
+        cadence: forecast::cadence(learn.t),
+        model_error,
     };
-    // The window ends at its last row.
-    let window_end = t[fit.row0 + fit.rows - 1];
-    let mut forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
-    // The model's own error, from windows of the same recording held out from this one,
-    // each followed as far as this forecast's lead (a model's lag keeps growing on a
-    // pendulum that is not chaotic: a shorter reach would hold its last value on).
-    let lead = end - window_end;
-    let held = crate::fit::model_error::HeldOut {
-        window,
-        windows: settings.held_out,
-        lead,
-        candidates: settings.candidates.min(HELD_OUT_CANDIDATES),
-    };
-    if let Some(error) = crate::fit::model_error::estimate(track, p, &held, engine, monitor)? {
-        let velocity = fit.velocities(&forecast.times);
-        forecast.widen(error, &velocity, (p.l1, p.l1 + p.l2), tolerance);
-    }
+    let forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
     let (data_horizon, run, data_coverage) = forecast::data_horizon(&forecast, t, data);
-    // The median within 5 % of the reach, the measure a forecast is judged by here.
-    let scores = forecast::scores(&forecast, t, data, 0.05 * (p.l1 + p.l2));
+    // The median within the tolerance, the measure a forecast is judged by here.
+    let scores = forecast::scores(&forecast, t, data, tolerance);
     let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();
-    let verdict = Verdict::judge(rms, t, data, p.l1 + p.l2);
+    let verdict = Verdict::judge(rms, learn.t, learn.data, p.l1 + p.l2);
     Ok(Outcome {
         scores,
         verdict,

@@ -72,6 +72,8 @@ impl ModelSource {
 
 /// What tracked data say about the apparatus, and the model to fit to them.
 pub struct Tracked {
+    /// How many of the rows (the first) taught the pivot, arm lengths, scale and moments.
+    pub learned: usize,
     /// The rows in seconds and metres (y up; a scale from the motion applied).
     pub frames: Vec<TrackedRow>,
     /// The metre scale found from the motion (pixels per metre and its error), where asked.
@@ -162,7 +164,7 @@ const UNIT_MISTAKE: f64 = 25.0;
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
 pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
-    motion_scale(&on_joint(frames)?.0, g)
+    motion_scale(&on_joint(frames, frames.len())?.0, g)
 }
 
 /// [`scale_from_motion`] of `frames` whose upper marker is on the middle joint.
@@ -188,11 +190,11 @@ fn motion_scale(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
 }
 
 /// `frames` with the upper marker moved out to the middle joint where it is not on it
-/// ([`super::joint`]), and where the joint lies.
-fn on_joint(frames: &[TrackedRow]) -> Result<(Vec<TrackedRow>, Option<Joint>)> {
-    let pivot = fit_pivot(frames)?;
+/// ([`super::joint`]), and where the joint lies, as the first `learn` rows show it.
+fn on_joint(frames: &[TrackedRow], learn: usize) -> Result<(Vec<TrackedRow>, Option<Joint>)> {
+    let pivot = fit_pivot(&frames[..learn])?;
     let pivot = (pivot.x, pivot.y);
-    Ok(match joint_off_marker(frames, pivot) {
+    Ok(match joint_off_marker(&frames[..learn], pivot) {
         Some(j) => (j.moved(frames, pivot), Some(j)),
         None => (frames.to_vec(), None),
     })
@@ -207,12 +209,31 @@ pub fn tracked_model(
     given: &ParamSources,
     units: &super::data::Units,
 ) -> Result<Tracked> {
+    tracked_model_from(frames, frames.len(), given, units, None)
+}
+
+/// [`tracked_model`] that learns from the first `learn` rows alone: the pivot, the arm
+/// lengths, the middle joint, the metre scale (unless `scale` gives one: pixels per metre and
+/// its error, from a calibration) and the motion's moments come from them; every row is
+/// then measured against what they taught. A forecast learns only from the rows up to its
+/// window's end, and the rows after it are only scored.
+pub fn tracked_model_from(
+    frames: &[TrackedRow],
+    learn: usize,
+    given: &ParamSources,
+    units: &super::data::Units,
+    scale: Option<(f64, f64)>,
+) -> Result<Tracked> {
     let g = given.g.unwrap_or(Params::default().g);
-    let (frames, mut joint) = on_joint(frames)?;
+    let learn = learn.clamp(1, frames.len());
+    let (frames, mut joint) = on_joint(frames, learn)?;
     let frames = &frames[..];
     let (frames, scale_from_motion) = match units.pixels_per_metre {
         Some(super::data::PixelScale::FromMotion) => {
-            let (ppm, error) = motion_scale(frames, g)?;
+            let (ppm, error) = match scale {
+                Some(s) => s,
+                None => motion_scale(&frames[..learn], g)?,
+            };
             if let Some(j) = &mut joint {
                 *j = Joint {
                     marker: j.marker / ppm,
@@ -235,11 +256,13 @@ pub fn tracked_model(
         _ => (frames.to_vec(), None),
     };
     let frames = &frames[..];
-    let pivot = fit_pivot(frames)?;
-    let (l1, l2) = arm_lengths(frames, (pivot.x, pivot.y));
+    let pivot = fit_pivot(&frames[..learn])?;
+    let (l1, l2) = arm_lengths(&frames[..learn], (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));
     let measured = super::measured(frames, (pivot.x, pivot.y));
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
+    // What the motion teaches (its own time, its moments) from the learned rows alone.
+    let (lt, lm, la) = (&t[..learn], &measured[..learn], &angles[..learn]);
     if l1.value > LONGEST_ARM {
         return Err(Error::invalid(
             "pixels_per_metre",
@@ -250,9 +273,9 @@ pub fn tracked_model(
         ));
     }
     let natural = TrackRows {
-        t: &t,
-        data: &measured,
-        angles: &angles,
+        t: lt,
+        data: lm,
+        angles: la,
     }
     .motion_time();
     if natural > SLOWEST_MOTION {
@@ -265,9 +288,9 @@ pub fn tracked_model(
     }
     let stated = given.preset.is_some() || given.params.is_some();
     let rows = TrackRows {
-        t: &t,
-        data: &measured,
-        angles: &angles,
+        t: lt,
+        data: lm,
+        angles: la,
     };
     let mut notices = Vec::new();
     let (params, source, identified) = if stated {
@@ -360,11 +383,17 @@ pub fn tracked_model(
     }
     if let Some((ppm, error)) = scale_from_motion {
         notices.push(format!(
-            "the metre scale from the motion: {ppm:.2} ± {error:.2} pixels per metre at the file's frame rate and g {g} m/s^2 (arms {:.4} and {:.4} m)",
-            l1.value, l2.value
+            "the metre scale {}: {ppm:.2} ± {error:.2} pixels per metre at the file's frame rate and g {g} m/s^2 (arms {:.4} and {:.4} m)",
+            match scale {
+                Some(_) => "from the calibration",
+                None => "from the motion",
+            },
+            l1.value,
+            l2.value
         ));
     }
     Ok(Tracked {
+        learned: learn,
         frames: frames.to_vec(),
         scale_from_motion,
         joint,

@@ -7,7 +7,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_pcg::Pcg64;
 
-use super::outcome::{ForecastSettings, Outcome, fit_and_forecast};
+use super::outcome::{ForecastSettings, Learning, Outcome, fit_and_forecast};
 use super::window::{STEPS_PER_SECOND, TrackRows, track_with};
 use super::{TrackedRow, angles};
 use crate::engine::Engine;
@@ -102,7 +102,15 @@ pub fn experiment(
         data: &track.measured,
         angles: &angle,
     };
-    let o = fit_and_forecast(&rows, truth, settings, end, engine, monitor)?;
+    let o = fit_and_forecast(
+        &rows,
+        truth,
+        settings,
+        Learning::default(),
+        end,
+        engine,
+        monitor,
+    )?;
     // The truth at the bands' times, from the release.
     let mut times = vec![0.0];
     times.extend(o.forecast.times.iter().filter(|&&x| x > 0.0));

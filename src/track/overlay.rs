@@ -157,30 +157,38 @@ fn draw(
         )
     };
     text(stage.0, 1, stage.1)?;
-    // The two horizons, each from its moment on: where the track leaves the band (the
-    // model no longer follows the pendulum to the tracking's precision), and where the
-    // members spread past the tolerance (the model has lost it whatever the tracking).
+    // The one horizon, from its moment on: where the members say the median leaves the
+    // pendulum by the tolerance; then, where the track shows it did.
     let mut line = 2;
-    if let Some(hz) = o.outcome.data_horizon
-        && t >= hz
-    {
-        text(
-            format!("from {hz:.2} s the track is out of the 90 % band"),
-            line,
-            FORECAST,
-        )?;
-        line += 1;
-    }
-    if let Some(hz) = f.spread_horizon
-        && t >= hz
+    let headline = f.headline();
+    if let Some(lead) = headline.lead
+        && t >= f.window_end + lead
     {
         text(
             format!(
-                "past the horizon ({hz:.2} s): the members spread beyond {:.1} mm: the forecast no longer says where the pendulum is",
+                "past the horizon ({:.2} s after the window): the forecast's median is expected over {:.1} mm from the pendulum",
+                lead,
                 1e3 * o.tolerance
             ),
             line,
             LOST,
+        )?;
+        line += 1;
+    }
+    let scores = &o.outcome.scores;
+    if let Some(lead) = scores
+        .median_follows_for
+        .filter(|_| !scores.followed_to_data_end)
+        && t >= f.window_end + lead
+    {
+        text(
+            format!(
+                "from {:.2} s the median is over {:.1} mm from the track",
+                f.window_end + lead,
+                1e3 * o.tolerance
+            ),
+            line,
+            FORECAST,
         )?;
     }
     root.present()?;

@@ -37,6 +37,8 @@ pub(super) fn prepare(engine: &Engine, monitor: &Monitor) -> Result<crate::fit::
         candidates: 4096,
         // The model is the truth here: no model error to measure.
         held_out: 0,
+        ahead: None,
+        in_sample: false,
     };
     Ok(
         experiment(&p, start, &track, &settings, 0.5 + SPAN, engine, monitor)?
@@ -60,6 +62,8 @@ pub(super) fn sample(
         tracking_error: fit.tracking_error,
         end: window_end + SPAN,
         data_times: Vec::new(),
+        cadence: 0.0,
+        model_error: None,
     };
     let t0 = Instant::now();
     let f = forecast(fit, window_end, &spec, engine, monitor)?;
