@@ -279,6 +279,7 @@ fn forecast_bands_agree_on_gpu_and_cpu_across_chunks() {
         data_times: track_.t.clone(),
         cadence: 0.0,
         model_error: None,
+        band_factors: None,
     };
     let (_, steps) = stepping(fit.t0, spec.end);
     assert!(
@@ -503,6 +504,11 @@ fn forecast_refuses_bad_input() {
         (&["--window", "0.6:0.7"], "--window"),
         (&["--members", "0"], "--members"),
         (&["--members", "100000000"], "--members"),
+        (&["--held-out", "65"], "--held-out"),
+        (&["--ahead", "0"], "--ahead"),
+        (&["--ahead", "1e9"], "--ahead"),
+        // The window must end before the last row unless --ahead says how far to go.
+        (&["--window", "0.6:21.02"], "--window"),
         (&["--tolerance", "0"], "--tolerance"),
         (&["--tracking-error", "-1mm"], "--tracking-error"),
         (&["--window", "a:b"], "--window"),

@@ -333,6 +333,7 @@ def fit(
     frame_rate: Optional[float] = None,
     before_release: bool = False,
     start: Optional[float] = None,
+    until: Optional[float] = None,
     window: Optional[float] = None,
     tolerance: Optional[float] = None,
     candidates: int = 65536,
@@ -370,7 +371,8 @@ def fit(
     parameter file, ``params_file=`` reads it back) go to ``output``. model.toml also holds the
     calibration a :func:`forecast` of another launch carries (``held_out`` stretches of the
     recording, each fitted and followed ``lead`` s past its end: the model's own error by
-    lead and the tracking error; ``held_out=0``: none). The model: a
+    lead and the tracking error; ``held_out=0``: none); ``until`` (s) reads the rows up to
+    that time only, a calibration stretch of a longer recording. The model: a
     ``preset`` or ``params_file`` where given, else the pendulum's own moments found from its
     motion; the joint damping is what the fit finds. ``summary["verdict"]`` says whether the
     model follows the data in the window; where it does not, :class:`ModelWarning` is raised

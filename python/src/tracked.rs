@@ -28,6 +28,7 @@ pub fn fit<'py>(
         output: k.or("output", std::path::PathBuf::from("out/fit"))?,
         units: k.units()?,
         start: k.get("start")?,
+        until: k.get("until")?,
         window: k.get("window")?,
         tolerance: k.get("tolerance")?,
         candidates: k.whole("candidates")?.unwrap_or(65536),

@@ -31,6 +31,8 @@ pub struct FitJob {
     /// Time (s) to start the model fit; the nearest data row is used. None: the first row
     /// with one before it.
     pub start: Option<f64>,
+    /// The rows up to this time (s) only: a calibration stretch. None: every row.
+    pub until: Option<f64>,
     /// Length of data (s) the model is fitted to. None: four of the motion's own times.
     pub window: Option<f64>,
     /// Position tolerance (m) for "the model agrees with the measurement". None: 6 % of
@@ -130,7 +132,20 @@ pub fn run(
         &[],
         &super::checks::tracked_inputs(&job.file, &job.params),
     )?;
-    let read = read_frames(&job.file, &job.units)?;
+    let mut read = read_frames(&job.file, &job.units)?;
+    if let Some(until) = job.until {
+        let first = read[0].t;
+        read.retain(|f| f.t <= until + 1e-9);
+        if read.len() < 3 {
+            return Err(Error::invalid(
+                "until",
+                format!(
+                    "{until} s leaves {} row(s) of the file (its first at {first} s): a fit needs three at least",
+                    read.len()
+                ),
+            ));
+        }
+    }
     let t: Vec<f64> = read.iter().map(|f| f.t).collect();
     // The fit starts at a data row with a neighbour on each side (its velocities are central
     // differences); a start outside them was moved to the nearest silently.
@@ -211,29 +226,52 @@ pub fn run(
     let verdict = Verdict::judge(fit.rms, &t, measured, params.l1 + params.l2);
     notices.push(verdict.describe());
     // The calibration a forecast of another launch carries: the model's own error on
-    // held-out stretches of this recording, as long as the fit's window.
+    // held-out stretches of this recording, as long as the fit's window (half of them), and
+    // the bands' factors from forecasts of the other half, interleaved with the first.
     let calibration = match job.held_out {
         0 => None,
         n => {
             let held = crate::fit::model_error::HeldOut {
                 length: window,
                 avoid: None,
-                windows: n,
+                windows: n.div_ceil(2),
                 lead: job.lead,
                 candidates: job.candidates.min(crate::fit::outcome::HELD_OUT_CANDIDATES),
+                phase: 0.5,
             };
             let rows = crate::fit::window::TrackRows {
                 t: &t,
                 data: measured,
                 angles: angle,
             };
-            match crate::fit::model_error::estimate(&rows, &params, &held, engine, monitor)? {
-                Some(e) if e.tracking_error.is_finite() => Some(Calibration {
+            let model_error =
+                crate::fit::model_error::estimate(&rows, &params, &held, engine, monitor)?
+                    .filter(|e| e.tracking_error.is_finite());
+            let band_factors = match &model_error {
+                Some(e) if n >= 2 => {
+                    let run = crate::fit::calibration::FactorRun {
+                        held: crate::fit::model_error::HeldOut {
+                            windows: n / 2,
+                            phase: 0.0,
+                            ..held
+                        },
+                        model_error: e,
+                        members: crate::fit::calibration::FACTOR_MEMBERS,
+                        seed: 1,
+                        tolerance: crate::fit::forecast::default_tolerance(&params),
+                    };
+                    crate::fit::calibration::band_factors(&rows, &params, &run, engine, monitor)?
+                }
+                _ => None,
+            };
+            match model_error {
+                Some(e) => Some(Calibration {
                     file: job.file.display().to_string(),
                     span: [t[0], t[t.len() - 1]],
                     window,
                     tracking_error: e.tracking_error,
                     pixels_per_metre: tracked.scale_from_motion.map(|(v, e)| [v, e]),
+                    pivot: Some([pivot.x, pivot.y]),
                     moment_covariance: match (source, identified) {
                         (ModelSource::Identified, Ok(id)) => Some(
                             (0..id.covariance.nrows())
@@ -243,6 +281,7 @@ pub fn run(
                         _ => None,
                     },
                     model_error: e,
+                    band_factors,
                 }),
                 _ => {
                     notices.push(format!(

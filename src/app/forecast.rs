@@ -146,16 +146,26 @@ pub fn run(
         None => None,
     };
     // The pivot, arm lengths and model as `fit` finds them, from the rows that may teach.
-    let scale = calibration
-        .as_ref()
-        .and_then(|c| c.pixels_per_metre)
-        .map(|[v, e]| (v, e));
+    let known = crate::fit::pendulum::Known {
+        scale: calibration
+            .as_ref()
+            .and_then(|c| c.pixels_per_metre)
+            .map(|[v, e]| (v, e)),
+        pivot: calibration
+            .as_ref()
+            .and_then(|c| c.pivot)
+            .map(|[x, y]| (x, y)),
+        l1: match &calibration {
+            Some(_) => Some(job.params.resolve()?.l1),
+            None => None,
+        },
+    };
     let tracked = crate::fit::pendulum::tracked_model_from(
         &read,
         learn,
         &job.params,
         &job.units,
-        scale,
+        known,
     )
     .map_err(|e| match e {
         Error::InvalidSpec { field: "params", reason } if !job.settings.in_sample => Error::invalid(

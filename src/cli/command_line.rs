@@ -468,9 +468,10 @@ fn units(u: &crate::fit::data::Units) -> String {
 
 pub fn fit(job: &FitJob) -> String {
     format!(
-        "chaoscope fit {}{}{}{}{} --candidates {} --held-out {} --lead {} --velocity-error {}{} --backend {}",
+        "chaoscope fit {}{}{}{}{}{} --candidates {} --held-out {} --lead {} --velocity-error {}{} --backend {}",
         word(&job.file),
         units(&job.units),
+        given("until", job.until),
         given("start", job.start),
         given("window", job.window),
         given("tolerance", job.tolerance),

@@ -28,6 +28,10 @@ pub struct FitArgs {
     /// times, a row either side [default: the second row]
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
     pub start: Option<f64>,
+    /// Read the rows up to this time only (s): a calibration stretch of a longer recording,
+    /// whose later rows a calibrated forecast then never learns from [default: every row]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub until: Option<f64>,
     /// Length of data (s) the model is fitted to [default: four of the motion's own times,
     /// 1/RMS of the upper arm's angular velocity; at least five rows]
     #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
@@ -65,6 +69,7 @@ impl FitArgs {
             output: self.output.clone(),
             units: self.units.units(),
             start: self.start,
+            until: self.until,
             window: self.window,
             tolerance: self.tolerance,
             candidates: self.candidates,

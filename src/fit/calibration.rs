@@ -33,11 +33,19 @@ pub struct Calibration {
     /// Pixels per metre and its error, where the recording's scale came from its motion.
     #[serde(default)]
     pub pixels_per_metre: Option<[f64; 2]>,
+    /// The pivot (m) in the recording's frame (relative to its pivot marker where it has
+    /// one): a recording too short to place it takes this one.
+    #[serde(default)]
+    pub pivot: Option<[f64; 2]>,
     /// The moments' covariance over P (a, b, c, q, k1, k2; identify's order), where the
     /// model came from the motion.
     #[serde(default)]
     pub moment_covariance: Option<Vec<Vec<f64>>>,
     pub model_error: ModelError,
+    /// By how much the bands are widened at each lead to hold the data (measured on held-out
+    /// windows of the recording other than the model error's).
+    #[serde(default)]
+    pub band_factors: Option<BandFactors>,
 }
 
 /// The table's name in model.toml.
@@ -67,6 +75,12 @@ impl Calibration {
             out.push_str(&format!(
                 "pixels_per_metre = {}  # and its error, from the motion\n",
                 list(&ppm)
+            ));
+        }
+        if let Some(p) = self.pivot {
+            out.push_str(&format!(
+                "pivot = {}  # m, in the recording's frame (relative to its pivot marker where it has one)\n",
+                list(&p)
             ));
         }
         if let Some(c) = &self.moment_covariance {
@@ -104,6 +118,22 @@ impl Calibration {
             quads(&e.m90),
             e.unfollowed,
         ));
+        if let Some(b) = &self.band_factors {
+            let pairs = |v: &[[f64; 2]]| format!("{v:?}");
+            out.push_str(&format!(
+                "\n[{TABLE}.band_factors]  # per bin of `step` s of lead: [upper mass, lower mass]\n\
+                 step = {}\n\
+                 f50 = {}\n\
+                 f90 = {}\n\
+                 windows = {}\n\
+                 scored = {:?}\n",
+                b.step,
+                pairs(&b.f50),
+                pairs(&b.f90),
+                b.windows,
+                b.scored,
+            ));
+        }
         out
     }
 
@@ -158,6 +188,23 @@ impl Calibration {
         if let Some((key, v)) = positive.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
             return Err(format!("key {key}: {v} must be a finite number > 0"));
         }
+        if let Some(b) = &self.band_factors {
+            let ok = b.step.is_finite()
+                && b.step > 0.0
+                && !b.f50.is_empty()
+                && b.f50.len() == b.f90.len()
+                && b.f50
+                    .iter()
+                    .chain(&b.f90)
+                    .flatten()
+                    .all(|f| f.is_finite() && *f > 0.0);
+            if !ok {
+                return Err(
+                    "band_factors: a step > 0 and as many finite factors > 0 in f50 as in f90"
+                        .into(),
+                );
+            }
+        }
         let widths = e
             .model_lag50
             .iter()
@@ -184,4 +231,246 @@ fn toml_string(s: &str) -> String {
     }
     out.push('"');
     out
+}
+
+/// By how much a forecast's bands must be widened (or narrowed) at each lead to hold the
+/// data they were meant to hold: measured on the calibration recording by forecasting its
+/// held-out windows exactly as a forecast of a new launch would (the model error measured
+/// on other windows, the same members and tracking error) and scoring each forecast on the
+/// rows after its window. For each row and coordinate, z is its distance from the median
+/// over the band's half-width on its side; the factor of the 90 % band is the quantile of z
+/// that holds 90 % of them (split conformal prediction, with the windows' count as the
+/// draws: the quantile 0.9 (1 + 1/n)), the 50 % band's the median. The lag of a model's
+/// orbit, grown by chaos, is what such factors catch that the model error's quadrature
+/// misses.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BandFactors {
+    /// The width of a lead bin (s), as the model error's.
+    pub step: f64,
+    /// Per bin, the upper mass's and the lower mass's factors for the 50 % and 90 % bands.
+    pub f50: Vec<[f64; 2]>,
+    pub f90: Vec<[f64; 2]>,
+    /// The windows forecast, and the coordinates scored in each bin.
+    pub windows: usize,
+    pub scored: Vec<usize>,
+}
+
+/// The most a band factor may be: past it the bands hold nothing but the reach.
+const MOST_FACTOR: f64 = 100.0;
+
+impl BandFactors {
+    /// The 50 % and 90 % factors of mass `mass` (0 upper, 1 lower) at `lead` (s): the last
+    /// bin's past the leads measured.
+    pub fn at(&self, lead: f64, mass: usize) -> (f64, f64) {
+        let k = ((lead / self.step).floor().max(0.0) as usize).min(self.f50.len() - 1);
+        (self.f50[k][mass], self.f90[k][mass])
+    }
+}
+
+/// What [`band_factors`] forecasts each held-out window with.
+pub struct FactorRun<'a> {
+    pub held: crate::fit::model_error::HeldOut,
+    pub model_error: &'a ModelError,
+    pub members: usize,
+    pub seed: u64,
+    pub tolerance: f64,
+}
+
+/// Members of each held-out window's forecast: a 90 % band's edges to a few percent.
+pub const FACTOR_MEMBERS: usize = 1000;
+
+/// Measures [`BandFactors`] on `track` (the calibration recording) with the model `p`.
+pub fn band_factors(
+    track: &crate::fit::window::TrackRows,
+    p: &crate::model::Params,
+    run: &FactorRun,
+    engine: &crate::engine::Engine,
+    monitor: &crate::monitor::Monitor,
+) -> Result<Option<BandFactors>> {
+    use super::forecast::{ForecastSpec, cadence, forecast};
+    use super::window::fit_window;
+    let t = track.t;
+    let e = run.model_error;
+    let step = e.step;
+    let bins = e.m50.len();
+    let quiet = monitor.quiet();
+    let mut z50: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; bins];
+    let mut z90: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; bins];
+    let mut windows = 0;
+    for s in run.held.starts(t) {
+        monitor.check()?;
+        let w = (s, s + run.held.length);
+        let Ok(fit) = fit_window(track, p, w, run.held.candidates, engine, &quiet) else {
+            continue;
+        };
+        let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();
+        if !super::verdict::Verdict::judge(rms, t, track.data, p.l1 + p.l2).follows {
+            continue;
+        }
+        let window_end = t[fit.row0 + fit.rows - 1];
+        let end = (window_end + run.held.lead).min(t[t.len() - 1]);
+        if end <= window_end {
+            continue;
+        }
+        let spec = ForecastSpec {
+            members: run.members,
+            seed: run.seed,
+            tolerance: run.tolerance,
+            tracking_error: e.tracking_error,
+            end,
+            data_times: t.to_vec(),
+            cadence: cadence(t),
+            model_error: Some(e.clone()),
+            band_factors: None,
+        };
+        let f = forecast(&fit, window_end, &spec, engine, &quiet)?;
+        windows += 1;
+        for (i, &ti) in t.iter().enumerate() {
+            if ti <= window_end + 1e-9 || ti > end + 1e-9 {
+                continue;
+            }
+            let Some(k) = f.index(ti) else { continue };
+            let bin = (((ti - window_end) / step).floor() as usize).min(bins - 1);
+            for c in 0..4 {
+                let q = &f.observed[k][c];
+                let (m, d) = (q[2], track.data[i][c]);
+                let (h50, h90) = match d >= m {
+                    true => (q[3] - m, q[4] - m),
+                    false => (m - q[1], m - q[0]),
+                };
+                let off = (d - m).abs();
+                if h50 > 0.0 {
+                    z50[bin][c / 2].push(off / h50);
+                }
+                if h90 > 0.0 {
+                    z90[bin][c / 2].push(off / h90);
+                }
+            }
+        }
+    }
+    if windows == 0 {
+        return Ok(None);
+    }
+    let quantile = |v: &[f64], q: f64| -> Option<f64> {
+        let mut v = v.to_vec();
+        v.retain(|x| x.is_finite());
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
+        Some(v[k].clamp(1.0 / MOST_FACTOR, MOST_FACTOR))
+    };
+    // The windows are the draws: a quantile of n of them holds a new one with the
+    // conformal correction (1 + 1/n).
+    let q90 = (0.9 * (1.0 + 1.0 / windows as f64)).min(1.0);
+    let q50 = (0.5 * (1.0 + 1.0 / windows as f64)).min(1.0);
+    let (mut f50, mut f90, mut scored) = (Vec::new(), Vec::new(), Vec::new());
+    // A bin with no rows (a gap) takes the one before it (the first: no change).
+    let (mut last50, mut last90) = ([1.0; 2], [1.0; 2]);
+    for k in 0..bins {
+        for mass in 0..2 {
+            if let Some(v) = quantile(&z50[k][mass], q50) {
+                last50[mass] = v;
+            }
+            if let Some(v) = quantile(&z90[k][mass], q90) {
+                last90[mass] = v;
+            }
+        }
+        f50.push(last50);
+        f90.push(last90);
+        scored.push(z90[k][0].len() + z90[k][1].len());
+    }
+    Ok(Some(BandFactors {
+        step,
+        f50,
+        f90,
+        windows,
+        scored,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Calibration {
+        let quads = |k: f64| vec![[k, 2.0 * k, 3.0 * k, 4.5e-4 * k]; 3];
+        Calibration {
+            file: "runs/a \"quoted\" name\\with\tcontrols.csv".into(),
+            span: [0.0, 9.9975],
+            window: 0.249_014_479_855_328_35,
+            tracking_error: 2.153_251_594_031_466_2e-4,
+            pixels_per_metre: Some([823.794_208_122_597_5, 3.74]),
+            pivot: Some([4.5e-4, -1.9e-4]),
+            moment_covariance: Some(vec![vec![1.48e-9, -9.08e-11], vec![-9.08e-11, 1.02e-9]]),
+            model_error: ModelError {
+                step: 0.062_253_619_963_832_09,
+                lag50: vec![1.3e-4, 5.6e-4, 1.2e-3],
+                lag90: vec![4.5e-4, 1.4e-3, 3.0e-3],
+                q50: quads(1e-4),
+                q90: quads(3e-4),
+                model_lag50: vec![4.4e-5, 0.0, 1.0e-3],
+                model_lag90: vec![3.3e-4, 1.2e-3, 2.6e-3],
+                m50: quads(0.0),
+                m90: quads(2e-4),
+                windows: vec![(0.305, 0.554), (0.91, 1.159)],
+                unfollowed: 1,
+                tracking_error: 2.153_251_594_031_466_2e-4,
+            },
+            band_factors: Some(BandFactors {
+                step: 0.062_253_619_963_832_09,
+                f50: vec![[0.6, 0.7], [0.79, 1.2], [0.38, 2.4]],
+                f90: vec![[1.36, 3.01], [1.74, 4.67], [0.56, 3.99]],
+                windows: 8,
+                scored: vec![704, 704, 736],
+            }),
+        }
+    }
+
+    /// What `fit` writes is what `forecast` reads, to the last bit (Rust prints the shortest
+    /// decimal that reads back as the same f64), and the parameter reader takes the file
+    /// with its [calibration] table.
+    #[test]
+    fn a_calibration_reads_back_as_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.toml");
+        let c = sample();
+        let text = format!("m1 = 1.0\nm2 = 0.5\nl1 = 0.3\nl2 = 0.2\n{}", c.to_toml());
+        std::fs::write(&path, &text).unwrap();
+        assert_eq!(
+            Calibration::read("params", &path).unwrap(),
+            Some(c),
+            "{text}"
+        );
+        let sources = crate::params::ParamSources {
+            params: Some(path.clone()),
+            ..Default::default()
+        };
+        assert_eq!(sources.resolve().unwrap().l2, 0.2);
+    }
+
+    /// A calibration whose bins disagree, or whose widths are negative, is refused naming the
+    /// file's table; a file without one has none.
+    #[test]
+    fn a_damaged_calibration_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.toml");
+        let mut c = sample();
+        c.model_error.m90.pop();
+        std::fs::write(&path, c.to_toml()).unwrap();
+        let err = Calibration::read("params", &path).unwrap_err().to_string();
+        assert!(
+            err.contains("[calibration]") && err.contains("bins"),
+            "{err}"
+        );
+        let mut c = sample();
+        c.model_error.model_lag90[1] = -1.0;
+        std::fs::write(&path, c.to_toml()).unwrap();
+        let err = Calibration::read("params", &path).unwrap_err().to_string();
+        assert!(err.contains("width"), "{err}");
+        std::fs::write(&path, "m1 = 1.0\n").unwrap();
+        assert_eq!(Calibration::read("params", &path).unwrap(), None);
+    }
 }

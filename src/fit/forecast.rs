@@ -41,6 +41,8 @@ pub struct ForecastSpec {
     /// The model's own error (held-out windows or a calibration), which widens the
     /// measurement bands ([`Forecast::widen`]) and each member's departure ([`departed`]).
     pub model_error: Option<super::model_error::ModelError>,
+    /// The bands' factors by lead from a calibration ([`Forecast::rescale`]).
+    pub band_factors: Option<super::calibration::BandFactors>,
 }
 
 /// A forecast's tolerance unless given: 5 % of the reach l1 + l2 of `p`. One tolerance
@@ -149,6 +151,28 @@ impl Forecast {
             }
         }
         self.model_error = Some(error);
+    }
+
+    /// Scales the measurement bands after the window about the members' median by the
+    /// calibration's factors at each lead (the 25-75 % band by its 50 % factor, the 5-95 %
+    /// by its 90 %), each mass by its own; never past the `reach` (m) of each mass.
+    pub fn rescale(&mut self, factors: &super::calibration::BandFactors, reach: (f64, f64)) {
+        for (k, &t) in self.times.iter().enumerate() {
+            let lead = t - self.window_end;
+            if lead <= 1e-9 {
+                continue;
+            }
+            for c in 0..4 {
+                let (f50, f90) = factors.at(lead, c / 2);
+                let most = if c < 2 { reach.0 } else { reach.1 };
+                let q = &mut self.observed[k][c];
+                let m = q[2];
+                q[0] = (m - (m - q[0]) * f90).max(-most);
+                q[1] = (m - (m - q[1]) * f50).max(-most);
+                q[3] = (m + (q[3] - m) * f50).min(most);
+                q[4] = (m + (q[4] - m) * f90).min(most);
+            }
+        }
     }
 
     /// The headline horizon ([`Headline`]) from the members' departures from the median.
@@ -411,9 +435,12 @@ pub fn forecast(
         departures,
         tolerance: spec.tolerance,
     };
+    let p = &fit.params;
     if let Some(error) = &spec.model_error {
-        let p = &fit.params;
         forecast.widen(error.clone(), &own, (p.l1, p.l1 + p.l2), spec.tolerance);
+    }
+    if let Some(factors) = &spec.band_factors {
+        forecast.rescale(factors, (p.l1, p.l1 + p.l2));
     }
     Ok(forecast)
 }
@@ -451,12 +478,19 @@ fn departed(
         }
         let median = (stats[k].0[2][2], stats[k].0[3][2]);
         let model = own[k].0[2].hypot(own[k].0[3]);
+        // The calibration's factor of the 50 % band: how much farther from the median the
+        // pendulum lies at this lead than the members say.
+        let factor = spec
+            .band_factors
+            .as_ref()
+            .map_or(1.0, |b| b.at(t - after, 1).0);
         for (j, slot) in out.iter_mut().enumerate().filter(|(_, s)| s.is_none()) {
             let x = v[2 * m + j] as f64 + pivots[j].0;
             let y = v[3 * m + j] as f64 + pivots[j].1;
-            let off = (x - median.0)
-                .hypot(y - median.1)
-                .hypot(severity[j] * model);
+            let off = factor
+                * (x - median.0)
+                    .hypot(y - median.1)
+                    .hypot(severity[j] * model);
             // A NaN position (a member that blew up) has left.
             if off.is_nan() || off > tolerance {
                 *slot = Some(t);

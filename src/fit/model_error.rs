@@ -102,8 +102,31 @@ pub struct HeldOut {
     pub windows: usize,
     /// How far past each window's end its fitted orbit is followed (s).
     pub lead: f64,
+    /// Where in its share of the recording each window starts (0.5: the middle; 0: the
+    /// start): two sets of windows with phases 0.5 and 0 interleave.
+    pub phase: f64,
     /// Candidates of each window's search.
     pub candidates: usize,
+}
+
+impl HeldOut {
+    /// The windows' starts (s) in the rows' times `t`: spread evenly over the recording, each
+    /// with room for a quarter of its length after it, none overlapping the window to avoid.
+    pub fn starts(&self, t: &[f64]) -> Vec<f64> {
+        let (first, last) = (t[1], t[t.len() - 1]);
+        let latest = last - self.length - 0.25 * self.length;
+        if self.windows == 0 || latest <= first {
+            return Vec::new();
+        }
+        let n = self.windows as f64;
+        (0..self.windows)
+            .map(|k| first + (latest - first) * (k as f64 + self.phase) / n)
+            .filter(|&s| {
+                self.avoid
+                    .is_none_or(|window| s + self.length <= window.0 || s >= window.1)
+            })
+            .collect()
+    }
 }
 
 /// The departure of the model `p` fitted on the `held` windows of the track. None where no
@@ -117,10 +140,11 @@ pub fn estimate(
 ) -> Result<Option<ModelError>> {
     let HeldOut {
         length,
-        avoid,
+        avoid: _,
         windows: held_out,
         lead,
         candidates,
+        phase: _,
     } = *held;
     let t = track.t;
     let (first, last) = (t[1], t[t.len() - 1]);
@@ -144,10 +168,7 @@ pub fn estimate(
     let (mut windows, mut unfollowed) = (Vec::new(), 0);
     // Evenly spread over the recording; one that overlaps the forecast's window is moved
     // past it (or dropped where there is no room).
-    let starts: Vec<f64> = (0..held_out)
-        .map(|k| first + (latest - first) * (k as f64 + 0.5) / held_out as f64)
-        .filter(|&s| avoid.is_none_or(|window| s + length <= window.0 || s >= window.1))
-        .collect();
+    let starts = held.starts(t);
     let mut tracking_errors = Vec::new();
     let reach = p.l1 + p.l2;
     for s in starts {

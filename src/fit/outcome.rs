@@ -197,6 +197,7 @@ pub fn fit_and_forecast(
         windows: settings.held_out,
         lead,
         candidates: settings.candidates.min(HELD_OUT_CANDIDATES),
+        phase: 0.5,
     };
     // The model's own error: a calibration's, else the held-out windows' (each fitted
     // orbit followed as far as this forecast's lead: a model's lag keeps growing on a
@@ -214,6 +215,7 @@ pub fn fit_and_forecast(
         data_times: t.to_vec(),
         cadence: forecast::cadence(learn.t),
         model_error,
+        band_factors: learning.calibration.and_then(|c| c.band_factors.clone()),
     };
     let forecast = forecast::forecast(&fit, window_end, &spec, engine, monitor)?;
     let (data_horizon, run, data_coverage) = forecast::data_horizon(&forecast, t, data);

@@ -43,21 +43,29 @@ impl ModelSource {
                 p.l2,
                 p.g
             ),
-            ModelSource::Identified => format!(
-                "the model fitted: {} (no preset or params given): A/P {:.4e}, B/P {:.4e}, C/P {:.4e} s^2, Q/P {:.4}, markers at {:.4} and {:.4} m, g {:.4} m/s^2 (the motion's); an equivalent pendulum of bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg (a 1 kg scale: the motion cannot see the masses')",
-                self.describe(),
-                k.a / k.p,
-                k.b / k.p,
-                k.c / k.p,
-                k.q / k.p,
-                p.l1,
-                p.l2,
-                p.g,
-                p.m1,
-                p.m2,
-                p.rod1,
-                p.rod2
-            ),
+            ModelSource::Identified => {
+                let masses = [p.m1, p.m2, p.rod1, p.rod2];
+                // Bobs and uniform rods hold the moments only where no mass comes out negative
+                // (a marker at a bar's centre of mass puts the moments where none does).
+                let equivalent = match masses.iter().all(|&m| m >= 0.0) {
+                    true => format!(
+                        "an equivalent pendulum of bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg (a 1 kg scale: the motion cannot see the masses')",
+                        p.m1, p.m2, p.rod1, p.rod2
+                    ),
+                    false => "no pendulum of point bobs on uniform rods with masses >= 0 has these moments (the arms' masses lie otherwise: the moments are the model)".into(),
+                };
+                format!(
+                    "the model fitted: {} (no preset or params given): A/P {:.4e}, B/P {:.4e}, C/P {:.4e} s^2, Q/P {:.4}, markers at {:.4} and {:.4} m, g {:.4} m/s^2 (the motion's); {equivalent}",
+                    self.describe(),
+                    k.a / k.p,
+                    k.b / k.p,
+                    k.c / k.p,
+                    k.q / k.p,
+                    p.l1,
+                    p.l2,
+                    p.g,
+                )
+            }
         }
     }
 
@@ -164,7 +172,9 @@ const UNIT_MISTAKE: f64 = 25.0;
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
 pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
-    motion_scale(&on_joint(frames, frames.len())?.0, g)
+    let (frames, _) = on_joint(frames, frames.len())?;
+    fit_pivot(&frames)?;
+    motion_scale(&frames, g)
 }
 
 /// [`scale_from_motion`] of `frames` whose upper marker is on the middle joint.
@@ -190,9 +200,12 @@ fn motion_scale(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
 }
 
 /// `frames` with the upper marker moved out to the middle joint where it is not on it
-/// ([`super::joint`]), and where the joint lies, as the first `learn` rows show it.
+/// ([`super::joint`]), and where the joint lies, as the first `learn` rows show it (rows too
+/// few to place the pivot show no joint: the marker is taken to be on it).
 fn on_joint(frames: &[TrackedRow], learn: usize) -> Result<(Vec<TrackedRow>, Option<Joint>)> {
-    let pivot = fit_pivot(&frames[..learn])?;
+    let Ok(pivot) = fit_pivot(&frames[..learn]) else {
+        return Ok((frames.to_vec(), None));
+    };
     let pivot = (pivot.x, pivot.y);
     Ok(match joint_off_marker(&frames[..learn], pivot) {
         Some(j) => (j.moved(frames, pivot), Some(j)),
@@ -209,21 +222,44 @@ pub fn tracked_model(
     given: &ParamSources,
     units: &super::data::Units,
 ) -> Result<Tracked> {
-    tracked_model_from(frames, frames.len(), given, units, None)
+    tracked_model_from(frames, frames.len(), given, units, Known::default())
 }
 
+/// What a calibration knows of the camera's view of the pendulum, for a recording too short
+/// to show it: the metre scale (pixels per metre and its error) where it came from the
+/// motion, and the pivot (m, in the rows' frame: relative to a pivot marker where the file
+/// has one, else the camera's, which must then stand where it stood).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Known {
+    pub scale: Option<(f64, f64)>,
+    pub pivot: Option<(f64, f64)>,
+    /// The upper marker's distance from the pivot (m) in the calibration's model: a circle
+    /// through a few rows that disagrees with it places no pivot.
+    pub l1: Option<f64>,
+}
+
+/// A pivot the learned rows place worse than this share of the upper arm (its standard
+/// error) is taken from a calibration where there is one: four frames of a high-speed film
+/// span a sliver of the arc, a quarter of a second of it a clear arc.
+const PIVOT_SHARE: f64 = 0.01;
+
+/// A circle through the learned rows whose radius is off the calibration's upper arm by
+/// more than this share is no pivot (a few frames fit a small circle exactly).
+const ARM_SHARE: f64 = 0.05;
+
 /// [`tracked_model`] that learns from the first `learn` rows alone: the pivot, the arm
-/// lengths, the middle joint, the metre scale (unless `scale` gives one: pixels per metre and
-/// its error, from a calibration) and the motion's moments come from them; every row is
-/// then measured against what they taught. A forecast learns only from the rows up to its
+/// lengths, the middle joint, the metre scale and the motion's moments come from them
+/// (the scale, and the pivot where they cannot place it, from `known`); every row is then
+/// measured against what they taught. A forecast learns only from the rows up to its
 /// window's end, and the rows after it are only scored.
 pub fn tracked_model_from(
     frames: &[TrackedRow],
     learn: usize,
     given: &ParamSources,
     units: &super::data::Units,
-    scale: Option<(f64, f64)>,
+    known: Known,
 ) -> Result<Tracked> {
+    let scale = known.scale;
     let g = given.g.unwrap_or(Params::default().g);
     let learn = learn.clamp(1, frames.len());
     let (frames, mut joint) = on_joint(frames, learn)?;
@@ -256,7 +292,39 @@ pub fn tracked_model_from(
         _ => (frames.to_vec(), None),
     };
     let frames = &frames[..];
-    let pivot = fit_pivot(&frames[..learn])?;
+    let own = fit_pivot(&frames[..learn]);
+    let placed = |p: &Pivot| {
+        p.errors[0].hypot(p.errors[1]) <= PIVOT_SHARE * p.radius
+            && known
+                .l1
+                .is_none_or(|l1| (p.radius - l1).abs() <= ARM_SHARE * l1)
+    };
+    let mut pivot_notice = None;
+    let pivot = match (own, known.pivot) {
+        (Ok(p), _) if placed(&p) => p,
+        (Ok(p), None) => p,
+        (own, Some((x, y))) => {
+            pivot_notice = Some(format!(
+                "the pivot from the calibration, ({x:.5}, {y:.5}) m: the {learn} rows learned from {}",
+                match own {
+                    Ok(p) => format!(
+                        "place it only to {:.2} mm, on a circle of {:.4} m",
+                        1e3 * p.errors[0].hypot(p.errors[1]),
+                        p.radius
+                    ),
+                    Err(_) => "span too little of the arc to place it".into(),
+                }
+            ));
+            Pivot {
+                x,
+                y,
+                radius: f64::NAN,
+                errors: [0.0; 3],
+                rms_residual: f64::NAN,
+            }
+        }
+        (Err(e), None) => return Err(e),
+    };
     let (l1, l2) = arm_lengths(&frames[..learn], (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));
     let measured = super::measured(frames, (pivot.x, pivot.y));
@@ -375,6 +443,7 @@ pub fn tracked_model_from(
             }
         }
     }
+    notices.extend(pivot_notice);
     if let Some(j) = &joint {
         notices.push(format!(
             "the upper marker is not on the middle joint: it sits {:.4} m from the pivot, the joint (where the lower arm turns) {:.4} ± {:.4} m; the joint's positions along the upper arm stand in for the marker's",

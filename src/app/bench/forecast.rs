@@ -64,6 +64,7 @@ pub(super) fn sample(
         data_times: Vec::new(),
         cadence: 0.0,
         model_error: None,
+        band_factors: None,
     };
     let t0 = Instant::now();
     let f = forecast(fit, window_end, &spec, engine, monitor)?;
