@@ -224,10 +224,11 @@ pub fn run(
     let out = &job.output;
     let mut files = Outputs::new();
     // Long enough to see the bands open and the data part, short enough to read.
-    let last_horizon = f
-        .spread_horizon
+    let last_horizon = headline
+        .lead
         .into_iter()
-        .chain(o.data_horizon)
+        .chain(o.scores.median_follows_for)
+        .map(|l| f.window_end + l)
         .fold(f.window_end, f64::max);
     let until = (last_horizon + 3.0)
         .max(f.window_end + 3.0)
@@ -239,7 +240,17 @@ pub fn run(
         &Marks {
             measured: (&t, &data),
             truth: None,
-            data_horizon: o.data_horizon,
+            horizon: (
+                headline.lead.map(|l| f.window_end + l),
+                "horizon: the members' median expected to leave the pendulum by the tolerance",
+            ),
+            on_data: (
+                o.scores
+                    .median_follows_for
+                    .filter(|_| !o.scores.followed_to_data_end)
+                    .map(|l| f.window_end + l),
+                "where the median left the measurements by the tolerance",
+            ),
             tolerance: o.tolerance,
             until,
             title: format!(

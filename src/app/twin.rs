@@ -326,7 +326,8 @@ pub fn run(
             &Marks {
                 measured: (&track.t, &track.measured),
                 truth: Some(at),
-                data_horizon: o.data_horizon,
+                horizon: (o.forecast.spread_horizon, forecast_plot::SPREAD_MARK),
+                on_data: (o.data_horizon, forecast_plot::DATA_MARK),
                 tolerance: o.tolerance,
                 until: job.duration,
                 title: format!(

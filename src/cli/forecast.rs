@@ -47,7 +47,8 @@ pub struct ForecastArgs {
     /// arms, the model, the tracking and model errors): every output then says "in sample".
     #[arg(long)]
     pub in_sample: bool,
-    /// Ensemble members drawn from the fit's uncertainty (state, damping, pivot).
+    /// Ensemble members drawn from the fit's uncertainty (state, damping, pivot): 1 to
+    /// 1,000,000 (fewer where their positions over a long forecast pass 4 GiB).
     #[arg(long, default_value = "10000", value_parser = parse_usize, allow_hyphen_values = true)]
     pub members: usize,
     /// Seed of the draws: the same seed, the same forecast.

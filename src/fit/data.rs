@@ -153,21 +153,25 @@ pub fn read_frames(path: &Path, units: &Units) -> Result<Vec<TrackedRow>> {
         }
         (None, _, _) => column("t")?,
     };
-    // A column named twice would be read from its first copy silently.
+    // A column named twice would be read from its first copy silently. Only the columns
+    // read are looked at, each name once (a header of 200,000 names costs one pass).
+    let mut first: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
     for (k, name) in names.iter().enumerate() {
-        if let Some(again) = names[k + 1..].iter().position(|n| n == name)
-            && COLUMNS.contains(&name.as_str())
-        {
+        if !COLUMNS.contains(&name.as_str()) {
+            continue;
+        }
+        if let Some(&j) = first.get(name.as_str()) {
             return Err(bad(
                 path,
                 header_line,
                 format!(
                     "the header names `{name}` twice (columns {} and {})",
-                    k + 1,
-                    k + again + 2
+                    j + 1,
+                    k + 1
                 ),
             ));
         }
+        first.insert(name.as_str(), k);
     }
     let cols = [
         time,

@@ -13,6 +13,10 @@ use crate::render::{self, Outputs};
 
 const BAND: RGBColor = RGBColor(31, 119, 180);
 const TRUTH: RGBColor = RGBColor(44, 160, 44);
+/// The marks' words for the spread's horizon and the data's, as the twin experiments show them.
+pub const SPREAD_MARK: &str = "spread horizon: the spread passes the tolerance";
+pub const DATA_MARK: &str = "data horizon: the measurements leave their 90 % band";
+
 const SPREAD_HORIZON: RGBColor = RGBColor(214, 39, 40);
 const DATA_HORIZON: RGBColor = RGBColor(255, 127, 14);
 
@@ -22,7 +26,10 @@ pub struct Marks<'a> {
     pub measured: (&'a [f64], &'a [[f64; 4]]),
     /// The hidden truth at the forecast's times (twin experiments).
     pub truth: Option<&'a [[f64; 4]]>,
-    pub data_horizon: Option<f64>,
+    /// The two times marked (s) and what each means: the forecast's own horizon (red), and
+    /// where the data showed it (orange).
+    pub horizon: (Option<f64>, &'static str),
+    pub on_data: (Option<f64>, &'static str),
     pub tolerance: f64,
     /// Last time shown (s).
     pub until: f64,
@@ -53,8 +60,8 @@ pub fn forecast(out: &mut Outputs, path: &Path, f: &Forecast, marks: &Marks) -> 
         let (top, bottom) = rest.split_vertically(740);
         let names = ["x1 (m)", "y1 (m)", "x2 (m)", "y2 (m)"];
         let lines = [
-            (f.spread_horizon, SPREAD_HORIZON),
-            (marks.data_horizon, DATA_HORIZON),
+            (marks.horizon.0, SPREAD_HORIZON),
+            (marks.on_data.0, DATA_HORIZON),
         ];
         for (k, area) in top.split_evenly((2, 2)).iter().enumerate() {
             let yr = range(
@@ -174,14 +181,8 @@ pub fn forecast(out: &mut Outputs, path: &Path, f: &Forecast, marks: &Marks) -> 
             }
         };
         for (label, colour) in [
-            (
-                "spread horizon: the spread passes the tolerance",
-                SPREAD_HORIZON,
-            ),
-            (
-                "data horizon: the measurements leave their 90 % band",
-                DATA_HORIZON,
-            ),
+            (marks.horizon.1, SPREAD_HORIZON),
+            (marks.on_data.1, DATA_HORIZON),
             ("measured (dots); grey: the fit window", MEASURED),
         ] {
             chart

@@ -73,6 +73,10 @@ pub struct ForecastSettings {
     pub in_sample: bool,
 }
 
+/// The most members of an ensemble: a band's 5 % quantile is good to a fraction of a percent
+/// at a million; the positions' memory budget may allow fewer over a long forecast.
+pub const MOST_MEMBERS: usize = 1_000_000;
+
 /// The most held-out windows: each is a whole fit (a few seconds), and past some dozens the
 /// bands' widths no longer move (Student's t at 64 windows is within 1 % of the normal).
 pub const MOST_HELD_OUT: usize = 64;
@@ -84,10 +88,10 @@ pub const MOST_AHEAD: f64 = 600.0;
 impl ForecastSettings {
     /// Checks the settings every forecast shares (the window against the data, later).
     pub fn validate(&self) -> Result<()> {
-        if self.members == 0 {
+        if self.members == 0 || self.members > MOST_MEMBERS {
             return Err(Error::invalid(
                 "members",
-                "must be at least 1 (10000 draws a smooth band)",
+                format!("must be between 1 and {MOST_MEMBERS} (10000 draws a smooth band)"),
             ));
         }
         if let Some(tolerance) = self.tolerance {
