@@ -14,7 +14,7 @@
 use chaoscope::app::forecast::{ForecastJob, run as forecast};
 use chaoscope::app::track::{TrackJob, run as track};
 use chaoscope::engine::{Backend, Engine};
-use chaoscope::fit::outcome::ForecastSettings;
+use chaoscope::forecast::outcome::ForecastSettings;
 use chaoscope::model::State;
 use chaoscope::monitor::Monitor;
 use chaoscope::params::{ParamSources, Preset};

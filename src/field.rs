@@ -2,7 +2,34 @@
 //! which path made them ([`RunInfo`]): the ground floor the engine, the render and the files
 //! all stand on.
 
-use crate::spec::Precision;
+/// The floating-point precision a GPU kernel integrates in (the CPU path is always f64).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Precision {
+    /// The default: every GPU, fastest.
+    #[default]
+    F32,
+    /// Needs an adapter with f64 (`Features::SHADER_F64`; lavapipe has it).
+    F64,
+}
+
+impl Precision {
+    pub const ALL: [Precision; 2] = [Precision::F32, Precision::F64];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        }
+    }
+
+    /// A GPU path in this precision, in the PNG metadata's words.
+    pub fn gpu_path_name(self) -> &'static str {
+        match self {
+            Precision::F32 => "gpu",
+            Precision::F64 => "gpu f64",
+        }
+    }
+}
 
 /// A 2-D grid of f32 values, row-major, row 0 at the top of the image (theta2 at its maximum),
 /// column 0 at theta1's minimum.

@@ -194,17 +194,18 @@ impl Params {
     /// rigid lower arm. Any pendulum of rigid arms has such an equivalent: a rod's mass sits
     /// at a third of its arm's inertia, a bar's may sit nearer the joint, and then a bob or a
     /// rod comes out negative (a uniform bar from joint to marker is a rod and no bob). The
-    /// moments must be a real pendulum's ([`crate::params::validate`] checks them).
+    /// moments must be a real pendulum's: the caller checks them
+    /// (`crate::params::validate`), naming where they came from.
     pub fn from_moments(
         [a, b, c, p]: [f64; 4],
         (l1, l2, g): (f64, f64, f64),
         losses: Losses,
-    ) -> crate::Result<Params> {
+    ) -> Params {
         let rod2 = 6.0 * (c / (l1 * l2) - b / (l2 * l2));
         let m2 = b / (l2 * l2) - rod2 / 3.0;
         let rod1 = 6.0 * (p / (g * l1) - a / (l1 * l1));
         let m1 = p / (g * l1) - (m2 + rod2) - rod1 / 2.0;
-        let params = Params {
+        Params {
             m1,
             m2,
             l1,
@@ -213,9 +214,7 @@ impl Params {
             rod1,
             rod2,
             losses,
-        };
-        crate::params::validate(&params)?;
-        Ok(params)
+        }
     }
 
     pub fn kinetic_energy(&self, s: &State) -> f64 {

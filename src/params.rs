@@ -86,56 +86,6 @@ pub struct ParamSources {
     pub params: Option<PathBuf>,
 }
 
-impl ParamSources {
-    /// That no value given here is one that varies along a map's axis or a sweep (`along`:
-    /// the field that names the axis, and what it varies): the axis would override it
-    /// silently. A pair (rod masses, joint damping) may give the part an axis sets as 0,
-    /// so that its other part can be given.
-    pub fn check_along(&self, along: &[(&'static str, crate::spec::Var)]) -> Result<()> {
-        let one = |field, v: Option<f64>| v.map(|v| (field, vec![(field, v)]));
-        let pair = |field, parts: [&'static str; 2], v: Option<(f64, f64)>| {
-            v.map(|(a, b)| (field, vec![(parts[0], a), (parts[1], b)]))
-        };
-        let given = [
-            one("m1", self.m1),
-            one("m2", self.m2),
-            one("l1", self.l1),
-            one("l2", self.l2),
-            one("g", self.g),
-            pair("rod_mass", ["rod1", "rod2"], self.rod_mass),
-            pair("joint_damping", ["joint1", "joint2"], self.joint_damping),
-        ];
-        for (field, parts) in given.into_iter().flatten() {
-            for &(axis, var) in along {
-                let single = parts.len() == 1;
-                if let Some((part, _)) = parts
-                    .iter()
-                    .find(|(part, v)| var.writes().contains(part) && (single || *v != 0.0))
-                {
-                    let hint = match single {
-                        true => "leave one of them out".to_string(),
-                        false => format!("give its {part} part as 0, or leave it out"),
-                    };
-                    return Err(Error::invalid(
-                        field,
-                        format!(
-                            "{} along {axis} sets {part}, which this value would give too: {hint}",
-                            var.name()
-                        ),
-                    ));
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// The parameters of a map on `grid`, none given that an axis sets ([`Self::check_along`]).
-    pub fn resolve_on(&self, grid: &crate::spec::Grid) -> Result<Params> {
-        self.check_along(&[("x", grid.x.var), ("y", grid.y.var)])?;
-        self.resolve()
-    }
-}
-
 /// The TOML parameter file; every key optional, unknown keys are errors.
 #[derive(Deserialize, Debug, Default)]
 #[serde(deny_unknown_fields)]
@@ -285,8 +235,8 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
                 joint2: k2 * unit,
                 ..Losses::default()
             },
-        )
-        .map_err(|e| match e {
+        );
+        validate(&p).map_err(|e| match e {
             Error::InvalidSpec { reason, .. } => in_file(format!("table [moments]: {reason}")),
             e => e,
         })?;

@@ -306,7 +306,7 @@ fn flip_map<'py>(
     let gpu_f32 = engine(backend)?.computes_in_f32(precision);
     let asked = k.stepping_asked(&integrator, precision, accurate, gpu_f32)?;
     let grid = k.grid()?;
-    let params = k.sources()?.resolve_on(&grid).map_err(py_err)?;
+    let params = chaoscope::spec::resolve_on(&k.sources()?, &grid).map_err(py_err)?;
     let spec = asked
         .flip(FlipSpec {
             measure,
@@ -355,7 +355,7 @@ fn lyapunov_map<'py>(
     let asked = k.stepping_asked(&integrator, precision, accurate, gpu_f32)?;
     let grid = k.grid()?;
     let spec = asked.lyapunov(LyapunovSpec {
-        params: k.sources()?.resolve_on(&grid).map_err(py_err)?,
+        params: chaoscope::spec::resolve_on(&k.sources()?, &grid).map_err(py_err)?,
         grid,
         stepping: k.stepping(20.0)?,
         method,

@@ -66,7 +66,7 @@ pub fn forecast<'py>(
             .ok_or_else(|| PyTypeError::new_err("file: the tracked data's CSV is needed"))?,
         output: k.or("output", std::path::PathBuf::from("out/forecast"))?,
         units: k.units()?,
-        settings: chaoscope::fit::outcome::ForecastSettings {
+        settings: chaoscope::forecast::outcome::ForecastSettings {
             window: k.get("window")?,
             members: k.whole("members")?.unwrap_or(10_000),
             seed: k.whole("seed")?.unwrap_or(1),
@@ -75,7 +75,7 @@ pub fn forecast<'py>(
             candidates: k.whole("candidates")?.unwrap_or(65536),
             held_out: k
                 .whole("held_out")?
-                .unwrap_or(chaoscope::fit::model_error::HELD_OUT),
+                .unwrap_or(chaoscope::forecast::model_error::HELD_OUT),
             ahead: k.get("ahead")?,
             in_sample: k.or("in_sample", false)?,
         },

@@ -8,7 +8,6 @@ use serde_json::json;
 use super::{check_count, check_within};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
-use crate::fit::calibration::Calibration;
 use crate::fit::data::Units;
 use crate::fit::pendulum::{ModelSource, Tracked, model_energies, model_file, tracked_model};
 use crate::fit::verdict::Verdict;
@@ -40,7 +39,7 @@ pub struct FitJob {
     pub tolerance: Option<f64>,
     /// Size of the candidate ensemble of the model fit.
     pub candidates: usize,
-    /// Stretches held out to calibrate forecasts ([`crate::fit::calibration`]; 0: none),
+    /// Stretches held out to calibrate forecasts ([`crate::forecast::calibration`]; 0: none),
     /// and how far past each its departure is measured (s).
     pub held_out: usize,
     pub lead: f64,
@@ -117,7 +116,7 @@ pub fn run(
         "held_out",
         job.held_out as u64,
         0,
-        crate::fit::outcome::MOST_HELD_OUT as u64,
+        crate::forecast::outcome::MOST_HELD_OUT as u64,
     )?;
     check_within("lead", job.lead, 0.05, 60.0)?;
     super::checks::check_damping_not_given(&job.params)?;
@@ -225,72 +224,37 @@ pub fn run(
     let fit = fit_model(frames, (pivot.x, pivot.y), angle, &spec, engine, monitor)?;
     let verdict = Verdict::judge(fit.rms, &t, measured, params.l1 + params.l2);
     notices.push(verdict.describe());
-    // The calibration a forecast of another launch carries: the model's own error on
-    // held-out stretches of this recording, as long as the fit's window (half of them), and
-    // the bands' factors from forecasts of the other half, interleaved with the first.
+    // The calibration a forecast of another launch carries (crate::forecast::calibrate).
     let calibration = match job.held_out {
         0 => None,
         n => {
-            let held = crate::fit::model_error::HeldOut {
-                length: window,
-                avoid: None,
-                windows: n.div_ceil(2),
-                lead: job.lead,
-                candidates: job.candidates.min(crate::fit::outcome::HELD_OUT_CANDIDATES),
-                phase: 0.5,
-            };
             let rows = crate::fit::window::TrackRows {
                 t: &t,
                 data: measured,
                 angles: angle,
             };
-            let model_error =
-                crate::fit::model_error::estimate(&rows, &params, &held, engine, monitor)?
-                    .filter(|e| e.tracking_error.is_finite());
-            let band_factors = match &model_error {
-                Some(e) if n >= 2 => {
-                    let run = crate::fit::calibration::FactorRun {
-                        held: crate::fit::model_error::HeldOut {
-                            windows: n / 2,
-                            phase: 0.0,
-                            ..held
-                        },
-                        model_error: e,
-                        members: crate::fit::calibration::FACTOR_MEMBERS,
-                        seed: 1,
-                        tolerance: crate::fit::forecast::default_tolerance(&params),
-                    };
-                    crate::fit::calibration::band_factors(&rows, &params, &run, engine, monitor)?
-                }
-                _ => None,
+            let asked = crate::forecast::calibrate::Asked {
+                file: job.file.display().to_string(),
+                window,
+                held_out: n,
+                lead: job.lead,
+                candidates: job.candidates,
+                pixels_per_metre: tracked.scale_from_motion,
+                pivot: (pivot.x, pivot.y),
+                moment_covariance: match (source, identified) {
+                    (ModelSource::Identified, Ok(id)) => Some(&id.covariance),
+                    _ => None,
+                },
             };
-            match model_error {
-                Some(e) => Some(Calibration {
-                    file: job.file.display().to_string(),
-                    span: [t[0], t[t.len() - 1]],
-                    window,
-                    tracking_error: e.tracking_error,
-                    pixels_per_metre: tracked.scale_from_motion.map(|(v, e)| [v, e]),
-                    pivot: Some([pivot.x, pivot.y]),
-                    moment_covariance: match (source, identified) {
-                        (ModelSource::Identified, Ok(id)) => Some(
-                            (0..id.covariance.nrows())
-                                .map(|i| id.covariance.row(i).iter().copied().collect())
-                                .collect(),
-                        ),
-                        _ => None,
-                    },
-                    model_error: e,
-                    band_factors,
-                }),
-                _ => {
-                    notices.push(format!(
-                        "no calibration: none of {n} held-out stretches of {window:.3} s with {:.2} s after them fitted and followed its data (a recording too short?)",
-                        job.lead
-                    ));
-                    None
-                }
+            let made =
+                crate::forecast::calibrate::calibrate(&rows, &params, &asked, engine, monitor)?;
+            if made.is_none() {
+                notices.push(format!(
+                    "no calibration: none of {n} held-out stretches of {window:.3} s with {:.2} s after them fitted and followed its data (a recording too short?)",
+                    job.lead
+                ));
             }
+            made
         }
     };
     if let Some(c) = &calibration {

@@ -8,13 +8,15 @@ use serde_json::json;
 
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
-use crate::fit::calibration::Calibration;
-use crate::fit::forecast::{self, Forecast, Headline, QUANTILES};
-use crate::fit::forecast_plot::{self, Marks};
-use crate::fit::outcome::{ForecastSettings, Learning, fit_and_forecast, fit_json, learned_rows};
 use crate::fit::read_frames;
 use crate::fit::verdict::Verdict;
 use crate::fit::window::TrackRows;
+use crate::forecast::calibration::Calibration;
+use crate::forecast::outcome::{
+    ForecastSettings, Learning, fit_and_forecast, fit_json, learned_rows,
+};
+use crate::forecast::plot::{self, Marks};
+use crate::forecast::{self, Forecast, Headline, QUANTILES};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::Outputs;
@@ -46,6 +48,9 @@ pub struct ForecastSummary {
     /// The one answer to "how long does the model predict the pendulum": the lead at which
     /// the median is expected to leave it by the tolerance, with its quartiles.
     pub headline: Headline,
+    /// What chaos and the tracking error alone allow (s): (1/lambda) ln(tolerance / tracking
+    /// error), None where the orbit does not stretch.
+    pub chaos_bound: Option<f64>,
     /// How long the median followed the data within the tolerance (s after the window's
     /// end; a lower bound where the data ended first).
     pub median_follows_for: Option<f64>,
@@ -221,6 +226,8 @@ pub fn run(
     let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
     let (data_after, data_lt) = o.after_window(o.data_horizon);
     let forecast_end = f.times.last().copied().unwrap_or(end);
+    let chaos_bound = (f.lyapunov > 0.0 && o.tracking_error > 0.0)
+        .then(|| (o.tolerance / o.tracking_error).ln() / f.lyapunov);
     let out = &job.output;
     let mut files = Outputs::new();
     // Long enough to see the bands open and the data part, short enough to read.
@@ -233,7 +240,7 @@ pub fn run(
     let until = (last_horizon + 3.0)
         .max(f.window_end + 3.0)
         .min(forecast_end);
-    forecast_plot::forecast(
+    plot::forecast(
         &mut files,
         &out.join("forecast.png"),
         f,
@@ -314,6 +321,8 @@ pub fn run(
         "horizon": {
             "headline": headline,
             "headline_rule": "the lead after the window's end at which the members' median is expected to leave the pendulum by more than the tolerance: each member is one pendulum the data allow (the model's own error added, each member its share), and the lead at which it first lies farther than the tolerance from the median is one draw; the median of the draws, with their quartiles",
+            "chaos_bound": chaos_bound,
+            "chaos_bound_rule": "(1/lambda) ln(tolerance / tracking error), lambda the FTLE along the fitted orbit over the forecast: how long chaos lets an error of the tracking's size stay within the tolerance, with a perfect model",
             "median_on_the_data": o.scores.median_follows_for,
             "median_on_the_data_is_lower_bound": o.scores.followed_to_data_end,
             "tolerance": o.tolerance,
@@ -338,14 +347,14 @@ pub fn run(
     });
     files.write_json(&out.join("summary.json"), &summary)?;
     if let (Some(video), Some(geometry)) = (&job.video, geometry) {
-        let overlay = crate::track::overlay::Overlay {
+        let overlay = crate::forecast::overlay::Overlay {
             rows: &frames,
             geometry,
             pivot: (pivot.x, pivot.y),
             outcome: &o,
             tolerance: o.tolerance,
         };
-        crate::track::overlay::write(
+        crate::forecast::overlay::write(
             &mut files,
             &out.join(OVERLAY),
             video,
@@ -358,6 +367,7 @@ pub fn run(
     Ok(ForecastSummary {
         in_sample: job.settings.in_sample,
         headline,
+        chaos_bound,
         median_follows_for: o.scores.median_follows_for,
         followed_to_data_end: o.scores.followed_to_data_end,
         window: o.window,
@@ -386,7 +396,7 @@ pub fn run(
 pub const OVERLAY: &str = "overlay.mp4";
 
 /// How far past its window's end (s) a forecast runs.
-fn forecast_lead(o: &crate::fit::outcome::Outcome) -> f64 {
+fn forecast_lead(o: &crate::forecast::outcome::Outcome) -> f64 {
     let f = &o.forecast;
     f.times.last().copied().unwrap_or(f.window_end) - f.window_end
 }

@@ -5,10 +5,10 @@ use std::path::PathBuf;
 
 use crate::engine::Engine;
 use crate::error::{Error, Result};
+use crate::fit::bridge::Bridged;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::Outputs;
-use crate::track::bridge::Bridged;
 use crate::track::{self, Markers, Scale, TrackRow};
 use crate::video::{Decoder, Pixels};
 
@@ -144,9 +144,15 @@ pub fn run(
             format!("{} frames: tracking needs at least 10", blobs.len()),
         ));
     }
-    let mut tracked = track::track(&blobs, &times, job.scale, job.markers)?;
+    let mut tracked = track::track(
+        &blobs,
+        &times,
+        job.scale,
+        job.markers,
+        &crate::fit::pendulum::scale_from_motion,
+    )?;
     let bridged = match (&job.bridge, engine) {
-        (Some(sources), Some(engine)) => Some(track::bridge::bridge(
+        (Some(sources), Some(engine)) => Some(crate::fit::bridge::bridge(
             &mut tracked,
             sources,
             engine,

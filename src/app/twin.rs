@@ -11,10 +11,10 @@ use serde_json::json;
 use super::check_count;
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
-use crate::fit::forecast::Slope;
-use crate::fit::forecast_plot::{self, Marks};
-use crate::fit::outcome::{ForecastSettings, Outcome, fit_json};
-use crate::fit::twin::{Track, experiment, make_track, release};
+use crate::forecast::Slope;
+use crate::forecast::outcome::{ForecastSettings, Outcome, fit_json};
+use crate::forecast::plot::{self, Marks};
+use crate::forecast::twin::{Track, experiment, make_track, release};
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
@@ -317,17 +317,17 @@ pub fn run(
             (rate, points)
         })
         .collect();
-    forecast_plot::twin(&mut files, &out.join("twin.png"), &series, &slopes)?;
+    plot::twin(&mut files, &out.join("twin.png"), &series, &slopes)?;
     if let Some((o, at, track, sigma, rate)) = &shown {
-        forecast_plot::forecast(
+        plot::forecast(
             &mut files,
             &out.join("twin_forecast.png"),
             &o.forecast,
             &Marks {
                 measured: (&track.t, &track.measured),
                 truth: Some(at),
-                horizon: (o.forecast.spread_horizon, forecast_plot::SPREAD_MARK),
-                on_data: (o.data_horizon, forecast_plot::DATA_MARK),
+                horizon: (o.forecast.spread_horizon, plot::SPREAD_MARK),
+                on_data: (o.data_horizon, plot::DATA_MARK),
                 tolerance: o.tolerance,
                 until: job.duration,
                 title: format!(

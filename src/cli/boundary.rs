@@ -89,7 +89,7 @@ impl BoundaryArgs {
             ..{
                 let grid = self.plane.grid((1, 1))?;
                 FlipSpec::new(
-                    self.physical.sources().resolve_on(&grid)?,
+                    crate::spec::resolve_on(&self.physical.sources(), &grid)?,
                     grid,
                     self.step.stepping(),
                 )

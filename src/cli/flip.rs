@@ -100,7 +100,7 @@ impl FlipArgs {
             early_exit: !self.full,
             use_symmetry: !(self.full || self.no_symmetry),
             ..FlipSpec::new(
-                self.physical.sources().resolve_on(&grid)?,
+                crate::spec::resolve_on(&self.physical.sources(), &grid)?,
                 grid,
                 self.step.stepping(),
             )

@@ -9,7 +9,7 @@ use super::parse::{parse_length, parse_number, parse_u64, parse_usize, parse_win
 use super::{command_line, json, say};
 use crate::app::forecast::{self, ForecastJob};
 use crate::error::Result;
-use crate::fit::outcome::ForecastSettings;
+use crate::forecast::outcome::ForecastSettings;
 use crate::monitor::Monitor;
 
 #[derive(Args, Debug, Clone)]
@@ -70,7 +70,7 @@ pub struct ForecastArgs {
     /// the bands are at least that wide. They lie before the forecast's window (over the
     /// whole file with --in-sample); a calibration (--params written by fit) takes their
     /// place. 0: the bands hold the tracking error and the fit's uncertainty alone.
-    #[arg(long, default_value_t = crate::fit::model_error::HELD_OUT, value_parser = parse_usize, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = crate::forecast::model_error::HELD_OUT, value_parser = parse_usize, allow_hyphen_values = true)]
     pub held_out: usize,
     #[command(flatten)]
     pub physical: PhysicalArgs,
@@ -122,7 +122,7 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
         (None, _) => "; no rows after the window to score".into(),
     };
     eprintln!(
-        "{}fit {:.4}..{:.4} s, {} members, tracking error {:.2} mm; horizon {} after the window (the median within {:.1} mm of the pendulum; the members' quartiles){on_data}; FTLE along the orbit {:.2} 1/s -> {}",
+        "{}fit {:.4}..{:.4} s, {} members, tracking error {:.2} mm; horizon {} after the window (the median within {:.1} mm of the pendulum; the members' quartiles){on_data}; FTLE along the orbit {:.2} 1/s{} -> {}",
         if s.in_sample { "IN SAMPLE: " } else { "" },
         s.window.0,
         s.window.1,
@@ -131,6 +131,9 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
         forecast::describe_headline(&s.headline),
         s.tolerance * 1e3,
         s.lyapunov_exponent,
+        s.chaos_bound.map_or(String::new(), |b| format!(
+            " (chaos and the tracking error alone would allow {b:.2} s)"
+        )),
         s.output.display()
     );
     json(&s)

@@ -161,7 +161,7 @@ impl LyapunovArgs {
             gpu_f32,
         };
         asked.lyapunov(LyapunovSpec {
-            params: self.physical.sources().resolve_on(&grid)?,
+            params: crate::spec::resolve_on(&self.physical.sources(), &grid)?,
             grid,
             stepping: Stepping {
                 dt: self.dt,

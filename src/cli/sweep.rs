@@ -105,7 +105,7 @@ impl SweepArgs {
         };
         let sources = self.physical.sources();
         if let Some(var) = vary.param.var() {
-            sources.check_along(&[("vary", var)])?;
+            crate::spec::check_along(&sources, &[("vary", var)])?;
             let plane = &self.grid.plane;
             for (given, field, v) in [
                 (plane.omega1.is_some(), "omega1", Var::Omega1),
@@ -133,7 +133,7 @@ impl SweepArgs {
                 fps: self.fps,
                 crf: self.crf,
             },
-            params: sources.resolve_on(&grid)?,
+            params: crate::spec::resolve_on(&sources, &grid)?,
             grid,
             stepping: self.step.stepping(),
             renorm: self.renorm,

@@ -9,7 +9,7 @@ use super::parse::{parse_length, parse_number, parse_u64, parse_usize, parse_win
 use super::{command_line, json, say};
 use crate::app::twin::{self, TwinJob};
 use crate::error::Result;
-use crate::fit::outcome::ForecastSettings;
+use crate::forecast::outcome::ForecastSettings;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::params::Preset;

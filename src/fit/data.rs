@@ -7,16 +7,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::lsq::{Fit, least_squares};
 use crate::error::{Error, Result};
-
-/// One row of tracked data (a camera frame's): time (s) and positions (m) of both masses, y up.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TrackedRow {
-    pub t: f64,
-    pub x1: f64,
-    pub y1: f64,
-    pub x2: f64,
-    pub y2: f64,
-}
+pub use crate::track::file::{PixelScale, RELEASE, TrackedRow};
 
 /// Smallest time step (s) between tracked rows.
 const MIN_TIME_STEP: f64 = 1e-6;
@@ -45,18 +36,6 @@ pub struct Units {
     /// Read the rows before the release as well, where `track` found one (its file says
     /// `# release = T`): the rest and the lift by hand are not free motion.
     pub before_release: bool,
-}
-
-/// The key of a tracked file's `# release = T` comment: where free motion begins (s).
-pub const RELEASE: &str = "release";
-
-/// The metre scale of positions in pixels.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum PixelScale {
-    PerMetre(f64),
-    /// From the motion: a rigid pendulum's swing fixes l1/g in seconds, so at the file's
-    /// frame rate and the stated g its upper arm's length in metres (src/fit/identify).
-    FromMotion,
 }
 
 /// The columns a tracked file may name, beside the positions x1, y1, x2, y2: the time `t`

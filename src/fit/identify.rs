@@ -399,7 +399,7 @@ impl Identified {
         let g = self.time_scale.g_implied;
         let p = g * self.l1;
         let [a, b, c, _, k1, k2] = self.values;
-        Params::from_moments(
+        let params = Params::from_moments(
             [a * p, b * p, c * p, p],
             (self.l1, self.l2, g),
             // A negative damping (the data gaining energy: a drive, or the tracking's
@@ -409,7 +409,9 @@ impl Identified {
                 joint2: (k2 * p).max(0.0),
                 ..Losses::default()
             },
-        )
+        );
+        crate::params::validate(&params)?;
+        Ok(params)
     }
 }
 

@@ -2,21 +2,15 @@
 //! and arm lengths, angles, velocities and energies with error bars, the energy decay laws, and
 //! the model's state and damping fitted to the positions. `app::fit` puts it together.
 
-pub mod calibration;
+pub mod bridge;
 pub mod data;
-pub mod forecast;
-pub mod forecast_plot;
 pub mod identify;
 pub mod joint;
 mod lsq;
 mod model;
-pub mod model_error;
-pub mod outcome;
 pub mod pendulum;
 pub mod plots;
-pub mod quantiles;
 mod refine;
-pub mod twin;
 pub mod verdict;
 pub mod window;
 

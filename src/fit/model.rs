@@ -5,12 +5,14 @@ use nalgebra::DVector;
 
 use super::data::TrackedRow;
 use super::lsq::{least_squares, numeric_jacobian};
+use super::window::with_damping;
 use crate::cpu;
 use crate::engine::Engine;
 use crate::error::Result;
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{EnsembleSpec, Keep};
+use crate::stats::halton;
 
 /// Simulation steps per data interval (~1/300 s for 1/3 s frames).
 const SUBSTEPS: u32 = 100;
@@ -93,29 +95,6 @@ fn simulate(
         }
     }
     out
-}
-
-fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
-    let mut q = *p;
-    q.losses.joint1 = c1;
-    q.losses.joint2 = c2;
-    q
-}
-
-/// Halton point k in [0, 1)^d (bases 2, 3, 5, 7, 11, 13): an even, reproducible spread.
-pub(super) fn halton(k: usize, d: usize) -> Vec<f64> {
-    const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
-    (0..d)
-        .map(|j| {
-            let (b, mut i, mut f, mut r) = (PRIMES[j], k + 1, 1.0, 0.0);
-            while i > 0 {
-                f /= b as f64;
-                r += f * (i % b) as f64;
-                i /= b;
-            }
-            r
-        })
-        .collect()
 }
 
 /// Fits the model to `frames` from the row nearest `spec.start_time`, the ensemble search

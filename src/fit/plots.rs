@@ -7,19 +7,19 @@ use plotters::prelude::*;
 use crate::error::{Error, Result};
 use crate::render::{self, Outputs};
 
-pub(super) fn err<E: std::fmt::Debug>(e: E) -> Error {
+pub(crate) fn err<E: std::fmt::Debug>(e: E) -> Error {
     Error::plot(e)
 }
 
-pub(super) const BG: RGBColor = RGBColor(255, 255, 255);
-pub(super) const MEASURED: RGBColor = RGBColor(30, 30, 30);
+pub(crate) const BG: RGBColor = RGBColor(255, 255, 255);
+pub(crate) const MEASURED: RGBColor = RGBColor(30, 30, 30);
 const SIMULATED: RGBColor = RGBColor(214, 39, 40);
 const FIT_A: RGBColor = RGBColor(31, 119, 180);
 const FIT_B: RGBColor = RGBColor(44, 160, 44);
 
 /// An axis range over the finite `values`, padded by `pad` of its span; 0..1 when there are
 /// none or their span overflows (plotters never ends on a non-finite range).
-pub(super) fn range(values: impl Iterator<Item = f64>, pad: f64) -> std::ops::Range<f64> {
+pub(crate) fn range(values: impl Iterator<Item = f64>, pad: f64) -> std::ops::Range<f64> {
     let (lo, hi) = values
         .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
@@ -33,7 +33,7 @@ pub(super) fn range(values: impl Iterator<Item = f64>, pad: f64) -> std::ops::Ra
     }
 }
 
-pub(super) fn save(
+pub(crate) fn save(
     out: &mut Outputs,
     path: &Path,
     w: u32,

@@ -54,7 +54,7 @@ pub fn time_quantum(t: &[f64]) -> f64 {
         })
         .unwrap_or(0.0);
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    let Some(median) = super::quantiles::median(&mut steps) else {
+    let Some(median) = crate::stats::median(&mut steps) else {
         return 0.0;
     };
     let rounded = steps.iter().any(|s| {

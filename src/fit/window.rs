@@ -5,13 +5,13 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::lsq::{least_squares, numeric_jacobian};
-use super::model::halton;
 use crate::cpu;
 use crate::engine::Engine;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 use crate::spec::{EnsembleSpec, Keep};
+use crate::stats::halton;
 
 /// Fitted parameters: the state (theta1, omega1, theta2, omega2), the joint damping at the
 /// pivot and the middle joint (N m s), where the pivot lies in the data's frame (m), the
@@ -196,7 +196,8 @@ pub fn track_with(p: &Params, start: State, t: &[f64], steps_per_second: f64) ->
     out
 }
 
-fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
+/// `p` with the joint damping `c1`, `c2` (N m s).
+pub(super) fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
     let mut q = *p;
     (q.losses.joint1, q.losses.joint2) = (c1, c2);
     q

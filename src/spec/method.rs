@@ -3,34 +3,8 @@
 
 use crate::error::{Error, Result};
 
-/// The floating-point precision a GPU kernel integrates in (the CPU path is always f64).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Precision {
-    /// The default: every GPU, fastest.
-    #[default]
-    F32,
-    /// Needs an adapter with f64 (`Features::SHADER_F64`; lavapipe has it).
-    F64,
-}
-
-impl Precision {
-    pub const ALL: [Precision; 2] = [Precision::F32, Precision::F64];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Precision::F32 => "f32",
-            Precision::F64 => "f64",
-        }
-    }
-
-    /// A GPU path in this precision, in the PNG metadata's words.
-    pub fn gpu_path_name(self) -> &'static str {
-        match self {
-            Precision::F32 => "gpu",
-            Precision::F64 => "gpu f64",
-        }
-    }
-}
+/// The precision lives on the ground floor, beside the `Field` whose path names it.
+pub use crate::field::Precision;
 
 /// How each pendulum is stepped in time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]

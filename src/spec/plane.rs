@@ -5,6 +5,7 @@
 use super::{Axis, Grid, Range, Var};
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
+use crate::params::ParamSources;
 
 /// An angle as asked: a range (along an axis) or one value (the start's).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,4 +116,52 @@ impl PlaneAsked {
             sampling: Default::default(),
         })
     }
+}
+
+/// That no value given here is one that varies along a map's axis or a sweep (`along`:
+/// the field that names the axis, and what it varies): the axis would override it
+/// silently. A pair (rod masses, joint damping) may give the part an axis sets as 0,
+/// so that its other part can be given.
+pub fn check_along(sources: &ParamSources, along: &[(&'static str, Var)]) -> Result<()> {
+    let one = |field, v: Option<f64>| v.map(|v| (field, vec![(field, v)]));
+    let pair = |field, parts: [&'static str; 2], v: Option<(f64, f64)>| {
+        v.map(|(a, b)| (field, vec![(parts[0], a), (parts[1], b)]))
+    };
+    let given = [
+        one("m1", sources.m1),
+        one("m2", sources.m2),
+        one("l1", sources.l1),
+        one("l2", sources.l2),
+        one("g", sources.g),
+        pair("rod_mass", ["rod1", "rod2"], sources.rod_mass),
+        pair("joint_damping", ["joint1", "joint2"], sources.joint_damping),
+    ];
+    for (field, parts) in given.into_iter().flatten() {
+        for &(axis, var) in along {
+            let single = parts.len() == 1;
+            if let Some((part, _)) = parts
+                .iter()
+                .find(|(part, v)| var.writes().contains(part) && (single || *v != 0.0))
+            {
+                let hint = match single {
+                    true => "leave one of them out".to_string(),
+                    false => format!("give its {part} part as 0, or leave it out"),
+                };
+                return Err(Error::invalid(
+                    field,
+                    format!(
+                        "{} along {axis} sets {part}, which this value would give too: {hint}",
+                        var.name()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The parameters of a map on `grid`, none given that an axis sets ([`check_along`]).
+pub fn resolve_on(sources: &ParamSources, grid: &Grid) -> Result<Params> {
+    check_along(sources, &[("x", grid.x.var), ("y", grid.y.var)])?;
+    sources.resolve()
 }

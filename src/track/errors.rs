@@ -3,7 +3,7 @@
 
 use super::geometry::{self, Geometry};
 use super::{Blob, Up};
-use crate::fit::quantiles::robust_spread;
+use crate::stats::robust_spread;
 
 /// Which way each mass moved in each frame (a unit vector in the picture), where its mean
 /// step from the neighbouring frames it was seen in (the one before to the one after) is

@@ -22,6 +22,28 @@ use std::path::Path;
 use super::{Mark, Tracked};
 use crate::error::{Error, Result};
 
+/// One row of tracked data (a camera frame's): time (s) and positions (m) of both masses, y up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrackedRow {
+    pub t: f64,
+    pub x1: f64,
+    pub y1: f64,
+    pub x2: f64,
+    pub y2: f64,
+}
+
+/// The key of a tracked file's `# release = T` comment: where free motion begins (s).
+pub const RELEASE: &str = "release";
+
+/// The metre scale of positions in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PixelScale {
+    PerMetre(f64),
+    /// From the motion: a rigid pendulum's swing fixes l1/g in seconds, so at the file's
+    /// frame rate and the stated g its upper arm's length in metres (src/fit/identify).
+    FromMotion,
+}
+
 /// The columns' names.
 pub const HEADER: &str = "t,x1,y1,x2,y2,seen1,seen2,sx1,sy1,sx2,sy2,streak1,streak2";
 
@@ -126,7 +148,7 @@ pub fn write(w: &mut impl Write, t: &Tracked, film: &Film, command: &str) -> Res
         writeln!(
             w,
             "# {} = {release:.6} (s: the last still frame before the pendulum swings; fit and forecast read from it)",
-            crate::fit::data::RELEASE
+            RELEASE
         )?;
     }
     writeln!(w, "# film_px = {} {}", film.width, film.height)?;
@@ -213,7 +235,7 @@ pub fn read_header(text: &str) -> Option<Header> {
     Some(Header {
         placement,
         film,
-        release: get(crate::fit::data::RELEASE, 1).map(|v| v[0]),
+        release: get(RELEASE, 1).map(|v| v[0]),
     })
 }
 

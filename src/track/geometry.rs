@@ -8,7 +8,7 @@
 use rand::{Rng, SeedableRng};
 
 use super::detect::Blob;
-use crate::fit::quantiles::median;
+use crate::stats::median;
 
 /// The pivot (px), the upper marker's circle's radius and the lower arm (px).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,12 +4,10 @@
 //! is not seen in a frame is reported as not seen, never placed. [`synth`] renders test
 //! films with a known truth.
 
-pub mod bridge;
 pub mod detect;
 mod errors;
 pub mod file;
 pub mod geometry;
-pub mod overlay;
 pub mod pivot;
 pub mod release;
 pub mod synth;
@@ -20,7 +18,8 @@ pub use geometry::Geometry;
 pub use pivot::PivotMarker;
 
 use crate::error::{Error, Result};
-use crate::fit::quantiles::median;
+use crate::stats::median;
+use file::TrackedRow;
 
 /// How pixels become metres.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,7 +28,8 @@ pub enum Scale {
     UpperArm(f64),
     PixelsPerMetre(f64),
     /// The scale the swing implies under gravity g (m/s^2) at the film's own frame times: a
-    /// rigid pendulum's motion fixes l1/g in seconds ([`crate::fit::identify`]).
+    /// rigid pendulum's motion fixes l1/g in seconds. Finding it is the fit's work (the
+    /// command hands [`track`] a [`MotionScale`]): a film's track knows no model.
     FromMotion(f64),
 }
 
@@ -38,9 +38,9 @@ impl Scale {
     /// `pixels_per_metre` (a number, or the swing's), one of the two.
     pub fn asked(
         l1: Option<f64>,
-        pixels_per_metre: Option<crate::fit::data::PixelScale>,
+        pixels_per_metre: Option<crate::track::file::PixelScale>,
     ) -> Result<Scale> {
-        use crate::fit::data::PixelScale;
+        use crate::track::file::PixelScale;
         match (l1, pixels_per_metre) {
             (Some(l1), None) => Ok(Scale::UpperArm(l1)),
             (None, Some(PixelScale::PerMetre(p))) => Ok(Scale::PixelsPerMetre(p)),
@@ -266,22 +266,29 @@ fn dim_ones_out(frames: Vec<Vec<Blob>>) -> Vec<Vec<Blob>> {
 /// inside: 1 px at r = 300 px and 0.35 rad swept in one exposure) and its noise.
 const OFF_GEOMETRY: f64 = 3.0;
 
+/// The metre scale (pixels per metre, and its error) that rows in pixels (y up) imply
+/// under gravity g (m/s^2) by their motion: the fit's `scale_from_motion`, handed in by the
+/// command, so that the track room imports nothing of the rooms above it.
+pub type MotionScale<'a> = &'a dyn Fn(&[TrackedRow], f64) -> Result<(f64, f64)>;
+
 /// Names every frame's blobs (found as `markers` say) and turns them into rows (times from
 /// `times`). Where a marker stays at the pivot, the blobs are measured from it frame by
-/// frame ([`pivot`]) and named again.
+/// frame ([`pivot`]) and named again. `motion` finds a scale from the motion where `scale`
+/// asks for one.
 pub fn track(
     frames: &[Vec<Blob>],
     times: &[f64],
     scale: Scale,
     markers: Markers,
+    motion: MotionScale,
 ) -> Result<Tracked> {
     check_colours_seen(markers, frames)?;
-    let tracked = track_steady(frames, times, scale)?;
+    let tracked = track_steady(frames, times, scale, motion)?;
     let coloured = matches!(markers, Markers::Colours { pivot: Some(_), .. });
     match pivot::find(frames, &tracked.geometry, coloured) {
         Some((marker, shifts)) => {
             let steady = pivot::steadied(frames, &shifts);
-            let mut tracked = track_steady(&steady, times, scale)?;
+            let mut tracked = track_steady(&steady, times, scale, motion)?;
             // The pivot's marker is no distractor set aside.
             tracked
                 .still
@@ -301,7 +308,12 @@ pub fn track(
 }
 
 /// [`track`] in a picture that stands still (or has been steadied on the pivot's marker).
-fn track_steady(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tracked> {
+fn track_steady(
+    frames: &[Vec<Blob>],
+    times: &[f64],
+    scale: Scale,
+    motion: MotionScale,
+) -> Result<Tracked> {
     let mut still = geometry::still(frames);
     let without = |still: &[(f64, f64)]| -> Vec<Vec<Blob>> {
         let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
@@ -420,12 +432,12 @@ fn track_steady(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tra
         Scale::PixelsPerMetre(p) => p,
         Scale::FromMotion(gravity) => {
             // The rows with both marks, in pixels (y up), are what the motion is read from.
-            let rows: Vec<crate::fit::TrackedRow> = named
+            let rows: Vec<TrackedRow> = named
                 .iter()
                 .zip(times)
                 .filter_map(|(&(a, b), &t)| {
                     let (a, b) = (mark_at(a?, 1.0, 0, None), mark_at(b?, 1.0, 1, None));
-                    Some(crate::fit::TrackedRow {
+                    Some(TrackedRow {
                         t,
                         x1: a.x,
                         y1: a.y,
@@ -440,7 +452,7 @@ fn track_steady(frames: &[Vec<Blob>], times: &[f64], scale: Scale) -> Result<Tra
                     "the scale cannot be found from the motion: both markers are seen in fewer than 5 frames; give it",
                 ));
             }
-            crate::fit::pendulum::scale_from_motion(&rows, gravity)?.0
+            motion(&rows, gravity)?.0
         }
     };
     let rows = named

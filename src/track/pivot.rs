@@ -5,7 +5,7 @@
 
 use super::detect::{Blob, Role};
 use super::geometry::Geometry;
-use crate::fit::quantiles::median;
+use crate::stats::median;
 
 /// The pivot's marker as the film showed it.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]

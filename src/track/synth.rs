@@ -458,7 +458,7 @@ pub fn film(
     // likewise (the wander about its median taken out).
     let median = |of: fn(&TruthRow) -> f64| {
         let mut v: Vec<f64> = truth.iter().map(of).collect();
-        crate::fit::quantiles::median(&mut v).unwrap_or(0.0)
+        crate::stats::median(&mut v).unwrap_or(0.0)
     };
     let (mx, my) = (median(|r| r.shift.0), median(|r| r.shift.1));
     for r in &mut truth {

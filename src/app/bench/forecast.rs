@@ -5,9 +5,9 @@
 use super::Sample;
 use crate::engine::Engine;
 use crate::error::Result;
-use crate::fit::forecast::{ForecastSpec, forecast};
-use crate::fit::outcome::ForecastSettings;
-use crate::fit::twin::{experiment, make_track};
+use crate::forecast::outcome::ForecastSettings;
+use crate::forecast::twin::{experiment, make_track};
+use crate::forecast::{ForecastSpec, forecast};
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::params::Preset;

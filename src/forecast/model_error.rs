@@ -21,10 +21,10 @@
 //! twice: a band about the members' median as wide as the distance between two unrelated
 //! states holds 98 % of the data, not 90 %).
 
-use super::verdict::Verdict;
-use super::window::{TrackRows, fit_window};
 use crate::engine::Engine;
 use crate::error::Result;
+use crate::fit::verdict::Verdict;
+use crate::fit::window::{TrackRows, fit_window};
 use crate::model::Params;
 use crate::monitor::Monitor;
 
@@ -268,7 +268,7 @@ pub fn estimate(
         m90: Vec::with_capacity(bins),
         windows,
         unfollowed,
-        tracking_error: super::quantiles::median(&mut tracking_errors).unwrap_or(f64::NAN),
+        tracking_error: crate::stats::median(&mut tracking_errors).unwrap_or(f64::NAN),
     };
     // A bin with no rows (a gap) takes the one before it.
     let (mut lag, mut lag_model) = ([0.0; 2], [0.0; 2]);

@@ -8,10 +8,10 @@ use rand_distr::{Distribution, StandardNormal};
 use rand_pcg::Pcg64;
 
 use super::outcome::{ForecastSettings, Learning, Outcome, fit_and_forecast};
-use super::window::{STEPS_PER_SECOND, TrackRows, track_with};
-use super::{TrackedRow, angles};
 use crate::engine::Engine;
 use crate::error::Result;
+use crate::fit::window::{STEPS_PER_SECOND, TrackRows, track_with};
+use crate::fit::{TrackedRow, angles};
 use crate::model::{Params, State};
 use crate::monitor::Monitor;
 

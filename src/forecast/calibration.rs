@@ -257,7 +257,7 @@ pub struct BandFactors {
 }
 
 /// The most a band factor may be: past it the bands hold nothing but the reach.
-const MOST_FACTOR: f64 = 100.0;
+pub const MOST_FACTOR: f64 = 100.0;
 
 impl BandFactors {
     /// The 50 % and 90 % factors of mass `mass` (0 upper, 1 lower) at `lead` (s): the last
@@ -266,129 +266,6 @@ impl BandFactors {
         let k = ((lead / self.step).floor().max(0.0) as usize).min(self.f50.len() - 1);
         (self.f50[k][mass], self.f90[k][mass])
     }
-}
-
-/// What [`band_factors`] forecasts each held-out window with.
-pub struct FactorRun<'a> {
-    pub held: crate::fit::model_error::HeldOut,
-    pub model_error: &'a ModelError,
-    pub members: usize,
-    pub seed: u64,
-    pub tolerance: f64,
-}
-
-/// Members of each held-out window's forecast: a 90 % band's edges to a few percent.
-pub const FACTOR_MEMBERS: usize = 1000;
-
-/// Measures [`BandFactors`] on `track` (the calibration recording) with the model `p`.
-pub fn band_factors(
-    track: &crate::fit::window::TrackRows,
-    p: &crate::model::Params,
-    run: &FactorRun,
-    engine: &crate::engine::Engine,
-    monitor: &crate::monitor::Monitor,
-) -> Result<Option<BandFactors>> {
-    use super::forecast::{ForecastSpec, cadence, forecast};
-    use super::window::fit_window;
-    let t = track.t;
-    let e = run.model_error;
-    let step = e.step;
-    let bins = e.m50.len();
-    let quiet = monitor.quiet();
-    let mut z50: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; bins];
-    let mut z90: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; bins];
-    let mut windows = 0;
-    for s in run.held.starts(t) {
-        monitor.check()?;
-        let w = (s, s + run.held.length);
-        let Ok(fit) = fit_window(track, p, w, run.held.candidates, engine, &quiet) else {
-            continue;
-        };
-        let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();
-        if !super::verdict::Verdict::judge(rms, t, track.data, p.l1 + p.l2).follows {
-            continue;
-        }
-        let window_end = t[fit.row0 + fit.rows - 1];
-        let end = (window_end + run.held.lead).min(t[t.len() - 1]);
-        if end <= window_end {
-            continue;
-        }
-        let spec = ForecastSpec {
-            members: run.members,
-            seed: run.seed,
-            tolerance: run.tolerance,
-            tracking_error: e.tracking_error,
-            end,
-            data_times: t.to_vec(),
-            cadence: cadence(t),
-            model_error: Some(e.clone()),
-            band_factors: None,
-        };
-        let f = forecast(&fit, window_end, &spec, engine, &quiet)?;
-        windows += 1;
-        for (i, &ti) in t.iter().enumerate() {
-            if ti <= window_end + 1e-9 || ti > end + 1e-9 {
-                continue;
-            }
-            let Some(k) = f.index(ti) else { continue };
-            let bin = (((ti - window_end) / step).floor() as usize).min(bins - 1);
-            for c in 0..4 {
-                let q = &f.observed[k][c];
-                let (m, d) = (q[2], track.data[i][c]);
-                let (h50, h90) = match d >= m {
-                    true => (q[3] - m, q[4] - m),
-                    false => (m - q[1], m - q[0]),
-                };
-                let off = (d - m).abs();
-                if h50 > 0.0 {
-                    z50[bin][c / 2].push(off / h50);
-                }
-                if h90 > 0.0 {
-                    z90[bin][c / 2].push(off / h90);
-                }
-            }
-        }
-    }
-    if windows == 0 {
-        return Ok(None);
-    }
-    let quantile = |v: &[f64], q: f64| -> Option<f64> {
-        let mut v = v.to_vec();
-        v.retain(|x| x.is_finite());
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
-        Some(v[k].clamp(1.0 / MOST_FACTOR, MOST_FACTOR))
-    };
-    // The windows are the draws: a quantile of n of them holds a new one with the
-    // conformal correction (1 + 1/n).
-    let q90 = (0.9 * (1.0 + 1.0 / windows as f64)).min(1.0);
-    let q50 = (0.5 * (1.0 + 1.0 / windows as f64)).min(1.0);
-    let (mut f50, mut f90, mut scored) = (Vec::new(), Vec::new(), Vec::new());
-    // A bin with no rows (a gap) takes the one before it (the first: no change).
-    let (mut last50, mut last90) = ([1.0; 2], [1.0; 2]);
-    for k in 0..bins {
-        for mass in 0..2 {
-            if let Some(v) = quantile(&z50[k][mass], q50) {
-                last50[mass] = v;
-            }
-            if let Some(v) = quantile(&z90[k][mass], q90) {
-                last90[mass] = v;
-            }
-        }
-        f50.push(last50);
-        f90.push(last90);
-        scored.push(z90[k][0].len() + z90[k][1].len());
-    }
-    Ok(Some(BandFactors {
-        step,
-        f50,
-        f90,
-        windows,
-        scored,
-    }))
 }
 
 #[cfg(test)]

@@ -7,12 +7,12 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::file::Placement;
 use crate::error::{Error, Result};
 use crate::fit::TrackedRow;
-use crate::fit::outcome::Outcome;
+use crate::forecast::outcome::Outcome;
 use crate::monitor::Monitor;
 use crate::render::Outputs;
+use crate::track::file::Placement;
 use crate::video::{Decoder, Mp4, Pixels};
 
 /// What to draw: the tracked rows (m, from the fitted `pivot`), the forecast, the horizon.

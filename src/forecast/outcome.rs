@@ -5,11 +5,11 @@
 use serde_json::json;
 
 use super::calibration::Calibration;
-use super::forecast::{self, Forecast, ForecastSpec, band_times, most_members};
-use super::verdict::Verdict;
-use super::window::{FITTED, TrackRows, WindowFit, fit_window};
+use super::ensemble::{self as forecast, Forecast, ForecastSpec, band_times, most_members};
 use crate::engine::Engine;
 use crate::error::{Error, Result, check_count, check_within};
+use crate::fit::verdict::Verdict;
+use crate::fit::window::{FITTED, TrackRows, WindowFit, fit_window};
 use crate::model::Params;
 use crate::monitor::Monitor;
 
@@ -195,7 +195,7 @@ pub fn fit_and_forecast(
             .map_or(fit.tracking_error, |c| c.tracking_error)
     });
     let lead = end - window_end;
-    let held = crate::fit::model_error::HeldOut {
+    let held = crate::forecast::model_error::HeldOut {
         length: b - a,
         avoid: Some(window),
         windows: settings.held_out,
@@ -208,7 +208,7 @@ pub fn fit_and_forecast(
     // pendulum that is not chaotic, and a shorter reach would hold its last value on).
     let model_error = match learning.calibration {
         Some(c) => Some(c.model_error.clone()),
-        None => crate::fit::model_error::estimate(&learn, p, &held, engine, monitor)?,
+        None => crate::forecast::model_error::estimate(&learn, p, &held, engine, monitor)?,
     };
     let spec = ForecastSpec {
         members: settings.members,

@@ -9,15 +9,15 @@ use rand_distr::{ChiSquared, Distribution, StandardNormal};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
-pub use super::quantiles::QUANTILES;
-use super::quantiles::quantiles;
-use super::window::{PARAMETERS, STEPS_PER_SECOND, WindowFit};
 use crate::cpu;
 use crate::engine::Engine;
 use crate::error::Result;
+use crate::fit::window::{PARAMETERS, STEPS_PER_SECOND, WindowFit};
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::spec::{EnsembleSpec, Keep};
+pub use crate::stats::QUANTILES;
+use crate::stats::quantiles;
 
 /// Spacing (s) of the bands' times between the data's own: smooth curves in the pictures.
 pub const BAND_STEP: f64 = 0.02;
@@ -58,7 +58,7 @@ pub const TOLERANCE_SHARE: f64 = 0.05;
 /// The data's step between rows (s): the median of the steps of `t` (0 for one row).
 pub fn cadence(t: &[f64]) -> f64 {
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    super::quantiles::median(&mut steps).unwrap_or(0.0)
+    crate::stats::median(&mut steps).unwrap_or(0.0)
 }
 
 /// The headline horizon: how long the members' median is expected to stay within the

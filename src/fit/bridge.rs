@@ -2,13 +2,13 @@
 //! fitted as `forecast` fits it to the rows measured around each gap, with the fit's errors;
 //! a gap the model cannot join stays hidden, and is named.
 
-use super::{Mark, TrackRow, Tracked};
 use crate::engine::Engine;
 use crate::error::Result;
 use crate::fit::TrackedRow;
 use crate::fit::window::{TrackRows, fit_window};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
+use crate::track::{Mark, TrackRow, Tracked};
 
 /// What `--bridge` did: gaps (runs of frames with a mass hidden) bridged by the model, the
 /// masses' places filled, and the gaps left open (first and last hidden frame, s) with why.
@@ -110,7 +110,7 @@ pub fn bridge(
     // The film's frame interval: the median step between rows.
     let frame = {
         let mut steps: Vec<f64> = tracked.rows.windows(2).map(|w| w[1].t - w[0].t).collect();
-        crate::fit::quantiles::median(&mut steps).unwrap_or(f64::NAN)
+        crate::stats::median(&mut steps).unwrap_or(f64::NAN)
     };
     for gap in gaps {
         monitor.check()?;

@@ -49,6 +49,22 @@ pub fn robust_spread(v: &mut [f64]) -> Option<f64> {
     Some(1.4826 * median(&mut dev)?)
 }
 
+/// Halton point k in [0, 1)^d (bases 2, 3, 5, 7, 11, 13): an even, reproducible spread.
+pub fn halton(k: usize, d: usize) -> Vec<f64> {
+    const PRIMES: [usize; 6] = [2, 3, 5, 7, 11, 13];
+    (0..d)
+        .map(|j| {
+            let (b, mut i, mut f, mut r) = (PRIMES[j], k + 1, 1.0, 0.0);
+            while i > 0 {
+                f /= b as f64;
+                r += f * (i % b) as f64;
+                i /= b;
+            }
+            r
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

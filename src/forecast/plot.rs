@@ -6,9 +6,9 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::forecast::{Forecast, Slope};
-use super::plots::{BG, MEASURED, err, range, save};
+use super::ensemble::{Forecast, Slope};
 use crate::error::Result;
+use crate::fit::plots::{BG, MEASURED, err, range, save};
 use crate::render::{self, Outputs};
 
 const BAND: RGBColor = RGBColor(31, 119, 180);
