@@ -457,8 +457,19 @@ fn describe_identified(id: &crate::fit::identify::Identified) -> String {
     };
     let method = match &id.refinement {
         Some(r) => format!(
-            "run on the angles over {} pieces of the motion ({} left out), the markers' arcs off it {:.3e} and {:.3e} RMS",
-            r.pieces, r.rejected, r.rms[0], r.rms[1]
+            "run on the angles over {} pieces of the motion ({} left out{}), the markers' arcs off it {:.3e} and {:.3e} RMS",
+            r.pieces,
+            r.rejected,
+            match r.of > r.pieces + r.rejected {
+                true => format!(
+                    "; a long recording: {} of its {} pieces, evenly spread",
+                    r.pieces + r.rejected,
+                    r.of
+                ),
+                false => String::new(),
+            },
+            r.rms[0],
+            r.rms[1]
         ),
         None => "from the equations' weak form alone (the run on the angles did not hold)".into(),
     };
@@ -493,6 +504,7 @@ fn identified_json(id: &crate::fit::identify::Identified) -> serde_json::Value {
         "weak_form": id.weak,
         "refinement": id.refinement.map(|r| json!({
             "pieces": r.pieces,
+            "pieces_in_the_recording": r.of,
             "rejected": r.rejected,
             "arc_rms": r.rms,
         })),

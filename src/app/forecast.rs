@@ -81,106 +81,16 @@ pub fn run(
     command: String,
     monitor: &Monitor,
 ) -> Result<ForecastSummary> {
-    job.settings.validate()?;
-    super::checks::check_damping_not_given(&job.params)?;
-    let mut inputs = super::checks::tracked_inputs(&job.file, &job.params);
-    if let Some(video) = &job.video {
-        if !video.exists() {
-            return Err(Error::Missing {
-                field: "video",
-                path: video.clone(),
-            });
-        }
-        inputs.push(("video", video.as_path()));
-        crate::video::require("ffmpeg", "drawing on a film")?;
-    }
-    // A film FFmpeg cannot read (or no ffprobe to read it) is refused before the work.
-    let film = match &job.video {
-        Some(video) => Some(crate::video::probe(video).map_err(|e| e.as_input("video"))?),
-        None => None,
-    };
-    super::checks::check_directory(
-        "output",
-        &job.output,
-        &["forecast.png", "bands.csv", "summary.json", OVERLAY],
-        &[],
-        &inputs,
-    )?;
-    super::checks::check_units(&job.units)?;
+    let film = check_inputs(job)?;
     let read = read_frames(&job.file, &job.units)?;
-    // A calibration that `fit` wrote beside the model, unless in sample (where the file
-    // itself teaches everything).
-    let calibration = match &job.params.params {
-        Some(path) if !job.settings.in_sample => Calibration::read("params", path)?,
-        _ => None,
-    };
-    // The window, before anything is learned: it says which rows may teach.
-    let (window, window_from) = match (job.settings.window, &calibration) {
-        (Some(w), _) => (w, "given"),
-        (None, Some(c)) => (
-            (read[1].t, read[1].t + c.window),
-            "the calibration's length",
-        ),
-        (None, None) => (
-            own_window(&read)?,
-            "four of the motion's own times, over the window's own rows",
-        ),
-    };
-    let learn = learned_rows(
-        &read.iter().map(|f| f.t).collect::<Vec<_>>(),
+    let (geometry, film_notice) = film_placement(job, film.as_ref())?;
+    let Learned {
+        calibration,
         window,
-        job.settings.in_sample,
-    )
-    .max(1);
-    // Where the track lies in the film, and that the film is the one it was tracked from,
-    // before any work: only a CSV `track` wrote says.
-    let mut film_notice = None;
-    let geometry = match &film {
-        Some(probe) => {
-            let header = crate::track::file::header_of(&job.file, "video")?;
-            match header.film {
-                Some(tracked) => tracked.check(&crate::track::file::Film::of(probe), "video")?,
-                None => {
-                    film_notice = Some(
-                        "the tracked file does not record its film (tracked by an earlier version): that the film is the one it was tracked from is not checked".to_string(),
-                    )
-                }
-            }
-            Some(header.placement)
-        }
-        None => None,
-    };
-    // The pivot, arm lengths and model as `fit` finds them, from the rows that may teach.
-    let known = crate::fit::pendulum::Known {
-        scale: calibration
-            .as_ref()
-            .and_then(|c| c.pixels_per_metre)
-            .map(|[v, e]| (v, e)),
-        pivot: calibration
-            .as_ref()
-            .and_then(|c| c.pivot)
-            .map(|[x, y]| (x, y)),
-        l1: match &calibration {
-            Some(_) => Some(job.params.resolve()?.l1),
-            None => None,
-        },
-    };
-    let tracked = crate::fit::pendulum::tracked_model_from(
-        &read,
-        learn,
-        &job.params,
-        &job.units,
-        known,
-    )
-    .map_err(|e| match e {
-        Error::InvalidSpec { field: "params", reason } if !job.settings.in_sample => Error::invalid(
-            "params",
-            format!(
-                "{reason} (a forecast learns only from the rows up to its window's end: calibrate once with `fit` on a longer recording of this pendulum and give its model.toml as [[params]])"
-            ),
-        ),
-        e => e,
-    })?;
+        window_from,
+        rows: learn,
+        tracked,
+    } = learned(job, &read)?;
     let mut notices = engine.notices();
     notices.push(tracked.source.describe_model(&tracked.params));
     notices.extend(film_notice);
@@ -223,128 +133,23 @@ pub fn run(
     }
     let f = &o.forecast;
     let headline = f.headline();
-    let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
-    let (data_after, data_lt) = o.after_window(o.data_horizon);
-    let forecast_end = f.times.last().copied().unwrap_or(end);
+    let (_, spread_lt) = o.after_window(f.spread_horizon);
+    let (_, data_lt) = o.after_window(o.data_horizon);
     let chaos_bound = (f.lyapunov > 0.0 && o.tracking_error > 0.0)
         .then(|| (o.tolerance / o.tracking_error).ln() / f.lyapunov);
     let out = &job.output;
     let mut files = Outputs::new();
-    // Long enough to see the bands open and the data part, short enough to read.
-    let last_horizon = headline
-        .lead
-        .into_iter()
-        .chain(o.scores.median_follows_for)
-        .map(|l| f.window_end + l)
-        .fold(f.window_end, f64::max);
-    let until = (last_horizon + 3.0)
-        .max(f.window_end + 3.0)
-        .min(forecast_end);
-    plot::forecast(
-        &mut files,
-        &out.join("forecast.png"),
-        f,
-        &Marks {
-            measured: (&t, &data),
-            truth: None,
-            horizon: (
-                headline.lead.map(|l| f.window_end + l),
-                "horizon: the members' median expected to leave the pendulum by the tolerance",
-            ),
-            on_data: (
-                o.scores
-                    .median_follows_for
-                    .filter(|_| !o.scores.followed_to_data_end)
-                    .map(|l| f.window_end + l),
-                "where the median left the measurements by the tolerance",
-            ),
-            tolerance: o.tolerance,
-            until,
-            title: format!(
-                "{}{}: fit {:.3}..{:.3} s, {} members; horizon {} (median within {:.1} mm){}",
-                job.file
-                    .file_name()
-                    .map(|n| n.to_string_lossy().into_owned())
-                    .unwrap_or_default(),
-                if job.settings.in_sample {
-                    " (in sample)"
-                } else {
-                    ""
-                },
-                o.window.0,
-                o.window.1,
-                settings.members,
-                describe_headline(&headline),
-                1e3 * o.tolerance,
-                match (o.scores.median_follows_for, o.scores.followed_to_data_end) {
-                    (Some(l), false) => format!("; on the data {l:.2} s"),
-                    (Some(l), true) => format!("; on the data over {l:.2} s"),
-                    (None, _) => String::new(),
-                },
-            ),
-        },
-    )?;
+    draw(&mut files, &out.join("forecast.png"), job, &o, (&t, &data))?;
     write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
-    // Which error ends the forecast first: the state's uncertainty spread by chaos (the
-    // ensemble), or the model's own (its departure on held-out windows).
-    let model_horizon = f.model_horizon;
-    let dominated_by = match (f.spread_horizon, model_horizon) {
-        (_, None) => "the state's uncertainty (the ensemble's spread)",
-        (None, Some(_)) => "the model's own error (its departure on held-out windows)",
-        (Some(s), Some(m)) if m < s => "the model's own error (its departure on held-out windows)",
-        _ => "the state's uncertainty (the ensemble's spread)",
-    };
-    let summary = json!({
-        "command": command,
-        "sample": if job.settings.in_sample { "in sample" } else { "out of sample" },
-        "file": job.file.display().to_string(),
-        "learned_from": provenance,
-        "scored": {
-            "rule": "only rows after the window's end, up to the forecast's end",
-            "rows": o.scores.rows,
-            "from": t.iter().find(|&&x| x > f.window_end + 1e-9),
-            "to": o.scores.last_lead.map(|l| f.window_end + l),
-        },
-        "pivot": [pivot.x, pivot.y],
-        "parameters": crate::params::to_json(&o.fit.params),
-        "fit": fit_json(&o.fit),
-        "verdict": o.verdict,
-        "scores": o.scores,
-        "model_error": f.model_error,
-        "ensemble": {
-            "members": settings.members, "seed": settings.seed, "clamped_negative_damping": f.clamped,
-            "tracking_error": o.tracking_error,
-            "tracking_error_from": if settings.tracking_error.is_some() { "the tracking error given" } else { "the fit's residuals" },
-            "backend": o.fit.backend, "precision": job.precision.name(),
-            "step": f.dt, "end": forecast_end, "data_end": end,
-        },
-        "horizon": {
-            "headline": headline,
-            "headline_rule": "the lead after the window's end at which the members' median is expected to leave the pendulum by more than the tolerance: each member is one pendulum the data allow (the model's own error added, each member its share), and the lead at which it first lies farther than the tolerance from the median is one draw; the median of the draws, with their quartiles",
-            "chaos_bound": chaos_bound,
-            "chaos_bound_rule": "(1/lambda) ln(tolerance / tracking error), lambda the FTLE along the fitted orbit over the forecast: how long chaos lets an error of the tracking's size stay within the tolerance, with a perfect model",
-            "median_on_the_data": o.scores.median_follows_for,
-            "median_on_the_data_is_lower_bound": o.scores.followed_to_data_end,
-            "tolerance": o.tolerance,
-            "spread": f.spread_horizon, "spread_after_window": spread_after,
-            "spread_lyapunov_times": spread_lt,
-            "data": o.data_horizon, "data_after_window": data_after, "data_lyapunov_times": data_lt,
-            "data_run": o.run,
-            "data_rule": "the first row after the window from which a measured coordinate lies outside its 90 % band (model and tracking error) for `data_run` rows in a row",
-            "data_coverage_before_spread_horizon": o.data_coverage,
-            "model_error": model_horizon,
-            "dominated_by": dominated_by,
-        },
-        "lyapunov": {
-            "exponent": f.lyapunov, "time": (f.lyapunov > 0.0).then(|| 1.0 / f.lyapunov),
-            "over": [f.window_end, end],
-            "along": "the fitted orbit: ln of the tangent propagator's largest singular value over the time",
-        },
-        // The lab report's comparison, for the lab's apparatus only.
-        "report": (job.params.preset == Some(crate::params::Preset::Lab)).then_some(
-            "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s"
-        ),
-    });
+    let summary = summary_json(
+        job,
+        &command,
+        &o,
+        provenance,
+        (pivot.x, pivot.y),
+        &t,
+        chaos_bound,
+    );
     files.write_json(&out.join("summary.json"), &summary)?;
     if let (Some(video), Some(geometry)) = (&job.video, geometry) {
         let overlay = crate::forecast::overlay::Overlay {
@@ -389,6 +194,282 @@ pub fn run(
             .chain(job.video.as_ref().map(|_| out.join(OVERLAY)))
             .collect(),
         notices,
+    })
+}
+
+/// The inputs' and outputs' checks before any work; the film's probe, where one is given.
+fn check_inputs(job: &ForecastJob) -> Result<Option<crate::video::Probe>> {
+    job.settings.validate()?;
+    super::checks::check_damping_not_given(&job.params)?;
+    let mut inputs = super::checks::tracked_inputs(&job.file, &job.params);
+    if let Some(video) = &job.video {
+        if !video.exists() {
+            return Err(Error::Missing {
+                field: "video",
+                path: video.clone(),
+            });
+        }
+        inputs.push(("video", video.as_path()));
+        crate::video::require("ffmpeg", "drawing on a film")?;
+    }
+    // A film FFmpeg cannot read (or no ffprobe to read it) is refused before the work.
+    let film = match &job.video {
+        Some(video) => Some(crate::video::probe(video).map_err(|e| e.as_input("video"))?),
+        None => None,
+    };
+    super::checks::check_directory(
+        "output",
+        &job.output,
+        &["forecast.png", "bands.csv", "summary.json", OVERLAY],
+        &[],
+        &inputs,
+    )?;
+    super::checks::check_units(&job.units)?;
+    Ok(film)
+}
+
+/// Where the track lies in the film, and that the film is the one it was tracked from,
+/// before any work (only a CSV `track` wrote says); a notice where it cannot be checked.
+fn film_placement(
+    job: &ForecastJob,
+    film: Option<&crate::video::Probe>,
+) -> Result<(Option<crate::track::file::Placement>, Option<String>)> {
+    let Some(probe) = film else {
+        return Ok((None, None));
+    };
+    let header = crate::track::file::header_of(&job.file, "video")?;
+    let notice = match header.film {
+        Some(tracked) => {
+            tracked.check(&crate::track::file::Film::of(probe), "video")?;
+            None
+        }
+        None => Some(
+            "the tracked file does not record its film (tracked by an earlier version): that the film is the one it was tracked from is not checked".to_string(),
+        ),
+    };
+    Ok((Some(header.placement), notice))
+}
+
+/// What a forecast may learn, decided before it learns anything: its calibration, its
+/// window (which says which rows may teach) and what those rows taught.
+struct Learned {
+    calibration: Option<Calibration>,
+    window: (f64, f64),
+    window_from: &'static str,
+    rows: usize,
+    tracked: crate::fit::pendulum::Tracked,
+}
+
+fn learned(job: &ForecastJob, read: &[crate::fit::TrackedRow]) -> Result<Learned> {
+    // A calibration that `fit` wrote beside the model, unless in sample (where the file
+    // itself teaches everything).
+    let calibration = match &job.params.params {
+        Some(path) if !job.settings.in_sample => Calibration::read("params", path)?,
+        _ => None,
+    };
+    // The window, before anything is learned: it says which rows may teach.
+    let (window, window_from) = match (job.settings.window, &calibration) {
+        (Some(w), _) => (w, "given"),
+        (None, Some(c)) => (
+            (read[1].t, read[1].t + c.window),
+            "the calibration's length",
+        ),
+        (None, None) => (
+            own_window(read)?,
+            "four of the motion's own times, over the window's own rows",
+        ),
+    };
+    let learn = learned_rows(
+        &read.iter().map(|f| f.t).collect::<Vec<_>>(),
+        window,
+        job.settings.in_sample,
+    )
+    .max(1);
+    // The pivot, arm lengths and model as `fit` finds them, from the rows that may teach.
+    let known = crate::fit::pendulum::Known {
+        scale: calibration
+            .as_ref()
+            .and_then(|c| c.pixels_per_metre)
+            .map(|[v, e]| (v, e)),
+        pivot: calibration
+            .as_ref()
+            .and_then(|c| c.pivot)
+            .map(|[x, y]| (x, y)),
+        l1: match &calibration {
+            Some(_) => Some(job.params.resolve()?.l1),
+            None => None,
+        },
+    };
+    let tracked = crate::fit::pendulum::tracked_model_from(
+        read,
+        learn,
+        &job.params,
+        &job.units,
+        known,
+    )
+    .map_err(|e| match e {
+        Error::InvalidSpec { field: "params", reason } if !job.settings.in_sample => Error::invalid(
+            "params",
+            format!(
+                "{reason} (a forecast learns only from the rows up to its window's end: calibrate once with `fit` on a longer recording of this pendulum and give its model.toml as [[params]])"
+            ),
+        ),
+        e => e,
+    })?;
+    Ok(Learned {
+        calibration,
+        window,
+        window_from,
+        rows: learn,
+        tracked,
+    })
+}
+
+/// forecast.png: the bands, the measured rows, the headline horizon and where the median
+/// left the data, long enough to see the bands open and the data part, short enough to read.
+fn draw(
+    files: &mut Outputs,
+    path: &std::path::Path,
+    job: &ForecastJob,
+    o: &crate::forecast::outcome::Outcome,
+    (t, data): (&[f64], &[[f64; 4]]),
+) -> Result<()> {
+    let f = &o.forecast;
+    let headline = f.headline();
+    let forecast_end = f.times.last().copied().unwrap_or(f.window_end);
+    let last_horizon = headline
+        .lead
+        .into_iter()
+        .chain(o.scores.median_follows_for)
+        .map(|l| f.window_end + l)
+        .fold(f.window_end, f64::max);
+    let until = (last_horizon + 3.0)
+        .max(f.window_end + 3.0)
+        .min(forecast_end);
+    plot::forecast(
+        files,
+        path,
+        f,
+        &Marks {
+            measured: (t, data),
+            truth: None,
+            horizon: (
+                headline.lead.map(|l| f.window_end + l),
+                "horizon: the members' median expected to leave the pendulum by the tolerance",
+            ),
+            on_data: (
+                o.scores
+                    .median_follows_for
+                    .filter(|_| !o.scores.followed_to_data_end)
+                    .map(|l| f.window_end + l),
+                "where the median left the measurements by the tolerance",
+            ),
+            tolerance: o.tolerance,
+            until,
+            title: format!(
+                "{}{}: fit {:.3}..{:.3} s, {} members; horizon {} (median within {:.1} mm){}",
+                job.file
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                if job.settings.in_sample {
+                    " (in sample)"
+                } else {
+                    ""
+                },
+                o.window.0,
+                o.window.1,
+                job.settings.members,
+                describe_headline(&headline),
+                1e3 * o.tolerance,
+                match (o.scores.median_follows_for, o.scores.followed_to_data_end) {
+                    (Some(l), false) => format!("; on the data {l:.2} s"),
+                    (Some(l), true) => format!("; on the data over {l:.2} s"),
+                    (None, _) => String::new(),
+                },
+            ),
+        },
+    )?;
+    Ok(())
+}
+
+/// summary.json: the command, what taught each part and what was scored, the fit, the
+/// scores, the ensemble, every horizon by name and the exponent.
+fn summary_json(
+    job: &ForecastJob,
+    command: &str,
+    o: &crate::forecast::outcome::Outcome,
+    provenance: serde_json::Value,
+    pivot: (f64, f64),
+    t: &[f64],
+    chaos_bound: Option<f64>,
+) -> serde_json::Value {
+    let f = &o.forecast;
+    let headline = f.headline();
+    let settings = &job.settings;
+    let end = t[t.len() - 1];
+    let forecast_end = f.times.last().copied().unwrap_or(end);
+    let (spread_after, spread_lt) = o.after_window(f.spread_horizon);
+    let (data_after, data_lt) = o.after_window(o.data_horizon);
+    // Which error ends the forecast first: the state's uncertainty spread by chaos (the
+    // ensemble), or the model's own (its departure on held-out windows).
+    let model_horizon = f.model_horizon;
+    let dominated_by = match (f.spread_horizon, model_horizon) {
+        (_, None) => "the state's uncertainty (the ensemble's spread)",
+        (None, Some(_)) => "the model's own error (its departure on held-out windows)",
+        (Some(s), Some(m)) if m < s => "the model's own error (its departure on held-out windows)",
+        _ => "the state's uncertainty (the ensemble's spread)",
+    };
+    json!({
+        "command": command,
+        "sample": if job.settings.in_sample { "in sample" } else { "out of sample" },
+        "file": job.file.display().to_string(),
+        "learned_from": provenance,
+        "scored": {
+            "rule": "only rows after the window's end, up to the forecast's end",
+            "rows": o.scores.rows,
+            "from": t.iter().find(|&&x| x > f.window_end + 1e-9),
+            "to": o.scores.last_lead.map(|l| f.window_end + l),
+        },
+        "pivot": [pivot.0, pivot.1],
+        "parameters": crate::params::to_json(&o.fit.params),
+        "fit": fit_json(&o.fit),
+        "verdict": o.verdict,
+        "scores": o.scores,
+        "model_error": f.model_error,
+        "ensemble": {
+            "members": settings.members, "seed": settings.seed, "clamped_negative_damping": f.clamped,
+            "tracking_error": o.tracking_error,
+            "tracking_error_from": if settings.tracking_error.is_some() { "the tracking error given" } else { "the fit's residuals" },
+            "backend": o.fit.backend, "precision": job.precision.name(),
+            "step": f.dt, "end": forecast_end, "data_end": end,
+        },
+        "horizon": {
+            "headline": headline,
+            "headline_rule": "the lead after the window's end at which the members' median is expected to leave the pendulum by more than the tolerance: each member is one pendulum the data allow (the model's own error added, each member its share), and the lead at which it first lies farther than the tolerance from the median is one draw; the median of the draws, with their quartiles",
+            "chaos_bound": chaos_bound,
+            "chaos_bound_rule": "(1/lambda) ln(tolerance / tracking error), lambda the FTLE along the fitted orbit over the forecast: how long chaos lets an error of the tracking's size stay within the tolerance, with a perfect model",
+            "median_on_the_data": o.scores.median_follows_for,
+            "median_on_the_data_is_lower_bound": o.scores.followed_to_data_end,
+            "tolerance": o.tolerance,
+            "spread": f.spread_horizon, "spread_after_window": spread_after,
+            "spread_lyapunov_times": spread_lt,
+            "data": o.data_horizon, "data_after_window": data_after, "data_lyapunov_times": data_lt,
+            "data_run": o.run,
+            "data_rule": "the first row after the window from which a measured coordinate lies outside its 90 % band (model and tracking error) for `data_run` rows in a row",
+            "data_coverage_before_spread_horizon": o.data_coverage,
+            "model_error": model_horizon,
+            "dominated_by": dominated_by,
+        },
+        "lyapunov": {
+            "exponent": f.lyapunov, "time": (f.lyapunov > 0.0).then(|| 1.0 / f.lyapunov),
+            "over": [f.window_end, end],
+            "along": "the fitted orbit: ln of the tangent propagator's largest singular value over the time",
+        },
+        // The lab report's comparison, for the lab's apparatus only.
+        "report": (job.params.preset == Some(crate::params::Preset::Lab)).then_some(
+            "the lab report's simulation, started at 0.8 s, agreed with the measurement until about 2 s"
+        ),
     })
 }
 

@@ -39,7 +39,10 @@ pub struct Refined {
 /// markers' arcs off the model (in the data's lengths).
 #[derive(Clone, Copy, Debug)]
 pub struct Refinement {
+    /// The pieces run on, and of how many the recording holds (a long recording's pieces
+    /// are thinned to [`MOST_PIECES`], evenly).
     pub pieces: usize,
+    pub of: usize,
     pub rejected: usize,
     pub rms: [f64; 2],
 }
@@ -158,6 +161,21 @@ fn linearise(
     (r, s_jac, m_jac)
 }
 
+/// The most pieces the refinement runs on: each costs its rows' integration at every
+/// iteration, so a recording of 10^6 rows would take an hour; 256 pieces (a quarter of an
+/// hour of a slow pendulum's motion times, 15 s of the shared high-speed film's) pin the six
+/// moments to parts in a thousand, and the moments' errors are measured on the pieces run.
+pub const MOST_PIECES: usize = 256;
+
+/// At most `most` of `pieces`, evenly spread over them (all where they are fewer).
+fn thinned(pieces: Vec<Range<usize>>, most: usize) -> Vec<Range<usize>> {
+    let n = pieces.len();
+    if n <= most {
+        return pieces;
+    }
+    (0..most).map(|k| pieces[k * n / most].clone()).collect()
+}
+
 /// Cuts `stretches` (ranges of rows) into pieces about the motion's own time long where
 /// each lies (1/RMS of the upper arm's rate over it), of at least [`PIECE_ROWS`] rows.
 fn pieces(motion: &Motion, stretches: &[Range<usize>]) -> Vec<Range<usize>> {
@@ -190,6 +208,8 @@ fn pieces(motion: &Motion, stretches: &[Range<usize>]) -> Vec<Range<usize>> {
 /// or the fit ends on moments no real pendulum has.
 pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> Option<Refined> {
     let mut pieces = pieces(motion, stretches);
+    let of = pieces.len();
+    pieces = thinned(pieces, MOST_PIECES);
     if pieces.len() < 4 {
         return None;
     }
@@ -300,6 +320,7 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
         covariance,
         refinement: Refinement {
             pieces: pieces.len(),
+            of,
             rejected,
             rms: arcs.map(|s| (s / n).sqrt()),
         },
