@@ -280,6 +280,16 @@ fn a_film_is_none_of_its_runs_frames() {
             };
             c.args(["--backend", "cpu"]);
         };
+        // Before the run has made its folder, a way round through `..` is its first frame
+        // all the same: seen as the path the run will make.
+        let round = format!("{folder}/../{folder}/frame_0001.png");
+        let mut c = chaoscope_in(dir.path());
+        c.args(&words).arg(flag("film", &round));
+        made(&mut c);
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{command} {round}: {err}");
+        assert!(err.contains("--film"), "{command} {round}: {err}");
         let mut c = chaoscope_in(dir.path());
         c.args(&words).arg(flag("film", "film.mp4"));
         made(&mut c);

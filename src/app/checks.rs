@@ -31,19 +31,31 @@ pub fn check_output(field: &'static str, path: &Path, ext: &str) -> Result<()> {
     check_writable(field, path)
 }
 
-/// The file `path` names, for comparing names: links and `..` resolved where the file or its
-/// folder exists, else the path made absolute.
+/// The file `path` names, for comparing names: links and `..` resolved as far as the path
+/// exists, the rest resolved lexically (as the run will make it).
 fn identity(path: &Path) -> std::path::PathBuf {
     if let Ok(p) = path.canonicalize() {
         return p;
     }
+    // Component by component: what exists through its links, the rest (a folder the run has
+    // not made yet, which holds no links) lexically, so `z/../z/f` is `z/f` before `z` is.
     let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
-    match (absolute.parent(), absolute.file_name()) {
-        (Some(dir), Some(name)) => dir
-            .canonicalize()
-            .map_or(absolute.clone(), |d| d.join(name)),
-        _ => absolute,
+    let mut out = std::path::PathBuf::new();
+    for c in absolute.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            c => {
+                out.push(c);
+                if let Ok(real) = out.canonicalize() {
+                    out = real;
+                }
+            }
+        }
     }
+    out
 }
 
 /// No two of a run's `outputs`, and no output and one of its `inputs`, are one file (by

@@ -104,69 +104,16 @@ pub fn run(
     command: String,
     monitor: &Monitor,
 ) -> Result<FitSummary> {
-    if let Some(window) = job.window {
-        check_within("window", window, 0.01, 60.0)?;
-    }
-    if let Some(tolerance) = job.tolerance {
-        check_within("tolerance", tolerance, 1e-6, 1e3)?;
-    }
-    check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
-    check_count("candidates", job.candidates as u64, 64, 4_000_000)?;
-    check_count(
-        "held_out",
-        job.held_out as u64,
-        0,
-        crate::forecast::outcome::MOST_HELD_OUT as u64,
-    )?;
-    check_within("lead", job.lead, 0.05, 60.0)?;
-    super::checks::check_damping_not_given(&job.params)?;
-    super::checks::check_units(&job.units)?;
-    if job.start.is_some_and(|s| !s.is_finite()) {
-        return Err(Error::invalid("start", "must be a finite time (s)"));
-    }
-    super::checks::check_directory(
-        "output",
-        &job.output,
-        &FILES,
-        &[],
-        &super::checks::tracked_inputs(&job.file, &job.params),
-    )?;
-    let mut read = read_frames(&job.file, &job.units)?;
-    if let Some(until) = job.until {
-        let first = read[0].t;
-        read.retain(|f| f.t <= until + 1e-9);
-        if read.len() < 3 {
-            return Err(Error::invalid(
-                "until",
-                format!(
-                    "{until} s leaves {} row(s) of the file (its first at {first} s): a fit needs three at least",
-                    read.len()
-                ),
-            ));
-        }
-    }
+    check_job(job)?;
+    let read = read_rows(job)?;
     let t: Vec<f64> = read.iter().map(|f| f.t).collect();
-    // The fit starts at a data row with a neighbour on each side (its velocities are central
-    // differences); a start outside them was moved to the nearest silently.
-    let (first, last) = (t[1], t[t.len() - 2]);
-    if let Some(start) = job.start
-        && !(first..=last).contains(&start)
-    {
-        return Err(Error::invalid(
-            "start",
-            format!(
-                "must lie within the data's times with a row either side, {first}..{last} s (got {start})"
-            ),
-        ));
-    }
-
     let tracked = tracked_model(&read, &job.params, &job.units)?;
     let frames = &tracked.frames;
     let start = job.start.unwrap_or_else(|| tracked.default_start());
     let window = job.window.unwrap_or_else(|| tracked.default_window());
     let tolerance = job.tolerance.unwrap_or_else(|| tracked.default_tolerance());
     let Tracked {
-        pivot,
+        ref pivot,
         l1,
         l2,
         angles: ref angle,
@@ -224,53 +171,7 @@ pub fn run(
     let fit = fit_model(frames, (pivot.x, pivot.y), angle, &spec, engine, monitor)?;
     let verdict = Verdict::judge(fit.rms, &t, measured, params.l1 + params.l2);
     notices.push(verdict.describe());
-    // The calibration a forecast of another launch carries (crate::forecast::calibrate).
-    let calibration = match job.held_out {
-        0 => None,
-        n => {
-            let rows = crate::fit::window::TrackRows {
-                t: &t,
-                data: measured,
-                angles: angle,
-            };
-            let asked = crate::forecast::calibrate::Asked {
-                file: job.file.display().to_string(),
-                window,
-                held_out: n,
-                lead: job.lead,
-                candidates: job.candidates,
-                pixels_per_metre: tracked.scale_from_motion,
-                pivot: (pivot.x, pivot.y),
-                moment_covariance: match (source, identified) {
-                    (ModelSource::Identified, Ok(id)) => Some(&id.covariance),
-                    _ => None,
-                },
-            };
-            let made =
-                crate::forecast::calibrate::calibrate(&rows, &params, &asked, engine, monitor)?;
-            if made.is_none() {
-                notices.push(format!(
-                    "no calibration: none of {n} held-out stretches of {window:.3} s with {:.2} s after them fitted and followed its data (a recording too short?)",
-                    job.lead
-                ));
-            }
-            made
-        }
-    };
-    if let Some(c) = &calibration {
-        let e = &c.model_error;
-        notices.push(format!(
-            "calibration for forecasts (model.toml): {} held-out stretches of {:.3} s followed ({} did not), tracking error {:.3} mm; the model's own 90 % lag at leads {:.2} / {:.2} s: {:.1} / {:.1} ms",
-            e.windows.len(),
-            window,
-            e.unfollowed,
-            1e3 * c.tracking_error,
-            e.step,
-            e.step * e.model_lag90.len() as f64,
-            1e3 * e.model_lag90[0],
-            1e3 * e.model_lag90[e.model_lag90.len() - 1],
-        ));
-    }
+    let calibration = calibration_of(job, &tracked, window, engine, monitor, &mut notices)?;
 
     // Plots, derived quantities and summary, written as a set.
     let out = &job.output;
@@ -433,6 +334,139 @@ pub fn run(
         files: FILES.iter().map(|f| out.join(f)).collect(),
         notices,
     })
+}
+
+/// The job's values, its inputs and its output folder, before any work.
+fn check_job(job: &FitJob) -> Result<()> {
+    if let Some(window) = job.window {
+        check_within("window", window, 0.01, 60.0)?;
+    }
+    if let Some(tolerance) = job.tolerance {
+        check_within("tolerance", tolerance, 1e-6, 1e3)?;
+    }
+    check_within("velocity_error", job.velocity_error, 0.0, 10.0)?;
+    check_count("candidates", job.candidates as u64, 64, 4_000_000)?;
+    check_count(
+        "held_out",
+        job.held_out as u64,
+        0,
+        crate::forecast::outcome::MOST_HELD_OUT as u64,
+    )?;
+    check_within("lead", job.lead, 0.05, 60.0)?;
+    super::checks::check_damping_not_given(&job.params)?;
+    super::checks::check_units(&job.units)?;
+    if job.start.is_some_and(|s| !s.is_finite()) {
+        return Err(Error::invalid("start", "must be a finite time (s)"));
+    }
+    super::checks::check_directory(
+        "output",
+        &job.output,
+        &FILES,
+        &[],
+        &super::checks::tracked_inputs(&job.file, &job.params),
+    )?;
+    Ok(())
+}
+
+/// The file's rows (up to `until`, where given), with the start within them.
+fn read_rows(job: &FitJob) -> Result<Vec<crate::fit::TrackedRow>> {
+    let mut read = read_frames(&job.file, &job.units)?;
+    if let Some(until) = job.until {
+        let first = read[0].t;
+        read.retain(|f| f.t <= until + 1e-9);
+        if read.len() < 3 {
+            return Err(Error::invalid(
+                "until",
+                format!(
+                    "{until} s leaves {} row(s) of the file (its first at {first} s): a fit needs three at least",
+                    read.len()
+                ),
+            ));
+        }
+    }
+    let t: Vec<f64> = read.iter().map(|f| f.t).collect();
+    // The fit starts at a data row with a neighbour on each side (its velocities are central
+    // differences); a start outside them was moved to the nearest silently.
+    let (first, last) = (t[1], t[t.len() - 2]);
+    if let Some(start) = job.start
+        && !(first..=last).contains(&start)
+    {
+        return Err(Error::invalid(
+            "start",
+            format!(
+                "must lie within the data's times with a row either side, {first}..{last} s (got {start})"
+            ),
+        ));
+    }
+
+    Ok(read)
+}
+
+/// The calibration a forecast of another launch carries ([`crate::forecast::calibrate`]),
+/// with its notices.
+fn calibration_of(
+    job: &FitJob,
+    tracked: &Tracked,
+    window: f64,
+    engine: &Engine,
+    monitor: &Monitor,
+    notices: &mut Vec<String>,
+) -> Result<Option<crate::forecast::calibration::Calibration>> {
+    let (pivot, params, source, identified) = (
+        &tracked.pivot,
+        tracked.params,
+        &tracked.source,
+        &tracked.identified,
+    );
+    let (t, measured, angle) = (&tracked.t, &tracked.measured, &tracked.angles);
+    let calibration = match job.held_out {
+        0 => None,
+        n => {
+            let rows = crate::fit::window::TrackRows {
+                t,
+                data: measured,
+                angles: angle,
+            };
+            let asked = crate::forecast::calibrate::Asked {
+                file: job.file.display().to_string(),
+                window,
+                held_out: n,
+                lead: job.lead,
+                candidates: job.candidates,
+                pixels_per_metre: tracked.scale_from_motion,
+                pivot: (pivot.x, pivot.y),
+                moment_covariance: match (source, identified) {
+                    (ModelSource::Identified, Ok(id)) => Some(&id.covariance),
+                    _ => None,
+                },
+            };
+            let made =
+                crate::forecast::calibrate::calibrate(&rows, &params, &asked, engine, monitor)?;
+            if made.is_none() {
+                notices.push(format!(
+                    "no calibration: none of {n} held-out stretches of {window:.3} s with {:.2} s after them fitted and followed its data (a recording too short?)",
+                    job.lead
+                ));
+            }
+            made
+        }
+    };
+    if let Some(c) = &calibration {
+        let e = &c.model_error;
+        notices.push(format!(
+            "calibration for forecasts (model.toml): {} held-out stretches of {:.3} s followed ({} did not), tracking error {:.3} mm; the model's own 90 % lag at leads {:.2} / {:.2} s: {:.1} / {:.1} ms",
+            e.windows.len(),
+            window,
+            e.unfollowed,
+            1e3 * c.tracking_error,
+            e.step,
+            e.step * e.model_lag90.len() as f64,
+            1e3 * e.model_lag90[0],
+            1e3 * e.model_lag90[e.model_lag90.len() - 1],
+        ));
+    }
+
+    Ok(calibration)
 }
 
 /// One line on what the motion says of the pendulum.

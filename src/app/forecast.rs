@@ -16,7 +16,7 @@ use crate::forecast::outcome::{
     ForecastSettings, Learning, fit_and_forecast, fit_json, learned_rows,
 };
 use crate::forecast::plot::{self, Marks};
-use crate::forecast::{self, Forecast, Headline, QUANTILES};
+use crate::forecast::{self, Headline};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::Outputs;
@@ -140,7 +140,7 @@ pub fn run(
     let out = &job.output;
     let mut files = Outputs::new();
     draw(&mut files, &out.join("forecast.png"), job, &o, (&t, &data))?;
-    write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
+    crate::forecast::files::write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
     let summary = summary_json(
         job,
         &command,
@@ -275,7 +275,7 @@ fn learned(job: &ForecastJob, read: &[crate::fit::TrackedRow]) -> Result<Learned
             "the calibration's length",
         ),
         (None, None) => (
-            own_window(read)?,
+            crate::forecast::outcome::own_window(read)?,
             "four of the motion's own times, over the window's own rows",
         ),
     };
@@ -497,53 +497,6 @@ pub fn describe_headline(h: &Headline) -> String {
     )
 }
 
-/// The window when none is given and no calibration says its length: from the second row,
-/// four of the motion's own times (1/RMS of the upper arm's angular velocity) and at least
-/// five rows, the motion measured over the window's own rows: the rows are taken one by one
-/// until they span four of the motion time they show.
-fn own_window(read: &[crate::fit::TrackedRow]) -> Result<(f64, f64)> {
-    use crate::fit::window::{WINDOW_ROWS, WINDOW_TIMES};
-    let n = read.len();
-    let t: Vec<f64> = read.iter().map(|f| f.t).collect();
-    let step = forecast::cadence(&t);
-    // The window's length from the first k rows, and whether those rows span it.
-    let length = |k: usize| -> Option<f64> {
-        let pivot = crate::fit::fit_pivot(&read[..k]).ok()?;
-        let angles = crate::fit::angles(&read[..k], (pivot.x, pivot.y));
-        let rows = TrackRows {
-            t: &t[..k],
-            data: &[],
-            angles: &angles,
-        };
-        let w = (WINDOW_TIMES * rows.motion_time()).max(WINDOW_ROWS as f64 * step);
-        w.is_finite().then_some(w)
-    };
-    let spans = |k: usize| length(k).is_some_and(|w| t[1] + w <= t[k - 1] + 1e-9);
-    // Doubling to rows that span their window, then the fewest that do.
-    let mut k = (WINDOW_ROWS + 2).min(n);
-    while !spans(k) {
-        if k == n {
-            return Err(Error::invalid(
-                "window",
-                format!(
-                    "the file's {n} rows do not span four of the motion's own times: give the window, or a calibration ([[params]] written by `fit`) and [[ahead]]"
-                ),
-            ));
-        }
-        k = (2 * k).min(n);
-    }
-    let (mut lo, mut hi) = (k / 2, k);
-    while hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        match spans(mid) {
-            true => hi = mid,
-            false => lo = mid,
-        }
-    }
-    let w = length(hi).expect("spans");
-    Ok((t[1], t[1] + w))
-}
-
 /// Which rows (file, times) taught each part of the forecast, and from where.
 fn provenance(
     job: &ForecastJob,
@@ -622,45 +575,5 @@ fn provenance(
 pub fn fmt_time(t: Option<f64>) -> String {
     t.map_or("never (to the data's end)".into(), |t| {
         format!("at {t:.2} s")
-    })
-}
-
-/// The bands as CSV: per coordinate the model's quantiles and a measurement's, the lower
-/// bob's spread and the FTLE.
-fn write_bands(
-    files: &mut Outputs,
-    path: &std::path::Path,
-    f: &Forecast,
-    command: &str,
-) -> Result<()> {
-    files.write(path, |w| {
-        use std::io::Write;
-        writeln!(w, "# {command}")?;
-        writeln!(
-            w,
-            "# quantiles {QUANTILES:?} of the members' positions (m) and of a measurement's (obs: with the tracking error); spread_lower (m): RMS distance of the lower bob from the members' mean; ftle (1/s) along the fitted orbit from the window's end"
-        )?;
-        let mut header = vec!["t".to_string()];
-        for c in ["x1", "y1", "x2", "y2"] {
-            for kind in ["", "obs_"] {
-                for q in ["p05", "p25", "median", "p75", "p95"] {
-                    header.push(format!("{c}_{kind}{q}"));
-                }
-            }
-        }
-        header.extend(["spread_lower".into(), "ftle".into()]);
-        writeln!(w, "{}", header.join(","))?;
-        for (j, &t) in f.times.iter().enumerate() {
-            let mut row = vec![format!("{t}")];
-            for c in 0..4 {
-                for band in [&f.model[j][c], &f.observed[j][c]] {
-                    row.extend(band.iter().map(|v| format!("{v}")));
-                }
-            }
-            row.push(format!("{}", f.spread[j]));
-            row.push(format!("{}", f.ftle[j]));
-            writeln!(w, "{}", row.join(","))?;
-        }
-        Ok(())
     })
 }

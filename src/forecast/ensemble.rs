@@ -3,16 +3,17 @@
 //! at every time (the model's, and a measurement's with the tracking error added), the
 //! horizons, and the finite-time Lyapunov exponent along the fitted orbit.
 
-use nalgebra::{Matrix4, SymmetricEigen};
+use nalgebra::Matrix4;
 use rand::SeedableRng;
-use rand_distr::{ChiSquared, Distribution, StandardNormal};
+use rand_distr::{Distribution, StandardNormal};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
+pub use super::members::{Members, draw_members, effective_freedom};
 use crate::cpu;
 use crate::engine::Engine;
 use crate::error::Result;
-use crate::fit::window::{PARAMETERS, STEPS_PER_SECOND, WindowFit};
+use crate::fit::window::{STEPS_PER_SECOND, WindowFit};
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::spec::{EnsembleSpec, Keep};
@@ -246,81 +247,6 @@ pub struct Slope {
     /// slope / (-1/lambda), and its error from both (relative errors in quadrature).
     pub ratio: f64,
     pub ratio_error: f64,
-}
-
-/// A forecast's members: where each starts, its joint damping and its pivot.
-pub struct Members {
-    pub starts: Vec<State>,
-    pub damping: Vec<(f64, f64)>,
-    /// Where each puts the pivot in the data's frame (m): its positions move by it.
-    pub pivots: Vec<(f64, f64)>,
-    /// Members drawn with a negative damping, which took zero instead.
-    pub clamped: usize,
-}
-
-/// Draws `n` members (state, joint damping and pivot) from the fit's distribution: the
-/// multivariate t the covariance and the residuals' degrees of freedom give (the covariance's
-/// scale is itself estimated from the window's residuals, so the fitted values are t
-/// distributed about the truth, not normal; a few rows at 3 Hz leave 14 degrees of freedom,
-/// whose 90 % interval is 7 % wider than the normal's). Correlated tracking errors carry
-/// less information than their count: the degrees of freedom are divided by the same
-/// inflation that widened the covariance. No measurement allows a joint that pushes: a damping drawn below zero takes zero, and the
-/// member's other parameters move with it as the fit's covariance says they go together
-/// (by their regression on the damping, Sigma_od Sigma_dd^-1), so that its state is one the
-/// data allow with that damping (clamping alone would keep a state that only suits a
-/// pushing joint). The members that did are counted. The scale and the lower arm are drawn
-/// with the rest (their correlations widen the others' spread) but every member keeps the
-/// fitted ones: the engine integrates members under one gravity and one pair of arms.
-pub fn draw_members(fit: &WindowFit, n: usize, seed: u64) -> Members {
-    let sigma = &fit.covariance;
-    let eigen = SymmetricEigen::new(sigma.clone());
-    // Sigma = V diag(l) V^T: a draw is the fit plus V sqrt(l) z (l < 0 from rounding: 0).
-    let root = &eigen.eigenvectors
-        * nalgebra::DMatrix::from_diagonal(&eigen.eigenvalues.map(|l| l.max(0.0).sqrt()));
-    const DAMPING: [usize; 2] = [4, 5];
-    let dd = nalgebra::Matrix2::from_fn(|i, j| sigma[(DAMPING[i], DAMPING[j])]);
-    let regression = dd.try_inverse().map(|inverse| {
-        nalgebra::DMatrix::from_fn(PARAMETERS, 2, |i, j| sigma[(i, DAMPING[j])]) * inverse
-    });
-    let fitted = nalgebra::DVector::from_row_slice(&fit.values);
-    let freedom = effective_freedom(fit);
-    let scatter = ChiSquared::new(freedom).expect("at least 3 degrees of freedom");
-    let mut rng = Pcg64::seed_from_u64(seed);
-    let mut members = Members {
-        starts: Vec::with_capacity(n),
-        damping: Vec::with_capacity(n),
-        pivots: Vec::with_capacity(n),
-        clamped: 0,
-    };
-    for _ in 0..n {
-        let z = nalgebra::DVector::from_fn(PARAMETERS, |_, _| StandardNormal.sample(&mut rng));
-        // A t draw: a normal over the root of a chi-square over its degrees of freedom.
-        let widen = (freedom / scatter.sample(&mut rng)).sqrt();
-        let mut v = &fitted + &root * z * widen;
-        let lift = nalgebra::Vector2::new((-v[4]).max(0.0), (-v[5]).max(0.0));
-        if lift != nalgebra::Vector2::zeros() {
-            members.clamped += 1;
-            if let Some(k) = &regression {
-                v += k * lift;
-            }
-            // Exactly zero where the regression left a rounding error below it.
-            (v[4], v[5]) = (v[4].max(0.0), v[5].max(0.0));
-        }
-        members
-            .starts
-            .push(State::from_array([v[0], v[1], v[2], v[3]]));
-        members.damping.push((v[4], v[5]));
-        members.pivots.push((v[6], v[7]));
-    }
-    members
-}
-
-/// The degrees of freedom the fit's covariance carries: the residuals' over the inflation
-/// that their correlation gave it, at least 3: the t's variance is infinite below 2, and a
-/// thinner fit than that is too thin to draw members from at all (its heavy tails would
-/// fill the bands with members that no window could have fitted).
-pub fn effective_freedom(fit: &WindowFit) -> f64 {
-    (fit.dof as f64 / fit.correlation.inflation.max(1.0)).max(3.0)
 }
 
 /// The bands' times: every [`BAND_STEP`] from `t0` to `end`, the data's times between, and
@@ -620,125 +546,6 @@ fn ftle_along(fit: &WindowFit, from: f64, end: f64, dt: f64, times: &[f64]) -> (
         })
         .collect();
     (ftle, logs[n] / (end - from))
-}
-
-/// The first data row (its time) after the window from which a measured coordinate lies
-/// outside its measurement band at `run` rows in a row: a single exit is what a calibrated
-/// 90 % band shows one time in ten. `run` is the least for which a calibrated band would
-/// show such a run by chance with probability under 5 % over the forecast's rows.
-pub fn data_horizon(
-    forecast: &Forecast,
-    t: &[f64],
-    data: &[[f64; 4]],
-) -> (Option<f64>, usize, Option<f64>) {
-    let rows: Vec<usize> = (0..t.len())
-        .filter(|&i| t[i] > forecast.window_end + 1e-9 && forecast.index(t[i]).is_some())
-        .collect();
-    let chances = 4.0 * rows.len().max(1) as f64;
-    let run = (1..)
-        .find(|&k| chances * 0.1f64.powi(k) < 0.05)
-        .unwrap_or(1) as usize;
-    let out = |i: usize, c: usize| {
-        let q = forecast.observed[forecast.index(t[i]).expect("a band time")][c];
-        !(q[0]..=q[4]).contains(&data[i][c])
-    };
-    let horizon = (0..rows.len()).find_map(|r| {
-        (0..4)
-            .any(|c| r + run <= rows.len() && (r..r + run).all(|s| out(rows[s], c)))
-            .then_some(t[rows[r]])
-    });
-    // How often the measurements lie inside the band before the spread's horizon.
-    let until = forecast.spread_horizon.unwrap_or(f64::INFINITY);
-    let (mut inside, mut all) = (0usize, 0usize);
-    for &i in rows.iter().filter(|&&i| t[i] < until) {
-        for c in 0..4 {
-            all += 1;
-            inside += !out(i, c) as usize;
-        }
-    }
-    (horizon, run, (all > 0).then(|| inside as f64 / all as f64))
-}
-
-/// How the forecast did against the data after its window: how long the members' median
-/// follows the lower mass within `within` (m, the distance), and the share of the lower
-/// mass's coordinates inside their measurement's 90 % band, over all the rows scored and by
-/// lead. Only rows after the window are scored; a median that is not a number never follows.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Scores {
-    pub within: f64,
-    /// Seconds after the window's end until the median first strays past `within`; where it
-    /// never strays, the last row's lead and `followed_to_data_end` (a lower bound). None
-    /// where no row lies after the window.
-    pub median_follows_for: Option<f64>,
-    pub followed_to_data_end: bool,
-    /// Rows scored, and the lead (s) of the last.
-    pub rows: usize,
-    pub last_lead: Option<f64>,
-    pub lower_in_band: Option<f64>,
-    /// The lower mass's coordinates inside their 90 % band by lead: each bin holds the rows
-    /// whose lead is at most its `to` (s) and more than the bin before's.
-    pub by_lead: Vec<LeadCoverage>,
-}
-
-/// One lead bin of [`Scores::by_lead`].
-#[derive(Clone, Copy, Debug, serde::Serialize)]
-pub struct LeadCoverage {
-    pub to: f64,
-    pub coordinates: usize,
-    pub inside: Option<f64>,
-}
-
-/// The lead bins' upper ends (s) of [`Scores::by_lead`].
-pub const SCORED_LEADS: [f64; 6] = [0.05, 0.1, 0.2, 0.3, 0.5, 1.0];
-
-pub fn scores(forecast: &Forecast, t: &[f64], data: &[[f64; 4]], within: f64) -> Scores {
-    let mut follows_for = None;
-    let (mut inside, mut all, mut rows, mut last_lead) = (0usize, 0usize, 0usize, None);
-    let mut by_lead: Vec<(usize, usize)> = vec![(0, 0); SCORED_LEADS.len()];
-    for (i, &ti) in t.iter().enumerate() {
-        if ti <= forecast.window_end + 1e-9 {
-            continue;
-        }
-        let Some(k) = forecast.index(ti) else {
-            continue;
-        };
-        let lead = ti - forecast.window_end;
-        rows += 1;
-        last_lead = Some(lead);
-        let (m, q) = (&forecast.model[k], &forecast.observed[k]);
-        let off = (data[i][2] - m[2][2]).hypot(data[i][3] - m[3][2]);
-        // A median that is not a number never follows.
-        if follows_for.is_none() && (off.is_nan() || off > within) {
-            follows_for = Some(lead);
-        }
-        let bin = SCORED_LEADS.iter().position(|&to| lead <= to + 1e-9);
-        for c in 2..4 {
-            let hit = (q[c][0]..=q[c][4]).contains(&data[i][c]) as usize;
-            all += 1;
-            inside += hit;
-            if let Some(b) = bin {
-                by_lead[b].0 += 1;
-                by_lead[b].1 += hit;
-            }
-        }
-    }
-    Scores {
-        within,
-        median_follows_for: follows_for.or(last_lead),
-        followed_to_data_end: follows_for.is_none() && last_lead.is_some(),
-        rows,
-        last_lead,
-        lower_in_band: (all > 0).then(|| inside as f64 / all as f64),
-        by_lead: SCORED_LEADS
-            .iter()
-            .zip(by_lead)
-            .map(|(&to, (n, hit))| LeadCoverage {
-                to,
-                coordinates: n,
-                inside: (n > 0).then(|| hit as f64 / n as f64),
-            })
-            .collect(),
-    }
 }
 
 /// Members the position budget allows over `times` band times.

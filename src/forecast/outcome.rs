@@ -5,11 +5,11 @@
 use serde_json::json;
 
 use super::calibration::Calibration;
-use super::ensemble::{self as forecast, Forecast, ForecastSpec, band_times, most_members};
 use crate::engine::Engine;
 use crate::error::{Error, Result, check_count, check_within};
 use crate::fit::verdict::Verdict;
 use crate::fit::window::{FITTED, TrackRows, WindowFit, fit_window};
+use crate::forecast::{self, Forecast, ForecastSpec, band_times, most_members};
 use crate::model::Params;
 use crate::monitor::Monitor;
 
@@ -239,6 +239,53 @@ pub fn fit_and_forecast(
         run,
         data_coverage,
     })
+}
+
+/// The window when none is given and no calibration says its length: from the second row,
+/// four of the motion's own times (1/RMS of the upper arm's angular velocity) and at least
+/// five rows, the motion measured over the window's own rows: the rows are taken one by one
+/// until they span four of the motion time they show.
+pub fn own_window(read: &[crate::fit::TrackedRow]) -> Result<(f64, f64)> {
+    use crate::fit::window::{WINDOW_ROWS, WINDOW_TIMES};
+    let n = read.len();
+    let t: Vec<f64> = read.iter().map(|f| f.t).collect();
+    let step = super::ensemble::cadence(&t);
+    // The window's length from the first k rows, and whether those rows span it.
+    let length = |k: usize| -> Option<f64> {
+        let pivot = crate::fit::fit_pivot(&read[..k]).ok()?;
+        let angles = crate::fit::angles(&read[..k], (pivot.x, pivot.y));
+        let rows = TrackRows {
+            t: &t[..k],
+            data: &[],
+            angles: &angles,
+        };
+        let w = (WINDOW_TIMES * rows.motion_time()).max(WINDOW_ROWS as f64 * step);
+        w.is_finite().then_some(w)
+    };
+    let spans = |k: usize| length(k).is_some_and(|w| t[1] + w <= t[k - 1] + 1e-9);
+    // Doubling to rows that span their window, then the fewest that do.
+    let mut k = (WINDOW_ROWS + 2).min(n);
+    while !spans(k) {
+        if k == n {
+            return Err(Error::invalid(
+                "window",
+                format!(
+                    "the file's {n} rows do not span four of the motion's own times: give the window, or a calibration ([[params]] written by `fit`) and [[ahead]]"
+                ),
+            ));
+        }
+        k = (2 * k).min(n);
+    }
+    let (mut lo, mut hi) = (k / 2, k);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        match spans(mid) {
+            true => hi = mid,
+            false => lo = mid,
+        }
+    }
+    let w = length(hi).expect("spans");
+    Ok((t[1], t[1] + w))
 }
 
 /// The fit as JSON: values, errors, covariance in [`FITTED`]'s order.
