@@ -453,16 +453,23 @@ fn calibration_of(
     };
     if let Some(c) = &calibration {
         let e = &c.model_error;
+        let factors = match &c.band_factors {
+            Some(b) => format!(
+                "; the bands' factors from {} more forecast and scored: the lower mass's 90 % band x{:.2} at leads to {:.2} s, x{:.2} to {:.2} s",
+                b.windows,
+                b.f90[0][1],
+                b.step,
+                b.f90[b.f90.len() - 1][1],
+                b.step * b.f90.len() as f64
+            ),
+            None => "; too few stretches for the bands' factors".into(),
+        };
         notices.push(format!(
-            "calibration for forecasts (model.toml): {} held-out stretches of {:.3} s followed ({} did not), tracking error {:.3} mm; the model's own 90 % lag at leads {:.2} / {:.2} s: {:.1} / {:.1} ms",
+            "calibration for forecasts (model.toml): the model's own error on {} held-out stretches of {:.3} s ({} did not follow), tracking error {:.3} mm{factors}",
             e.windows.len(),
             window,
             e.unfollowed,
             1e3 * c.tracking_error,
-            e.step,
-            e.step * e.model_lag90.len() as f64,
-            1e3 * e.model_lag90[0],
-            1e3 * e.model_lag90[e.model_lag90.len() - 1],
         ));
     }
 
