@@ -2,7 +2,7 @@
 //! lie in the film, and which film they came from) and by the tests (the measured rows):
 //! its one owner. The comments above the header carry the placement and the film as
 //! `# key = value` lines (numbers, then an optional remark in parentheses); `fit` and
-//! `forecast` read the rows as any positions file (`crate::fit::data`), skipping them.
+//! `forecast` read the rows as any positions file (the fit room's reader), skipping them.
 //!
 //! ```text
 //! # chaoscope track film.mp4 --l1 0.3
