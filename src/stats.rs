@@ -36,6 +36,17 @@ pub fn quantiles(v: &mut [f32]) -> [f64; 5] {
 
 /// The median of `v` by the nearest rank (the upper middle of an even count: the value
 /// at rank n / 2), `v` reordered; None for no values.
+/// The nearest-rank `q` quantile of the finite values of `v` (the ceil(q n)-th smallest):
+/// None where none is finite.
+pub fn quantile(mut v: Vec<f64>, q: f64) -> Option<f64> {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return None;
+    }
+    let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
+    Some(*v.select_nth_unstable_by(k, f64::total_cmp).1)
+}
+
 pub fn median(v: &mut [f64]) -> Option<f64> {
     let mid = v.len() / 2;
     (!v.is_empty()).then(|| *v.select_nth_unstable_by(mid, f64::total_cmp).1)

@@ -139,7 +139,13 @@ pub fn run(
         .then(|| (o.tolerance / o.tracking_error).ln() / f.lyapunov);
     let out = &job.output;
     let mut files = Outputs::new();
-    draw(&mut files, &out.join("forecast.png"), job, &o, (&t, &data))?;
+    draw(
+        &mut files,
+        &out.join("forecast.png"),
+        job,
+        (&o, &headline),
+        (&t, &data),
+    )?;
     crate::forecast::files::write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
     let summary = summary_json(
         job,
@@ -148,7 +154,7 @@ pub fn run(
         provenance,
         (pivot.x, pivot.y),
         &t,
-        chaos_bound,
+        (&headline, chaos_bound),
     );
     files.write_json(&out.join("summary.json"), &summary)?;
     if let (Some(video), Some(geometry)) = (&job.video, geometry) {
@@ -157,6 +163,7 @@ pub fn run(
             geometry,
             pivot: (pivot.x, pivot.y),
             outcome: &o,
+            headline,
             tolerance: o.tolerance,
         };
         crate::forecast::overlay::write(
@@ -331,11 +338,10 @@ fn draw(
     files: &mut Outputs,
     path: &std::path::Path,
     job: &ForecastJob,
-    o: &crate::forecast::outcome::Outcome,
+    (o, headline): (&crate::forecast::outcome::Outcome, &Headline),
     (t, data): (&[f64], &[[f64; 4]]),
 ) -> Result<()> {
     let f = &o.forecast;
-    let headline = f.headline();
     let forecast_end = f.times.last().copied().unwrap_or(f.window_end);
     let last_horizon = headline
         .lead
@@ -380,7 +386,7 @@ fn draw(
                 o.window.0,
                 o.window.1,
                 job.settings.members,
-                describe_headline(&headline),
+                describe_headline(headline),
                 1e3 * o.tolerance,
                 match (o.scores.median_follows_for, o.scores.followed_to_data_end) {
                     (Some(l), false) => format!("; on the data {l:.2} s"),
@@ -402,10 +408,9 @@ fn summary_json(
     provenance: serde_json::Value,
     pivot: (f64, f64),
     t: &[f64],
-    chaos_bound: Option<f64>,
+    (headline, chaos_bound): (&Headline, Option<f64>),
 ) -> serde_json::Value {
     let f = &o.forecast;
-    let headline = f.headline();
     let settings = &job.settings;
     let end = t[t.len() - 1];
     let forecast_end = f.times.last().copied().unwrap_or(end);

@@ -171,15 +171,8 @@ pub fn band_factors(
     if windows == 0 {
         return Ok(None);
     }
-    let quantile = |v: &[f64], q: f64| -> Option<f64> {
-        let mut v = v.to_vec();
-        v.retain(|x| x.is_finite());
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
-        Some(v[k].clamp(1.0 / MOST_FACTOR, MOST_FACTOR))
+    let quantile = |v: &[f64], q: f64| {
+        crate::stats::quantile(v.to_vec(), q).map(|f| f.clamp(1.0 / MOST_FACTOR, MOST_FACTOR))
     };
     // The windows are the draws: a quantile of n of them holds a new one with the
     // conformal correction (1 + 1/n).

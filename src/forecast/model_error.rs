@@ -227,14 +227,7 @@ pub fn estimate(
     if windows.is_empty() {
         return Ok(None);
     }
-    let quantile_of = |mut v: Vec<f64>, q: f64| -> f64 {
-        v.retain(|x| x.is_finite());
-        if v.is_empty() {
-            return 0.0;
-        }
-        let k = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1;
-        *v.select_nth_unstable_by(k, f64::total_cmp).1
-    };
+    let quantile_of = |v: Vec<f64>, q: f64| crate::stats::quantile(v, q).unwrap_or(0.0);
     let quantile = |values: &[[f64; 4]], c: usize, q: f64| {
         quantile_of(values.iter().map(|d| d[c]).collect(), q)
     };

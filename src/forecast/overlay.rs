@@ -23,6 +23,8 @@ pub struct Overlay<'a> {
     /// The fitted pivot (m, in the CSV's frame) the forecast's positions are relative to.
     pub pivot: (f64, f64),
     pub outcome: &'a Outcome,
+    /// The forecast's headline horizon ([`crate::forecast::Forecast::headline`]), found once.
+    pub headline: crate::forecast::Headline,
     /// The lower bob's spread (m) that ends the forecast's horizon.
     pub tolerance: f64,
 }
@@ -160,8 +162,7 @@ fn draw(
     // The one horizon, from its moment on: where the members say the median leaves the
     // pendulum by the tolerance; then, where the track shows it did.
     let mut line = 2;
-    let headline = f.headline();
-    if let Some(lead) = headline.lead
+    if let Some(lead) = o.headline.lead
         && t >= f.window_end + lead
     {
         text(
