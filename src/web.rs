@@ -244,7 +244,9 @@ fn divergence_kind(indicator: Indicator, spec: &SiteSpec) -> Value {
         height: 1,
         data: vec![0.0],
     };
-    let floor = measure.default_range(indicator, &lyapunov, &zeros).1;
+    let floor = measure
+        .default_range(indicator, lyapunov.stepping.t_max, &zeros)
+        .1;
     let quantity = indicator.quantity();
     json!({
         "name": indicator.spelled().0,

@@ -366,10 +366,10 @@ fn every_indicator() -> Vec<Indicator> {
                 }
             }
             for given in &asked {
-                let i = chaoscope::spec::IndicatorAsked {
+                let i = chaoscope::measure::IndicatorAsked {
                     options: given,
                     gpu_f32: true,
-                    ..chaoscope::spec::IndicatorAsked::named(name)
+                    ..chaoscope::measure::IndicatorAsked::named(name)
                 }
                 .indicator()
                 .unwrap();

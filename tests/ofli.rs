@@ -96,7 +96,7 @@ fn the_ofli_never_exceeds_the_fli_and_follows_it_in_chaos() {
 #[test]
 fn the_ofli_map_runs_through_every_door_of_the_registry() {
     // Its name, its map on the CPU, its picture's range.
-    let asked = chaoscope::spec::IndicatorAsked::named("ofli");
+    let asked = chaoscope::measure::IndicatorAsked::named("ofli");
     assert_eq!(asked.indicator().unwrap(), Indicator::Ofli);
     assert!(
         chaoscope::spec::MapKind::all()

@@ -53,15 +53,15 @@ fn on_a_regular_orbit_the_rli_scales_with_the_distance_and_in_chaos_it_saturates
 
 #[test]
 fn the_rli_and_its_distance_go_through_every_door() {
-    let asked = chaoscope::spec::IndicatorAsked {
+    let asked = chaoscope::measure::IndicatorAsked {
         options: &[("rli_delta", 1e-6)],
-        ..chaoscope::spec::IndicatorAsked::named("rli")
+        ..chaoscope::measure::IndicatorAsked::named("rli")
     };
     assert_eq!(asked.indicator().unwrap(), Indicator::Rli { delta: 1e-6 });
     // Its defaults: f64's 1e-8, f32's 1e-4 (the least f32 separates from an angle of 3).
-    let f32_gpu = chaoscope::spec::IndicatorAsked {
+    let f32_gpu = chaoscope::measure::IndicatorAsked {
         gpu_f32: true,
-        ..chaoscope::spec::IndicatorAsked::named("rli")
+        ..chaoscope::measure::IndicatorAsked::named("rli")
     };
     assert_eq!(f32_gpu.indicator().unwrap(), Indicator::Rli { delta: 1e-4 });
     assert!(

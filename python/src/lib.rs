@@ -11,11 +11,10 @@ use chaoscope::app::trajectory::TrajectoryJob;
 use chaoscope::cli::command_line;
 use chaoscope::engine::{Backend, MapKernels};
 use chaoscope::field::Field;
+use chaoscope::measure::IndicatorAsked;
 use chaoscope::model::State;
 use chaoscope::render::PictureSpec;
-use chaoscope::spec::{
-    FlipMeasure, FlipSpec, IndicatorAsked, Integrator, LyapunovSpec, MapSpec, Method,
-};
+use chaoscope::spec::{FlipMeasure, FlipSpec, Integrator, LyapunovSpec, MapSpec, Method};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyFileNotFoundError, PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;

@@ -10,8 +10,9 @@ use super::{command_line, json, say};
 use crate::app::boundary::{self, BoundaryClass, BoundaryJob};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
+use crate::measure::IndicatorAsked;
 use crate::monitor::Monitor;
-use crate::spec::{FlipSpec, IndicatorAsked, LyapunovSpec, Precision};
+use crate::spec::{FlipSpec, LyapunovSpec, Precision};
 
 #[derive(Args, Debug, Clone)]
 #[command(mut_arg("t_max", |a| a.default_value("20")))]

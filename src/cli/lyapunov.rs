@@ -11,12 +11,12 @@ use crate::app::MapOutputs;
 use crate::app::lyapunov::{self, LyapunovMapJob, LyapunovPointJob};
 use crate::engine::Backend;
 use crate::error::{Error, Result};
+use crate::measure::IndicatorAsked;
 use crate::model::State;
 use crate::monitor::Monitor;
 use crate::spec::MapSpec;
 use crate::spec::{
-    Grid, Indicator, IndicatorAsked, Integrator, LyapunovSpec, Method, Precision, Range, Stepping,
-    SteppingAsked,
+    Grid, Indicator, Integrator, LyapunovSpec, Method, Precision, Range, Stepping, SteppingAsked,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -82,7 +82,10 @@ pub fn indicator_run(
         m.start("steps", spec.stepping.steps() as u64);
     }
     let mut run = CpuRun {
-        spec,
+        params: spec.params,
+        stepping: spec.stepping,
+        integrator: spec.integrator,
+        renorm_steps: spec.renorm_steps(),
         start,
         sample,
         tick: &tick,
@@ -98,11 +101,11 @@ pub fn indicator_run(
 /// by Gram-Schmidt every `renorm`; the running exponents sampled there (and their sum when
 /// `n` is 4).
 pub fn tangent_sums(run: &mut CpuRun, n: usize) -> Result<Vec<f64>> {
-    let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+    let (p, dt) = (&run.params, run.stepping.dt);
     let mut y = run.start.to_array();
     let mut v = FRAME[..n].to_vec();
     let mut sums = vec![0.0; n];
-    for k in 1..=run.spec.stepping.steps() {
+    for k in 1..=run.stepping.steps() {
         y = step_vectors(p, &y, &mut v, dt);
         if run.renormalise(k) {
             for (sum, l) in sums.iter_mut().zip(gram_schmidt(&mut v)) {
@@ -124,11 +127,11 @@ pub fn tangent_sums(run: &mut CpuRun, n: usize) -> Result<Vec<f64>> {
 /// until it falls below `threshold`: (its log10 at the end, the time it fell below, +inf if
 /// it did not).
 pub fn alignment_run(run: &mut CpuRun, index: Alignment, threshold: f64) -> Result<(f64, f64)> {
-    let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+    let (p, dt) = (&run.params, run.stepping.dt);
     let mut y = run.start.to_array();
     let mut v = FRAME[..index.vectors() as usize].to_vec();
     let mut log = 0.0;
-    for k in 1..=run.spec.stepping.steps() {
+    for k in 1..=run.stepping.steps() {
         y = step_vectors(p, &y, &mut v, dt);
         if run.renormalise(k) {
             for v in &mut v {
@@ -151,11 +154,7 @@ pub fn alignment_run(run: &mut CpuRun, index: Alignment, threshold: f64) -> Resu
 /// One vector renormalised every step (ln |v| of a step is the integrand of both): (MEGNO
 /// <Y>, the FLI) at t-max, sampled with Y(t) every `renorm`; NaN where it left the numbers.
 pub fn growth_run(run: &mut CpuRun) -> Result<(f64, f64)> {
-    let (p, dt, steps) = (
-        &run.spec.params,
-        run.spec.stepping.dt,
-        run.spec.stepping.steps(),
-    );
+    let (p, dt, steps) = (&run.params, run.stepping.dt, run.stepping.steps());
     let mut y = run.start.to_array();
     let mut v = TANGENT_START;
     let (mut weighted, mut mean, mut total, mut fli) = (0.0, 0.0, 0.0, 0.0f64);
@@ -184,7 +183,7 @@ pub fn growth_run(run: &mut CpuRun) -> Result<(f64, f64)> {
 /// The Lagrangian descriptor with the power `power`: one RK4 trajectory forward and one
 /// backward, the trapezoid rule each way; NaN where it left the numbers.
 pub fn descriptor_run(run: &mut CpuRun, power: f64) -> Result<f64> {
-    let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+    let (p, dt) = (&run.params, run.stepping.dt);
     let g = |s: &State| -> f64 {
         derivative(p, s)
             .to_array()
@@ -195,7 +194,7 @@ pub fn descriptor_run(run: &mut CpuRun, power: f64) -> Result<f64> {
     let (mut ahead, mut back) = (run.start, run.start);
     let (mut g_ahead, mut g_back) = (g(&run.start), g(&run.start));
     let mut m = 0.0;
-    for k in 1..=run.spec.stepping.steps() {
+    for k in 1..=run.stepping.steps() {
         ahead = rk4_step(p, &ahead, dt);
         back = rk4_step(p, &back, -dt);
         let (ga, gb) = (g(&ahead), g(&back));
@@ -216,10 +215,9 @@ pub fn spectrum_adaptive(run: &mut CpuRun) -> Result<[f64; 4]> {
     use super::adaptive::{Clock, dp54_to};
     use num_dual::Dual64;
     const N: usize = 20;
-    let spec = run.spec;
-    let p = &spec.params;
-    let (rtol, atol) = spec.integrator.tolerances().expect("adaptive");
-    let (dt, steps, every) = (spec.stepping.dt, spec.stepping.steps(), spec.renorm_steps());
+    let p = &run.params;
+    let (rtol, atol) = run.integrator.tolerances().expect("adaptive");
+    let (dt, steps, every) = (run.stepping.dt, run.stepping.steps(), run.renorm_steps);
     // x = (y, v1, v2, v3, v4); each vector's rate is the dual part of the rate at y + eps v.
     let rate = |x: &[f64; N]| -> [f64; N] {
         let mut out = [0.0; N];
@@ -294,9 +292,11 @@ pub fn spectrum_map(spec: &LyapunovSpec, monitor: &Monitor) -> Result<[Field; 4]
             let values = (0..grid.width)
                 .map(|col| {
                     let (params, start) = grid.pixel(&spec.params, col, span.first + row);
-                    let spec = LyapunovSpec { params, ..*spec };
                     let mut run = CpuRun {
-                        spec: &spec,
+                        params,
+                        stepping: spec.stepping,
+                        integrator: spec.integrator,
+                        renorm_steps: spec.renorm_steps(),
                         start,
                         sample: &mut |_, _| {},
                         tick: &|_| Ok(()),

@@ -2,46 +2,14 @@
 //! Bountis, Antonopoulos 2007), as log10 of the index or the time it fell below its
 //! threshold (where the start is called chaotic and stops).
 
+use super::MapKindEntry;
+use super::indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment};
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::{Error, Result};
 use crate::field::Field;
+use crate::field::Precision;
 use crate::gpu::layout::NEVER;
 use crate::quantity::{Quantity, Tolerance};
-use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
-
-/// Which alignment index of normalised tangent vectors.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Alignment {
-    /// The smaller alignment index of two vectors, min(|v1 + v2|, |v1 - v2|).
-    Sali,
-    /// The generalised alignment index of k = 2..4 vectors: the volume of their
-    /// parallelotope.
-    Gali(u8),
-}
-
-impl Alignment {
-    /// Tangent vectors it follows.
-    pub fn vectors(self) -> u32 {
-        match self {
-            Alignment::Sali => 2,
-            Alignment::Gali(k) => k as u32,
-        }
-    }
-
-    pub fn name(self) -> String {
-        match self {
-            Alignment::Sali => "SALI".into(),
-            Alignment::Gali(k) => format!("GALI_{k}"),
-        }
-    }
-}
-
-/// Default threshold below which an alignment index calls a start chaotic and stops it.
-pub const ALIGNED: f64 = 1e-8;
-
-/// f32 holds unit vectors to about 6e-8 a component: alignment indices below this are its
-/// round-off, not the orbit's.
-pub const ALIGNED_F32_FLOOR: f64 = 1e-5;
 
 /// An alignment threshold that nothing reaches, so that every pixel runs every step (the
 /// bench's peer has no early stop): its rows time the indicator's work, not the map's.
@@ -308,9 +276,9 @@ impl Measure for AlignmentIndex {
         }
     }
     /// The threshold to 1 for the index, 0 to t-max for its time.
-    fn default_range(&self, i: Indicator, spec: &LyapunovSpec, _field: &Field) -> (f32, f32) {
+    fn default_range(&self, i: Indicator, t_max: f64, _field: &Field) -> (f32, f32) {
         match parts(i) {
-            (_, _, true) => (0.0, spec.stepping.t_max as f32),
+            (_, _, true) => (0.0, t_max as f32),
             (_, threshold, false) => (threshold.log10() as f32, 0.0),
         }
     }

@@ -1,12 +1,13 @@
 //! The Lagrangian descriptor M (Lopesino et al. 2017): the integral of sum_i |f_i|^p of the
 //! phase-space velocity f over [-t-max, t-max], one plain trajectory each way.
 
+use super::MapKindEntry;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs};
 use crate::error::{Error, Result};
 use crate::field::Field;
+use crate::field::Precision;
 use crate::model::Params;
 use crate::quantity::{Quantity, Tolerance};
-use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 /// The exponents p a Lagrangian descriptor takes.
 pub const DESCRIPTOR_POWERS: [f64; 4] = [0.25, 0.5, 1.0, 2.0];
@@ -126,7 +127,7 @@ impl Measure for Descriptor {
             reversed: false,
         }
     }
-    fn default_range(&self, _i: Indicator, _spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
         crate::render::percentile_range(field, 0.005, 0.995)
     }
     /// With losses the backward half runs anti-damped: say so.

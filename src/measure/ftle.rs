@@ -1,11 +1,11 @@
 //! The largest finite-time Lyapunov exponent: one tangent vector (or a twin), the divergence
 //! kernel's map, the one measure with accurate settings.
 
+use super::MapKindEntry;
 use super::{CpuRun, Indicator, Look, Measure, Opt, Runs};
 use crate::error::Result;
 use crate::field::Field;
 use crate::quantity::{FTLE, Quantity};
-use crate::spec::{LyapunovSpec, MapKindEntry};
 
 pub struct Ftle;
 
@@ -66,7 +66,7 @@ impl Measure for Ftle {
         &["ftle"]
     }
     fn cpu(&self, _i: Indicator, run: &mut CpuRun) -> Result<f64> {
-        let t_end = run.spec.stepping.steps() as f64 * run.spec.stepping.dt;
+        let t_end = run.stepping.steps() as f64 * run.stepping.dt;
         Ok(crate::cpu::tangent_sums(run, 1)?[0] / t_end)
     }
     fn look(&self, _i: Indicator, t_max: f64) -> Look {
@@ -77,7 +77,7 @@ impl Measure for Ftle {
             reversed: false,
         }
     }
-    fn default_range(&self, _i: Indicator, _spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
         crate::render::ftle_range(field)
     }
     fn kinds(&self) -> &'static [MapKindEntry] {

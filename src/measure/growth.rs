@@ -2,11 +2,11 @@
 //! growth of nearby orbits (Cincotta and Simó 2000), and the fast Lyapunov indicator, the
 //! largest log10 |v| so far (Froeschlé, Lega, Gonczi 1997).
 
+use super::MapKindEntry;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::Result;
 use crate::field::Field;
 use crate::quantity::{Quantity, Tolerance};
-use crate::spec::{LyapunovSpec, MapKindEntry};
 
 pub struct Growth;
 
@@ -140,7 +140,7 @@ impl Measure for Growth {
     }
     /// 0 to the 99.5th percentile, at least to 4 (MEGNO) or 1 (the FLI): a regular map is
     /// then drawn dark, not stretched over its small spread.
-    fn default_range(&self, i: Indicator, _spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+    fn default_range(&self, i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
         let floor = if is_megno(i) { 4.0 } else { 1.0 };
         let high = crate::render::percentile_range(field, 0.0, 0.995).1;
         (0.0, high.max(floor))

@@ -10,44 +10,44 @@ mod alignment;
 mod descriptor;
 mod ftle;
 mod growth;
+pub(crate) mod indicator;
 mod ofli;
 mod rli;
 mod spectrum;
 
 use crate::error::{Error, Result};
 use crate::field::Field;
+use crate::field::Precision;
 use crate::model::{Params, State};
 use crate::quantity::Quantity;
-use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
+use crate::spec::{Integrator, Stepping};
 
-pub use alignment::{ALIGNED, ALIGNED_F32_FLOOR, Alignment};
 pub use descriptor::DESCRIPTOR_POWERS;
+pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};
 
-/// What a divergence-family map measures of each start (its family says how:
-/// [`Indicator::measure`]). Stores keep it in their identity, so variants keep their names.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub enum Indicator {
-    /// The largest finite-time Lyapunov exponent, one tangent vector (1/s).
-    #[default]
-    Ftle,
-    /// Exponent k (1..=4, in Gram-Schmidt order) of the spectrum (1/s).
-    Exponent(u8),
-    /// The sum of the four exponents (1/s).
-    ExponentSum,
-    /// log10 of an alignment index at t-max, or where it fell below `threshold`.
-    Alignment { index: Alignment, threshold: f64 },
-    /// The time the alignment index fell below `threshold` (s; +inf = not within t-max).
-    AlignmentTime { index: Alignment, threshold: f64 },
-    /// The mean exponential growth of nearby orbits, <Y> at t-max.
-    Megno,
-    /// The fast Lyapunov indicator: the largest log10 |v| of one tangent vector so far.
-    Fli,
-    /// The Lagrangian descriptor M with the power `p`.
-    Descriptor { p: f64 },
-    /// The orthogonal FLI: the largest log10 of the tangent vector's part across the flow.
-    Ofli,
-    /// log10 of the relative Lyapunov indicator, the neighbour `delta` away.
-    Rli { delta: f64 },
+/// A map's line in the kinds' table.
+pub struct MapKindEntry {
+    pub quantity: &'static Quantity,
+    /// Its name in `sweep --map`.
+    pub name: &'static str,
+    /// Its name in the explorer's queries (`kind=`).
+    pub short: &'static str,
+    /// The explorer's menu entry.
+    pub label: &'static str,
+    /// What its colours mean, under the explorer's colour bar; `{ends}` stands where the
+    /// picture's dark and bright ends are named, with the meanings `low` and `high` of its
+    /// low and high values in the order the picture draws them (`render::legend`).
+    pub legend: &'static str,
+    /// What its low values mean ("" where its colours have no order).
+    pub low: &'static str,
+    /// What its high values mean.
+    pub high: &'static str,
+    /// Whether its colours span a range the user may set (`--colour-range`).
+    pub ranged: bool,
+    /// Whether it has accurate settings (`--accurate`: f64, adaptive steps).
+    pub accurate: bool,
+    /// The divergence family's measure a front door asks for by this name (None: a flip map).
+    pub indicator: Option<Indicator>,
 }
 
 /// Every family, in the order the doors list them.
@@ -173,7 +173,11 @@ pub use crate::render::Look;
 /// One start's run on the CPU: the spec, the start, where the columns go at every
 /// renormalisation (`sample(t, columns)`) and the progress tick (`tick(steps done)`).
 pub struct CpuRun<'a> {
-    pub spec: &'a LyapunovSpec,
+    pub params: Params,
+    pub stepping: Stepping,
+    pub integrator: Integrator,
+    /// Steps in a renormalisation window.
+    pub renorm_steps: u32,
     pub start: State,
     pub sample: &'a mut dyn FnMut(f64, &[f64]),
     pub tick: &'a dyn Fn(u32) -> Result<()>,
@@ -182,7 +186,7 @@ pub struct CpuRun<'a> {
 impl CpuRun<'_> {
     /// Whether the `k`-th step ends a renormalisation window.
     pub fn renormalise(&self, k: u32) -> bool {
-        k.is_multiple_of(self.spec.renorm_steps()) || k == self.spec.stepping.steps()
+        k.is_multiple_of(self.renorm_steps) || k == self.stepping.steps()
     }
 }
 
@@ -244,7 +248,7 @@ pub trait Measure: Sync {
     }
     fn look(&self, i: Indicator, t_max: f64) -> Look;
     /// The colour range of its map by default.
-    fn default_range(&self, i: Indicator, spec: &LyapunovSpec, field: &Field) -> (f32, f32);
+    fn default_range(&self, i: Indicator, t_max: f64, field: &Field) -> (f32, f32);
     /// Whether the summary counts a pixel (chaotic).
     fn counted(&self, i: Indicator, x: f32) -> bool {
         (self.quantity(i).counted)(x)

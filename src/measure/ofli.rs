@@ -5,6 +5,7 @@
 //! (growing like log t); chaotic orbits grow like λ t, as for the FLI. Its kernel is
 //! `shaders/ofli.wgsl`; its CPU twin, below, steps with the FTLE's dual numbers.
 
+use super::MapKindEntry;
 use super::growth::CHAOTIC_FLI;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::cpu::{TANGENT_START, derivative, norm, tangent_step};
@@ -12,7 +13,6 @@ use crate::error::Result;
 use crate::field::Field;
 use crate::model::{Params, State};
 use crate::quantity::{Quantity, Tolerance};
-use crate::spec::{LyapunovSpec, MapKindEntry};
 
 pub struct Ofli;
 
@@ -99,12 +99,12 @@ impl Measure for Ofli {
     /// One vector renormalised every step, its length kept as a log; the OFLI and the FLI
     /// sampled every `renorm`; NaN where it left the numbers.
     fn cpu(&self, _i: Indicator, run: &mut CpuRun) -> Result<f64> {
-        let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+        let (p, dt) = (&run.params, run.stepping.dt);
         let mut y = run.start.to_array();
         let mut v = TANGENT_START;
         let mut ofli = log10_across(p, &y, &v);
         let (mut log10_length, mut fli) = (0.0, 0.0f64);
-        for k in 1..=run.spec.stepping.steps() {
+        for k in 1..=run.stepping.steps() {
             let (next, w) = tangent_step(p, &y, &v, dt);
             let n = norm(&w);
             (y, v) = (next, w.map(|x| x / n));
@@ -112,7 +112,7 @@ impl Measure for Ofli {
             fli = fli.max(log10_length);
             ofli = ofli.max(log10_length + log10_across(p, &y, &v));
             if run.renormalise(k) {
-                (run.sample)(k as f64 * run.spec.stepping.dt, &[ofli, fli]);
+                (run.sample)(k as f64 * run.stepping.dt, &[ofli, fli]);
                 (run.tick)(k)?;
             }
             if !log10_length.is_finite() {
@@ -131,7 +131,7 @@ impl Measure for Ofli {
     }
     /// From its 0.5th percentile (it may start below 0: v's part across the flow is shorter
     /// than v) to its 99.5th, at least to 1: a regular map is then drawn dark.
-    fn default_range(&self, _i: Indicator, _spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
         let (low, high) = crate::render::percentile_range(field, 0.005, 0.995);
         (low.min(0.0), high.max(1.0))
     }

@@ -8,12 +8,13 @@
 //! the exponent itself. Its kernel is `shaders/rli.wgsl`; its CPU twin, below, steps with
 //! the FTLE's dual numbers.
 
+use super::MapKindEntry;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::cpu::{TANGENT_START, norm, tangent_step};
 use crate::error::{Error, Result};
 use crate::field::Field;
+use crate::field::Precision;
 use crate::quantity::{Quantity, Tolerance};
-use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 pub struct Rli;
 
@@ -135,14 +136,14 @@ impl Measure for Rli {
     /// lengths kept as logs; the running log10 RLI and |L_b - L_a| (1/s) sampled every
     /// `renorm`; NaN where either left the numbers.
     fn cpu(&self, i: Indicator, run: &mut CpuRun) -> Result<f64> {
-        let (p, dt) = (&run.spec.params, run.spec.stepping.dt);
+        let (p, dt) = (&run.params, run.stepping.dt);
         let delta = separation(i);
         let mut a = run.start.to_array();
         let side = a.iter().find(|x| **x != 0.0).map_or(1.0, |x| x.signum());
         let mut b: [f64; 4] = std::array::from_fn(|k| a[k] + side * delta * TANGENT_START[k]);
         let (mut va, mut vb) = (TANGENT_START, TANGENT_START);
         let (mut ln_a, mut ln_b, mut sum) = (0.0f64, 0.0f64, 0.0f64);
-        let steps = run.spec.stepping.steps();
+        let steps = run.stepping.steps();
         for k in 1..=steps {
             let (next_a, wa) = tangent_step(p, &a, &va, dt);
             let (next_b, wb) = tangent_step(p, &b, &vb, dt);
@@ -174,7 +175,7 @@ impl Measure for Rli {
             reversed: false,
         }
     }
-    fn default_range(&self, _i: Indicator, _spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
         crate::render::percentile_range(field, 0.005, 0.995)
     }
     fn kinds(&self) -> &'static [MapKindEntry] {

@@ -1,11 +1,12 @@
 //! The Lyapunov spectrum: four tangent vectors kept orthonormal by modified Gram-Schmidt, one
 //! exponent of it (in Gram-Schmidt order) or their sum; RK4 or DP54 steps.
 
+use super::MapKindEntry;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::{Error, Result};
 use crate::field::Field;
+use crate::field::Precision;
 use crate::quantity::{FTLE, FTLE_ABSOLUTE, Quantity, Tolerance};
-use crate::spec::{LyapunovSpec, MapKindEntry, Precision};
 
 pub struct Spectrum;
 
@@ -156,8 +157,8 @@ impl Measure for Spectrum {
         &["lambda1", "lambda2", "lambda3", "lambda4", "sum"]
     }
     fn cpu(&self, i: Indicator, run: &mut CpuRun) -> Result<f64> {
-        let t_end = run.spec.stepping.steps() as f64 * run.spec.stepping.dt;
-        let sums = match run.spec.integrator.tolerances() {
+        let t_end = run.stepping.steps() as f64 * run.stepping.dt;
+        let sums = match run.integrator.tolerances() {
             Some(_) => crate::cpu::spectrum_adaptive(run)?.to_vec(),
             None => crate::cpu::tangent_sums(run, 4)?,
         };
@@ -191,7 +192,7 @@ impl Measure for Spectrum {
     }
     /// The first exponent as the FTLE; the others and the sum from their 0.5th to 99.5th
     /// percentile (they take either sign).
-    fn default_range(&self, i: Indicator, _spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
+    fn default_range(&self, i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
         match which(i) {
             Some(1) => crate::render::ftle_range(field),
             _ => crate::render::percentile_range(field, 0.005, 0.995),

@@ -306,7 +306,7 @@ fn look(spec: &LyapunovSpec) -> Look {
 /// The colour range a divergence-family map takes by default (its measure's).
 pub fn default_range(spec: &LyapunovSpec, field: &Field) -> (f32, f32) {
     let i = spec.indicator;
-    i.measure().default_range(i, spec, field)
+    i.measure().default_range(i, spec.stepping.t_max, field)
 }
 
 /// The colour bar of a divergence-family map over `range`: colours from left to right,

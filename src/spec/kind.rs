@@ -1,38 +1,14 @@
 //! The maps a front door asks for by name (`sweep --map`, the explorer's menu), one table
 //! line each: a new quantity's map is one more line here, and both front doors list it.
 
-use super::{AnyMap, Indicator, MapSpec};
+use super::{AnyMap, MapSpec};
 use crate::measure::MEASURES;
+pub use crate::measure::MapKindEntry;
 use crate::quantity::{FLIP_KIND, FLIP_TIME, Quantity};
 
 /// A map by what it measures: its place in the kinds' table ([`MapKind::all`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct MapKind(u16);
-
-/// A map's line in the kinds' table.
-pub struct MapKindEntry {
-    pub quantity: &'static Quantity,
-    /// Its name in `sweep --map`.
-    pub name: &'static str,
-    /// Its name in the explorer's queries (`kind=`).
-    pub short: &'static str,
-    /// The explorer's menu entry.
-    pub label: &'static str,
-    /// What its colours mean, under the explorer's colour bar; `{ends}` stands where the
-    /// picture's dark and bright ends are named, with the meanings `low` and `high` of its
-    /// low and high values in the order the picture draws them (`render::legend`).
-    pub legend: &'static str,
-    /// What its low values mean ("" where its colours have no order).
-    pub low: &'static str,
-    /// What its high values mean.
-    pub high: &'static str,
-    /// Whether its colours span a range the user may set (`--colour-range`).
-    pub ranged: bool,
-    /// Whether it has accurate settings (`--accurate`: f64, adaptive steps).
-    pub accurate: bool,
-    /// The divergence family's measure a front door asks for by this name (None: a flip map).
-    pub indicator: Option<Indicator>,
-}
 
 /// The flip family's maps; the divergence family's come from its measures
 /// ([`crate::measure::Measure::kinds`]).

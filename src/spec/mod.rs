@@ -16,7 +16,7 @@ mod stability;
 mod var;
 mod zoom;
 
-pub use crate::measure::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator, IndicatorAsked};
+pub use crate::measure::indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};
 pub use ensemble::{Chunk, EnsembleSpec, Keep};
 pub use grid::{Axis, Grid, Sampling, Var, pcg};
 pub use kind::{MapKind, MapKindEntry};
