@@ -9,11 +9,10 @@ use super::{check_count, check_within};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::fit::data::Units;
-use crate::fit::pendulum::{ModelSource, Tracked, model_energies, model_file, tracked_model};
+use crate::fit::pendulum::{ModelSource, Tracked, model_file, tracked_model};
+use crate::fit::report::{self, EnergyReport};
 use crate::fit::verdict::Verdict;
-use crate::fit::{
-    Fit, ModelFitSpec, data, energies, fit_decay, fit_model, grid_pivot, plots, read_frames,
-};
+use crate::fit::{ModelFit, ModelFitSpec, fit_model, grid_pivot, read_frames};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::Outputs;
@@ -108,159 +107,127 @@ pub fn run(
     let read = read_rows(job)?;
     let t: Vec<f64> = read.iter().map(|f| f.t).collect();
     let tracked = tracked_model(&read, &job.params, &job.units)?;
-    let frames = &tracked.frames;
-    let start = job.start.unwrap_or_else(|| tracked.default_start());
-    let window = job.window.unwrap_or_else(|| tracked.default_window());
-    let tolerance = job.tolerance.unwrap_or_else(|| tracked.default_tolerance());
-    let Tracked {
-        ref pivot,
-        l1,
-        l2,
-        angles: ref angle,
-        ref measured,
-        params,
-        ref source,
-        ref identified,
-        ..
-    } = tracked;
-    // The report's grid: whole millimetres within 5 cm of the data's origin.
-    let grid = grid_pivot(frames, (0.0, 0.0), 0.05, 0.001);
-
-    // A model found from the motion cannot see the masses' scale: its energy is in units of
-    // its gravity moment P, and counts the arms' own inertia as the model does.
-    let (en, unit) = match source {
-        ModelSource::Given => (
-            energies(
-                frames,
-                (pivot.x, pivot.y),
-                (params.m1, params.m2),
-                (l1.value, l2.value),
-                params.g,
-                job.velocity_error,
-            ),
-            plots::EnergyUnit::Joule,
-        ),
-        ModelSource::Identified => (
-            model_energies(&t, angle, &params, job.velocity_error),
-            plots::EnergyUnit::GravityMoment,
-        ),
-    };
-    let decay = fit_decay(&en);
-    let (ex, inv) = (&decay.exponential, &decay.inverse_square);
-    let better = if ex.reduced_chi2() <= inv.reduced_chi2() {
-        "exponential"
-    } else {
-        "inverse_square"
-    };
-
     let spec = ModelFitSpec {
-        params,
-        start_time: start,
-        window,
-        tolerance,
+        params: tracked.params,
+        start_time: job.start.unwrap_or_else(|| tracked.default_start()),
+        window: job.window.unwrap_or_else(|| tracked.default_window()),
+        tolerance: job.tolerance.unwrap_or_else(|| tracked.default_tolerance()),
         candidates: job.candidates,
     };
-    let mut notices: Vec<String> = engine.notices();
-    // Which pendulum is fitted is said, never assumed.
-    notices.push(source.describe_model(&params));
-    notices.push(match identified {
-        Ok(id) => describe_identified(id),
-        Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
-    });
-    notices.extend(tracked.notices.iter().cloned());
-    let fit = fit_model(frames, (pivot.x, pivot.y), angle, &spec, engine, monitor)?;
-    let verdict = Verdict::judge(fit.rms, &t, measured, params.l1 + params.l2);
+    let energy = EnergyReport::of(&tracked, &t, job.velocity_error);
+    let mut notices = notices_of(engine, &tracked);
+    let pivot = (tracked.pivot.x, tracked.pivot.y);
+    let fit = fit_model(
+        &tracked.frames,
+        pivot,
+        &tracked.angles,
+        &spec,
+        engine,
+        monitor,
+    )?;
+    let verdict = Verdict::judge(
+        fit.rms,
+        &t,
+        &tracked.measured,
+        spec.params.l1 + spec.params.l2,
+    );
     notices.push(verdict.describe());
-    let calibration = calibration_of(job, &tracked, window, engine, monitor, &mut notices)?;
+    let calibration = calibration_of(job, &tracked, spec.window, engine, monitor, &mut notices)?;
 
     // Plots, derived quantities and summary, written as a set.
     let out = &job.output;
     let mut files = Outputs::new();
-    // Long enough to see the model agree and then part (chaos), short enough to read.
-    let t_end = (fit.agrees_until + 4.0).max(fit.t0 + 4.0);
-    plots::positions(
-        &mut files,
-        &out.join("positions.png"),
-        &t,
-        measured,
-        &fit.simulated,
-        fit.t0,
-        t_end,
-    )?;
-    plots::energy(
-        &mut files,
-        &out.join("energy.png"),
-        &en,
-        (ex.params[0], ex.params[1]),
-        (inv.params[0], inv.params[1]),
-        unit,
-    )?;
-    // Angular velocities at the interior rows (central differences), once for both uses.
-    let arm = |k: usize| -> Vec<f64> {
-        angle
-            .iter()
-            .map(|a| if k == 0 { a.0 } else { a.1 })
-            .collect()
-    };
-    let (wa, wb) = (
-        data::central_differences(&t, &arm(0)),
-        data::central_differences(&t, &arm(1)),
+    report::write(&mut files, out, &t, &tracked, &fit, &energy)?;
+    let summary = summary_json(
+        job,
+        command.clone(),
+        &tracked,
+        &spec,
+        &fit,
+        &energy,
+        &verdict,
+        &calibration,
     );
-    let wrap = |x: f64| {
-        (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
-    };
-    let portrait = |k: usize, w: &[f64]| -> Vec<(f64, f64)> {
-        let a = arm(k);
-        w.iter()
-            .enumerate()
-            .map(|(i, &w)| (wrap(a[i + 1]), w))
-            .collect()
-    };
-    let (w1, w2) = (portrait(0, &wa), portrait(1, &wb));
-    plots::phase(
-        &mut files,
-        &out.join("phase.png"),
-        [&w1, &w2],
-        &plots::cadence(&t),
-    )?;
-    // The derived quantities row by row (interior rows: central differences need neighbours).
-    files.write(&out.join("derived.csv"), |f| {
+    files.write_json(&out.join("summary.json"), &summary)?;
+    write_model(&mut files, out, &tracked, &fit, &calibration, &command)?;
+    files.commit(monitor)?;
+    let (ex, inv) = (&energy.decay.exponential, &energy.decay.inverse_square);
+    Ok(FitSummary {
+        pivot,
+        l1: (tracked.l1.value, tracked.l1.error),
+        l2: (tracked.l2.value, tracked.l2.error),
+        exponential: (ex.params[0], ex.params[1], ex.reduced_chi2()),
+        inverse_square_chi2: inv.reduced_chi2(),
+        better: energy.better,
+        t0: fit.t0,
+        agrees_until: fit.agrees_until,
+        tolerance: spec.tolerance,
+        verdict,
+        energy_unit: energy.unit_symbol(),
+        output: out.clone(),
+        files: FILES.iter().map(|f| out.join(f)).collect(),
+        notices,
+    })
+}
+
+/// What the run says of its model before the fit: the engine's notices, which pendulum is
+/// fitted (said, never assumed), what the motion says of it, and the tracked model's own.
+fn notices_of(engine: &Engine, tracked: &Tracked) -> Vec<String> {
+    let mut notices: Vec<String> = engine.notices();
+    notices.push(tracked.source.describe_model(&tracked.params));
+    notices.push(match &tracked.identified {
+        Ok(id) => describe_identified(id),
+        Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
+    });
+    notices.extend(tracked.notices.iter().cloned());
+    notices
+}
+
+/// model.toml: the fitted pendulum with its joint damping from the fit, and the calibration.
+fn write_model(
+    files: &mut Outputs,
+    out: &std::path::Path,
+    tracked: &Tracked,
+    fit: &ModelFit,
+    calibration: &Option<crate::forecast::calibration::Calibration>,
+    command: &str,
+) -> Result<()> {
+    let mut fitted = tracked.params;
+    (fitted.losses.joint1, fitted.losses.joint2) = fit.damping;
+    let heading = format!(
+        "The pendulum `chaoscope fit` fitted ({}), its joint damping from the fit:\n{command}\nRead it back with --params (trajectory, the maps, forecast).",
+        tracked.source.describe()
+    );
+    files.write(&out.join(MODEL_FILE), |w| {
         use std::io::Write;
-        writeln!(
-            f,
-            "# chaoscope fit: angles (rad, unwrapped), angular velocities (rad/s, central differences), energy and its error ({})",
-            match unit {
-                plots::EnergyUnit::Joule => "J",
-                plots::EnergyUnit::GravityMoment => "over the upper arm's gravity moment P",
-            }
-        )?;
-        writeln!(f, "t,theta1,theta2,omega1,omega2,energy,energy_error")?;
-        for i in 1..frames.len() - 1 {
-            writeln!(
-                f,
-                "{},{},{},{},{},{},{}",
-                t[i],
-                angle[i].0,
-                angle[i].1,
-                wa[i - 1],
-                wb[i - 1],
-                en.e[i - 1],
-                en.de[i - 1]
-            )?;
+        write!(w, "{}", model_file(&fitted, &tracked.source, &heading))?;
+        if let Some(c) = calibration {
+            write!(w, "{}", c.to_toml())?;
         }
         Ok(())
-    })?;
-    let fitted = |f: &Fit, names: [&str; 2]| {
-        json!({
-            names[0]: f.params[0], format!("{}_error", names[0]): f.errors[0],
-            names[1]: f.params[1], format!("{}_error", names[1]): f.errors[1],
-            "chi2": f.chi2, "dof": f.dof, "reduced_chi2": f.reduced_chi2(),
-        })
-    };
-    let summary = json!({
+    })
+}
+
+/// summary.json: the command, the file, the geometry, the energy, what the motion says, the
+/// verdict, the calibration and the fitted model.
+#[allow(clippy::too_many_arguments)]
+fn summary_json(
+    job: &FitJob,
+    command: String,
+    tracked: &Tracked,
+    spec: &ModelFitSpec,
+    fit: &ModelFit,
+    energy: &EnergyReport,
+    verdict: &Verdict,
+    calibration: &Option<crate::forecast::calibration::Calibration>,
+) -> serde_json::Value {
+    let pivot = &tracked.pivot;
+    // The report's grid: whole millimetres within 5 cm of the data's origin.
+    let grid = grid_pivot(&tracked.frames, (0.0, 0.0), 0.05, 0.001);
+    json!({
         "command": command,
         "file": job.file.display().to_string(),
-        "rows": frames.len(),
+        "rows": tracked.frames.len(),
         "pivot": {
             "least_squares_circle": {
                 "x": pivot.x, "y": pivot.y, "x_error": pivot.errors[0], "y_error": pivot.errors[1],
@@ -268,71 +235,30 @@ pub fn run(
             },
             "report_grid_least_distance_variance": { "x": grid.0, "y": grid.1, "grid_step": 0.001 },
         },
-        "arm_lengths": { "l1": l1, "l2": l2 },
+        "arm_lengths": { "l1": tracked.l1, "l2": tracked.l2 },
         "middle_joint_off_marker": tracked.joint,
-        "energy": {
-            "velocity_error": job.velocity_error,
-            "exponential": fitted(ex, ["a", "b"]),
-            "inverse_square": fitted(inv, ["a", "b"]),
-            "inverse_square_note": "E = a (b t + d)^-2 with d = 1: a, b, d are degenerate (only a/d^2 and b/d matter)",
-            "better_fit": better,
-        },
-        "identified": match identified {
+        "energy": energy.to_json(),
+        "identified": match &tracked.identified {
             Ok(id) => identified_json(id),
             Err(e) => json!({ "error": e.to_string() }),
         },
         "verdict": verdict,
         "calibration": calibration,
         "model": {
-            "source": source.key(),
-            "source_text": source.describe(),
-            "parameters": crate::params::to_json(&params),
+            "source": tracked.source.key(),
+            "source_text": tracked.source.describe(),
+            "parameters": crate::params::to_json(&tracked.params),
             "start_row": fit.row, "t0": fit.t0,
             "state": fit.start.to_array(),
             "joint_damping": [fit.damping.0, fit.damping.1],
-            "energy_unit": match unit { plots::EnergyUnit::Joule => "J", plots::EnergyUnit::GravityMoment => "P" },
+            "energy_unit": energy.unit_symbol(),
             "rms_position_error_in_window": fit.rms,
-            "window": window,
+            "window": spec.window,
             "candidates": fit.candidates, "searched_on": fit.backend,
-            "tolerance": tolerance,
+            "tolerance": spec.tolerance,
             "agrees_until": fit.agrees_until,
             "agrees_for": fit.agrees_until - fit.t0,
         },
-    });
-    files.write_json(&out.join("summary.json"), &summary)?;
-    let mut fitted = params;
-    (fitted.losses.joint1, fitted.losses.joint2) = fit.damping;
-    let heading = format!(
-        "The pendulum `chaoscope fit` fitted ({}), its joint damping from the fit:\n{command}\nRead it back with --params (trajectory, the maps, forecast).",
-        source.describe()
-    );
-    files.write(&out.join(MODEL_FILE), |w| {
-        use std::io::Write;
-        write!(w, "{}", model_file(&fitted, source, &heading))?;
-        if let Some(c) = &calibration {
-            write!(w, "{}", c.to_toml())?;
-        }
-        Ok(())
-    })?;
-    files.commit(monitor)?;
-    Ok(FitSummary {
-        pivot: (pivot.x, pivot.y),
-        l1: (l1.value, l1.error),
-        l2: (l2.value, l2.error),
-        exponential: (ex.params[0], ex.params[1], ex.reduced_chi2()),
-        inverse_square_chi2: inv.reduced_chi2(),
-        better,
-        t0: fit.t0,
-        agrees_until: fit.agrees_until,
-        tolerance,
-        verdict,
-        energy_unit: match unit {
-            plots::EnergyUnit::Joule => "J",
-            plots::EnergyUnit::GravityMoment => "P",
-        },
-        output: out.clone(),
-        files: FILES.iter().map(|f| out.join(f)).collect(),
-        notices,
     })
 }
 

@@ -11,12 +11,13 @@ mod model;
 pub mod pendulum;
 pub mod plots;
 mod refine;
+pub mod report;
 pub mod verdict;
 pub mod window;
 
 pub use data::{
-    Energies, TrackedRow, angles, arm_lengths, energies, fit_decay, fit_pivot, grid_pivot,
-    read_frames,
+    DecayFits, Energies, TrackedRow, angles, arm_lengths, energies, fit_decay, fit_pivot,
+    grid_pivot, read_frames,
 };
 pub use lsq::{Fit, least_squares};
 pub use model::{ModelFit, ModelFitSpec, fit_model, measured};

@@ -1,0 +1,173 @@
+//! The lab report's analysis of a fit: the energy with its error bars and its decay laws, the
+//! pictures (positions, energy, phase portraits) and the derived quantities as CSV.
+
+use serde_json::{Value, json};
+
+use super::pendulum::{ModelSource, Tracked, model_energies};
+use super::plots::{self, EnergyUnit};
+use super::{DecayFits, Energies, Fit, ModelFit, data, energies, fit_decay};
+use crate::error::Result;
+use crate::render::Outputs;
+
+/// The energy row by row and the decay laws fitted to it.
+pub struct EnergyReport {
+    pub energies: Energies,
+    pub unit: EnergyUnit,
+    pub decay: DecayFits,
+    /// The decay law with the smaller reduced chi^2.
+    pub better: &'static str,
+    pub velocity_error: f64,
+}
+
+impl EnergyReport {
+    /// The tracked rows' energy and its decay. A model found from the motion cannot see the
+    /// masses' scale: its energy is in units of its gravity moment P, and counts the arms' own
+    /// inertia as the model does.
+    pub fn of(tracked: &Tracked, t: &[f64], velocity_error: f64) -> EnergyReport {
+        let params = &tracked.params;
+        let (en, unit) = match tracked.source {
+            ModelSource::Given => (
+                energies(
+                    &tracked.frames,
+                    (tracked.pivot.x, tracked.pivot.y),
+                    (params.m1, params.m2),
+                    (tracked.l1.value, tracked.l2.value),
+                    params.g,
+                    velocity_error,
+                ),
+                EnergyUnit::Joule,
+            ),
+            ModelSource::Identified => (
+                model_energies(t, &tracked.angles, params, velocity_error),
+                EnergyUnit::GravityMoment,
+            ),
+        };
+        let decay = fit_decay(&en);
+        let better = if decay.exponential.reduced_chi2() <= decay.inverse_square.reduced_chi2() {
+            "exponential"
+        } else {
+            "inverse_square"
+        };
+        EnergyReport {
+            energies: en,
+            unit,
+            decay,
+            better,
+            velocity_error,
+        }
+    }
+
+    /// The energy's unit as summaries write it: J, or P.
+    pub fn unit_symbol(&self) -> &'static str {
+        match self.unit {
+            EnergyUnit::Joule => "J",
+            EnergyUnit::GravityMoment => "P",
+        }
+    }
+
+    /// summary.json's `energy`.
+    pub fn to_json(&self) -> Value {
+        let fitted = |f: &Fit, names: [&str; 2]| {
+            json!({
+                names[0]: f.params[0], format!("{}_error", names[0]): f.errors[0],
+                names[1]: f.params[1], format!("{}_error", names[1]): f.errors[1],
+                "chi2": f.chi2, "dof": f.dof, "reduced_chi2": f.reduced_chi2(),
+            })
+        };
+        json!({
+            "velocity_error": self.velocity_error,
+            "exponential": fitted(&self.decay.exponential, ["a", "b"]),
+            "inverse_square": fitted(&self.decay.inverse_square, ["a", "b"]),
+            "inverse_square_note": "E = a (b t + d)^-2 with d = 1: a, b, d are degenerate (only a/d^2 and b/d matter)",
+            "better_fit": self.better,
+        })
+    }
+}
+
+/// positions.png, energy.png, phase.png and derived.csv into `out`, among `files`.
+pub fn write(
+    files: &mut Outputs,
+    out: &std::path::Path,
+    t: &[f64],
+    tracked: &Tracked,
+    fit: &ModelFit,
+    report: &EnergyReport,
+) -> Result<()> {
+    let (ex, inv) = (&report.decay.exponential, &report.decay.inverse_square);
+    // Long enough to see the model agree and then part (chaos), short enough to read.
+    let t_end = (fit.agrees_until + 4.0).max(fit.t0 + 4.0);
+    plots::positions(
+        files,
+        &out.join("positions.png"),
+        t,
+        &tracked.measured,
+        &fit.simulated,
+        fit.t0,
+        t_end,
+    )?;
+    plots::energy(
+        files,
+        &out.join("energy.png"),
+        &report.energies,
+        (ex.params[0], ex.params[1]),
+        (inv.params[0], inv.params[1]),
+        report.unit,
+    )?;
+    let angle = &tracked.angles;
+    // Angular velocities at the interior rows (central differences), once for both uses.
+    let arm = |k: usize| -> Vec<f64> {
+        angle
+            .iter()
+            .map(|a| if k == 0 { a.0 } else { a.1 })
+            .collect()
+    };
+    let (wa, wb) = (
+        data::central_differences(t, &arm(0)),
+        data::central_differences(t, &arm(1)),
+    );
+    let wrap = |x: f64| {
+        (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    };
+    let portrait = |k: usize, w: &[f64]| -> Vec<(f64, f64)> {
+        let a = arm(k);
+        w.iter()
+            .enumerate()
+            .map(|(i, &w)| (wrap(a[i + 1]), w))
+            .collect()
+    };
+    let (w1, w2) = (portrait(0, &wa), portrait(1, &wb));
+    plots::phase(
+        files,
+        &out.join("phase.png"),
+        [&w1, &w2],
+        &plots::cadence(t),
+    )?;
+    let en = &report.energies;
+    // The derived quantities row by row (interior rows: central differences need neighbours).
+    files.write(&out.join("derived.csv"), |f| {
+        use std::io::Write;
+        writeln!(
+            f,
+            "# chaoscope fit: angles (rad, unwrapped), angular velocities (rad/s, central differences), energy and its error ({})",
+            match report.unit {
+                EnergyUnit::Joule => "J",
+                EnergyUnit::GravityMoment => "over the upper arm's gravity moment P",
+            }
+        )?;
+        writeln!(f, "t,theta1,theta2,omega1,omega2,energy,energy_error")?;
+        for i in 1..tracked.frames.len() - 1 {
+            writeln!(
+                f,
+                "{},{},{},{},{},{},{}",
+                t[i],
+                angle[i].0,
+                angle[i].1,
+                wa[i - 1],
+                wb[i - 1],
+                en.e[i - 1],
+                en.de[i - 1]
+            )?;
+        }
+        Ok(())
+    })
+}
