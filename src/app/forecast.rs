@@ -13,7 +13,7 @@ use crate::fit::verdict::Verdict;
 use crate::fit::window::TrackRows;
 use crate::forecast::calibration::Calibration;
 use crate::forecast::outcome::{
-    ForecastSettings, Learning, fit_and_forecast, fit_json, learned_rows,
+    ForecastSettings, Learning, Outcome, fit_and_forecast, fit_json, learned_rows,
 };
 use crate::forecast::plot::{self, Marks};
 use crate::forecast::{self, Headline};
@@ -123,20 +123,10 @@ pub fn run(
     if job.settings.in_sample {
         notices.push(IN_SAMPLE.into());
     }
-    if let Some(c) = &calibration {
-        let measured = c.model_error.step * c.model_error.m50.len() as f64;
-        if forecast_lead(&o) > measured + 1e-9 {
-            notices.push(format!(
-                "the calibration measured the model's own error to {measured:.2} s after a window; past that its last value is held, so the bands there are not calibrated (calibrate with a longer [[lead]])"
-            ));
-        }
-    }
+    notices.extend(calibration.as_ref().and_then(|c| past_calibration(c, &o)));
     let f = &o.forecast;
     let headline = f.headline();
-    let (_, spread_lt) = o.after_window(f.spread_horizon);
-    let (_, data_lt) = o.after_window(o.data_horizon);
-    let chaos_bound = (f.lyapunov > 0.0 && o.tracking_error > 0.0)
-        .then(|| (o.tolerance / o.tracking_error).ln() / f.lyapunov);
+    let chaos_bound = o.chaos_bound();
     let out = &job.output;
     let mut files = Outputs::new();
     draw(
@@ -166,25 +156,34 @@ pub fn run(
             headline,
             tolerance: o.tolerance,
         };
-        crate::forecast::overlay::write(
-            &mut files,
-            &out.join(OVERLAY),
-            video,
-            &overlay,
-            &command,
-            monitor,
-        )?;
+        let path = out.join(OVERLAY);
+        crate::forecast::overlay::write(&mut files, &path, video, &overlay, &command, monitor)?;
     }
     files.commit(monitor)?;
-    Ok(ForecastSummary {
+    Ok(summary_of(job, o, headline, settings.members, notices))
+}
+
+/// What the command reports of `o`.
+fn summary_of(
+    job: &ForecastJob,
+    o: Outcome,
+    headline: Headline,
+    members: usize,
+    notices: Vec<String>,
+) -> ForecastSummary {
+    let f = &o.forecast;
+    let (_, spread_lt) = o.after_window(f.spread_horizon);
+    let (_, data_lt) = o.after_window(o.data_horizon);
+    let out = &job.output;
+    ForecastSummary {
         in_sample: job.settings.in_sample,
         headline,
-        chaos_bound,
+        chaos_bound: o.chaos_bound(),
         median_follows_for: o.scores.median_follows_for,
         followed_to_data_end: o.scores.followed_to_data_end,
         window: o.window,
         tolerance: o.tolerance,
-        members: settings.members,
+        members,
         tracking_error: o.tracking_error,
         spread_horizon: f.spread_horizon,
         spread_horizon_lyapunov_times: spread_lt,
@@ -201,7 +200,16 @@ pub fn run(
             .chain(job.video.as_ref().map(|_| out.join(OVERLAY)))
             .collect(),
         notices,
-    })
+    }
+}
+
+/// Where the forecast runs past the lead to which the calibration measured the model's own
+/// error: a notice saying its bands there are not calibrated.
+fn past_calibration(c: &Calibration, o: &Outcome) -> Option<String> {
+    let measured = c.model_error.step * c.model_error.m50.len() as f64;
+    (forecast_lead(o) > measured + 1e-9).then(|| format!(
+        "the calibration measured the model's own error to {measured:.2} s after a window; past that its last value is held, so the bands there are not calibrated (calibrate with a longer [[lead]])"
+    ))
 }
 
 /// The inputs' and outputs' checks before any work; the film's probe, where one is given.
@@ -338,7 +346,7 @@ fn draw(
     files: &mut Outputs,
     path: &std::path::Path,
     job: &ForecastJob,
-    (o, headline): (&crate::forecast::outcome::Outcome, &Headline),
+    (o, headline): (&Outcome, &Headline),
     (t, data): (&[f64], &[[f64; 4]]),
 ) -> Result<()> {
     let f = &o.forecast;

@@ -75,27 +75,7 @@ pub fn run(
     command: &str,
     monitor: &Monitor,
 ) -> Result<TrackSummary> {
-    match job.scale {
-        Scale::UpperArm(l1) => super::check_within("l1", l1, 1e-4, 1e4)?,
-        Scale::PixelsPerMetre(p) => super::check_within("pixels_per_metre", p, 1e-3, 1e9)?,
-        Scale::FromMotion(g) => super::check_within("g", g, 1e-6, 1e6)?,
-    }
-    if !job.video.exists() {
-        return Err(Error::Missing {
-            field: "video",
-            path: job.video.clone(),
-        });
-    }
-    super::check_output("output", &job.output, "csv")?;
-    let engine = match (&job.bridge, engine) {
-        (Some(sources), Some(engine)) => {
-            super::checks::check_damping_not_given(sources)?;
-            Some(engine)
-        }
-        (Some(_), None) => unreachable!("a door that bridges lends an engine"),
-        (None, _) => None,
-    };
-    super::checks::check_distinct(&[("output", &job.output)], &[("video", &job.video)])?;
+    let engine = check_job(job, engine)?;
     let started = std::time::Instant::now();
     let mut decoder = Decoder::open(
         &job.video,
@@ -106,44 +86,8 @@ pub fn run(
     )
     .map_err(|e| e.as_input("video"))?;
     let (width, height) = (decoder.probe.width, decoder.probe.height);
-    let region = match job.region {
-        Some((x0, y0, x1, y1)) => {
-            if !(x0 < x1 && y0 < y1 && x1 <= width && y1 <= height) {
-                return Err(Error::invalid(
-                    "region",
-                    format!(
-                        "{x0},{y0},{x1},{y1} must be X0,Y0,X1,Y1 with X0 < X1 <= {width} and Y0 < Y1 <= {height} (the film's size)"
-                    ),
-                ));
-            }
-            Some((x0 as usize, y0 as usize, x1 as usize, y1 as usize))
-        }
-        None => None,
-    };
-    let total = decoder.probe.times.len();
-    monitor.start("track", total as u64);
-    let mut frame = Vec::new();
-    let mut scratch = track::detect::Scratch::default();
-    let (mut blobs, mut times) = (Vec::with_capacity(total), Vec::with_capacity(total));
-    while let Some(t) = decoder
-        .next_frame(&mut frame)
-        .map_err(|e| e.as_input("video"))?
-    {
-        monitor.check()?;
-        blobs.push(
-            job.markers
-                .find(&frame, width as usize, region, &mut scratch),
-        );
-        times.push(t);
-        monitor.advance(1);
-    }
-    monitor.finish();
-    if blobs.len() < 10 {
-        return Err(Error::invalid(
-            "video",
-            format!("{} frames: tracking needs at least 10", blobs.len()),
-        ));
-    }
+    let region = region_within(job.region, width, height)?;
+    let (blobs, times) = markers_of(&mut decoder, job.markers, region, monitor)?;
     let mut tracked = track::track(
         &blobs,
         &times,
@@ -165,20 +109,8 @@ pub fn run(
     let share =
         |f: &dyn Fn(&TrackRow) -> bool| tracked.rows.iter().filter(|r| f(r)).count() as f64 / n;
     let measured = |m: Option<track::Mark>| m.is_some_and(|m| !m.bridged);
-    let mut notices = Vec::new();
-    if decoder.probe.repeated > 0 {
-        notices.push(format!(
-            "note: {} of the film's {} frames repeat another's timestamp (its container's rounding): each took its place in time order",
-            decoder.probe.repeated, total
-        ));
-    }
     let both = share(&|r| measured(r.m1) && measured(r.m2));
-    if both < 0.5 {
-        notices.push(format!(
-            "note: both masses were measured in {:.0} % of the frames only: is the region, the markers' kind or the scale right?",
-            100.0 * both
-        ));
-    }
+    let notices = notices_of(&decoder.probe, both);
     let mut files = Outputs::new();
     let film = track::file::Film::of(&decoder.probe);
     files.write(&job.output, |w| {
@@ -213,4 +145,101 @@ pub fn run(
         files: vec![job.output.clone()],
         notices,
     })
+}
+
+/// The job's values, its film and its output, before any work; the engine where it bridges.
+fn check_job<'e>(job: &TrackJob, engine: Option<&'e Engine>) -> Result<Option<&'e Engine>> {
+    match job.scale {
+        Scale::UpperArm(l1) => super::check_within("l1", l1, 1e-4, 1e4)?,
+        Scale::PixelsPerMetre(p) => super::check_within("pixels_per_metre", p, 1e-3, 1e9)?,
+        Scale::FromMotion(g) => super::check_within("g", g, 1e-6, 1e6)?,
+    }
+    if !job.video.exists() {
+        return Err(Error::Missing {
+            field: "video",
+            path: job.video.clone(),
+        });
+    }
+    super::check_output("output", &job.output, "csv")?;
+    let engine = match (&job.bridge, engine) {
+        (Some(sources), Some(engine)) => {
+            super::checks::check_damping_not_given(sources)?;
+            Some(engine)
+        }
+        (Some(_), None) => unreachable!("a door that bridges lends an engine"),
+        (None, _) => None,
+    };
+    super::checks::check_distinct(&[("output", &job.output)], &[("video", &job.video)])?;
+    Ok(engine)
+}
+
+/// The region to look in, as pixel bounds, checked against the film's size.
+fn region_within(
+    region: Option<(u32, u32, u32, u32)>,
+    width: u32,
+    height: u32,
+) -> Result<Option<(usize, usize, usize, usize)>> {
+    let Some((x0, y0, x1, y1)) = region else {
+        return Ok(None);
+    };
+    if !(x0 < x1 && y0 < y1 && x1 <= width && y1 <= height) {
+        return Err(Error::invalid(
+            "region",
+            format!(
+                "{x0},{y0},{x1},{y1} must be X0,Y0,X1,Y1 with X0 < X1 <= {width} and Y0 < Y1 <= {height} (the film's size)"
+            ),
+        ));
+    }
+    Ok(Some((x0 as usize, y0 as usize, x1 as usize, y1 as usize)))
+}
+
+/// Every frame's marker blobs and its time, frame by frame (the progress bar's units).
+fn markers_of(
+    decoder: &mut Decoder,
+    markers: Markers,
+    region: Option<(usize, usize, usize, usize)>,
+    monitor: &Monitor,
+) -> Result<(Vec<Vec<track::Blob>>, Vec<f64>)> {
+    let width = decoder.probe.width as usize;
+    let total = decoder.probe.times.len();
+    monitor.start("track", total as u64);
+    let mut frame = Vec::new();
+    let mut scratch = track::detect::Scratch::default();
+    let (mut blobs, mut times) = (Vec::with_capacity(total), Vec::with_capacity(total));
+    while let Some(t) = decoder
+        .next_frame(&mut frame)
+        .map_err(|e| e.as_input("video"))?
+    {
+        monitor.check()?;
+        blobs.push(markers.find(&frame, width, region, &mut scratch));
+        times.push(t);
+        monitor.advance(1);
+    }
+    monitor.finish();
+    if blobs.len() < 10 {
+        return Err(Error::invalid(
+            "video",
+            format!("{} frames: tracking needs at least 10", blobs.len()),
+        ));
+    }
+    Ok((blobs, times))
+}
+
+/// What the film's reading says: repeated timestamps, masses measured too rarely.
+fn notices_of(probe: &crate::video::Probe, both: f64) -> Vec<String> {
+    let mut notices = Vec::new();
+    if probe.repeated > 0 {
+        notices.push(format!(
+            "note: {} of the film's {} frames repeat another's timestamp (its container's rounding): each took its place in time order",
+            probe.repeated,
+            probe.times.len()
+        ));
+    }
+    if both < 0.5 {
+        notices.push(format!(
+            "note: both masses were measured in {:.0} % of the frames only: is the region, the markers' kind or the scale right?",
+            100.0 * both
+        ));
+    }
+    notices
 }

@@ -41,6 +41,15 @@ impl Outcome {
         let lambda = self.forecast.lyapunov;
         (after, after.filter(|_| lambda > 0.0).map(|a| a * lambda))
     }
+
+    /// What chaos and the tracking error alone allow (s): (1/lambda) ln(tolerance / tracking
+    /// error), the FTLE lambda along the fitted orbit. None where the orbit does not stretch or
+    /// the data have no error.
+    pub fn chaos_bound(&self) -> Option<f64> {
+        let lambda = self.forecast.lyapunov;
+        (lambda > 0.0 && self.tracking_error > 0.0)
+            .then(|| (self.tolerance / self.tracking_error).ln() / lambda)
+    }
 }
 
 /// The settings of a fit and forecast of one track (`forecast`'s, and each of `twin`'s
