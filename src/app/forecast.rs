@@ -10,7 +10,6 @@ use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::fit::read_frames;
 use crate::fit::verdict::Verdict;
-use crate::fit::window::TrackRows;
 use crate::forecast::calibration::Calibration;
 use crate::forecast::outcome::{
     ForecastSettings, Learning, Outcome, fit_and_forecast, fit_json, learned_rows,
@@ -96,29 +95,17 @@ pub fn run(
     notices.extend(film_notice);
     notices.extend(tracked.notices.iter().cloned());
     let provenance = provenance(job, &tracked, learn, window_from, calibration.as_ref());
-    let crate::fit::pendulum::Tracked {
-        frames,
-        t,
-        pivot,
-        angles: angle,
-        measured: data,
-        params,
-        ..
-    } = tracked;
     let settings = ForecastSettings {
         window: Some(window),
         ..job.settings
     };
-    let end = t[t.len() - 1];
-    let track = TrackRows {
-        t: &t,
-        data: &data,
-        angles: &angle,
-    };
+    let (t, data, pivot) = (&tracked.t, &tracked.measured, &tracked.pivot);
     let learning = Learning {
         calibration: calibration.as_ref(),
     };
-    let o = fit_and_forecast(&track, &params, &settings, learning, end, engine, monitor)?;
+    let end = t[t.len() - 1];
+    let (track, params) = (tracked.rows(), &tracked.params);
+    let o = fit_and_forecast(&track, params, &settings, learning, end, engine, monitor)?;
     notices.push(o.verdict.describe());
     if job.settings.in_sample {
         notices.push(IN_SAMPLE.into());
@@ -134,7 +121,7 @@ pub fn run(
         &out.join("forecast.png"),
         job,
         (&o, &headline),
-        (&t, &data),
+        (t, data),
     )?;
     crate::forecast::files::write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
     let summary = summary_json(
@@ -143,13 +130,13 @@ pub fn run(
         &o,
         provenance,
         (pivot.x, pivot.y),
-        &t,
+        t,
         (&headline, chaos_bound),
     );
     files.write_json(&out.join("summary.json"), &summary)?;
     if let (Some(video), Some(geometry)) = (&job.video, geometry) {
         let overlay = crate::forecast::overlay::Overlay {
-            rows: &frames,
+            rows: &tracked.frames,
             geometry,
             pivot: (pivot.x, pivot.y),
             outcome: &o,
