@@ -548,6 +548,12 @@ fn files_as_users_have_them() {
         (read[3].t, read[3].x1, read[3].x2, read[3].y2),
         (0.16, 0.1, 0.15, -0.5)
     );
+    // Tracker's bare header (`t x y x y` without the tracks' names above it) reads the same
+    // rows: before, it was refused for want of a column `x1`.
+    let bare = dir.path().join("bare.txt");
+    let text = std::fs::read_to_string(&tracker).unwrap();
+    std::fs::write(&bare, text.replace("#multi:\n\tmass A\t\tmass B\t\t\n", "")).unwrap();
+    assert_eq!(fit::read_frames(&bare, &Units::default()).unwrap(), read);
     // Frame numbers without a rate: the error names the rate.
     let e = fit::read_frames(&semicolons, &Units::default()).unwrap_err();
     assert!(

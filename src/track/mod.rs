@@ -9,6 +9,7 @@ mod errors;
 pub mod file;
 pub mod geometry;
 pub mod pivot;
+pub mod reader;
 pub mod release;
 pub mod synth;
 
