@@ -610,3 +610,105 @@ fn files_as_users_have_them() {
     }
     assert!(!dir.path().join("out").exists(), "nothing written");
 }
+
+/// Tracker exports pixels in its own frame, y up. Read so (`--y-up`), a film's track fits to
+/// the moments its y-down twin does; read as images count (y down) it is refused naming the
+/// flag, whether the scale comes from the motion (it would be negative) or is given (the
+/// moments would all be negative), never fitted upside down.
+#[test]
+fn a_tracker_y_up_export_fits_as_its_y_down_twin() {
+    use chaoscope::fit::data::{PixelScale, Units};
+    use chaoscope::fit::pendulum::tracked_model;
+    let dir = tempfile::tempdir().unwrap();
+    let truth = compound(1.0);
+    let csv = compound_csv(&truth, State::at_rest(2.0, 2.6), 200.0, 3.0, 1e-4);
+    // The same positions in pixels (1200 a metre) with y down, and with y up.
+    let pixels = |up: bool| -> String {
+        let mut out = String::new();
+        for (i, line) in csv.lines().enumerate() {
+            if i == 0 {
+                out += &format!("{line}\n");
+                continue;
+            }
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let y = |y: f64| {
+                if up {
+                    300.0 + 1200.0 * y
+                } else {
+                    300.0 - 1200.0 * y
+                }
+            };
+            out += &format!(
+                "{},{},{},{},{}\n",
+                v[0],
+                500.0 + 1200.0 * v[1],
+                y(v[2]),
+                500.0 + 1200.0 * v[3],
+                y(v[4])
+            );
+        }
+        out
+    };
+    let (down, up) = (dir.path().join("down.csv"), dir.path().join("up.csv"));
+    std::fs::write(&down, pixels(false)).unwrap();
+    std::fs::write(&up, pixels(true)).unwrap();
+    let model = |file: &std::path::Path, scale: PixelScale, y_up: bool| {
+        let units = Units {
+            pixels_per_metre: Some(scale),
+            y_up,
+            ..Default::default()
+        };
+        let rows = fit::read_frames(file, &units)?;
+        tracked_model(&rows, &Default::default(), &units)
+    };
+    let twin = model(&down, PixelScale::FromMotion, false).unwrap();
+    let turned = model(&up, PixelScale::FromMotion, true).unwrap();
+    let (a, b) = (
+        twin.identified.as_ref().unwrap().values,
+        turned.identified.as_ref().unwrap().values,
+    );
+    for k in 0..4 {
+        // The same rows to rounding (0.2 px of 1200 px/m in print): the same moments within
+        // a part in 1e9.
+        assert!((a[k] - b[k]).abs() <= 1e-9 * a[k].abs(), "{a:?} vs {b:?}");
+    }
+    for scale in [PixelScale::FromMotion, PixelScale::PerMetre(1200.0)] {
+        let e = model(&up, scale, false).err().expect("refused");
+        assert!(
+            matches!(&e, chaoscope::Error::InvalidSpec { field: "y_up", .. }),
+            "{scale:?}: {e}"
+        );
+    }
+    // With the model stated (the preset's, the arms from the data), the motion still says so.
+    let units = Units {
+        pixels_per_metre: Some(PixelScale::PerMetre(1200.0)),
+        ..Default::default()
+    };
+    let rows = fit::read_frames(&up, &units).unwrap();
+    let stated = chaoscope::params::ParamSources {
+        preset: Some(Preset::Lab),
+        ..Default::default()
+    };
+    let e = tracked_model(&rows, &stated, &units)
+        .err()
+        .expect("refused");
+    assert!(
+        matches!(&e, chaoscope::Error::InvalidSpec { field: "y_up", .. }),
+        "{e}"
+    );
+    // The command line names the flag.
+    chaoscope()
+        .arg("fit")
+        .arg(&up)
+        .args([
+            "--pixels-per-metre",
+            "motion",
+            "--backend",
+            "cpu",
+            "--output",
+        ])
+        .arg(dir.path().join("out"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--y-up"));
+}

@@ -25,6 +25,7 @@ def fit(
     pixels_per_metre: Union[None, float, str] = None,
     frame_rate: Optional[float] = None,
     before_release: bool = False,
+    y_up: bool = False,
     start: Optional[float] = None,
     until: Optional[float] = None,
     window: Optional[float] = None,
@@ -53,8 +54,9 @@ def fit(
     progress: Progress = None,
 ) -> dict:
     """The model fitted to a camera-tracked run (``chaoscope fit``): ``file`` is a CSV of
-    t, x1, y1, x2, y2 (s, m; y up), or ``frame`` numbers at ``frame_rate`` and pixels (y down)
-    at ``pixels_per_metre`` (or ``"motion"``: the scale the swing implies), a moving pivot in
+    t, x1, y1, x2, y2 (s, m; y up), or ``frame`` numbers at ``frame_rate`` and pixels (y down;
+    ``y_up=True``: up, as Tracker exports them in its own frame) at ``pixels_per_metre`` (or
+    ``"motion"``: the scale the swing implies), a moving pivot in
     ``x0``, ``y0``; a file ``track`` wrote is read from the release it found (the rest and
     the lift by hand are no free motion) unless ``before_release=True``. Returns the summary: the pivot and arm lengths (m, with errors), the
     energy's exponential and inverse-square decay fits, and how long the model released at
@@ -101,6 +103,7 @@ def forecast(
     pixels_per_metre: Union[None, float, str] = None,
     frame_rate: Optional[float] = None,
     before_release: bool = False,
+    y_up: bool = False,
     window: Optional[Pair] = None,
     ahead: Optional[float] = None,
     in_sample: bool = False,

@@ -36,7 +36,8 @@ impl<'py> Keywords<'py> {
         }
     }
 
-    /// A tracked file's units: `pixels_per_metre` (a number, or "motion") and `frame_rate`.
+    /// A tracked file's units: `pixels_per_metre` (a number, or "motion"), `frame_rate`,
+    /// `before_release` and `y_up`.
     pub fn units(&self) -> PyResult<chaoscope::fit::data::Units> {
         use chaoscope::fit::data::PixelScale;
         let pixels_per_metre = match self.get::<String>("pixels_per_metre") {
@@ -54,6 +55,7 @@ impl<'py> Keywords<'py> {
             pixels_per_metre,
             frame_rate: self.get("frame_rate")?,
             before_release: self.or("before_release", false)?,
+            y_up: self.or("y_up", false)?,
         })
     }
 

@@ -158,5 +158,11 @@ pub fn check_units(units: &crate::fit::data::Units) -> Result<()> {
     if let Some(crate::fit::data::PixelScale::PerMetre(p)) = units.pixels_per_metre {
         check_within("pixels_per_metre", p, 1e-3, 1e9)?;
     }
+    if units.y_up && units.pixels_per_metre.is_none() {
+        return Err(Error::invalid(
+            "y_up",
+            "is for pixels (with [[pixels_per_metre]]): positions in metres are read with y up already",
+        ));
+    }
     Ok(())
 }

@@ -367,6 +367,10 @@ pub struct TrackedUnitsArgs {
     /// free motion) where `track` found one [default: from the release]
     #[arg(long)]
     pub before_release: bool,
+    /// The pixels' y runs up, as Tracker exports them in its own frame [default: down, as
+    /// images count it]
+    #[arg(long)]
+    pub y_up: bool,
 }
 
 impl TrackedUnitsArgs {
@@ -375,6 +379,7 @@ impl TrackedUnitsArgs {
             pixels_per_metre: self.pixels_per_metre,
             frame_rate: self.frame_rate,
             before_release: self.before_release,
+            y_up: self.y_up,
         }
     }
 }

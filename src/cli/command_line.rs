@@ -463,7 +463,9 @@ fn units(u: &crate::fit::data::Units) -> String {
         PixelScale::PerMetre(p) => p.to_string(),
         PixelScale::FromMotion => "motion".to_string(),
     });
-    given("pixels-per-metre", scale) + &given("frame-rate", u.frame_rate)
+    given("pixels-per-metre", scale)
+        + &given("frame-rate", u.frame_rate)
+        + if u.y_up { " --y-up" } else { "" }
 }
 
 pub fn fit(job: &FitJob) -> String {

@@ -133,48 +133,15 @@ pub fn fit_model(
         theta2: angles[row].1,
         omega2: w(row, 1),
     };
-    let cost = |sim: &[[f64; 4]]| -> f64 {
-        sim.iter()
-            .zip(&data[row..])
-            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>())
-            .sum()
-    };
-    // Candidates: angles within +-0.15 rad (a few cm at these lengths), angular velocities
-    // within +-4 rad/s (central differences over 2/3 s are crude), damping rates on the
-    // upper arm's inertia (scaling every mass changes nothing).
-    let spans = [0.15, 4.0, 0.15, 4.0];
     let scale = super::window::damping_scale(&spec.params);
-    let dampings: Vec<f64> = super::window::DAMPING_RATES
-        .iter()
-        .map(|r| r * scale)
-        .collect();
-    let per_damping = (spec.candidates / dampings.len()).max(1);
-    let starts: Vec<State> = (0..per_damping)
-        .map(|k| {
-            let u = halton(k, 4);
-            let g = guess.to_array();
-            State::from_array(std::array::from_fn(|j| {
-                g[j] + spans[j] * (2.0 * u[j] - 1.0)
-            }))
-        })
-        .collect();
-    let n_sub = (window_rows as u32 - 1) * SUBSTEPS;
-    // The ensemble integrates with the mean data interval; refinement uses the exact times.
-    let dt = (t[row + window_rows - 1] - t[row]) / n_sub as f64;
+    let window = Rows {
+        t: &t,
+        data: &data,
+        row,
+        count: window_rows,
+    };
+    let (best, candidates) = search(spec, &window, guess, engine, monitor)?;
     let backend = engine.info().backend();
-    let mut best = (f64::INFINITY, guess, 0.0);
-    for &c in &dampings {
-        let p = with_damping(&spec.params, c, c);
-        let ensemble = EnsembleSpec::new(p, &starts, dt, n_sub).keeping(Keep::Every(SUBSTEPS));
-        let runs = engine.ensemble_all(&ensemble, monitor)?;
-        for (s, run) in starts.iter().zip(&runs) {
-            let sim: Vec<[f64; 4]> = run.iter().map(|y| positions(&p, y)).collect();
-            let e = cost(&sim);
-            if e < best.0 {
-                best = (e, *s, c);
-            }
-        }
-    }
     // Refine state and both damping constants together in f64 (damping as q^2 >= 0, smooth).
     let residuals = |q: &DVector<f64>| -> DVector<f64> {
         let p = with_damping(&spec.params, q[4] * q[4], q[5] * q[5]);
@@ -203,24 +170,93 @@ pub fn fit_model(
     // Ten points per data interval for the plots; every tenth is at a data time.
     let simulated = simulate(&fitted, start, &t, row, frames.len() - row, 10);
     let all: Vec<[f64; 4]> = simulated.iter().step_by(10).map(|s| s.1).collect();
-    let mut agrees_until = t[row];
-    for (k, (a, b)) in all.iter().zip(&data[row..]).enumerate() {
-        let e1 = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
-        let e2 = ((a[2] - b[2]).powi(2) + (a[3] - b[3]).powi(2)).sqrt();
-        if e1.max(e2) > spec.tolerance {
-            break;
-        }
-        agrees_until = t[row + k];
-    }
+    let agrees_until = agrees_until(&all, &data[row..], &t[row..], spec.tolerance);
     Ok(ModelFit {
         row,
         t0: t[row],
         start,
         damping: (q[4] * q[4], q[5] * q[5]),
         rms: (refined.chi2 / (window_rows * 4) as f64).sqrt(),
-        candidates: per_damping * dampings.len(),
+        candidates,
         backend,
         agrees_until,
         simulated,
     })
+}
+
+/// The fitted rows: times, measured positions, and the window's first row and count.
+struct Rows<'a> {
+    t: &'a [f64],
+    data: &'a [[f64; 4]],
+    row: usize,
+    count: usize,
+}
+
+/// The ensemble search over the state near `guess` and the joint damping: the best (squared
+/// error, state, damping) and how many candidates it tried.
+fn search(
+    spec: &ModelFitSpec,
+    rows: &Rows,
+    guess: State,
+    engine: &Engine,
+    monitor: &Monitor,
+) -> Result<((f64, State, f64), usize)> {
+    let (t, row, window_rows) = (rows.t, rows.row, rows.count);
+    let cost = |sim: &[[f64; 4]]| -> f64 {
+        sim.iter()
+            .zip(&rows.data[row..])
+            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>())
+            .sum()
+    };
+    // Candidates: angles within +-0.15 rad (a few cm at these lengths), angular velocities
+    // within +-4 rad/s (central differences over 2/3 s are crude), damping rates on the
+    // upper arm's inertia (scaling every mass changes nothing).
+    let spans = [0.15, 4.0, 0.15, 4.0];
+    let scale = super::window::damping_scale(&spec.params);
+    let dampings: Vec<f64> = super::window::DAMPING_RATES
+        .iter()
+        .map(|r| r * scale)
+        .collect();
+    let per_damping = (spec.candidates / dampings.len()).max(1);
+    let starts: Vec<State> = (0..per_damping)
+        .map(|k| {
+            let u = halton(k, 4);
+            let g = guess.to_array();
+            State::from_array(std::array::from_fn(|j| {
+                g[j] + spans[j] * (2.0 * u[j] - 1.0)
+            }))
+        })
+        .collect();
+    let n_sub = (window_rows as u32 - 1) * SUBSTEPS;
+    // The ensemble integrates with the mean data interval; refinement uses the exact times.
+    let dt = (t[row + window_rows - 1] - t[row]) / n_sub as f64;
+    let mut best = (f64::INFINITY, guess, 0.0);
+    for &c in &dampings {
+        let p = with_damping(&spec.params, c, c);
+        let ensemble = EnsembleSpec::new(p, &starts, dt, n_sub).keeping(Keep::Every(SUBSTEPS));
+        let runs = engine.ensemble_all(&ensemble, monitor)?;
+        for (s, run) in starts.iter().zip(&runs) {
+            let sim: Vec<[f64; 4]> = run.iter().map(|y| positions(&p, y)).collect();
+            let e = cost(&sim);
+            if e < best.0 {
+                best = (e, *s, c);
+            }
+        }
+    }
+    Ok((best, per_damping * dampings.len()))
+}
+
+/// Until when (s) `simulated` stays within `tolerance` of every measured position (both
+/// masses); the first time where none does.
+fn agrees_until(simulated: &[[f64; 4]], data: &[[f64; 4]], t: &[f64], tolerance: f64) -> f64 {
+    let mut until = t[0];
+    for (k, (a, b)) in simulated.iter().zip(data).enumerate() {
+        let e1 = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+        let e2 = ((a[2] - b[2]).powi(2) + (a[3] - b[3]).powi(2)).sqrt();
+        if e1.max(e2) > tolerance {
+            break;
+        }
+        until = t[k];
+    }
+    until
 }

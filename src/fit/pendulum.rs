@@ -177,6 +177,24 @@ pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
     motion_scale(&frames, g)
 }
 
+/// Refuses moments that say the file's y axis is turned over. The moments are over the upper
+/// arm's gravity moment P: with gravity turned over, P is negative, and both inertias over it
+/// are, each by three of its standard errors (a stated model's fit is not refused on a noisy
+/// file's chance).
+fn turned_over(id: &Identified) -> Result<()> {
+    let negative = |k: usize| id.values[k] + 3.0 * id.errors[k] < 0.0;
+    if negative(0) && negative(1) {
+        return Err(Error::invalid(
+            "y_up",
+            format!(
+                "the inertias the motion implies are negative (a {:.3e}, b {:.3e} s^2 over the upper arm's gravity moment): the signature of a y axis turned over, the masses falling upwards; pixels are read y down unless [[y_up]] is given (Tracker's own frame), metres y up",
+                id.values[0], id.values[1]
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// [`scale_from_motion`] of `frames` whose upper marker is on the middle joint.
 fn motion_scale(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
     let pivot = fit_pivot(frames)?;
@@ -196,6 +214,16 @@ fn motion_scale(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
         e => e,
     })?;
     let ts = id.time_scale;
+    // Upside down, gravity pulls the masses up: the swing implies a negative scale.
+    if ts.g_implied <= 0.0 {
+        return Err(Error::invalid(
+            "y_up",
+            format!(
+                "the motion implies a scale of {:.4} pixels per metre, negative: in this file's frame the masses fall upwards, so its y runs up (as Tracker exports it); give [[y_up]]",
+                ts.g_implied / g
+            ),
+        ));
+    }
     Ok((ts.g_implied / g, ts.g_implied_error / g))
 }
 
@@ -378,6 +406,9 @@ pub fn tracked_model_from(
             Error::InvalidSpec { reason, .. } => reason,
             e => e.to_string(),
         });
+        if let Ok(id) = &identified {
+            turned_over(id)?;
+        }
         (params, ModelSource::Given, identified)
     } else {
         if let Some(field) = stated_parts(given) {
@@ -395,6 +426,7 @@ pub fn tracked_model_from(
             ),
             e => e,
         })?;
+        turned_over(&id)?;
         if !id.physical() {
             return Err(Error::invalid(
                 "params",

@@ -281,24 +281,7 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
             return None;
         }
     }
-    // The covariance by pieces (the sandwich H^-1 (sum u u^T) H^-1, u each piece's score in
-    // the moments once its state is eliminated): a real pendulum's residuals are not the
-    // camera's white noise alone but the model's small errors too, correlated along a piece,
-    // and pieces are independent where rows are not. With white noise it is the usual
-    // s^2 H^-1 (on 50 seeded pendulums their standard errors agree within a third, a median
-    // 2 % apart; on the shared recording these are 2 to 4 times the white-noise ones).
-    let parts = normals(motion, &pieces, &states, &m, sigma);
-    let (h, _, inverses) = reduce(&parts, 0.0);
-    let h_inv = h.try_inverse()?;
-    let mut scores = DMatrix::zeros(M, M);
-    for (p, a_inv) in parts.iter().zip(&inverses) {
-        let a_inv_d = DMatrix::from_iterator(4, 4, a_inv.iter().copied());
-        let u =
-            &p.g_m - p.b.transpose() * a_inv_d * DVector::from_iterator(4, p.g_s.iter().copied());
-        scores += &u * u.transpose();
-    }
-    let k = pieces.len() as f64;
-    let covariance = &h_inv * scores * &h_inv * (k / (k - 1.0));
+    let covariance = sandwich(motion, &pieces, &states, &m, sigma)?;
     let rows: usize = pieces.iter().map(|p| 2 * p.len()).sum();
     let [a, b, c, q, ..] = m;
     if !(a > 0.0 && b > 0.0 && q > 0.0 && a * b > c * c) {
@@ -325,6 +308,33 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
             rms: arcs.map(|s| (s / n).sqrt()),
         },
     })
+}
+
+/// The covariance by pieces (the sandwich H^-1 (sum u u^T) H^-1, u each piece's score in
+/// the moments once its state is eliminated): a real pendulum's residuals are not the
+/// camera's white noise alone but the model's small errors too, correlated along a piece,
+/// and pieces are independent where rows are not. With white noise it is the usual
+/// s^2 H^-1 (on 50 seeded pendulums their standard errors agree within a third, a median
+/// 2 % apart; on the shared recording these are 2 to 4 times the white-noise ones).
+fn sandwich(
+    motion: &Motion,
+    pieces: &[Range<usize>],
+    states: &[Vector4<f64>],
+    m: &[f64; M],
+    sigma: [f64; 2],
+) -> Option<DMatrix<f64>> {
+    let parts = normals(motion, pieces, states, m, sigma);
+    let (h, _, inverses) = reduce(&parts, 0.0);
+    let h_inv = h.try_inverse()?;
+    let mut scores = DMatrix::zeros(M, M);
+    for (p, a_inv) in parts.iter().zip(&inverses) {
+        let a_inv_d = DMatrix::from_iterator(4, 4, a_inv.iter().copied());
+        let u =
+            &p.g_m - p.b.transpose() * a_inv_d * DVector::from_iterator(4, p.g_s.iter().copied());
+        scores += &u * u.transpose();
+    }
+    let k = pieces.len() as f64;
+    Some(&h_inv * scores * &h_inv * (k / (k - 1.0)))
 }
 
 /// A piece's normal equations, undamped: A = S^T S, B = S^T G, C = G^T G, g_s = S^T r and

@@ -24,7 +24,7 @@
 use crate::engine::Engine;
 use crate::error::Result;
 use crate::fit::verdict::Verdict;
-use crate::fit::window::{TrackRows, fit_window};
+use crate::fit::window::{TrackRows, WindowFit, fit_window};
 use crate::model::Params;
 use crate::monitor::Monitor;
 
@@ -138,43 +138,26 @@ pub fn estimate(
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<Option<ModelError>> {
-    let HeldOut {
-        length,
-        avoid: _,
-        windows: held_out,
-        lead,
-        candidates,
-        phase: _,
-    } = *held;
+    let (length, lead) = (held.length, held.lead);
     let t = track.t;
     let (first, last) = (t[1], t[t.len() - 1]);
     // Each window needs some lead after it: a quarter of its own length at least.
     let latest = last - length - 0.25 * length;
-    if held_out == 0 || latest <= first {
+    if held.windows == 0 || latest <= first {
         return Ok(None);
     }
     let step_rows = t.len() as f64 / (last - t[0]).max(1e-12);
     let step = (0.25 * length).max(2.0 / step_rows);
-    let bins = (lead / step).ceil().max(1.0) as usize;
-    // Per bin: each row's lag and departure across the motion, and the fit's own standard
-    // errors of them there.
-    let mut lags: Vec<Vec<f64>> = vec![Vec::new(); bins];
-    // How many windows reach each bin: each window's departures are one draw of the model's
-    // error, so the bins' quantiles stand on this many draws.
-    let mut draws = vec![0usize; bins];
-    let mut own_lags: Vec<Vec<f64>> = vec![Vec::new(); bins];
-    let mut departures: Vec<Vec<[f64; 4]>> = vec![Vec::new(); bins];
-    let mut own: Vec<Vec<[f64; 4]>> = vec![Vec::new(); bins];
+    let mut bins = Bins::new((lead / step).ceil().max(1.0) as usize, step);
     let (mut windows, mut unfollowed) = (Vec::new(), 0);
     // Evenly spread over the recording; one that overlaps the forecast's window is moved
     // past it (or dropped where there is no room).
-    let starts = held.starts(t);
     let mut tracking_errors = Vec::new();
     let reach = p.l1 + p.l2;
-    for s in starts {
+    for s in held.starts(t) {
         monitor.check()?;
         let w = (s, s + length);
-        let Ok(fit) = fit_window(track, p, w, candidates, engine, &monitor.quiet()) else {
+        let Ok(fit) = fit_window(track, p, w, held.candidates, engine, &monitor.quiet()) else {
             continue;
         };
         let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();
@@ -183,12 +166,53 @@ pub fn estimate(
             continue;
         }
         tracking_errors.push(fit.tracking_error);
+        if bins.add(track, &fit, lead) {
+            windows.push(w);
+        }
+    }
+    if windows.is_empty() {
+        return Ok(None);
+    }
+    let tracking_error = crate::stats::median(&mut tracking_errors).unwrap_or(f64::NAN);
+    Ok(Some(bins.summary(windows, unfollowed, tracking_error)))
+}
+
+/// The held-out windows' departures by lead, a bin every `step` s.
+struct Bins {
+    step: f64,
+    /// Per bin: each row's lag and departure across the motion, and the fit's own standard
+    /// errors of them there.
+    lags: Vec<Vec<f64>>,
+    own_lags: Vec<Vec<f64>>,
+    departures: Vec<Vec<[f64; 4]>>,
+    own: Vec<Vec<[f64; 4]>>,
+    /// How many windows reach each bin: each window's departures are one draw of the model's
+    /// error, so the bins' quantiles stand on this many draws.
+    draws: Vec<usize>,
+}
+
+impl Bins {
+    fn new(bins: usize, step: f64) -> Bins {
+        Bins {
+            step,
+            lags: vec![Vec::new(); bins],
+            own_lags: vec![Vec::new(); bins],
+            departures: vec![Vec::new(); bins],
+            own: vec![Vec::new(); bins],
+            draws: vec![0; bins],
+        }
+    }
+
+    /// The departures of the rows within `lead` after `fit`'s window from its orbit; false
+    /// where no row follows the window.
+    fn add(&mut self, track: &TrackRows, fit: &WindowFit, lead: f64) -> bool {
+        let (t, bins) = (track.t, self.draws.len());
         let end = t[fit.row0 + fit.rows - 1];
         let after: Vec<usize> = (fit.row0 + fit.rows..t.len())
             .take_while(|&i| t[i] - end <= lead)
             .collect();
         if after.is_empty() {
-            continue;
+            return false;
         }
         let times: Vec<f64> = after.iter().map(|&i| t[i]).collect();
         let orbit = fit.positions(&times);
@@ -200,7 +224,7 @@ pub fn estimate(
         let slow = MOVING * MOVING * speeds.iter().sum::<f64>() / speeds.len() as f64;
         let mut reached = vec![false; bins];
         for (((&i, o), v), e) in after.iter().zip(&orbit).zip(&velocity).zip(&errors) {
-            let k = (((t[i] - end) / step).floor() as usize).min(bins - 1);
+            let k = (((t[i] - end) / self.step).floor() as usize).min(bins - 1);
             reached[k] = true;
             let d: [f64; 4] = std::array::from_fn(|c| track.data[i][c] - o[c]);
             // The fit's own error with the tracking error a measurement adds.
@@ -208,93 +232,105 @@ pub fn estimate(
             let vv = dot(v, v);
             let lag = if vv > slow {
                 let tau = dot(&d, v) / vv;
-                lags[k].push(tau.abs());
+                self.lags[k].push(tau.abs());
                 // The fit's own errors along the motion, as a lag (the coordinates' errors
                 // taken as independent).
-                own_lags[k].push((0..4).map(|c| (e[c] * v[c]).powi(2)).sum::<f64>().sqrt() / vv);
+                self.own_lags[k]
+                    .push((0..4).map(|c| (e[c] * v[c]).powi(2)).sum::<f64>().sqrt() / vv);
                 tau
             } else {
                 0.0
             };
-            departures[k].push(std::array::from_fn(|c| (d[c] - lag * v[c]).abs()));
-            own[k].push(e);
+            self.departures[k].push(std::array::from_fn(|c| (d[c] - lag * v[c]).abs()));
+            self.own[k].push(e);
         }
-        for (n, r) in draws.iter_mut().zip(reached) {
+        for (n, r) in self.draws.iter_mut().zip(reached) {
             *n += r as usize;
         }
-        windows.push(w);
+        true
     }
-    if windows.is_empty() {
-        return Ok(None);
-    }
-    let quantile_of = |v: Vec<f64>, q: f64| crate::stats::quantile(v, q).unwrap_or(0.0);
-    let quantile = |values: &[[f64; 4]], c: usize, q: f64| {
-        quantile_of(values.iter().map(|d| d[c]).collect(), q)
-    };
-    let rms = |v: &mut dyn Iterator<Item = f64>| {
-        let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
-        (sum / n.max(1) as f64).sqrt()
-    };
-    // What a quantile `q` exceeds a normal error of standard deviation `s`'s half-width
-    // (z of them) by, in quadrature.
-    let excess = |q: f64, z: f64, s: f64| (q * q - (z * s).powi(2)).max(0.0).sqrt();
-    // A quantile of n draws speaks for the next draw (this forecast's) only as widely as a
-    // prediction interval: Student's t with n - 1 degrees of freedom for the normal z, and
-    // the draws' own mean's uncertainty, sqrt(1 + 1/n). Five windows widen a 90 % band by
-    // 1.42, eight by 1.22.
-    let predictive = |z: f64, n: usize| match n {
-        0 => 1.0,
-        n => student_t(z, (n.max(2) - 1) as f64) / z * (1.0 + 1.0 / n as f64).sqrt(),
-    };
-    // A normal error's 50 % and 90 % half-widths in standard deviations.
-    const Z50: f64 = 0.6745;
-    const Z90: f64 = 1.6449;
-    let mut e = ModelError {
-        step,
-        lag50: Vec::with_capacity(bins),
-        lag90: Vec::with_capacity(bins),
-        q50: Vec::with_capacity(bins),
-        q90: Vec::with_capacity(bins),
-        model_lag50: Vec::with_capacity(bins),
-        model_lag90: Vec::with_capacity(bins),
-        m50: Vec::with_capacity(bins),
-        m90: Vec::with_capacity(bins),
-        windows,
-        unfollowed,
-        tracking_error: crate::stats::median(&mut tracking_errors).unwrap_or(f64::NAN),
-    };
-    // A bin with no rows (a gap) takes the one before it.
-    let (mut lag, mut lag_model) = ([0.0; 2], [0.0; 2]);
-    let (mut across, mut across_model) = (([0.0; 4], [0.0; 4]), ([0.0; 4], [0.0; 4]));
-    for k in 0..bins {
-        if !lags[k].is_empty() {
-            // The fit's own standard error in this bin: the root mean square.
-            let s = rms(&mut own_lags[k].iter().copied());
-            let n = draws[k];
-            lag = [(0.5, Z50), (0.9, Z90)]
-                .map(|(q, z)| quantile_of(lags[k].clone(), q) * predictive(z, n));
-            lag_model = [excess(lag[0], Z50, s), excess(lag[1], Z90, s)];
+
+    /// The model error: per bin the departures' quantiles widened to prediction intervals,
+    /// and the model's own part of them.
+    fn summary(
+        self,
+        windows: Vec<(f64, f64)>,
+        unfollowed: usize,
+        tracking_error: f64,
+    ) -> ModelError {
+        let bins = self.draws.len();
+        let quantile_of = |v: Vec<f64>, q: f64| crate::stats::quantile(v, q).unwrap_or(0.0);
+        let quantile = |values: &[[f64; 4]], c: usize, q: f64| {
+            quantile_of(values.iter().map(|d| d[c]).collect(), q)
+        };
+        let rms = |v: &mut dyn Iterator<Item = f64>| {
+            let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
+            (sum / n.max(1) as f64).sqrt()
+        };
+        // What a quantile `q` exceeds a normal error of standard deviation `s`'s half-width
+        // (z of them) by, in quadrature.
+        let excess = |q: f64, z: f64, s: f64| (q * q - (z * s).powi(2)).max(0.0).sqrt();
+        // A quantile of n draws speaks for the next draw (this forecast's) only as widely as
+        // a prediction interval: Student's t with n - 1 degrees of freedom for the normal z,
+        // and the draws' own mean's uncertainty, sqrt(1 + 1/n). Five windows widen a 90 %
+        // band by 1.42, eight by 1.22.
+        let predictive = |z: f64, n: usize| match n {
+            0 => 1.0,
+            n => student_t(z, (n.max(2) - 1) as f64) / z * (1.0 + 1.0 / n as f64).sqrt(),
+        };
+        // A normal error's 50 % and 90 % half-widths in standard deviations.
+        const Z50: f64 = 0.6745;
+        const Z90: f64 = 1.6449;
+        let mut e = ModelError {
+            step: self.step,
+            lag50: Vec::with_capacity(bins),
+            lag90: Vec::with_capacity(bins),
+            q50: Vec::with_capacity(bins),
+            q90: Vec::with_capacity(bins),
+            model_lag50: Vec::with_capacity(bins),
+            model_lag90: Vec::with_capacity(bins),
+            m50: Vec::with_capacity(bins),
+            m90: Vec::with_capacity(bins),
+            windows,
+            unfollowed,
+            tracking_error,
+        };
+        // A bin with no rows (a gap) takes the one before it.
+        let (mut lag, mut lag_model) = ([0.0; 2], [0.0; 2]);
+        let (mut across, mut across_model) = (([0.0; 4], [0.0; 4]), ([0.0; 4], [0.0; 4]));
+        for k in 0..bins {
+            if !self.lags[k].is_empty() {
+                // The fit's own standard error in this bin: the root mean square.
+                let s = rms(&mut self.own_lags[k].iter().copied());
+                let n = self.draws[k];
+                lag = [(0.5, Z50), (0.9, Z90)]
+                    .map(|(q, z)| quantile_of(self.lags[k].clone(), q) * predictive(z, n));
+                lag_model = [excess(lag[0], Z50, s), excess(lag[1], Z90, s)];
+            }
+            if !self.departures[k].is_empty() {
+                let (bin, sd) = (&self.departures[k], &self.own[k]);
+                let s: [f64; 4] = std::array::from_fn(|c| rms(&mut sd.iter().map(|e| e[c])));
+                let (w50, w90) = (
+                    predictive(Z50, self.draws[k]),
+                    predictive(Z90, self.draws[k]),
+                );
+                let d50: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.5) * w50);
+                let d90: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.9) * w90);
+                across = (d50, d90);
+                across_model = (
+                    std::array::from_fn(|c| excess(d50[c], Z50, s[c])),
+                    std::array::from_fn(|c| excess(d90[c], Z90, s[c])),
+                );
+            }
+            e.lag50.push(lag[0]);
+            e.lag90.push(lag[1]);
+            e.model_lag50.push(lag_model[0]);
+            e.model_lag90.push(lag_model[1]);
+            e.q50.push(across.0);
+            e.q90.push(across.1);
+            e.m50.push(across_model.0);
+            e.m90.push(across_model.1);
         }
-        if !departures[k].is_empty() {
-            let (bin, sd) = (&departures[k], &own[k]);
-            let s: [f64; 4] = std::array::from_fn(|c| rms(&mut sd.iter().map(|e| e[c])));
-            let (w50, w90) = (predictive(Z50, draws[k]), predictive(Z90, draws[k]));
-            let d50: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.5) * w50);
-            let d90: [f64; 4] = std::array::from_fn(|c| quantile(bin, c, 0.9) * w90);
-            across = (d50, d90);
-            across_model = (
-                std::array::from_fn(|c| excess(d50[c], Z50, s[c])),
-                std::array::from_fn(|c| excess(d90[c], Z90, s[c])),
-            );
-        }
-        e.lag50.push(lag[0]);
-        e.lag90.push(lag[1]);
-        e.model_lag50.push(lag_model[0]);
-        e.model_lag90.push(lag_model[1]);
-        e.q50.push(across.0);
-        e.q90.push(across.1);
-        e.m50.push(across_model.0);
-        e.m90.push(across_model.1);
+        e
     }
-    Ok(Some(e))
 }

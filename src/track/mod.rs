@@ -308,42 +308,13 @@ pub fn track(
     }
 }
 
-/// [`track`] in a picture that stands still (or has been steadied on the pivot's marker).
-fn track_steady(
-    frames: &[Vec<Blob>],
-    times: &[f64],
-    scale: Scale,
-    motion: MotionScale,
-) -> Result<Tracked> {
-    let mut still = geometry::still(frames);
-    let without = |still: &[(f64, f64)]| -> Vec<Vec<Blob>> {
-        let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
-        dim_ones_out(
-            frames
-                .iter()
-                .map(|f| f.iter().filter(|b| !is_still(b)).copied().collect())
-                .collect(),
-        )
-    };
-    let mut moving = without(&still);
-    let not_found = || {
-        Error::invalid(
-            "video",
-            "no pendulum found: no circle of blobs that one marker keeps to (are the markers bright on a dark background, or [[markers]] of their colour?)",
-        )
-    };
-    let g = geometry::find(&moving, OFF_GEOMETRY, 1).ok_or_else(not_found)?;
-    // A pendulum hanging still through much of the film looks like lamps where it hangs.
-    let hanging = hanging_places(&still, &g);
-    if !hanging.is_empty() {
-        still.retain(|s| !hanging.contains(s));
-        moving = without(&still);
-    }
-    // Markers of one look are as bright as each other, give or take: a blob with much less
-    // light than the named ones is a reflection or a marker partly hidden (its centroid
-    // off), and one with much more is two blobs merged or a lamp. Markers of two colours
-    // are compared each with its own.
-    let named = geometry::name(&moving, &g, OFF_GEOMETRY);
+/// The blobs of each frame that look like markers (None where no blob is named one).
+/// Markers of one look are as bright as each other, give or take: a blob with much less
+/// light than the named ones is a reflection or a marker partly hidden (its centroid
+/// off), and one with much more is two blobs merged or a lamp. Markers of two colours
+/// are compared each with its own.
+fn plausible_blobs(moving: &[Vec<Blob>], g: &Geometry) -> Option<Vec<Vec<Blob>>> {
+    let named = geometry::name(moving, g, OFF_GEOMETRY);
     let typical = |role: Role, of: fn(&Blob) -> f64| {
         let mut v: Vec<f64> = named
             .iter()
@@ -355,7 +326,7 @@ fn track_steady(
     let flux = Role::ALL.map(|r| typical(r, |b| b.flux));
     let core = Role::ALL.map(|r| typical(r, |b| b.core.2));
     if flux.iter().all(Option::is_none) {
-        return Err(not_found());
+        return None;
     }
     // A sticker's colour smears further than a lamp's light under blur and the chroma's
     // subsampling (1/120 s streaks kept 74 % of a still sticker's flux on the test film):
@@ -391,6 +362,41 @@ fn track_steady(
                 .collect()
         })
         .collect();
+    Some(plausible)
+}
+
+/// [`track`] in a picture that stands still (or has been steadied on the pivot's marker).
+fn track_steady(
+    frames: &[Vec<Blob>],
+    times: &[f64],
+    scale: Scale,
+    motion: MotionScale,
+) -> Result<Tracked> {
+    let mut still = geometry::still(frames);
+    let without = |still: &[(f64, f64)]| -> Vec<Vec<Blob>> {
+        let is_still = |b: &Blob| still.iter().any(|s| (s.0 - b.x).hypot(s.1 - b.y) < 3.0);
+        dim_ones_out(
+            frames
+                .iter()
+                .map(|f| f.iter().filter(|b| !is_still(b)).copied().collect())
+                .collect(),
+        )
+    };
+    let mut moving = without(&still);
+    let not_found = || {
+        Error::invalid(
+            "video",
+            "no pendulum found: no circle of blobs that one marker keeps to (are the markers bright on a dark background, or [[markers]] of their colour?)",
+        )
+    };
+    let g = geometry::find(&moving, OFF_GEOMETRY, 1).ok_or_else(not_found)?;
+    // A pendulum hanging still through much of the film looks like lamps where it hangs.
+    let hanging = hanging_places(&still, &g);
+    if !hanging.is_empty() {
+        still.retain(|s| !hanging.contains(s));
+        moving = without(&still);
+    }
+    let plausible = plausible_blobs(&moving, &g).ok_or_else(not_found)?;
     let named = geometry::name(&plausible, &g, OFF_GEOMETRY);
     check_upper_on_its_circle(frames, &named)?;
     let g = geometry::refined(&named, g);

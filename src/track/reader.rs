@@ -33,6 +33,8 @@ pub struct Units {
     /// Read the rows before the release as well, where `track` found one (its file says
     /// `# release = T`): the rest and the lift by hand are not free motion.
     pub before_release: bool,
+    /// Pixels whose y runs up (Tracker's own frame, and plots'), not down as images count it.
+    pub y_up: bool,
 }
 
 /// The columns a tracked file may name, beside the positions x1, y1, x2, y2: the time `t`
@@ -265,11 +267,12 @@ impl Header {
         if let Some(rate) = units.frame_rate {
             v[0] /= rate;
         }
-        // Pixels count y down; metres here count it up.
+        // Pixels count y down (unless the file's run up); metres here count it up.
+        let down = if units.y_up { 1.0 } else { -1.0 };
         let (scale, flip) = match units.pixels_per_metre {
             None => (1.0, 1.0),
-            Some(PixelScale::PerMetre(p)) => (1.0 / p, -1.0),
-            Some(PixelScale::FromMotion) => (1.0, -1.0),
+            Some(PixelScale::PerMetre(p)) => (1.0 / p, down),
+            Some(PixelScale::FromMotion) => (1.0, down),
         };
         for (k, x) in v.iter_mut().enumerate().skip(1) {
             let along = match k % 2 {
