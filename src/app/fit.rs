@@ -365,6 +365,7 @@ fn calibration_of(
                     (ModelSource::Identified, Ok(id)) => Some(&id.covariance),
                     _ => None,
                 },
+                damping: tracked.damping_prior(),
             };
             let made =
                 crate::forecast::calibrate::calibrate(&rows, &params, &asked, engine, monitor)?;

@@ -102,6 +102,10 @@ pub fn run(
     let (t, data, pivot) = (&tracked.t, &tracked.measured, &tracked.pivot);
     let learning = Learning {
         calibration: calibration.as_ref(),
+        damping: match &calibration {
+            Some(c) => c.damping,
+            None => tracked.damping_prior(),
+        },
     };
     let end = t[t.len() - 1];
     let (track, params) = (tracked.rows(), &tracked.params);

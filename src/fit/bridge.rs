@@ -189,6 +189,7 @@ impl Filler<'_> {
             self.params,
             window,
             BRIDGE_CANDIDATES,
+            None,
             self.engine,
             self.monitor,
         ) {

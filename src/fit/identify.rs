@@ -24,7 +24,7 @@ use nalgebra::{DMatrix, DVector};
 
 pub use super::refine::Refinement;
 use super::refine::{Motion, refine};
-use super::window::TrackRows;
+use super::window::{DampingPrior, TrackRows};
 use crate::error::{Error, Result};
 use crate::model::{Losses, Params};
 
@@ -412,6 +412,17 @@ impl Identified {
         );
         crate::params::validate(&params)?;
         Ok(params)
+    }
+
+    /// The joint damping the motion shows, with its standard errors, in [`Self::params`]'
+    /// units (N m s on the model's scale; a negative value kept as found): what each
+    /// window's fit is held to.
+    pub fn damping_prior(&self) -> DampingPrior {
+        let p = self.time_scale.g_implied * self.l1;
+        DampingPrior {
+            damping: [self.values[4] * p, self.values[5] * p],
+            error: [self.errors[4] * p.abs(), self.errors[5] * p.abs()],
+        }
     }
 }
 

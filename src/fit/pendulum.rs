@@ -107,6 +107,15 @@ pub struct Tracked {
 }
 
 impl Tracked {
+    /// The joint damping the rows' motion shows, with its errors, where the model came from
+    /// the motion: what a window's fit is held to ([`super::window::DampingPrior`]).
+    pub fn damping_prior(&self) -> Option<super::window::DampingPrior> {
+        match (&self.source, &self.identified) {
+            (ModelSource::Identified, Ok(id)) => Some(id.damping_prior()).filter(|d| d.is_valid()),
+            _ => None,
+        }
+    }
+
     pub fn rows(&self) -> TrackRows<'_> {
         TrackRows {
             t: &self.t,

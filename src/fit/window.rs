@@ -345,13 +345,34 @@ impl TrackRows<'_> {
     }
 }
 
+/// What a window's fit knows of the joint damping before it looks: the damping (N m s) at
+/// the pivot and the middle joint with its standard errors, as the motion of a longer stretch
+/// shows it (a calibration's recording, or the rows a forecast learns from). A window of a
+/// few motion times hardly sees the damping: fitted alone, the pivot's wandered from -2 to +2
+/// times its size between the shared recordings' windows, and the members' spread with it.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DampingPrior {
+    pub damping: [f64; 2],
+    pub error: [f64; 2],
+}
+
+impl DampingPrior {
+    /// Finite values with errors > 0.
+    pub fn is_valid(&self) -> bool {
+        self.damping.iter().all(|d| d.is_finite())
+            && self.error.iter().all(|e| e.is_finite() && *e > 0.0)
+    }
+}
+
 /// Fits `p`'s state, joint damping, pivot and scale to the `track`'s measured positions
-/// within `window`; `candidates` states and dampings are searched on `engine` first.
+/// within `window`, the damping held to `prior` where one is known; `candidates` states and
+/// dampings are searched on `engine` first.
 pub fn fit_window(
     rows: &TrackRows,
     p: &Params,
     window: (f64, f64),
     candidates: usize,
+    prior: Option<&DampingPrior>,
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<WindowFit> {
@@ -464,12 +485,15 @@ pub fn fit_window(
             q[8] / SCALE_PRIOR,
             q[9] / SCALE_PRIOR,
         ];
+        // The damping's prior, where known: two more residuals of the same kind.
+        let damping = prior.map(|d| [0, 1].map(|k| (q[4 + k] - d.damping[k]) / d.error[k]));
         DVector::from_iterator(
-            rows * 4 + priors.len(),
+            rows * 4 + priors.len() + damping.map_or(0, |d| d.len()),
             sim.iter()
                 .zip(data)
                 .flat_map(|(a, b)| (0..4).map(move |k| a[k] + pivot[k] - b[k]))
-                .chain(priors.map(|z| z * error)),
+                .chain(priors.map(|z| z * error))
+                .chain(damping.into_iter().flatten().map(|z| z * error)),
         )
     };
     let solve = |q0: DVector<f64>, error: f64| {

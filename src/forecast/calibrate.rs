@@ -7,7 +7,7 @@ use super::calibration::{BandFactors, Calibration, MOST_FACTOR};
 use super::model_error::{HeldOut, ModelError, estimate};
 use crate::engine::Engine;
 use crate::error::Result;
-use crate::fit::window::TrackRows;
+use crate::fit::window::{DampingPrior, TrackRows};
 use crate::model::Params;
 use crate::monitor::Monitor;
 
@@ -26,6 +26,9 @@ pub struct Asked<'a> {
     pub pivot: (f64, f64),
     /// The moments' covariance, where the model came from the motion.
     pub moment_covariance: Option<&'a nalgebra::DMatrix<f64>>,
+    /// The joint damping the recording's motion shows, which each stretch's fit is held to
+    /// (and a forecast's, after).
+    pub damping: Option<DampingPrior>,
 }
 
 /// The calibration of `p` on the recording `rows`: the model's own error on half the
@@ -46,6 +49,7 @@ pub fn calibrate(
         lead: asked.lead,
         candidates: asked.candidates.min(super::outcome::HELD_OUT_CANDIDATES),
         phase: 0.5,
+        damping: asked.damping,
     };
     let Some(model_error) =
         estimate(rows, p, &held, engine, monitor)?.filter(|e| e.tracking_error.is_finite())
@@ -82,6 +86,7 @@ pub fn calibrate(
                 .map(|i| c.row(i).iter().copied().collect())
                 .collect()
         }),
+        damping: asked.damping,
         model_error,
         band_factors,
     }))
@@ -120,7 +125,15 @@ pub fn band_factors(
     for s in run.held.starts(t) {
         monitor.check()?;
         let w = (s, s + run.held.length);
-        let Ok(fit) = fit_window(track, p, w, run.held.candidates, engine, &quiet) else {
+        let Ok(fit) = fit_window(
+            track,
+            p,
+            w,
+            run.held.candidates,
+            run.held.damping.as_ref(),
+            engine,
+            &quiet,
+        ) else {
             continue;
         };
         let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();

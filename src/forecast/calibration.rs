@@ -16,6 +16,7 @@ use serde::Deserialize;
 
 use super::model_error::ModelError;
 use crate::error::{Error, Result};
+use crate::fit::window::DampingPrior;
 
 #[derive(Clone, Debug, serde::Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -41,6 +42,10 @@ pub struct Calibration {
     /// model came from the motion.
     #[serde(default)]
     pub moment_covariance: Option<Vec<Vec<f64>>>,
+    /// The joint damping the recording's motion shows (N m s on the model's scale) and its
+    /// standard errors, where the model came from the motion: each window's fit is held to it.
+    #[serde(default)]
+    pub damping: Option<DampingPrior>,
     pub model_error: ModelError,
     /// By how much the bands are widened at each lead to hold the data (measured on held-out
     /// windows of the recording other than the model error's).
@@ -88,6 +93,15 @@ impl Calibration {
             out.push_str(&format!(
                 "moment_covariance = [{}]  # a, b, c, q, k1, k2 over P\n",
                 rows.join(", ")
+            ));
+        }
+        if let Some(d) = &self.damping {
+            out.push_str(&format!(
+                "\n[{TABLE}.damping]  # N m s on the model's scale, as the motion shows it: each window's fit is held to it\n\
+                 damping = {}  # at the pivot and the middle joint\n\
+                 error = {}  # their standard errors\n",
+                list(&d.damping),
+                list(&d.error),
             ));
         }
         let e = &self.model_error;
@@ -188,6 +202,9 @@ impl Calibration {
         if let Some((key, v)) = positive.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
             return Err(format!("key {key}: {v} must be a finite number > 0"));
         }
+        if self.damping.is_some_and(|d| !d.is_valid()) {
+            return Err("damping: finite values and errors > 0".into());
+        }
         if let Some(b) = &self.band_factors {
             let ok = b.step.is_finite()
                 && b.step > 0.0
@@ -282,6 +299,10 @@ mod tests {
             pixels_per_metre: Some([823.794_208_122_597_5, 3.74]),
             pivot: Some([4.5e-4, -1.9e-4]),
             moment_covariance: Some(vec![vec![1.48e-9, -9.08e-11], vec![-9.08e-11, 1.02e-9]]),
+            damping: Some(DampingPrior {
+                damping: [-2.2e-5, 1.4e-4],
+                error: [9.4e-5, 1.46e-5],
+            }),
             model_error: ModelError {
                 step: 0.062_253_619_963_832_09,
                 lag50: vec![1.3e-4, 5.6e-4, 1.2e-3],

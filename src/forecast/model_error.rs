@@ -24,7 +24,7 @@
 use crate::engine::Engine;
 use crate::error::Result;
 use crate::fit::verdict::Verdict;
-use crate::fit::window::{TrackRows, WindowFit, fit_window};
+use crate::fit::window::{DampingPrior, TrackRows, WindowFit, fit_window};
 use crate::model::Params;
 use crate::monitor::Monitor;
 
@@ -107,6 +107,8 @@ pub struct HeldOut {
     pub phase: f64,
     /// Candidates of each window's search.
     pub candidates: usize,
+    /// What each window's fit knows of the joint damping.
+    pub damping: Option<DampingPrior>,
 }
 
 impl HeldOut {
@@ -157,7 +159,15 @@ pub fn estimate(
     for s in held.starts(t) {
         monitor.check()?;
         let w = (s, s + length);
-        let Ok(fit) = fit_window(track, p, w, held.candidates, engine, &monitor.quiet()) else {
+        let Ok(fit) = fit_window(
+            track,
+            p,
+            w,
+            held.candidates,
+            held.damping.as_ref(),
+            engine,
+            &monitor.quiet(),
+        ) else {
             continue;
         };
         let rms = (fit.chi2 / (4 * fit.rows) as f64).sqrt();

@@ -8,7 +8,7 @@ use super::calibration::Calibration;
 use crate::engine::Engine;
 use crate::error::{Error, Result, check_count, check_within};
 use crate::fit::verdict::Verdict;
-use crate::fit::window::{FITTED, TrackRows, WindowFit, fit_window};
+use crate::fit::window::{DampingPrior, FITTED, TrackRows, WindowFit, fit_window};
 use crate::forecast::{self, Forecast, ForecastSpec, band_times, most_members};
 use crate::model::Params;
 use crate::monitor::Monitor;
@@ -122,6 +122,9 @@ impl ForecastSettings {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Learning<'a> {
     pub calibration: Option<&'a Calibration>,
+    /// The joint damping the motion shows (the calibration's, or the learned rows'), which
+    /// the window's fit and the held-out ones are held to.
+    pub damping: Option<DampingPrior>,
 }
 
 /// The rows of `t` a forecast with `window` learns from: those up to its end (to a
@@ -194,7 +197,16 @@ pub fn fit_and_forecast(
             ),
         ));
     }
-    let fit = fit_window(&learn, p, window, settings.candidates, engine, monitor)?;
+    let prior = learning.damping.as_ref();
+    let fit = fit_window(
+        &learn,
+        p,
+        window,
+        settings.candidates,
+        prior,
+        engine,
+        monitor,
+    )?;
     // The window ends at its last row.
     let window_end = t[fit.row0 + fit.rows - 1];
     let end = settings.ahead.map_or(end, |ahead| window_end + ahead);
@@ -211,6 +223,7 @@ pub fn fit_and_forecast(
         lead,
         candidates: settings.candidates.min(HELD_OUT_CANDIDATES),
         phase: 0.5,
+        damping: learning.damping,
     };
     // The model's own error: a calibration's, else the held-out windows' (each fitted
     // orbit followed as far as this forecast's lead: a model's lag keeps growing on a
