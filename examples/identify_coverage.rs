@@ -71,7 +71,7 @@ fn main() {
             angles: &angles,
         };
         let truth = [k.a / k.p, k.b / k.p, k.c / k.p, k.q / k.p];
-        match identify(&track, p.g) {
+        match identify(&track, p.g, &chaoscope::monitor::Monitor::hidden()) {
             Ok(id) => {
                 identified += 1;
                 let hits: Vec<bool> = (0..4)

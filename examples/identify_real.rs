@@ -41,7 +41,8 @@ fn main() {
         data: &data,
         angles: &angles,
     };
-    let id = chaoscope::fit::identify::identify(&rows, 9.81).unwrap();
+    let hidden = chaoscope::monitor::Monitor::hidden();
+    let id = chaoscope::fit::identify::identify(&rows, 9.81, &hidden).unwrap();
     let ts = id.time_scale;
     println!("rows {} from {first} s at {fps} frames/s", t.len());
     for (k, name) in chaoscope::fit::identify::MOMENTS.iter().enumerate() {

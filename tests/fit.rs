@@ -659,7 +659,12 @@ fn a_tracker_y_up_export_fits_as_its_y_down_twin() {
             ..Default::default()
         };
         let rows = fit::read_frames(file, &units)?;
-        tracked_model(&rows, &Default::default(), &units)
+        tracked_model(
+            &rows,
+            &Default::default(),
+            &units,
+            &chaoscope::monitor::Monitor::hidden(),
+        )
     };
     let twin = model(&down, PixelScale::FromMotion, false).unwrap();
     let turned = model(&up, PixelScale::FromMotion, true).unwrap();
@@ -689,9 +694,14 @@ fn a_tracker_y_up_export_fits_as_its_y_down_twin() {
         preset: Some(Preset::Lab),
         ..Default::default()
     };
-    let e = tracked_model(&rows, &stated, &units)
-        .err()
-        .expect("refused");
+    let e = tracked_model(
+        &rows,
+        &stated,
+        &units,
+        &chaoscope::monitor::Monitor::hidden(),
+    )
+    .err()
+    .expect("refused");
     assert!(
         matches!(&e, chaoscope::Error::InvalidSpec { field: "y_up", .. }),
         "{e}"

@@ -210,6 +210,40 @@ fn ctrl_c_and_sigterm_stop_long_commands_without_leaving_files() {
     }
 }
 
+/// A long recording's motion is identified with the monitor checked between blocks of rows
+/// (before, a million rows held Ctrl-C for 11 s while their velocities were differentiated):
+/// `fit` of a million rows stops within the few seconds `stops_on` allows.
+#[test]
+fn ctrl_c_stops_the_identification_of_a_long_recording() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("long.csv");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&csv).unwrap());
+    writeln!(w, "t,x1,y1,x2,y2").unwrap();
+    for k in 0..1_000_000 {
+        let t = k as f64 / 1000.0;
+        let (a, b) = (0.8 * (4.1 * t).sin(), 1.1 * (6.3 * t + 1.0).sin());
+        let (x1, y1) = (0.3 * a.sin(), -0.3 * a.cos());
+        let (x2, y2) = (x1 + 0.2 * b.sin(), y1 - 0.2 * b.cos());
+        writeln!(w, "{t:.3},{x1:.6},{y1:.6},{x2:.6},{y2:.6}").unwrap();
+    }
+    drop(w);
+    let outputs = dir.path().join("outputs");
+    std::fs::create_dir(&outputs).unwrap();
+    let out = outputs.join("fit");
+    let args = [
+        "fit",
+        csv.to_str().unwrap(),
+        "--held-out",
+        "0",
+        "--backend",
+        "cpu",
+        "--output",
+        out.to_str().unwrap(),
+    ];
+    stops_on("INT", &outputs, &args, Duration::from_millis(2500), false);
+}
+
 #[test]
 fn outputs_are_checked_before_any_work() {
     let dir = tempfile::tempdir().unwrap();

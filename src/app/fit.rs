@@ -106,7 +106,7 @@ pub fn run(
     check_job(job)?;
     let read = read_rows(job)?;
     let t: Vec<f64> = read.iter().map(|f| f.t).collect();
-    let tracked = tracked_model(&read, &job.params, &job.units)?;
+    let tracked = tracked_model(&read, &job.params, &job.units, monitor)?;
     let spec = ModelFitSpec {
         params: tracked.params,
         start_time: job.start.unwrap_or_else(|| tracked.default_start()),

@@ -89,7 +89,7 @@ pub fn run(
         window_from,
         rows: learn,
         tracked,
-    } = learned(job, &read)?;
+    } = learned(job, &read, monitor)?;
     let mut notices = engine.notices();
     notices.push(tracked.source.describe_model(&tracked.params));
     notices.extend(film_notice);
@@ -266,7 +266,11 @@ struct Learned {
     tracked: crate::fit::pendulum::Tracked,
 }
 
-fn learned(job: &ForecastJob, read: &[crate::fit::TrackedRow]) -> Result<Learned> {
+fn learned(
+    job: &ForecastJob,
+    read: &[crate::fit::TrackedRow],
+    monitor: &Monitor,
+) -> Result<Learned> {
     // A calibration that `fit` wrote beside the model, unless in sample (where the file
     // itself teaches everything).
     let calibration = match &job.params.params {
@@ -312,6 +316,7 @@ fn learned(job: &ForecastJob, read: &[crate::fit::TrackedRow]) -> Result<Learned
         &job.params,
         &job.units,
         known,
+        monitor,
     )
     .map_err(|e| match e {
         Error::InvalidSpec { field: "params", reason } if !job.settings.in_sample => Error::invalid(

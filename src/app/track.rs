@@ -88,13 +88,9 @@ pub fn run(
     let (width, height) = (decoder.probe.width, decoder.probe.height);
     let region = region_within(job.region, width, height)?;
     let (blobs, times) = markers_of(&mut decoder, job.markers, region, monitor)?;
-    let mut tracked = track::track(
-        &blobs,
-        &times,
-        job.scale,
-        job.markers,
-        &crate::fit::pendulum::scale_from_motion,
-    )?;
+    let mut tracked = track::track(&blobs, &times, job.scale, job.markers, &|rows, g| {
+        crate::fit::pendulum::scale_from_motion(rows, g, monitor)
+    })?;
     let bridged = match (&job.bridge, engine) {
         (Some(sources), Some(engine)) => Some(crate::fit::bridge::bridge(
             &mut tracked,

@@ -68,7 +68,8 @@ pub fn bridge(
             .collect();
         return Ok(out);
     }
-    let model = crate::fit::pendulum::tracked_model(&frames, sources, &Default::default())?;
+    let units = Default::default();
+    let model = crate::fit::pendulum::tracked_model(&frames, sources, &units, monitor)?;
     let t: Vec<f64> = frames.iter().map(|f| f.t).collect();
     let nested = monitor.quiet();
     let filler = Filler {

@@ -27,6 +27,7 @@ use super::refine::{Motion, refine};
 use super::window::{DampingPrior, TrackRows};
 use crate::error::{Error, Result};
 use crate::model::{Losses, Params};
+use crate::monitor::Monitor;
 
 /// The identified quantities, in [`Identified::values`]' order.
 pub const MOMENTS: [&str; 6] = ["a", "b", "c", "q", "k1", "k2"];
@@ -110,29 +111,41 @@ fn bump(s: f64) -> [f64; 3] {
 /// quartic over five rows at 30 and 60 frames a second left a's 95 % interval missing the
 /// truth in 17 of 20 cases, degree 10 over eleven rows in 5 (examples/identify_coverage).
 /// Solved by singular values: the powers' columns are nearly parallel.
-fn velocities(t: &[f64], theta: &[f64], half: usize) -> Vec<f64> {
+/// Rows in parallel, a block at a time between the monitor's checks (a million rows take
+/// some ten seconds of singular values on one core).
+fn velocities(t: &[f64], theta: &[f64], half: usize, monitor: &Monitor) -> Result<Vec<f64>> {
+    use rayon::prelude::*;
+    const BLOCK: usize = 8192;
     let n = t.len();
-    (0..n)
-        .map(|i| {
-            let (lo, hi) = (i.saturating_sub(half), (i + half + 1).min(n));
-            let degree = (hi - lo - 1).min(10);
-            let scale = (t[hi - 1] - t[lo]).max(1e-12);
-            let x = DMatrix::from_fn(hi - lo, degree + 1, |r, k| {
-                ((t[lo + r] - t[i]) / scale).powi(k as i32)
-            });
-            let y = DVector::from_iterator(hi - lo, theta[lo..hi].iter().copied());
-            match x.svd(true, true).solve(&y, 1e-13).ok() {
-                Some(beta) if degree >= 1 => beta[1] / scale,
-                _ => f64::NAN,
-            }
-        })
-        .collect()
+    let at = |i: usize| {
+        let (lo, hi) = (i.saturating_sub(half), (i + half + 1).min(n));
+        let degree = (hi - lo - 1).min(10);
+        let scale = (t[hi - 1] - t[lo]).max(1e-12);
+        let x = DMatrix::from_fn(hi - lo, degree + 1, |r, k| {
+            ((t[lo + r] - t[i]) / scale).powi(k as i32)
+        });
+        let y = DVector::from_iterator(hi - lo, theta[lo..hi].iter().copied());
+        match x.svd(true, true).solve(&y, 1e-13).ok() {
+            Some(beta) if degree >= 1 => beta[1] / scale,
+            _ => f64::NAN,
+        }
+    };
+    let mut out = Vec::with_capacity(n);
+    for first in (0..n).step_by(BLOCK) {
+        monitor.check()?;
+        let block: Vec<f64> = (first..(first + BLOCK).min(n))
+            .into_par_iter()
+            .map(at)
+            .collect();
+        out.extend(block);
+    }
+    Ok(out)
 }
 
 /// Identifies the pendulum from a track's rows (times, positions relative to the pivot and
 /// the arms' unwrapped angles, [`crate::fit::data::angles`]): the upper marker at the middle
 /// joint, the lower one anywhere along the lower arm. `g` is the stated gravity.
-pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
+pub fn identify(track: &TrackRows, g: f64, monitor: &Monitor) -> Result<Identified> {
     let (t, data) = (track.t, track.data);
     let n = t.len();
     let finite = |d: &[f64; 4]| d.iter().all(|x| x.is_finite());
@@ -178,7 +191,10 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         rows
     };
     let half = ((0.1 * natural * rate).round() as usize).clamp(5, 8);
-    let (w1, w2) = (velocities(t, &th1, half), velocities(t, &th2, half));
+    let (w1, w2) = (
+        velocities(t, &th1, half, monitor)?,
+        velocities(t, &th2, half, monitor)?,
+    );
     // Two equations a stretch: the regressors of (a, b, c, q, k1, k2), and the first's right
     // side (the second's is 0: gravity's moment P, the unit, acts on the upper arm alone).
     let mut rows1: Vec<([f64; 6], f64)> = Vec::new();
@@ -187,6 +203,7 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
     let mut durations = Vec::new();
     let mut ranges = Vec::new();
     loop {
+        monitor.check()?;
         let rows = stretch_rows(start);
         if start + rows > n {
             break;
@@ -292,6 +309,7 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
     let mut weights = [1.0, 1.0];
     let mut rounds = 0;
     loop {
+        monitor.check()?;
         let beta = solve(weights, &keep).3.ok_or_else(singular)?;
         let r = residuals(&beta);
         let spread = [robust(&r, &keep, 0), robust(&r, &keep, 1)];
@@ -337,7 +355,7 @@ pub fn identify(track: &TrackRows, g: f64) -> Result<Identified> {
         .filter(|(_, k)| **k)
         .map(|(r, _)| r.clone())
         .collect();
-    let (values, covariance, refinement) = match refine(&motion, &stretches, weak) {
+    let (values, covariance, refinement) = match refine(&motion, &stretches, weak, monitor)? {
         Some(r) => (r.values, r.covariance, Some(r.refinement)),
         None => (weak, weak_covariance, None),
     };
@@ -527,7 +545,7 @@ mod tests {
                 data: &data,
                 angles: &angles,
             };
-            let id = identify(&rows, 9.81).unwrap();
+            let id = identify(&rows, 9.81, &Monitor::hidden()).unwrap();
             let want = truth(&p);
             assert!(id.refinement.is_some(), "{scale} {fps}: not refined");
             eprintln!(

@@ -9,6 +9,7 @@ use super::joint::{Joint, joint_off_marker};
 use super::window::TrackRows;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
+use crate::monitor::Monitor;
 use crate::params::ParamSources;
 
 /// Where the fitted model came from.
@@ -180,10 +181,10 @@ const UNIT_MISTAKE: f64 = 25.0;
 
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
-pub fn scale_from_motion(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
+pub fn scale_from_motion(frames: &[TrackedRow], g: f64, monitor: &Monitor) -> Result<(f64, f64)> {
     let (frames, _) = on_joint(frames, frames.len())?;
     fit_pivot(&frames)?;
-    motion_scale(&frames, g)
+    motion_scale(&frames, g, monitor)
 }
 
 /// Refuses moments that say the file's y axis is turned over. The moments are over the upper
@@ -205,7 +206,7 @@ fn turned_over(id: &Identified) -> Result<()> {
 }
 
 /// [`scale_from_motion`] of `frames` whose upper marker is on the middle joint.
-fn motion_scale(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
+fn motion_scale(frames: &[TrackedRow], g: f64, monitor: &Monitor) -> Result<(f64, f64)> {
     let pivot = fit_pivot(frames)?;
     let measured = super::measured(frames, (pivot.x, pivot.y));
     let angles = angles(frames, (pivot.x, pivot.y));
@@ -215,7 +216,7 @@ fn motion_scale(frames: &[TrackedRow], g: f64) -> Result<(f64, f64)> {
         data: &measured,
         angles: &angles,
     };
-    let id = identify(&rows, g).map_err(|e| match e {
+    let id = identify(&rows, g, monitor).map_err(|e| match e {
         Error::InvalidSpec { reason, .. } => Error::invalid(
             "pixels_per_metre",
             format!("the scale cannot be found from this file's motion: {reason}; give it"),
@@ -258,8 +259,16 @@ pub fn tracked_model(
     frames: &[TrackedRow],
     given: &ParamSources,
     units: &super::data::Units,
+    monitor: &Monitor,
 ) -> Result<Tracked> {
-    tracked_model_from(frames, frames.len(), given, units, Known::default())
+    tracked_model_from(
+        frames,
+        frames.len(),
+        given,
+        units,
+        Known::default(),
+        monitor,
+    )
 }
 
 /// What a calibration knows of the camera's view of the pendulum, for a recording too short
@@ -295,6 +304,7 @@ pub fn tracked_model_from(
     given: &ParamSources,
     units: &super::data::Units,
     known: Known,
+    monitor: &Monitor,
 ) -> Result<Tracked> {
     let scale = known.scale;
     let g = given.g.unwrap_or(Params::default().g);
@@ -305,7 +315,7 @@ pub fn tracked_model_from(
         Some(super::data::PixelScale::FromMotion) => {
             let (ppm, error) = match scale {
                 Some(s) => s,
-                None => motion_scale(&frames[..learn], g)?,
+                None => motion_scale(&frames[..learn], g, monitor)?,
             };
             if let Some(j) = &mut joint {
                 *j = Joint {
@@ -411,7 +421,7 @@ pub fn tracked_model_from(
                 params.losses.joint1, params.losses.joint2
             ));
         }
-        let identified = identify(&rows, params.g).map_err(|e| match e {
+        let identified = identify(&rows, params.g, monitor).map_err(|e| match e {
             Error::InvalidSpec { reason, .. } => reason,
             e => e.to_string(),
         });
@@ -426,7 +436,7 @@ pub fn tracked_model_from(
                 "states a part of a pendulum, but no model was given for it to be part of: with no preset or params the model is found from the motion, which fixes it; give a preset or params to state a model, or leave it out",
             ));
         }
-        let id = identify(&rows, g).map_err(|e| match e {
+        let id = identify(&rows, g, monitor).map_err(|e| match e {
             Error::InvalidSpec { reason, .. } => Error::invalid(
                 "params",
                 format!(

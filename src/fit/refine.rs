@@ -11,6 +11,9 @@
 
 use std::ops::Range;
 
+use crate::error::Result;
+use crate::monitor::Monitor;
+
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 
 /// The moments' count: a, b, c, q, k1, k2 ([`super::identify::MOMENTS`]).
@@ -206,12 +209,17 @@ fn pieces(motion: &Motion, stretches: &[Range<usize>]) -> Vec<Range<usize>> {
 
 /// Refines the moments `start` on `stretches` of `motion`. None when the pieces are too few
 /// or the fit ends on moments no real pendulum has.
-pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> Option<Refined> {
+pub fn refine(
+    motion: &Motion,
+    stretches: &[Range<usize>],
+    start: [f64; M],
+    monitor: &Monitor,
+) -> Result<Option<Refined>> {
     let mut pieces = pieces(motion, stretches);
     let of = pieces.len();
     pieces = thinned(pieces, MOST_PIECES);
     if pieces.len() < 4 {
-        return None;
+        return Ok(None);
     }
     let mut states: Vec<Vector4<f64>> = pieces
         .iter()
@@ -226,7 +234,7 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
         })
         .collect();
     if states.iter().any(|s| !s.iter().all(|x| x.is_finite())) {
-        return None;
+        return Ok(None);
     }
     let mut m = start;
     let mut sigma = [1.0, 1.0];
@@ -234,7 +242,7 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
     // Rounds: the markers' noise (each marker's arc RMS) sets the weights, pieces far off
     // the rest are left out, and the fit runs again until the set and the weights hold.
     for round in 0..4 {
-        converge(motion, &pieces, &mut states, &mut m, sigma);
+        converge(motion, &pieces, &mut states, &mut m, sigma, monitor)?;
         let rms: Vec<[f64; 2]> = pieces
             .iter()
             .zip(&states)
@@ -278,14 +286,16 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
             .map(|(piece, _)| piece)
             .unzip();
         if pieces.len() < 4 {
-            return None;
+            return Ok(None);
         }
     }
-    let covariance = sandwich(motion, &pieces, &states, &m, sigma)?;
+    let Some(covariance) = sandwich(motion, &pieces, &states, &m, sigma) else {
+        return Ok(None);
+    };
     let rows: usize = pieces.iter().map(|p| 2 * p.len()).sum();
     let [a, b, c, q, ..] = m;
     if !(a > 0.0 && b > 0.0 && q > 0.0 && a * b > c * c) {
-        return None;
+        return Ok(None);
     }
     let n = rows as f64 / 2.0;
     let arcs = pieces
@@ -298,7 +308,7 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
                 acc[1] + r.iter().skip(1).step_by(2).map(|x| x * x).sum::<f64>(),
             ]
         });
-    Some(Refined {
+    Ok(Some(Refined {
         values: m,
         covariance,
         refinement: Refinement {
@@ -307,7 +317,7 @@ pub fn refine(motion: &Motion, stretches: &[Range<usize>], start: [f64; M]) -> O
             rejected,
             rms: arcs.map(|s| (s / n).sqrt()),
         },
-    })
+    }))
 }
 
 /// The covariance by pieces (the sandwich H^-1 (sum u u^T) H^-1, u each piece's score in
@@ -407,7 +417,8 @@ fn converge(
     states: &mut [Vector4<f64>],
     m: &mut [f64; M],
     sigma: [f64; 2],
-) {
+    monitor: &Monitor,
+) -> Result<()> {
     let cost_at = |states: &[Vector4<f64>], m: &[f64; M]| -> f64 {
         use rayon::prelude::*;
         pieces
@@ -418,6 +429,7 @@ fn converge(
     };
     let mut lambda = 1e-3;
     for _ in 0..40 {
+        monitor.check()?;
         let parts = normals(motion, pieces, states, m, sigma);
         let cost: f64 = parts.iter().map(|p| p.cost).sum();
         let mut improved = false;
@@ -450,4 +462,5 @@ fn converge(
             break;
         }
     }
+    Ok(())
 }
