@@ -33,7 +33,7 @@ fn documents() -> Vec<PathBuf> {
     docs
 }
 
-const COMMANDS: [&str; 18] = [
+const COMMANDS: [&str; 19] = [
     "flip",
     "zoom",
     "lyapunov",
@@ -47,6 +47,7 @@ const COMMANDS: [&str; 18] = [
     "forecast",
     "twin",
     "serve",
+    "web",
     "status",
     "render",
     "info",

@@ -31,7 +31,7 @@ def fit(
     window: Optional[float] = None,
     tolerance: Optional[float] = None,
     candidates: int = 65536,
-    held_out: int = 16,
+    held_out: int = 40,
     lead: float = 1.0,
     velocity_error: float = 0.1,
     m1: Optional[float] = None,

@@ -33,6 +33,9 @@ def test_fit_equals_its_command(tmp_path):
     # The fit finds the joint damping: no keyword for it.
     with pytest.raises(TypeError, match="joint_damping"):
         chaoscope.fit(str(data), joint_damping=0.01, progress=False)
+    # y_up is for pixels: metres are read y up already.
+    with pytest.raises(ValueError, match="^y_up: "):
+        chaoscope.fit(str(data), output=str(tmp_path / "up"), y_up=True, progress=False)
 
 
 

@@ -123,6 +123,8 @@ mod tests {
                     "joint_damping",
                     "params",
                     "output",
+                    "y_up",
+                    "pixels_per_metre",
                 ],
             ),
             (
@@ -138,6 +140,7 @@ mod tests {
                     "joint_damping",
                     "params",
                     "output",
+                    "y_up",
                 ],
             ),
             (
