@@ -757,6 +757,15 @@ fn bands_hold_the_models_own_error_on_precise_data() {
         "{learned}"
     );
     assert_eq!(learned["rows"]["to"], 3.0, "{learned}");
+    // The joint damping each window's fit is held to: the calibration recording's motion's,
+    // or, alone, the motion of the rows up to the window's end.
+    let from = |s: &serde_json::Value| s["learned_from"]["damping"]["from"].to_string();
+    assert!(from(&calibrated).contains("the calibration"), "{learned}");
+    assert!(from(&alone).contains("up to the window's end"), "{alone}");
+    assert_eq!(
+        learned["damping"]["error"].as_array().map(Vec::len),
+        Some(2)
+    );
     // The lower mass's coordinates inside the 90 % band over the first second after the
     // window (the leads the targets pool), from the scores' lead bins.
     let inside = |s: &serde_json::Value| {

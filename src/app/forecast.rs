@@ -94,7 +94,18 @@ pub fn run(
     notices.push(tracked.source.describe_model(&tracked.params));
     notices.extend(film_notice);
     notices.extend(tracked.notices.iter().cloned());
-    let provenance = provenance(job, &tracked, learn, window_from, calibration.as_ref());
+    // The joint damping each window's fit is held to: the calibration's, or the learned rows'.
+    let damping = match &calibration {
+        Some(c) => c.damping,
+        None => tracked.damping_prior(),
+    };
+    let taught = Taught {
+        rows: learn,
+        window_from,
+        calibration: calibration.as_ref(),
+        damping: damping.as_ref(),
+    };
+    let provenance = provenance(job, &tracked, &taught);
     let settings = ForecastSettings {
         window: Some(window),
         ..job.settings
@@ -102,10 +113,7 @@ pub fn run(
     let (t, data, pivot) = (&tracked.t, &tracked.measured, &tracked.pivot);
     let learning = Learning {
         calibration: calibration.as_ref(),
-        damping: match &calibration {
-            Some(c) => c.damping,
-            None => tracked.damping_prior(),
-        },
+        damping,
     };
     let end = t[t.len() - 1];
     let (track, params) = (tracked.rows(), &tracked.params);
@@ -507,13 +515,21 @@ pub fn describe_headline(h: &Headline) -> String {
 }
 
 /// Which rows (file, times) taught each part of the forecast, and from where.
+/// What taught a forecast besides its model: the rows it learned from, the rule its window
+/// came from, the calibration, and the joint damping its window's fit was held to.
+struct Taught<'a> {
+    rows: usize,
+    window_from: &'a str,
+    calibration: Option<&'a Calibration>,
+    damping: Option<&'a crate::fit::window::DampingPrior>,
+}
+
 fn provenance(
     job: &ForecastJob,
     tracked: &crate::fit::pendulum::Tracked,
-    learn: usize,
-    window_from: &str,
-    calibration: Option<&Calibration>,
+    taught: &Taught,
 ) -> serde_json::Value {
+    let (learn, window_from, calibration) = (taught.rows, taught.window_from, taught.calibration);
     let file = job.file.display().to_string();
     let rows = json!({
         "file": file, "from": tracked.t[0], "to": tracked.t[learn - 1], "count": learn,
@@ -567,6 +583,25 @@ fn provenance(
             false => "held-out windows before the forecast's window",
         }),
     };
+    let damping = match taught.damping {
+        None => {
+            json!({ "from": "none: the window's fit finds the joint damping alone (a stated model)" })
+        }
+        Some(d) => {
+            let mut v = match calibration {
+                Some(_) => calibrated(
+                    "the joint damping each window's fit is held to (the recording's motion)",
+                )
+                .unwrap_or_default(),
+                None => these_rows(
+                    "the joint damping the motion shows, which the window's fit is held to",
+                ),
+            };
+            v["damping"] = json!(d.damping);
+            v["error"] = json!(d.error);
+            v
+        }
+    };
     json!({
         "sample": if job.settings.in_sample { "in sample" } else { "out of sample" },
         "rows": rows,
@@ -577,6 +612,7 @@ fn provenance(
         "fit": these_rows("the state, joint damping, pivot offset, scale and lower arm in the window"),
         "tracking_error": tracking,
         "model_error": model_error,
+        "damping": damping,
     })
 }
 
