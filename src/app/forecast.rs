@@ -83,37 +83,21 @@ pub fn run(
     let film = check_inputs(job)?;
     let read = read_frames(&job.file, &job.units)?;
     let (geometry, film_notice) = film_placement(job, film.as_ref())?;
-    let Learned {
-        calibration,
-        window,
-        window_from,
-        rows: learn,
-        tracked,
-    } = learned(job, &read, monitor)?;
+    let learned = learned(job, &read, monitor)?;
+    let (tracked, calibration) = (&learned.tracked, learned.calibration.as_ref());
     let mut notices = engine.notices();
     notices.push(tracked.source.describe_model(&tracked.params));
     notices.extend(film_notice);
     notices.extend(tracked.notices.iter().cloned());
-    // The joint damping each window's fit is held to: the calibration's, or the learned rows'.
-    let damping = match &calibration {
-        Some(c) => c.damping,
-        None => tracked.damping_prior(),
-    };
-    let taught = Taught {
-        rows: learn,
-        window_from,
-        calibration: calibration.as_ref(),
-        damping: damping.as_ref(),
-    };
-    let provenance = provenance(job, &tracked, &taught);
+    let provenance = provenance(job, &learned);
     let settings = ForecastSettings {
-        window: Some(window),
+        window: Some(learned.window),
         ..job.settings
     };
     let (t, data, pivot) = (&tracked.t, &tracked.measured, &tracked.pivot);
     let learning = Learning {
-        calibration: calibration.as_ref(),
-        damping,
+        calibration,
+        damping: learned.damping,
     };
     let end = t[t.len() - 1];
     let (track, params) = (tracked.rows(), &tracked.params);
@@ -122,7 +106,7 @@ pub fn run(
     if job.settings.in_sample {
         notices.push(IN_SAMPLE.into());
     }
-    notices.extend(calibration.as_ref().and_then(|c| past_calibration(c, &o)));
+    notices.extend(calibration.and_then(|c| past_calibration(c, &o)));
     let f = &o.forecast;
     let headline = f.headline();
     let chaos_bound = o.chaos_bound();
@@ -272,6 +256,9 @@ struct Learned {
     window_from: &'static str,
     rows: usize,
     tracked: crate::fit::pendulum::Tracked,
+    /// The joint damping each window's fit is held to: the calibration's, or the learned
+    /// rows' motion's.
+    damping: Option<crate::fit::window::DampingPrior>,
 }
 
 fn learned(
@@ -335,12 +322,17 @@ fn learned(
         ),
         e => e,
     })?;
+    let damping = match &calibration {
+        Some(c) => c.damping,
+        None => tracked.damping_prior(),
+    };
     Ok(Learned {
         calibration,
         window,
         window_from,
         rows: learn,
         tracked,
+        damping,
     })
 }
 
@@ -514,22 +506,10 @@ pub fn describe_headline(h: &Headline) -> String {
     )
 }
 
-/// Which rows (file, times) taught each part of the forecast, and from where.
-/// What taught a forecast besides its model: the rows it learned from, the rule its window
-/// came from, the calibration, and the joint damping its window's fit was held to.
-struct Taught<'a> {
-    rows: usize,
-    window_from: &'a str,
-    calibration: Option<&'a Calibration>,
-    damping: Option<&'a crate::fit::window::DampingPrior>,
-}
-
-fn provenance(
-    job: &ForecastJob,
-    tracked: &crate::fit::pendulum::Tracked,
-    taught: &Taught,
-) -> serde_json::Value {
-    let (learn, window_from, calibration) = (taught.rows, taught.window_from, taught.calibration);
+/// Which rows of which file, or which calibration, taught each part of the forecast.
+fn provenance(job: &ForecastJob, learned: &Learned) -> serde_json::Value {
+    let (tracked, learn) = (&learned.tracked, learned.rows);
+    let (window_from, calibration) = (learned.window_from, learned.calibration.as_ref());
     let file = job.file.display().to_string();
     let rows = json!({
         "file": file, "from": tracked.t[0], "to": tracked.t[learn - 1], "count": learn,
@@ -583,25 +563,7 @@ fn provenance(
             false => "held-out windows before the forecast's window",
         }),
     };
-    let damping = match taught.damping {
-        None => {
-            json!({ "from": "none: the window's fit finds the joint damping alone (a stated model)" })
-        }
-        Some(d) => {
-            let mut v = match calibration {
-                Some(_) => calibrated(
-                    "the joint damping each window's fit is held to (the recording's motion)",
-                )
-                .unwrap_or_default(),
-                None => these_rows(
-                    "the joint damping the motion shows, which the window's fit is held to",
-                ),
-            };
-            v["damping"] = json!(d.damping);
-            v["error"] = json!(d.error);
-            v
-        }
-    };
+    let damping = damping_source(learned, calibrated, these_rows);
     json!({
         "sample": if job.settings.in_sample { "in sample" } else { "out of sample" },
         "rows": rows,
@@ -614,6 +576,33 @@ fn provenance(
         "model_error": model_error,
         "damping": damping,
     })
+}
+
+/// Where the joint damping each window's fit was held to came from, with its value.
+fn damping_source(
+    learned: &Learned,
+    calibrated: impl Fn(&str) -> Option<serde_json::Value>,
+    these_rows: impl Fn(&str) -> serde_json::Value,
+) -> serde_json::Value {
+    match learned.damping {
+        None => {
+            json!({ "from": "none: the window's fit finds the joint damping alone (a stated model)" })
+        }
+        Some(d) => {
+            let mut v = match learned.calibration {
+                Some(_) => calibrated(
+                    "the joint damping each window's fit is held to (the recording's motion)",
+                )
+                .unwrap_or_default(),
+                None => these_rows(
+                    "the joint damping the motion shows, which the window's fit is held to",
+                ),
+            };
+            v["damping"] = json!(d.damping);
+            v["error"] = json!(d.error);
+            v
+        }
+    }
 }
 
 /// "at 2.31 s", or "never (to the data's end)".
