@@ -83,6 +83,10 @@ const KERNELS: [(&str, Kernel); 4] = [
 /// The divergence-family maps the page offers beside the flip time.
 const INDICATORS: [Indicator; 3] = [Indicator::Ftle, Indicator::Megno, Indicator::Fli];
 
+/// What a site's manifest.json says wrote it: `web --output` writes again only into a folder
+/// that is new, empty or such a site.
+pub const GENERATOR: &str = "chaoscope web";
+
 /// The site's files: (path inside the folder, contents).
 pub fn files(spec: &SiteSpec) -> Vec<(String, Vec<u8>)> {
     let mut files = vec![
@@ -159,6 +163,7 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
     kinds.extend(INDICATORS.iter().map(|&i| divergence_kind(i, spec)));
     let colours: serde_json::Map<String, Value> = colours.into_iter().collect();
     json!({
+        "generator": GENERATOR,
         "version": env!("CARGO_PKG_VERSION"),
         "kernels": kernels,
         "kinds": kinds,

@@ -433,3 +433,41 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         );
     }
 }
+
+/// `web --output` writes into a new or empty folder, or over a site it wrote before; a folder
+/// of the user's files is refused naming them, with nothing written (its index.html was
+/// replaced before), and a link to nothing is named as such.
+#[test]
+fn the_site_goes_only_where_it_replaces_nothing_of_the_users() {
+    use predicates::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let again = dir.path().join("site");
+    site(&again);
+    site(&again);
+    let notes = dir.path().join("notes");
+    std::fs::create_dir(&notes).unwrap();
+    std::fs::write(notes.join("index.html"), "my page").unwrap();
+    std::fs::write(notes.join("todo.txt"), "").unwrap();
+    chaoscope()
+        .args(["web", "--output"])
+        .arg(&notes)
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("--output")
+                .and(predicate::str::contains("index.html, todo.txt")),
+        );
+    assert_eq!(
+        std::fs::read_to_string(notes.join("index.html")).unwrap(),
+        "my page"
+    );
+    assert!(!notes.join("manifest.json").exists());
+    let link = dir.path().join("gone");
+    std::os::unix::fs::symlink(dir.path().join("nowhere"), &link).unwrap();
+    chaoscope()
+        .args(["web", "--output"])
+        .arg(&link)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("dangling"));
+}

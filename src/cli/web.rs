@@ -15,8 +15,9 @@ use crate::web::{Pendulum, SiteSpec};
 
 #[derive(Args, Debug, Clone)]
 pub struct WebArgs {
-    /// The folder for the site (index.html, its script, the kernels, manifest.json): serve it
-    /// from any static web host, or `python3 -m http.server -d DIR`.
+    /// The folder for the site (index.html, its script, the kernels, manifest.json): new,
+    /// empty, or a site written before (a folder of other files is refused); serve it from
+    /// any static web host, or `python3 -m http.server -d DIR`.
     #[arg(long, default_value = "out/web")]
     pub output: PathBuf,
     /// A pendulum the page offers first, besides the equal arms and the lab's.
