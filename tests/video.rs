@@ -675,3 +675,62 @@ fn a_film_cut_short_or_joined_is_refused() {
         assert!(!dir.path().join("t.csv").exists());
     }
 }
+
+/// The track records its film's first frames (a digest), and `forecast --video` draws only on
+/// that film: another take of the same size, frames and length (here the same film mirrored)
+/// is refused before any work, naming the option; before, only size, frames and length were
+/// compared, and it was drawn on.
+#[test]
+fn a_forecast_is_drawn_only_on_the_film_it_was_tracked_from() {
+    if !common::ffmpeg() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let film = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/test_film.mp4");
+    let csv = dir.path().join("t.csv");
+    chaoscope()
+        .arg("track")
+        .arg(&film)
+        .args(["--l1", "0.30", "--output"])
+        .arg(&csv)
+        .assert()
+        .success();
+    assert!(
+        std::fs::read_to_string(&csv)
+            .unwrap()
+            .contains("# film_digest = ")
+    );
+    let other = dir.path().join("other.mp4");
+    let made = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(&film)
+        .args("-vf hflip -fps_mode passthrough -c:v libx264 -crf 18 -pix_fmt yuv420p".split(' '))
+        .arg(&other)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let out = chaoscope()
+        .arg("forecast")
+        .arg(&csv)
+        .args([
+            "--preset",
+            "lab",
+            "--window",
+            "0.8:2.3",
+            "--members",
+            "100",
+            "--video",
+        ])
+        .arg(&other)
+        .arg("--output")
+        .arg(dir.path().join("f"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--video") && err.contains("first 3 frames"),
+        "{err}"
+    );
+    assert!(!dir.path().join("f").exists());
+}

@@ -238,7 +238,8 @@ fn film_placement(
     let header = crate::track::file::header_of(&job.file, "video")?;
     let notice = match header.film {
         Some(tracked) => {
-            tracked.check(&crate::track::file::Film::of(probe), "video")?;
+            let film = crate::track::file::Film::of(probe);
+            tracked.check_film(&film, job.video.as_deref().expect("a film"), "video")?;
             None
         }
         None => Some(

@@ -9,6 +9,7 @@ use crate::fit::bridge::Bridged;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::Outputs;
+use crate::track::file::{DIGEST_FRAMES, Digest};
 use crate::track::{self, Markers, Scale, TrackRow};
 use crate::video::{Decoder, Pixels};
 
@@ -87,7 +88,7 @@ pub fn run(
     .map_err(|e| e.as_input("video"))?;
     let (width, height) = (decoder.probe.width, decoder.probe.height);
     let region = region_within(job.region, width, height)?;
-    let (blobs, times) = markers_of(&mut decoder, job.markers, region, monitor)?;
+    let (blobs, times, digest) = markers_of(&mut decoder, job.markers, region, monitor)?;
     let mut tracked = track::track(&blobs, &times, job.scale, job.markers, &|rows, g| {
         crate::fit::pendulum::scale_from_motion(rows, g, monitor)
     })?;
@@ -108,7 +109,10 @@ pub fn run(
     let both = share(&|r| measured(r.m1) && measured(r.m2));
     let notices = notices_of(&decoder.probe, both);
     let mut files = Outputs::new();
-    let film = track::file::Film::of(&decoder.probe);
+    let film = track::file::Film {
+        digest: Some(digest),
+        ..track::file::Film::of(&decoder.probe)
+    };
     files.write(&job.output, |w| {
         track::file::write(w, &tracked, &film, command)
     })?;
@@ -189,24 +193,29 @@ fn region_within(
     Ok(Some((x0 as usize, y0 as usize, x1 as usize, y1 as usize)))
 }
 
-/// Every frame's marker blobs and its time, frame by frame (the progress bar's units).
+/// Every frame's marker blobs and its time, frame by frame (the progress bar's units), and
+/// the film's digest (its first frames as read).
 fn markers_of(
     decoder: &mut Decoder,
     markers: Markers,
     region: Option<(usize, usize, usize, usize)>,
     monitor: &Monitor,
-) -> Result<(Vec<Vec<track::Blob>>, Vec<f64>)> {
+) -> Result<(Vec<Vec<track::Blob>>, Vec<f64>, Digest)> {
     let width = decoder.probe.width as usize;
     let total = decoder.probe.times.len();
     monitor.start("track", total as u64);
     let mut frame = Vec::new();
     let mut scratch = track::detect::Scratch::default();
     let (mut blobs, mut times) = (Vec::with_capacity(total), Vec::with_capacity(total));
+    let mut digest = Digest::start(markers.channels() as u8);
     while let Some(t) = decoder
         .next_frame(&mut frame)
         .map_err(|e| e.as_input("video"))?
     {
         monitor.check()?;
+        if times.len() < DIGEST_FRAMES {
+            digest.add(&frame);
+        }
         blobs.push(markers.find(&frame, width, region, &mut scratch));
         times.push(t);
         monitor.advance(1);
@@ -218,7 +227,7 @@ fn markers_of(
             format!("{} frames: tracking needs at least 10", blobs.len()),
         ));
     }
-    Ok((blobs, times))
+    Ok((blobs, times, digest))
 }
 
 /// What the film's reading says: repeated timestamps, masses measured too rarely.

@@ -65,14 +65,66 @@ impl Placement {
     }
 }
 
-/// The film a track was made from: its picture size (px), its frames, and the last frame's
-/// time from the first (s).
+/// The film a track was made from: its picture size (px), its frames, the last frame's time
+/// from the first (s), and what its first frames hold ([`Digest`]; None in a file tracked
+/// before digests were recorded).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
     pub frames: usize,
     pub seconds: f64,
+    pub digest: Option<Digest>,
+}
+
+/// The identity of a film's pictures: FNV-1a (64 bits) of its first [`DIGEST_FRAMES`]
+/// frames as decoded, at `bytes_per_pixel` (1: luma, 3: RGB, as the track read them). Two
+/// takes of one scene with the same size, frames and length differ here.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Digest {
+    pub value: u64,
+    pub bytes_per_pixel: u8,
+}
+
+/// Frames a [`Digest`] covers.
+pub const DIGEST_FRAMES: usize = 3;
+
+impl Digest {
+    const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+
+    /// The digest of no frames yet.
+    pub fn start(bytes_per_pixel: u8) -> Digest {
+        Digest {
+            value: Self::OFFSET,
+            bytes_per_pixel,
+        }
+    }
+
+    /// Adds a frame's bytes.
+    pub fn add(&mut self, frame: &[u8]) {
+        for &b in frame {
+            self.value = (self.value ^ b as u64).wrapping_mul(Self::PRIME);
+        }
+    }
+
+    /// The digest of the film at `path`, read as the track read it.
+    pub fn of_film(path: &Path, bytes_per_pixel: u8) -> Result<Digest> {
+        use crate::video::{Decoder, Pixels};
+        let pixels = match bytes_per_pixel {
+            1 => Pixels::Gray,
+            _ => Pixels::Rgb,
+        };
+        let mut decoder = Decoder::open(path, pixels)?;
+        let (mut digest, mut frame) = (Digest::start(bytes_per_pixel), Vec::new());
+        for _ in 0..DIGEST_FRAMES {
+            if decoder.next_frame(&mut frame)?.is_none() {
+                break;
+            }
+            digest.add(&frame);
+        }
+        Ok(digest)
+    }
 }
 
 impl Film {
@@ -82,6 +134,7 @@ impl Film {
             height: probe.height,
             frames: probe.times.len(),
             seconds: probe.times.last().copied().unwrap_or(0.0),
+            digest: None,
         }
     }
 
@@ -92,10 +145,29 @@ impl Film {
         )
     }
 
-    /// That `other` (a film about to be drawn on) is this one: its size and frames the same,
-    /// its length within a millisecond (the containers' timestamps are exact to far less).
-    /// Else an error naming `field` and both films.
-    pub fn check(&self, other: &Film, field: &'static str) -> Result<()> {
+    /// That the film at `path` (probed as `other`, about to be drawn on) is this one: its
+    /// size and frames the same, its length within a millisecond (the containers' timestamps
+    /// are exact to far less), and its first frames the same where this film's digest is
+    /// known. Else an error naming `field` and both films.
+    pub fn check_film(&self, other: &Film, path: &Path, field: &'static str) -> Result<()> {
+        self.check(other, field)?;
+        let Some(digest) = self.digest else {
+            return Ok(());
+        };
+        let theirs =
+            Digest::of_film(path, digest.bytes_per_pixel).map_err(|e| e.as_input(field))?;
+        match theirs == digest {
+            true => Ok(()),
+            false => Err(Error::invalid(
+                field,
+                format!(
+                    "the film's first {DIGEST_FRAMES} frames are not those the track was made from (another take of the same size and length?): draw on the film it was tracked from"
+                ),
+            )),
+        }
+    }
+
+    fn check(&self, other: &Film, field: &'static str) -> Result<()> {
         let same = self.width == other.width
             && self.height == other.height
             && self.frames == other.frames
@@ -158,6 +230,15 @@ pub fn write(w: &mut impl Write, t: &Tracked, film: &Film, command: &str) -> Res
         "# film_seconds = {:.6} (the last frame's time from the first; t counts from the first)",
         film.seconds
     )?;
+    if let Some(d) = film.digest {
+        writeln!(
+            w,
+            "# film_digest = {} {} {} (FNV-1a of the first {DIGEST_FRAMES} frames as decoded: its two 32-bit halves, and bytes a pixel)",
+            d.value >> 32,
+            d.value & 0xffff_ffff,
+            d.bytes_per_pixel
+        )?;
+    }
     writeln!(w, "{HEADER}")?;
     for r in &t.rows {
         let pos = |m: Option<Mark>| match m {
@@ -229,6 +310,13 @@ pub fn read_header(text: &str) -> Option<Header> {
             height: px[1] as u32,
             frames: n[0] as usize,
             seconds: s[0],
+            digest: get("film_digest", 3)
+                .filter(|d| d[..2].iter().all(|&h| (0.0..=u32::MAX as f64).contains(&h)))
+                .filter(|d| d[2] == 1.0 || d[2] == 3.0)
+                .map(|d| Digest {
+                    value: (d[0] as u64) << 32 | d[1] as u64,
+                    bytes_per_pixel: d[2] as u8,
+                }),
         }),
         _ => None,
     };
@@ -392,6 +480,11 @@ mod tests {
             height: 720,
             frames: 3,
             seconds: 0.066667,
+            // The digest's high half and low half both full: read back to the bit.
+            digest: Some(Digest {
+                value: 0xfedc_ba98_7654_3210,
+                bytes_per_pixel: 3,
+            }),
         };
         let mut text = Vec::new();
         write(&mut text, &tracked, &film, "chaoscope track 'a b.mp4'").unwrap();
