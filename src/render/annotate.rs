@@ -135,6 +135,18 @@ pub fn decimal_ticks(min: f64, max: f64) -> Vec<(f64, String)> {
         .collect()
 }
 
+/// `line` cut in two at the " · " nearest its middle (the whole where it has none).
+fn halves(line: &str) -> Vec<String> {
+    let middle = line.len() / 2;
+    match line
+        .match_indices(" · ")
+        .min_by_key(|(i, _)| i.abs_diff(middle))
+    {
+        Some((i, sep)) => vec![line[..i].to_string(), line[i + sep.len()..].to_string()],
+        None => vec![line.to_string()],
+    }
+}
+
 const BACKGROUND: [u8; 3] = [17, 17, 20];
 const INK: RGBColor = RGBColor(225, 225, 225);
 
@@ -155,8 +167,24 @@ pub fn annotate(map: &[u8], w: u32, h: u32, a: &Annotation) -> Result<Annotated>
             .map(|t| t.1.chars().count())
             .max()
             .unwrap_or(1) as f64;
-    let (left, right, top, bottom) = (f(2.6 + 0.36 * widest).max(f(4.2)), f(7.0), f(3.2), f(3.4));
-    let (width, height) = (left + w + right, top + h + bottom);
+    let (left, right, bottom) = (f(2.6 + 0.36 * widest).max(f(4.2)), f(7.0), f(3.4));
+    let width = left + w + right;
+    // The parameters' line, on two lines where one would not fit the picture (a small map
+    // of a fitted pendulum ran off it), each shrunk to fit if need be: never clipped.
+    let room = (width - left) as f64 - font * 0.3;
+    let measure = |line: &str, size: f64| -> f64 {
+        ("sans-serif", size)
+            .into_font()
+            .box_size(line)
+            .map_or(0.0, |(w, _)| w as f64)
+    };
+    let sub_size = font * 0.72;
+    let sub_lines: Vec<String> = match measure(&a.subtitle, sub_size) > room {
+        true => halves(&a.subtitle),
+        false => vec![a.subtitle.clone()],
+    };
+    let top = f(3.2) + f(0.9) * (sub_lines.len() as u32 - 1);
+    let height = top + h + bottom;
     let mut rgb = vec![0u8; (width * height * 3) as usize];
     for px in rgb.chunks_exact_mut(3) {
         px.copy_from_slice(&BACKGROUND);
@@ -257,18 +285,25 @@ pub fn annotate(map: &[u8], w: u32, h: u32, a: &Annotation) -> Result<Annotated>
             (bar_x as i32 - f(0.2) as i32, bar_top as i32 - f(0.3) as i32),
         )
         .map_err(draw_err)?;
+        // The title and the parameters' lines shrink to the picture's width if need be.
+        let fitted = |line: &str, size: f64| -> f64 {
+            let w = measure(line, size);
+            if w > room { size * room / w } else { size }
+        };
         root.draw_text(
             &a.title,
-            &text(font, Pos::new(HPos::Left, VPos::Center)),
+            &text(fitted(&a.title, font), Pos::new(HPos::Left, VPos::Center)),
             (left as i32, f(0.9) as i32),
         )
         .map_err(draw_err)?;
-        root.draw_text(
-            &a.subtitle,
-            &text(font * 0.72, Pos::new(HPos::Left, VPos::Center)),
-            (left as i32, f(2.15) as i32),
-        )
-        .map_err(draw_err)?;
+        for (k, line) in sub_lines.iter().enumerate() {
+            root.draw_text(
+                line,
+                &text(fitted(line, sub_size), Pos::new(HPos::Left, VPos::Center)),
+                (left as i32, (f(2.15) + f(0.9) * k as u32) as i32),
+            )
+            .map_err(draw_err)?;
+        }
         root.present().map_err(draw_err)?;
     }
     Ok(Annotated {

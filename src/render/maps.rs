@@ -120,9 +120,16 @@ fn physics_line(p: &Params, grid: &Grid) -> String {
     if !grid.is_angle_plane() {
         return plane_line(p, grid);
     }
+    let s = sig;
     let line = format!(
         "m1 {} kg · m2 {} kg · l1 {} m · l2 {} m · g {} m/s² · ω0 ({}, {}) rad/s",
-        p.m1, p.m2, p.l1, p.l2, p.g, grid.fixed.omega1, grid.fixed.omega2
+        s(p.m1),
+        s(p.m2),
+        s(p.l1),
+        s(p.l2),
+        s(p.g),
+        s(grid.fixed.omega1),
+        s(grid.fixed.omega2)
     );
     line + &losses_line(p)
 }
@@ -141,12 +148,12 @@ fn plane_line(p: &Params, grid: &Grid) -> String {
     ]
     .iter()
     .filter(|(v, _)| !on_axis(*v))
-    .map(|(v, unit)| format!("{} {} {unit}", v.name(), v.get(p, s)))
+    .map(|(v, unit)| format!("{} {} {unit}", v.name(), sig(v.get(p, s))))
     .collect();
     let start: Vec<String> = [Var::Theta1, Var::Theta2, Var::Omega1, Var::Omega2]
         .iter()
         .filter(|v| !on_axis(**v))
-        .map(|v| format!("{} {}", v.symbol(), v.get(p, s)))
+        .map(|v| format!("{} {}", v.symbol(), sig(v.get(p, s))))
         .collect();
     items.push(format!("start {}", start.join(", ")));
     let mut losses = *p;
@@ -159,14 +166,35 @@ fn plane_line(p: &Params, grid: &Grid) -> String {
     items.join(" · ") + &losses_line(&losses)
 }
 
+/// `x` to four significant figures, as short as it reads (a fitted pendulum's 16-digit
+/// masses made a subtitle run off the picture): 0.414, 9.81, 1, 2.5e-5.
+pub fn sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    if !(-3..5).contains(&magnitude) {
+        let s = format!("{x:.3e}");
+        let (mantissa, exponent) = s.split_once('e').expect("an exponent");
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        return format!("{mantissa}e{exponent}");
+    }
+    let decimals = (3 - magnitude).max(0) as usize;
+    let s = format!("{x:.decimals$}");
+    match s.contains('.') {
+        true => s.trim_end_matches('0').trim_end_matches('.').to_string(),
+        false => s,
+    }
+}
+
 fn losses_line(p: &Params) -> String {
     let mut line = String::new();
     if p.rod1 != 0.0 || p.rod2 != 0.0 {
-        line += &format!(" · rods {}/{} kg", p.rod1, p.rod2);
+        line += &format!(" · rods {}/{} kg", sig(p.rod1), sig(p.rod2));
     }
     let l = &p.losses;
     if l.joint1 != 0.0 || l.joint2 != 0.0 {
-        line += &format!(" · damping {}/{} N m s", l.joint1, l.joint2);
+        line += &format!(" · damping {}/{} N m s", sig(l.joint1), sig(l.joint2));
     }
     if l.has_drag() {
         line += " · air drag";
@@ -492,5 +520,28 @@ impl MapPicture for AnyMap {
         unresolved: Option<&[u8]>,
     ) -> Result<Drawn> {
         on_any!(self, s => s.draw(field, picture, range, unresolved))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sig;
+
+    #[test]
+    fn subtitles_give_four_significant_figures() {
+        let cases = [
+            (0.41400441153470036, "0.414"),
+            (9.81, "9.81"),
+            (1.0, "1"),
+            (-2.0, "-2"),
+            (0.2963, "0.2963"),
+            (123456.0, "1.235e5"),
+            (2.5e-5, "2.5e-5"),
+            (0.0, "0"),
+            (1234.6, "1235"),
+        ];
+        for (x, want) in cases {
+            assert_eq!(sig(x), want, "{x}");
+        }
     }
 }
