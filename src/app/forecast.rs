@@ -106,7 +106,7 @@ pub fn run(
     if job.settings.in_sample {
         notices.push(IN_SAMPLE.into());
     }
-    notices.extend(calibration.and_then(|c| past_calibration(c, &o)));
+    notices.extend(calibration.and_then(|c| c.held_past(o.lead())));
     let f = &o.forecast;
     let headline = f.headline();
     let chaos_bound = o.chaos_bound();
@@ -184,15 +184,6 @@ fn summary_of(
             .collect(),
         notices,
     }
-}
-
-/// Where the forecast runs past the lead to which the calibration measured the model's own
-/// error: a notice saying its bands there are not calibrated.
-fn past_calibration(c: &Calibration, o: &Outcome) -> Option<String> {
-    let measured = c.model_error.step * c.model_error.m50.len() as f64;
-    (forecast_lead(o) > measured + 1e-9).then(|| format!(
-        "the calibration measured the model's own error to {measured:.2} s after a window; past that its last value is held, so the bands there are not calibrated (calibrate with a longer [[lead]])"
-    ))
 }
 
 /// The inputs' and outputs' checks before any work; the film's probe, where one is given.
@@ -485,12 +476,6 @@ fn summary_json(
 
 /// The forecast drawn on the film (`--video`), in the output folder.
 pub const OVERLAY: &str = "overlay.mp4";
-
-/// How far past its window's end (s) a forecast runs.
-fn forecast_lead(o: &crate::forecast::outcome::Outcome) -> f64 {
-    let f = &o.forecast;
-    f.times.last().copied().unwrap_or(f.window_end) - f.window_end
-}
 
 /// What every output of a forecast that learned from its future says.
 pub const IN_SAMPLE: &str = "in sample: the pivot, the arms, the model and its errors were learned from every row of the file, the rows this forecast is scored on included; its scores flatter it";

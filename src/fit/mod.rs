@@ -3,6 +3,7 @@
 //! the model's state and damping fitted to the positions. `app::fit` puts it together.
 
 pub mod bridge;
+mod correlation;
 pub mod data;
 pub mod identify;
 pub mod joint;

@@ -8,7 +8,7 @@ use super::identify::{Identified, identify};
 use super::joint::{Joint, joint_off_marker};
 use super::window::TrackRows;
 use crate::error::{Error, Result};
-use crate::model::{Params, State};
+use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 
@@ -528,39 +528,6 @@ pub fn tracked_model_from(
         identified,
         notices,
     })
-}
-
-/// Energies at the interior rows in units of the upper arm's gravity moment P (E/P, zero
-/// hanging at rest) by the model `p` itself (rods and bars included), angular velocities by
-/// central differences, and their errors: a mass's velocity error `dv` (m/s) moves omega1
-/// by dv / l1 and omega2 by sqrt 2 dv / l2 (both its ends' errors), dE = |M omega| d omega.
-pub fn model_energies(t: &[f64], angles: &[(f64, f64)], p: &Params, dv: f64) -> super::Energies {
-    let k = p.inertia();
-    let floor = p.potential_energy(0.0, 0.0);
-    let mut out = super::Energies {
-        t: Vec::new(),
-        e: Vec::new(),
-        de: Vec::new(),
-    };
-    for i in 1..t.len() - 1 {
-        let h = t[i + 1] - t[i - 1];
-        let s = State {
-            theta1: angles[i].0,
-            omega1: (angles[i + 1].0 - angles[i - 1].0) / h,
-            theta2: angles[i].1,
-            omega2: (angles[i + 1].1 - angles[i - 1].1) / h,
-        };
-        let cd = (s.theta1 - s.theta2).cos();
-        let m_omega = [
-            k.a * s.omega1 + k.c * cd * s.omega2,
-            k.c * cd * s.omega1 + k.b * s.omega2,
-        ];
-        let (d1, d2) = (dv / p.l1, std::f64::consts::SQRT_2 * dv / p.l2);
-        out.t.push(t[i]);
-        out.e.push((p.energy(&s) - floor) / k.p);
-        out.de.push((m_omega[0] * d1).hypot(m_omega[1] * d2) / k.p);
-    }
-    out
 }
 
 /// The model `p` as a parameter file that `--params` reads back (src/params.rs), headed by

@@ -151,6 +151,16 @@ impl Calibration {
         out
     }
 
+    /// Where a forecast runs `lead` s past its window, beyond the lead to which this
+    /// calibration measured the model's own error: a notice saying its bands there are not
+    /// calibrated.
+    pub fn held_past(&self, lead: f64) -> Option<String> {
+        let measured = self.model_error.step * self.model_error.m50.len() as f64;
+        (lead > measured + 1e-9).then(|| format!(
+            "the calibration measured the model's own error to {measured:.2} s after a window; past that its last value is held, so the bands there are not calibrated (calibrate with a longer [[lead]])"
+        ))
+    }
+
     /// The calibration in the parameter file `path`, if it holds one (`field` names the
     /// option that gave the file).
     pub fn read(field: &'static str, path: &Path) -> Result<Option<Calibration>> {

@@ -42,6 +42,12 @@ impl Outcome {
         (after, after.filter(|_| lambda > 0.0).map(|a| a * lambda))
     }
 
+    /// How far past its window's end (s) the forecast runs.
+    pub fn lead(&self) -> f64 {
+        let f = &self.forecast;
+        f.times.last().copied().unwrap_or(f.window_end) - f.window_end
+    }
+
     /// What chaos and the tracking error alone allow (s): (1/lambda) ln(tolerance / tracking
     /// error), the FTLE lambda along the fitted orbit. None where the orbit does not stretch or
     /// the data have no error.
@@ -197,16 +203,8 @@ pub fn fit_and_forecast(
             ),
         ));
     }
-    let prior = learning.damping.as_ref();
-    let fit = fit_window(
-        &learn,
-        p,
-        window,
-        settings.candidates,
-        prior,
-        engine,
-        monitor,
-    )?;
+    let (prior, candidates) = (learning.damping.as_ref(), settings.candidates);
+    let fit = fit_window(&learn, p, window, candidates, prior, engine, monitor)?;
     // The window ends at its last row.
     let window_end = t[fit.row0 + fit.rows - 1];
     let end = settings.ahead.map_or(end, |ahead| window_end + ahead);
