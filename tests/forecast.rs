@@ -873,24 +873,10 @@ fn a_forecast_never_sees_its_future() {
 /// times as uncertain.
 #[test]
 fn a_windows_damping_is_held_to_what_the_motion_shows() {
-    use chaoscope::fit::TrackedRow;
-    use chaoscope::fit::data::angles;
     use chaoscope::fit::window::{DampingPrior, TrackRows, fit_window};
     let p = lab_with_damping();
     let track = make_track(&p, RELEASE, 100.0, 1.0, 2e-4, 5);
-    let frames: Vec<TrackedRow> = track
-        .t
-        .iter()
-        .zip(&track.measured)
-        .map(|(&t, d)| TrackedRow {
-            t,
-            x1: d[0],
-            y1: d[1],
-            x2: d[2],
-            y2: d[3],
-        })
-        .collect();
-    let angle = angles(&frames, (0.0, 0.0));
+    let angle = track.angles();
     let rows = TrackRows {
         t: &track.t,
         data: &track.measured,

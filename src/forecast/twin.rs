@@ -55,6 +55,26 @@ pub struct Track {
     pub measured: Vec<[f64; 4]>,
 }
 
+impl Track {
+    /// The arms' angles of the measured positions (the pivot at the origin), as a tracked
+    /// file's are found.
+    pub fn angles(&self) -> Vec<(f64, f64)> {
+        let frames: Vec<TrackedRow> = self
+            .t
+            .iter()
+            .zip(&self.measured)
+            .map(|(&t, m)| TrackedRow {
+                t,
+                x1: m[0],
+                y1: m[1],
+                x2: m[2],
+                y2: m[3],
+            })
+            .collect();
+        angles(&frames, (0.0, 0.0))
+    }
+}
+
 pub fn make_track(
     p: &Params,
     start: State,
@@ -90,19 +110,7 @@ pub fn experiment(
     engine: &Engine,
     monitor: &Monitor,
 ) -> Result<(Outcome, Vec<[f64; 4]>)> {
-    let frames: Vec<TrackedRow> = track
-        .t
-        .iter()
-        .zip(&track.measured)
-        .map(|(&t, m)| TrackedRow {
-            t,
-            x1: m[0],
-            y1: m[1],
-            x2: m[2],
-            y2: m[3],
-        })
-        .collect();
-    let angle = angles(&frames, (0.0, 0.0));
+    let angle = track.angles();
     let rows = TrackRows {
         t: &track.t,
         data: &track.measured,
