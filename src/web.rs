@@ -109,6 +109,13 @@ pub fn files(spec: &SiteSpec) -> Vec<(String, Vec<u8>)> {
     files
 }
 
+/// The simulated time a view of the page may ask for (s), in its controls and its links
+/// alike (a link outside is refused in words): with [`PAGE_DT`], at most 1000 / 1e-4 = 10^7
+/// steps a run, within the engine's `MAX_STEPS` (2^24).
+pub const PAGE_T_MAX: [f64; 2] = [0.1, 1000.0];
+/// The time step a view of the page may ask for (s).
+pub const PAGE_DT: [f64; 2] = [1e-4, 0.1];
+
 /// The page's settings: the kernels' layouts, the engine's constants, the pendulums, the
 /// planes' variables, the colours.
 fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
@@ -179,7 +186,11 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
             "f32_min_pixel_step": F32_MIN_PIXEL_STEP,
             // The coarsest step the verdict vouches at (src/verdict.rs).
             "verdict_dt_max": crate::verdict::LARGEST_VOUCHED_DT,
+            // The most steps a run may take (src/spec/map.rs): the page computes no more.
+            "max_steps": crate::spec::MAX_STEPS,
         },
+        // The page's own bounds on a view's run, its controls' and its links' alike.
+        "bounds": {"t_max": PAGE_T_MAX, "dt": PAGE_DT},
         "pendulums": pendulums,
         "vars": vars,
         "colours": colours,

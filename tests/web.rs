@@ -110,6 +110,15 @@ fn the_site_is_the_engines_own_and_small() {
             .collect();
         assert_eq!(given, words(p), "pendulum {i}");
     }
+    // The page's bounds on a run are the library's, and its longest run is one the engine
+    // takes (within MAX_STEPS).
+    assert_eq!(m["bounds"]["t_max"], serde_json::json!(chaoscope::web::PAGE_T_MAX));
+    assert_eq!(m["bounds"]["dt"], serde_json::json!(chaoscope::web::PAGE_DT));
+    let longest = chaoscope::spec::Stepping {
+        t_max: chaoscope::web::PAGE_T_MAX[1],
+        dt: chaoscope::web::PAGE_DT[0],
+    };
+    chaoscope::spec::validate_stepping(&longest).unwrap();
     let hex: String = flip_table(Colormap::Inferno)
         .iter()
         .map(|[r, g, b]| format!("{r:02x}{g:02x}{b:02x}"))
@@ -470,4 +479,264 @@ fn the_site_goes_only_where_it_replaces_nothing_of_the_users() {
         .assert()
         .code(2)
         .stderr(predicate::str::contains("dangling"));
+}
+
+/// A setting of a link and the rule the page's controls hold it to (`chaoscope::web`'s
+/// bounds, the manifest's names): written here apart from the page's script, so the two
+/// agreeing means something.
+fn link_value_ok(manifest: &serde_json::Value, key: &str, text: &str, number: Option<f64>) -> bool {
+    let names = |list: &str, field: Option<&str>| -> Vec<String> {
+        match field {
+            Some(f) => manifest[list]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v[f].as_str().unwrap().to_string())
+                .collect(),
+            None => manifest[list]
+                .as_object()
+                .unwrap()
+                .keys()
+                .cloned()
+                .collect(),
+        }
+    };
+    let within = |[lo, hi]: [f64; 2]| number.is_some_and(|x| (lo..=hi).contains(&x));
+    let pendulums = manifest["pendulums"].as_array().unwrap().len() as f64;
+    match key {
+        "t_max" => within(chaoscope::web::PAGE_T_MAX),
+        "dt" => within(chaoscope::web::PAGE_DT),
+        "cx" | "cy" => number.is_some_and(f64::is_finite),
+        "w" | "h" => number.is_some_and(|x| x.is_finite() && x > 0.0),
+        "pendulum" => number.is_some_and(|x| x.fract() == 0.0 && (0.0..pendulums).contains(&x)),
+        "x" | "y" => names("vars", Some("name")).iter().any(|n| n == text),
+        "kind" => names("kinds", Some("name")).iter().any(|n| n == text),
+        "colours" => names("colours", None).iter().any(|n| n == text),
+        "verdict" => text == "0" || text == "1",
+        _ => false,
+    }
+}
+
+/// Percent-encodes every byte of `s` but letters, digits and `-._~` (so the page's
+/// URLSearchParams reads back exactly `s`).
+fn percent(s: &str) -> String {
+    s.bytes()
+        .map(|b| match b {
+            b'a'..=b'z' | b'A'..=b'Z' | b'0'..=b'9' | b'-' | b'.' | b'_' | b'~' => {
+                (b as char).to_string()
+            }
+            _ => format!("%{b:02X}"),
+        })
+        .collect()
+}
+
+#[test]
+fn a_link_is_held_to_the_controls_rules_in_chromium() {
+    let Some(python) = browser_tools() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("site");
+    let manifest = site(&root);
+    let server = StaticServer::start(&root);
+    // Values with the number JavaScript's Number() makes of them (None: NaN; the page takes
+    // blank text as no number), and names: the manifest's, an Object's own members, junk.
+    let numbers: &[(&str, Option<f64>)] = &[
+        ("0", Some(0.0)),
+        ("-5", Some(-5.0)),
+        ("2", Some(2.0)),
+        ("0.01", Some(0.01)),
+        ("1e-300", Some(1e-300)),
+        ("1e9", Some(1e9)),
+        ("1e308", Some(1e308)),
+        ("-1", Some(-1.0)),
+        ("0.5", Some(0.5)),
+        ("1", Some(1.0)),
+        ("1000", Some(1000.0)),
+        ("0.1", Some(0.1)),
+        ("0.0001", Some(1e-4)),
+        ("0.00009999", Some(9.999e-5)),
+        ("1000.0001", Some(1000.0001)),
+        ("NaN", None),
+        ("Infinity", Some(f64::INFINITY)),
+        ("-Infinity", Some(f64::NEG_INFINITY)),
+        ("", None),
+        (" ", None),
+        ("abc", None),
+        ("0x10", Some(16.0)),
+        ("1e3", Some(1000.0)),
+        (" 3 ", Some(3.0)),
+        ("1,5", None),
+        ("2.5e-3", Some(0.0025)),
+        ("1.2", Some(1.2)),
+    ];
+    let words = [
+        "theta1",
+        "theta2",
+        "omega1",
+        "m2/m1",
+        "flip",
+        "ftle",
+        "megno",
+        "inferno",
+        "viridis",
+        "constructor",
+        "__proto__",
+        "toString",
+        "hasOwnProperty",
+        "1",
+        "0",
+        "yes",
+        "<b>x</b>",
+        "théta",
+        "",
+    ];
+    let keys = [
+        "t_max", "dt", "cx", "cy", "w", "h", "pendulum", "x", "y", "kind", "colours", "verdict",
+    ];
+    let odd_keys = [
+        "constructor",
+        "__proto__",
+        "toString",
+        "foo",
+        "T_MAX",
+        "t_max ",
+    ];
+    let numeric = |k: &str| ["t_max", "dt", "cx", "cy", "w", "h", "pendulum"].contains(&k);
+    let number_of = |t: &str| {
+        numbers
+            .iter()
+            .find(|(w, _)| *w == t)
+            .map_or(t.parse().ok(), |n| n.1)
+    };
+    // The audit's crafted links, then seeded random ones.
+    let mut links: Vec<Vec<(String, String, Option<f64>)>> = [
+        "dt=0&t_max=2",
+        "dt=1e-300",
+        "t_max=1e9",
+        "t_max=-5",
+        "w=-1&h=-1",
+        "colours=constructor",
+        "colours=__proto__",
+        "kind=toString",
+        "pendulum=1e9",
+        "pendulum=0.5",
+        "x=constructor",
+        "verdict=yes",
+        "t_max=2",
+        "kind=ftle&t_max=1",
+        "",
+        "colours=viridis&t_max=1",
+        "x=theta1&y=m2/m1&t_max=1",
+        "x=theta1&y=theta1&t_max=1",
+    ]
+    .iter()
+    .map(|l| {
+        l.split('&')
+            .filter(|p| !p.is_empty())
+            .map(|p| {
+                let (k, v) = p.split_once('=').unwrap();
+                let n = numbers
+                    .iter()
+                    .find(|(t, _)| *t == v)
+                    .map_or(v.parse().ok(), |n| n.1);
+                (k.to_string(), v.to_string(), n)
+            })
+            .collect()
+    })
+    .collect();
+    // Half the values drawn among those a control could set, so that about half the links
+    // hold to the rules.
+    let good = |k: &str| -> &[&str] {
+        match k {
+            "t_max" => &["0.5", "1", "2"],
+            "dt" => &["0.005", "0.01", "0.02"],
+            "cx" | "cy" => &["0", "1", "-1", "0.5"],
+            "w" | "h" => &["0.5", "1", "2", "6.283185307179586"],
+            "pendulum" | "verdict" => &["0", "1"],
+            "x" | "y" => &["theta1", "theta2", "omega1", "m2/m1"],
+            "kind" => &["flip", "ftle", "megno", "fli"],
+            "colours" => &["inferno", "viridis"],
+            _ => &["1"],
+        }
+    };
+    let mut rng = fastrand::Rng::with_seed(66);
+    for _ in 0..100 {
+        let pairs = (0..rng.usize(1..=3))
+            .map(|_| {
+                let key = if rng.f64() < 0.9 {
+                    keys[rng.usize(..keys.len())]
+                } else {
+                    odd_keys[rng.usize(..odd_keys.len())]
+                };
+                let text = if rng.f64() < 0.75 {
+                    let pool = good(key);
+                    pool[rng.usize(..pool.len())]
+                } else if numeric(key) == (rng.f64() < 0.75) {
+                    numbers[rng.usize(..numbers.len())].0
+                } else {
+                    words[rng.usize(..words.len())]
+                };
+                (key.to_string(), text.to_string(), number_of(text))
+            })
+            .collect();
+        links.push(pairs);
+    }
+    let hashes: Vec<String> = links
+        .iter()
+        .map(|pairs| {
+            pairs
+                .iter()
+                .map(|(k, v, _)| format!("{}={}", percent(k), percent(v)))
+                .collect::<Vec<_>>()
+                .join("&")
+        })
+        .collect();
+    let report = browser_report(
+        &python,
+        "links.py",
+        &[
+            server.url.as_ref(),
+            serde_json::to_string(&hashes).unwrap().as_ref(),
+        ],
+    );
+    let cases = report["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), links.len());
+    let mut refused = 0;
+    for (pairs, case) in links.iter().zip(cases) {
+        let status = case["status"].as_str().unwrap();
+        // Nothing thrown past the script, and every link settled in words within the wait.
+        assert_eq!(case["errors"], serde_json::json!([]), "{case}");
+        assert!(case["error"].is_null(), "{case}");
+        assert!(!status.starts_with("starting"), "{case}");
+        let bad: Vec<&String> = pairs
+            .iter()
+            .filter(|(k, v, n)| !link_value_ok(&manifest, k, v, *n))
+            .map(|(k, _, _)| k)
+            .collect();
+        let said = case["refused"].as_array().unwrap();
+        if bad.is_empty() {
+            assert!(said.is_empty(), "a link within the rules refused: {case}");
+        } else {
+            refused += 1;
+            // Refused, each bad setting named, and nothing computed.
+            assert!(status.contains("was not computed"), "{case}");
+            assert_eq!(case["views"], 0, "{case}");
+            let text = said
+                .iter()
+                .map(|s| s.as_str().unwrap())
+                .collect::<Vec<_>>()
+                .join("; ");
+            for k in bad {
+                assert!(text.contains(k.as_str()), "{k} not named: {case}");
+            }
+        }
+    }
+    eprintln!("{} links, {refused} refused", links.len());
+    // The seeded draw holds both kinds (so each branch above was tried).
+    assert!(
+        refused > 10 && refused + 10 < links.len(),
+        "{refused} of {}",
+        links.len()
+    );
 }

@@ -6,8 +6,12 @@
 // address's hash, so a link opens the same view.
 "use strict";
 
-const page = { ready: false, error: null, views: 0, lost: 0, last: null };
+const page = { ready: false, error: null, views: 0, lost: 0, last: null, refused: [],
+  errors: [] };
 window.chaoscope = page;   // for tests and the curious
+// Anything the script did not catch, kept where a test can read it.
+window.addEventListener("error", (e) => page.errors.push(String(e.message)));
+window.addEventListener("unhandledrejection", (e) => page.errors.push(String(e.reason)));
 
 const canvas = document.getElementById("map");
 const statusLine = document.getElementById("status");
@@ -109,25 +113,49 @@ function steps(t_max, dt) {
   return Math.abs(n - rounded) < 1e-9 * Math.max(n, 1) ? rounded : Math.ceil(n);
 }
 
+// The view of the address's hash, each value held to the rules the controls keep (the
+// bounds in manifest.json, the names it lists, own properties only): returns what it refused,
+// in words (none: the link's view is the page's).
 function readHash() {
-  const h = new URLSearchParams(location.hash.slice(1));
-  for (const k of ["cx", "cy", "w", "h", "t_max", "dt", "pendulum"]) {
-    if (h.has(k) && Number.isFinite(Number(h.get(k)))) view[k] = Number(h.get(k));
+  const h = new URLSearchParams(location.hash.slice(1)), refused = [];
+  const b = manifest.bounds, n = manifest.pendulums.length;
+  const between = ([lo, hi], unit) => [(x) => x >= lo && x <= hi, `from ${lo} to ${hi}${unit}`];
+  const numbers = {
+    t_max: between(b.t_max, " s"), dt: between(b.dt, " s"),
+    cx: [() => true, "a number"], cy: [() => true, "a number"],
+    w: [(x) => x > 0, "a width above 0"], h: [(x) => x > 0, "a height above 0"],
+    pendulum: [(x) => Number.isInteger(x) && x >= 0 && x < n, `a whole number from 0 to ${n - 1}`],
+  };
+  const oneOf = (names) => `one of ${names.join(", ")}`;
+  const words = {
+    x: [varOf, oneOf(manifest.vars.map((v) => v.name))],
+    y: [varOf, oneOf(manifest.vars.map((v) => v.name))],
+    kind: [kindOf, oneOf(manifest.kinds.map((k) => k.name))],
+    colours: [(c) => Object.hasOwn(manifest.colours, c), oneOf(Object.keys(manifest.colours))],
+    verdict: [(s) => s === "0" || s === "1", "0 or 1"],
+  };
+  for (const [k, raw] of h) {
+    const shown = raw.length > 24 ? `${raw.slice(0, 24)}…` : raw;
+    if (Object.hasOwn(numbers, k)) {
+      const x = raw.trim() === "" ? NaN : Number(raw), [ok, rule] = numbers[k];
+      if (Number.isFinite(x) && ok(x)) view[k] = x;
+      else refused.push(`${k} = ${shown} (${rule})`);
+    } else if (Object.hasOwn(words, k)) {
+      const [ok, rule] = words[k];
+      if (ok(raw)) view[k] = k === "verdict" ? raw === "1" : raw;
+      else refused.push(`${k} = ${shown} (${rule})`);
+    } else {
+      refused.push(`${k.length > 24 ? `${k.slice(0, 24)}…` : k}: no such setting`);
+    }
   }
   // An axis named without its region gets its variable's whole range; a width without a
   // height, a square view.
   for (const k of ["x", "y"]) {
-    if (h.has(k) && varOf(h.get(k))) {
-      view[k] = h.get(k);
-      const [c, size] = k === "x" ? ["cx", "w"] : ["cy", "h"];
-      if (!h.has(c) && !h.has(size)) wholeAxis(k);
-    }
+    const [c, size] = k === "x" ? ["cx", "w"] : ["cy", "h"];
+    if (h.has(k) && varOf(h.get(k)) && !h.has(c) && !h.has(size)) wholeAxis(k);
   }
   if (h.has("w") && !h.has("h")) view.h = view.w;
-  if (h.has("colours") && manifest.colours[h.get("colours")]) view.colours = h.get("colours");
-  if (h.has("kind") && kindOf(h.get("kind"))) view.kind = h.get("kind");
-  view.verdict = h.get("verdict") === "1";
-  view.pendulum = Math.min(Math.max(0, Math.round(view.pendulum)), manifest.pendulums.length - 1);
+  return refused;
 }
 
 function writeHash() {
@@ -448,6 +476,13 @@ async function verdictOf(values, v, g, onProgress) {
 async function compute(v, g, onProgress) {
   const beyond = outside(g);
   if (beyond) throw new Error(beyond);
+  // The work's bound, whatever asked for it (a view, its verdict's finer steps, a test): the
+  // engine's most steps a run.
+  const n = steps(v.t_max, v.dt);
+  if (!(n >= 1 && n <= manifest.constants.max_steps)) {
+    throw new Error(`t-max / dt = ${n.toPrecision(3)} steps: at most ` +
+      `${manifest.constants.max_steps} a run.`);
+  }
   await ready();
   const kind = kindOf(v.kind);
   return kind.name === "flip" ? flipTimes(v, g, onProgress) : divergence(kind, v, g, onProgress);
@@ -748,8 +783,9 @@ function wire() {
       if (view[a] !== f.get(a)) { view[a] = f.get(a); wholeAxis(a); }
     }
     const t = Number(f.get("t_max")), dt = Number(f.get("dt"));
-    if (t >= 0.1 && t <= 1000) view.t_max = t;
-    if (dt >= 1e-4 && dt <= 0.1) view.dt = dt;
+    const b = manifest.bounds;
+    if (t >= b.t_max[0] && t <= b.t_max[1]) view.t_max = t;
+    if (dt >= b.dt[0] && dt <= b.dt[1]) view.dt = dt;
     view.colours = f.get("colours");
     view.kind = f.get("kind");
     view.verdict = f.get("verdict") === "on";
@@ -923,7 +959,10 @@ function fillForm() {
   form.elements.verdict.checked = view.verdict;
   form.elements.pendulum.value = String(view.pendulum);
   form.elements.x.value = view.x; form.elements.y.value = view.y;
-  form.elements.t_max.value = view.t_max; form.elements.dt.value = view.dt;
+  for (const k of ["t_max", "dt"]) {
+    [form.elements[k].min, form.elements[k].max] = manifest.bounds[k].map(String);
+    form.elements[k].value = view[k];
+  }
   form.elements.colours.value = view.colours;
 }
 
@@ -989,8 +1028,19 @@ function serverView() {
 }
 
 async function main() {
-  manifest = await (await fetch("manifest.json")).json();
-  readHash();
+  try {
+    manifest = await (await fetch("manifest.json")).json();
+  } catch (e) {
+    // Opened from disk (file://), the browser lets the page read none of its files.
+    say(location.protocol === "file:"
+      ? "This page must be served, not opened from disk: in its folder run " +
+        "`python3 -m http.server`, then open http://127.0.0.1:8000/ (or put the folder on " +
+        "any web host)."
+      : `The page's settings (manifest.json) could not be read: ${e.message}`, true);
+    page.error = "no-manifest";
+    return;
+  }
+  page.refused = readHash();
   fillForm();
   fit();
   wire();
@@ -1019,6 +1069,14 @@ async function main() {
     return;
   }
   page.ready = true;
+  if (page.refused.length) {
+    // A link outside the controls' rules: said, and nothing computed until a control moves.
+    say(`This link's view was not computed: ${page.refused.join("; ")}. Change a control ` +
+      "or press Whole plane to compute a view.", true);
+    document.getElementById("command").textContent =
+      command(view, grid(view, canvas.width, canvas.height));
+    return;
+  }
   show();
 }
 
