@@ -839,3 +839,54 @@ fn json_output_is_json_alone() {
         "{first}"
     );
 }
+
+#[test]
+fn a_motion_too_slow_blames_what_the_user_gave() {
+    let dir = tempfile::tempdir().unwrap();
+    // A swing sampled every 10 ms, its times written in milliseconds: to the reader a
+    // pendulum turning a thousand times too slowly.
+    let swing = |k: usize| {
+        let t = k as f64 * 0.01;
+        let (a, b) = (0.8 * (4.1 * t).sin(), 1.1 * (6.3 * t + 1.0).sin());
+        let (x1, y1) = (0.3 * a.sin(), -0.3 * a.cos());
+        (x1, y1, x1 + 0.2 * b.sin(), y1 - 0.2 * b.cos())
+    };
+    let (mut ms, mut frames) = (
+        String::from("t,x1,y1,x2,y2\n"),
+        String::from("frame,x1,y1,x2,y2\n"),
+    );
+    for k in 0..300 {
+        let (x1, y1, x2, y2) = swing(k);
+        ms += &format!("{},{x1},{y1},{x2},{y2}\n", k * 10);
+        frames += &format!("{k},{x1},{y1},{x2},{y2}\n");
+    }
+    std::fs::write(dir.path().join("ms.csv"), ms).unwrap();
+    std::fs::write(dir.path().join("frames.csv"), frames).unwrap();
+    // No frame rate was given: the file's times are named, not the flag.
+    chaoscope()
+        .current_dir(dir.path())
+        .args(["fit", "ms.csv", "--held-out", "0", "--output", "a"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("FILE").and(predicate::str::contains("not in seconds")))
+        .stderr(predicate::str::contains("--frame-rate").not());
+    // Frames at 0.1 a second (100 frames a second meant): the frame rate is named.
+    chaoscope()
+        .current_dir(dir.path())
+        .args([
+            "fit",
+            "frames.csv",
+            "--frame-rate",
+            "0.1",
+            "--held-out",
+            "0",
+            "--output",
+            "b",
+        ])
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("--frame-rate")
+                .and(predicate::str::contains("0.1 frames a second")),
+        );
+}

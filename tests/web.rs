@@ -112,8 +112,14 @@ fn the_site_is_the_engines_own_and_small() {
     }
     // The page's bounds on a run are the library's, and its longest run is one the engine
     // takes (within MAX_STEPS).
-    assert_eq!(m["bounds"]["t_max"], serde_json::json!(chaoscope::web::PAGE_T_MAX));
-    assert_eq!(m["bounds"]["dt"], serde_json::json!(chaoscope::web::PAGE_DT));
+    assert_eq!(
+        m["bounds"]["t_max"],
+        serde_json::json!(chaoscope::web::PAGE_T_MAX)
+    );
+    assert_eq!(
+        m["bounds"]["dt"],
+        serde_json::json!(chaoscope::web::PAGE_DT)
+    );
     let longest = chaoscope::spec::Stepping {
         t_max: chaoscope::web::PAGE_T_MAX[1],
         dt: chaoscope::web::PAGE_DT[0],

@@ -394,12 +394,22 @@ pub fn tracked_model_from(
     }
     .motion_time();
     if natural > SLOWEST_MOTION {
-        return Err(Error::invalid(
-            "frame_rate",
-            format!(
-                "the upper arm turns by 1 rad in {natural:.0} s (1/RMS of its angular velocity; a swinging pendulum's is under a second or so): are the times frame numbers? Name the column `frame` and give the frame rate"
+        let slow = format!(
+            "the upper arm turns by 1 rad in {natural:.0} s (1/RMS of its angular velocity; a swinging pendulum's is under a second or so)"
+        );
+        // Blame what the user gave: the frame rate that made the times, or the times' column.
+        return Err(match units.frame_rate {
+            Some(rate) => Error::invalid(
+                "frame_rate",
+                format!("{slow}: is the film's frame rate {rate} frames a second?"),
             ),
-        ));
+            None => Error::invalid(
+                "file",
+                format!(
+                    "{slow}: the rows barely move (a pendulum at rest?), or their `t` column is not in seconds (frame numbers: name the column `frame` and give the frame rate)"
+                ),
+            ),
+        });
     }
     let stated = given.preset.is_some() || given.params.is_some();
     let rows = TrackRows {
