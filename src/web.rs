@@ -10,18 +10,17 @@
 use serde_json::{Value, json};
 use wgpu::naga;
 
-use crate::field::Field;
 use crate::gpu::layout::{GpuParams, GpuPendulum, NEVER, NONFINITE, WORKGROUP_SIZE, mass_scale};
 use crate::gpu::shaders::{Kernel, source};
 use crate::gpu::{
     LEFT_BELOW, MIN_STEPS, STALLED_BELOW, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION,
     TANGENT_STEP_COST,
 };
-use crate::measure::{Indicator, Runs};
+use crate::measure::{End, Indicator, IndicatorAsked, Runs};
 use crate::model::Params;
 use crate::quantity::Quantity;
-use crate::render::{Colormap, flip_table, ftle_table};
-use crate::spec::{F32_MIN_PIXEL_STEP, LyapunovSpec, Precision, Var};
+use crate::render::{Colormap, flip_table, ftle_table, legend};
+use crate::spec::{F32_MIN_PIXEL_STEP, LyapunovSpec, MapKind, Precision, Var};
 
 /// The page, its script and its style.
 const PAGE: &str = include_str!("../assets/web/index.html");
@@ -62,11 +61,13 @@ pub fn parameter_axes() -> Vec<Vec<Var>> {
 pub struct SiteSpec {
     pub pendulums: Vec<Pendulum>,
     /// The flip map's command line with `{width}`, `{height}`, `{x_min}`, `{x_max}`,
-    /// `{y_min}`, `{y_max}`, `{t_max}`, `{dt}` and `{pendulum}` to fill in: the page shows it
-    /// for its view, the map the command line computes for the same pixels.
+    /// `{y_min}`, `{y_max}`, `{t_max}`, `{dt}`, `{pendulum}`, `{colours}` and `{verdict}`
+    /// to fill in: the page shows it for its view, the map the command line computes for the
+    /// same pixels.
     pub command: String,
-    /// The same for a divergence-family map, with `{indicator}` for the indicator's name too.
-    pub indicator_command: String,
+    /// The divergence-family maps the page offers (the kinds' table's, in its order), each
+    /// with the indicator it computes ([`in_f32`]) and its command line, as the flip map's.
+    pub indicator_commands: Vec<(MapKind, Indicator, String)>,
     /// A clicked pixel's run as a command line, with `{theta1}`, `{omega1}`, `{theta2}`,
     /// `{omega2}`, `{t_max}`, `{dt}` and `{pendulum}` to fill in.
     pub swing_command: String,
@@ -79,9 +80,6 @@ const KERNELS: [(&str, Kernel); 4] = [
     ("indicators", Kernel::Indicators),
     ("trajectory", Kernel::Trajectory),
 ];
-
-/// The divergence-family maps the page offers beside the flip time.
-const INDICATORS: [Indicator; 3] = [Indicator::Ftle, Indicator::Megno, Indicator::Fli];
 
 /// What a site's manifest.json says wrote it: `web --output` writes again only into a folder
 /// that is new, empty or such a site.
@@ -115,6 +113,25 @@ pub fn files(spec: &SiteSpec) -> Vec<(String, Vec<u8>)> {
 pub const PAGE_T_MAX: [f64; 2] = [0.1, 1000.0];
 /// The time step a view of the page may ask for (s).
 pub const PAGE_DT: [f64; 2] = [1e-4, 0.1];
+
+/// `indicator` as the page computes it, in f32: a setting f32 cannot hold (the RLI's
+/// neighbour 1e-8 away) takes the measure's own f32 default, as the command line's f32 maps do.
+pub fn in_f32(indicator: Indicator) -> Indicator {
+    let measure = indicator.measure();
+    match measure.validate(indicator, Precision::F32) {
+        Ok(()) => indicator,
+        Err(_) => {
+            let name = indicator.spelled().0;
+            measure.asked(
+                name,
+                &IndicatorAsked {
+                    gpu_f32: true,
+                    ..IndicatorAsked::named(name)
+                },
+            )
+        }
+    }
+}
 
 /// The page's settings: the kernels' layouts, the engine's constants, the pendulums, the
 /// planes' variables, the colours.
@@ -162,12 +179,18 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
         .iter()
         .map(|&c| (c.name().to_string(), Value::String(hex(&flip_table(c)))))
         .collect();
+    let flip = MapKind::FLIP_TIME.entry();
     let mut kinds = vec![json!({
-        "name": "flip", "label": "flip time", "unit": "s", "kernel": "flip_time",
+        "name": flip.short, "label": flip.label, "unit": "s", "kernel": "flip_time",
+        "about": legend(MapKind::FLIP_TIME),
         "command": spec.command,
         "vouch": vouch(&crate::quantity::FLIP_TIME),
     })];
-    kinds.extend(INDICATORS.iter().map(|&i| divergence_kind(i, spec)));
+    kinds.extend(
+        spec.indicator_commands
+            .iter()
+            .map(|(kind, i, command)| divergence_kind(*kind, *i, command)),
+    );
     let colours: serde_json::Map<String, Value> = colours.into_iter().collect();
     json!({
         "generator": GENERATOR,
@@ -214,10 +237,11 @@ fn hex(table: &[[u8; 3]]) -> String {
         .collect()
 }
 
-/// What the page needs to map `indicator`, from the measure that computes it: the kernel
-/// and entries the engine runs, the run's setting and measure, a step's cost, how a raw
-/// value is finished and what marks a start that left the numbers, its colours' range.
-fn divergence_kind(indicator: Indicator, spec: &SiteSpec) -> Value {
+/// What the page needs to map `indicator`, from the measure that computes it and its line in
+/// the kinds' table: the kernel and entries the engine runs, the run's setting and measure,
+/// a step's cost, how a raw value is finished and what marks a start that left the numbers,
+/// its colours' range rule, its names and its legend.
+fn divergence_kind(kind: MapKind, indicator: Indicator, command: &str) -> Value {
     let measure = indicator.measure();
     let (kernel, init, advance, code, setting, cost, left_below) = match measure.runs(indicator) {
         Runs::Divergence => (
@@ -253,20 +277,16 @@ fn divergence_kind(indicator: Indicator, spec: &SiteSpec) -> Value {
         Runs::Divergence => true,
         Runs::Indicators(_) => measure.finish(indicator, 1.0, 2.0) == 0.5,
     };
-    // The colours run from 0 to the 99.5th percentile of the map, at least to what a map of
-    // zeros gets (the measure's `default_range`).
-    let zeros = Field {
-        width: 1,
-        height: 1,
-        data: vec![0.0],
-    };
-    let floor = measure
-        .default_range(indicator, lyapunov.stepping.t_max, &zeros)
-        .1;
     let quantity = indicator.quantity();
+    // How the command line draws it: its colour bar's label, and whether its colours run
+    // from bright (low values) to dark.
+    let look = measure.look(indicator, lyapunov.stepping.t_max);
     json!({
-        "name": indicator.spelled().0,
-        "label": indicator.title(),
+        "name": kind.short(),
+        "label": kind.entry().label,
+        "about": legend(kind),
+        "bar_label": look.label,
+        "reversed": look.reversed,
         "unit": quantity.unit,
         "kernel": kernel,
         "entries": [init, advance],
@@ -276,11 +296,32 @@ fn divergence_kind(indicator: Indicator, spec: &SiteSpec) -> Value {
         "renorm": lyapunov.renorm,
         "per_time": per_time,
         "left_below": left_below,
-        "range": {"quantile": 0.995, "at_least": floor},
+        // The colours' range: the measure's rule (src/measure/range.rs), t-max's where it
+        // counts in place of "{t_max}".
+        "range": range_rule(indicator),
+        // A start the measure marks as never (an alignment not within t-max) finishes as +inf.
+        "never_inf": measure.finish(indicator, NEVER as f64, 1.0) == f32::INFINITY,
         "vouch": vouch(quantity),
         "table": hex(&ftle_table(Colormap::Magma)),
-        "command": spec.indicator_command.replace("{indicator}", indicator.spelled().0),
+        "command": command,
     })
+}
+
+/// `indicator`'s colour range rule as the page applies it: ends fixed or quantiles, with
+/// their bounds; a fixed end that is t-max as the string "t_max" (the page's t-max varies).
+fn range_rule(indicator: Indicator) -> Value {
+    // Two t-maxes tell an end that follows t-max from one that is fixed.
+    let (a, b) = (
+        indicator.measure().range_rule(indicator, 1.0),
+        indicator.measure().range_rule(indicator, 2.0),
+    );
+    let end = |x: End, y: End| match (x, y) {
+        (End::Fixed(p), End::Fixed(q)) if p == 1.0 && q == 2.0 => json!("t_max"),
+        (End::Fixed(p), _) => json!({"fixed": p}),
+        (End::Quantile { bound }, _) => json!({"bound": bound}),
+    };
+    json!({"quantiles": [a.quantiles.0, a.quantiles.1], "widen": a.widen,
+        "low": end(a.low, b.low), "high": end(a.high, b.high)})
 }
 
 /// What the page needs to know of a kernel's WGSL, read from it by naga: its file, its entry

@@ -14,7 +14,7 @@ use chaoscope::gpu::shaders::{Kernel, source};
 use chaoscope::model::Params;
 use chaoscope::params::Preset;
 use chaoscope::render::{Colormap, flip_table};
-use chaoscope::spec::{Axis, Grid, Precision, Var};
+use chaoscope::spec::{Axis, Grid, MapKind, Precision, Var};
 use common::{browser_report, browser_tools, chaoscope, gpu, read_npy};
 
 /// The site made by `chaoscope web` in `dir`, and its manifest.
@@ -132,6 +132,16 @@ fn the_site_is_the_engines_own_and_small() {
     assert_eq!(m["colours"]["inferno"].as_str(), Some(hex.as_str()));
 }
 
+/// A site written by `chaoscope web` into a new folder (kept while the test holds it), and
+/// served: the folder, the site's root in it, its manifest, its server.
+fn served() -> (tempfile::TempDir, PathBuf, serde_json::Value, StaticServer) {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("site");
+    let manifest = site(&root);
+    let server = StaticServer::start(&root);
+    (dir, root, manifest, server)
+}
+
 /// `python3 -m http.server` on a free port over `dir`, stopped when dropped.
 struct StaticServer {
     child: Child,
@@ -210,10 +220,7 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     let Some(python) = browser_tools() else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
-    let root = dir.path().join("site");
-    site(&root);
-    let server = StaticServer::start(&root);
+    let (dir, _, _, server) = served();
     let turn = std::f64::consts::TAU;
     // The whole plane over 20 s (chaos grows any difference in the arithmetic), a deep view
     // into the boundary, the lab's pendulum (its losses compiled in), the (theta1, omega1)
@@ -245,6 +252,21 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         {"name": "fli", "width": 48, "height": 48,
          "view": {"kind": "fli", "cx": 0, "cy": 0, "w": turn, "t_max": 5, "dt": 0.01}},
     ]);
+    // Every other indicator of the kinds' table, each on a small grid.
+    for kind in [
+        "sali",
+        "gali",
+        "alignment-time",
+        "exponent",
+        "exponent-sum",
+        "descriptor",
+        "ofli",
+        "rli",
+    ] {
+        views.as_array_mut().unwrap().push(serde_json::json!({
+            "name": kind, "width": 32, "height": 32,
+            "view": {"kind": kind, "cx": 0.5, "cy": 0.5, "w": 3, "t_max": 5, "dt": 0.01}}));
+    }
     // The verdict in f32: the same map at half and a quarter of the step.
     views.as_array_mut().unwrap().push(serde_json::json!({
         "name": "judged", "width": 64, "height": 64, "times": false, "verdict": true,
@@ -279,11 +301,13 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         "view": {"x": "theta1", "y": "m2/m1", "cx": 0, "cy": 0, "w": 2, "h": 2, "t_max": 1}}));
     let shot = dir.path().join("page.png");
     let views_json = views.to_string();
+    // The first view in viridis: the saved PNG's command must draw it so.
+    let first = format!("{}#t_max=10&colours=viridis", server.url);
     let report = browser_report(
         &python,
         "web.py",
         &[
-            server.url.as_ref(),
+            first.as_ref(),
             shot.as_ref(),
             dir.path().as_ref(),
             views_json.as_ref(),
@@ -329,7 +353,8 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     );
     let shown = &text["chaoscope:command"];
     assert!(
-        shown.starts_with(&format!("chaoscope flip --size {w}x{h} ")),
+        shown.starts_with(&format!("chaoscope flip --size {w}x{h} "))
+            && shown.contains("--colormap viridis"),
         "{shown}"
     );
     let cli_png = dir.path().join("shown_cli.png");
@@ -433,15 +458,39 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         let page = read_f32(&dir.path().join(format!("{name}.f32")));
         let (w, h) = (v["width"].as_u64().unwrap(), v["height"].as_u64().unwrap());
         assert_eq!(shape, [h, w], "{name}");
-        let agree = agreement(&cli, &page, 1e-3);
+        // The RLI is the difference of two orbits' exponents 1e-4 apart: each carries the f32
+        // round-off of its 500 steps (about 1e-6 /s), some percent of an RLI near 1e-4, so
+        // its log10 may part by a few hundredths where the maps' rounding differs.
+        let tol = if name == "rli" { 0.05 } else { 1e-3 };
+        let agree = agreement(&cli, &page, tol);
         let exact = agreement(&cli, &page, 0.0);
-        eprintln!("{name}: {agree:.5} within 1e-3 (s, 1/s) or the same class, {exact:.5} exactly");
+        eprintln!("{name}: {agree:.5} within {tol} (s, 1/s) or the same class, {exact:.5} exactly");
         // Both run the same WGSL over the same f32 params. The two software GPUs round
         // every step of the motion alike (RK4's 6 is data: Params `six`; the bearing
         // friction's sums are explicit fmas) and differ at most in an ulp or two of where a
         // flip falls in its step: the 1e-3 s (and 1e-3 /s for the FTLE) holds
         // everywhere, the lab's pendulum with its losses included.
         assert!(agree >= 0.999, "{name}: {agree}");
+        // The colours' range the page drew is the measure's rule on the command line's map.
+        let kind = v["view"]["kind"].as_str().unwrap_or("flip");
+        if let Some(i) = MapKind::from_short(kind).and_then(|k| k.entry().indicator) {
+            let t_max = v["view"]["t_max"].as_f64().unwrap();
+            let field = chaoscope::field::Field {
+                width: w as u32,
+                height: h as u32,
+                data: cli,
+            };
+            let (lo, hi) = i.measure().default_range(i, t_max, &field);
+            let page = &report["views"][name]["range"];
+            for (p, r) in [(&page[0], lo), (&page[1], hi)] {
+                let p = p.as_f64().unwrap();
+                // Quantiles of maps equal within 1e-3 at 99.9 % of their pixels.
+                assert!(
+                    (p - r as f64).abs() <= 2e-3 * (1.0 + r.abs() as f64),
+                    "{name}: {page} against ({lo}, {hi})"
+                );
+            }
+        }
         assert!(
             report["views"][name]["resolves"].as_bool().unwrap(),
             "{name}"
@@ -541,10 +590,7 @@ fn a_link_is_held_to_the_controls_rules_in_chromium() {
     let Some(python) = browser_tools() else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
-    let root = dir.path().join("site");
-    let manifest = site(&root);
-    let server = StaticServer::start(&root);
+    let (_dir, root, manifest, server) = served();
     // Values with the number JavaScript's Number() makes of them (None: NaN; the page takes
     // blank text as no number), and names: the manifest's, an Object's own members, junk.
     let numbers: &[(&str, Option<f64>)] = &[
@@ -704,7 +750,15 @@ fn a_link_is_held_to_the_controls_rules_in_chromium() {
         &[
             server.url.as_ref(),
             serde_json::to_string(&hashes).unwrap().as_ref(),
+            format!("file://{}", root.join("index.html").display()).as_ref(),
         ],
+    );
+    // Opened from disk (the browser lets it read none of its files), the page says to serve
+    // the folder instead of waiting for ever.
+    let disk = report["from_disk"].as_str().unwrap();
+    assert!(
+        disk.contains("must be served") && disk.contains("http.server"),
+        "{disk}"
     );
     let cases = report["cases"].as_array().unwrap();
     assert_eq!(cases.len(), links.len());
@@ -741,8 +795,83 @@ fn a_link_is_held_to_the_controls_rules_in_chromium() {
     eprintln!("{} links, {refused} refused", links.len());
     // The seeded draw holds both kinds (so each branch above was tried).
     assert!(
-        refused > 10 && refused + 10 < links.len(),
+        refused > 30 && refused + 30 < links.len(),
         "{refused} of {}",
         links.len()
     );
+}
+
+#[test]
+fn the_page_serves_a_class_on_a_phone_and_a_projector() {
+    let Some(python) = browser_tools() else {
+        return;
+    };
+    let (dir, _, _, server) = served();
+    let report = browser_report(
+        &python,
+        "class.py",
+        &[server.url.as_ref(), dir.path().as_ref()],
+    );
+    for (name, r) in report.as_object().unwrap() {
+        let first = &r["first"];
+        for step in ["first", "tapped", "changed", "copied"] {
+            assert_eq!(
+                r[step]["errors"],
+                serde_json::json!([]),
+                "{name} {step}: {r}"
+            );
+        }
+        let width = first["inner"][0].as_f64().unwrap();
+        let map = first["map"]["width"].as_f64().unwrap();
+        if name == "phone" {
+            // On a phone the map comes first, across (nearly) the whole width.
+            assert!(map >= 0.9 * width, "{name}: map {map} px of {width}");
+        }
+        // The new view showed coarse before it was whole.
+        let (preview, whole) = (
+            first["preview"].as_f64().unwrap(),
+            first["seconds"].as_f64().unwrap(),
+        );
+        assert!(
+            preview < whole,
+            "{name}: preview {preview} s, map {whole} s"
+        );
+        // The tapped start: marked on the map, in words, its swing in sight.
+        let tapped = &r["tapped"];
+        let text = tapped["clicked"].as_str().unwrap();
+        assert!(
+            text.contains("theta1 = ") && text.contains("flips"),
+            "{name}: {text}"
+        );
+        let marker = &tapped["marker"];
+        assert!(!marker.is_null(), "{name}: no marker");
+        let inside = |outer: &serde_json::Value, inner: &serde_json::Value| {
+            ["left", "top"]
+                .iter()
+                .all(|k| inner[k].as_f64() >= outer[k].as_f64())
+                && ["right", "bottom"]
+                    .iter()
+                    .all(|k| inner[k].as_f64() <= outer[k].as_f64())
+        };
+        assert!(inside(&tapped["map"], marker), "{name}: {tapped}");
+        let swing = &tapped["swing"];
+        let height = first["inner"][1].as_f64().unwrap();
+        assert!(
+            swing["top"].as_f64().unwrap() >= 0.0 && swing["bottom"].as_f64().unwrap() <= height,
+            "{name}: the swing is out of sight: {swing}"
+        );
+        // Its words follow the map shown.
+        let changed = r["changed"]["clicked"].as_str().unwrap();
+        assert!(
+            changed.contains("FTLE") && !changed.contains("flips"),
+            "{name}: {changed}"
+        );
+        // "Copy link" copies the view's address.
+        let copied = &r["copied"];
+        assert_eq!(copied["copied"], copied["href"], "{name}");
+        assert!(
+            copied["href"].as_str().unwrap().contains("kind=ftle"),
+            "{name}"
+        );
+    }
 }

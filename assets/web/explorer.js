@@ -103,7 +103,7 @@ function command(v, g) {
   const p = manifest.pendulums[v.pendulum];
   const values = { width: g.width, height: g.height, x_min: g.x[0], x_max: g.x[1],
     y_min: g.y[0], y_max: g.y[1], t_max: v.t_max, dt: v.dt, pendulum: p.flags[parameterAxes(v)],
-    x: v.x, y: v.y };
+    x: v.x, y: v.y, colours: v.colours, verdict: v.verdict ? " --show-unresolved" : "" };
   return kindOf(v.kind).command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
 }
 
@@ -402,6 +402,7 @@ function mirrored(out, start) {
 // grid `g`, as src/gpu/lyapunov.rs and indicators.rs drive it: every pixel every step, the
 // steps of a dispatch bounded by their cost; NaN where the run left the numbers.
 async function divergence(kind, v, g, onProgress) {
+  const c = manifest.constants;
   const kernel = await kernelOf(gpu, kind.kernel), k = kernel.k;
   const s = setUp(v, g, k);
   const [init, advance] = await pipelines(gpu, kind.kernel, kind.entries, s.constants);
@@ -439,6 +440,7 @@ async function divergence(kind, v, g, onProgress) {
       for (let i = 0; i < n; i++) {
         const x = raw[i];
         out[row0 * g.width + i] = x < kind.left_below ? NaN
+          : kind.never_inf && x === c.never ? Infinity
           : kind.per_time ? Math.fround(x / tEnd) : x;
       }
     }
@@ -507,17 +509,27 @@ function scale(kind, values, v) {
     return { lo: t0, hi: v.t_max, log: true,
       at: (t) => Number.isFinite(t) ? (Math.log(Math.max(t, t0)) - lo) / (hi - lo) : null };
   }
-  const finite = values.filter(Number.isFinite).sort((a, b) => a - b);
-  const top = finite.length ? finite[Math.round((finite.length - 1) * kind.range.quantile)] : 0;
-  const hi = Math.max(top, kind.range.at_least);
-  return { lo: 0, hi, log: false, at: (x) => x / hi };
+  // The measure's rule (src/measure/range.rs `RangeRule::apply`), in f32 as the engine's.
+  const r = kind.range, finite = values.filter(Number.isFinite).sort((a, b) => a - b);
+  let [ql, qh] = [0, 1];
+  if (finite.length) {
+    const at = (q) => finite[Math.round((finite.length - 1) * q)];
+    [ql, qh] = [at(r.quantiles[0]), at(r.quantiles[1])];
+    if (r.widen && qh <= ql) [ql, qh] = [Math.fround(ql - 0.5), Math.fround(ql + 0.5)];
+  }
+  const end = (e, q, keep) => e === "t_max" ? Math.fround(v.t_max) : "fixed" in e ? e.fixed
+    : e.bound === null ? q : keep(q, e.bound);
+  const lo = end(r.low, ql, Math.min), hi = end(r.high, qh, Math.max);
+  // Reversed (src/render/maps.rs `lyapunov_picture`), low values take the bright end.
+  return { lo, hi, log: false,
+    at: kind.reversed ? (x) => (hi - x) / (hi - lo) : (x) => (x - lo) / (hi - lo) };
 }
 
 function colourTable(kind, v) {
   return parseTable(kind.name === "flip" ? manifest.colours[v.colours] : kind.table);
 }
 
-function draw(values, g, v, sc, mask) {
+function image(values, g, v, sc, mask) {
   const kind = kindOf(v.kind), lut = colourTable(kind, v), n = lut.length / 3;
   const image = new ImageData(g.width, g.height);
   for (let i = 0; i < values.length; i++) {
@@ -534,7 +546,12 @@ function draw(values, g, v, sc, mask) {
     const o = i * 4;
     image.data[o] = r; image.data[o + 1] = gr; image.data[o + 2] = b; image.data[o + 3] = 255;
   }
-  canvas.getContext("2d").putImageData(image, 0, 0);
+  return image;
+}
+
+function draw(values, g, v, sc, mask) {
+  canvas.getContext("2d").putImageData(image(values, g, v, sc, mask), 0, 0);
+  canvas.classList.remove("stale");
   drawAxes(g);
   page.shownCommand = command(v, g);
   document.getElementById("save").hidden = false;
@@ -616,8 +633,9 @@ function drawAxes(g) {
   const name = (v) => `${varOf(v).symbol}${varOf(v).unit === "1" ? "" : ` (${varOf(v).unit})`}`;
   Object.assign(document.getElementById("x-name"), { textContent: name(g.xVar) }).style.cssText =
     `left: ${left + side / 2}px; top: ${side + 20}px`;
+  // Beside the map, turned; on a narrow screen, inside its top left corner.
   Object.assign(document.getElementById("y-name"), { textContent: name(g.yVar) }).style.cssText =
-    `left: 9px; top: ${side / 2}px`;
+    NARROW.matches ? `left: ${left + 40}px; top: 4px` : `left: 9px; top: ${side / 2}px`;
 }
 
 function drawBar(sc) {
@@ -631,14 +649,12 @@ function drawBar(sc) {
   }
   const ticks = document.getElementById("bar-ticks");
   ticks.replaceChildren();
-  document.getElementById("bar-label").textContent = kind.name === "flip"
-    ? "first flip (s): bright early, dark late, black never"
-    : `${kind.label}${kind.unit && !kind.unit.startsWith("1") ? ` (${kind.unit})` : ""}, ` +
-      "from 0 to the " +
-      "99.5th percentile of the view; green: left the numbers";
+  document.getElementById("bar-label").textContent =
+    kind.name === "flip" ? "flip time (s)" : kind.bar_label;
+  document.getElementById("about").textContent = kind.about;
   if (!sc) return;
   const marks = sc.log ? [0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500]
-    : [0, 0.25, 0.5, 0.75, 1].map((f) => Number((f * sc.hi).toPrecision(2)));
+    : [0, 0.25, 0.5, 0.75, 1].map((f) => Number((sc.lo + f * (sc.hi - sc.lo)).toPrecision(2)));
   for (const t of marks) {
     if (t < sc.lo || t > sc.hi) continue;
     const el = document.createElement("span");
@@ -649,6 +665,57 @@ function drawBar(sc) {
 }
 
 // ---- Computing the view ----
+
+// Views at least 4 x this many pixels wide are drawn coarse first.
+const PREVIEW_MIN = 64;
+
+// A coarse map of the view, stretched over the canvas (its pixels as blocks).
+function preview(values, g, v) {
+  const small = document.createElement("canvas");
+  [small.width, small.height] = [g.width, g.height];
+  small.getContext("2d").putImageData(image(values, g, v, scale(kindOf(v.kind), values, v)), 0, 0);
+  const ctx = canvas.getContext("2d");
+  ctx.imageSmoothingEnabled = false;
+  ctx.drawImage(small, 0, 0, canvas.width, canvas.height);
+  canvas.classList.remove("stale");
+}
+
+// The start last clicked ({x, y} on axes xVar, yVar), kept across views: marked on the map,
+// its words those of the map shown.
+let clicked = null;
+
+function pixelWords(kind, value) {
+  return kind.name === "flip"
+    ? (Number.isFinite(value) ? `flips at ${value.toFixed(3)} s` : Number.isNaN(value)
+      ? "left the numbers" : `never flips within ${view.t_max} s`)
+    : `${kind.label} ${Number.isFinite(value) ? value.toPrecision(4)
+      : Number.isNaN(value) ? "NaN (left the numbers)" : value}`;
+}
+
+function markClicked() {
+  const marker = document.getElementById("marker"), text = document.getElementById("pixel-text");
+  marker.hidden = true;
+  if (!clicked || !page.shown) return;
+  const at = `${clicked.xVar} = ${clicked.x.toPrecision(6)}, ${clicked.yVar} = ` +
+    clicked.y.toPrecision(6);
+  if (clicked.xVar !== view.x || clicked.yVar !== view.y) {
+    text.textContent = `${at}: not on this plane (${view.x}, ${view.y}).`;
+    return;
+  }
+  const g = grid(view, canvas.width, canvas.height);
+  const fx = (clicked.x - g.x[0]) / (g.x[1] - g.x[0]), fy = (g.y[1] - clicked.y) / (g.y[1] - g.y[0]);
+  if (!(fx >= 0 && fx < 1 && fy >= 0 && fy < 1)) {
+    text.textContent = `${at}: outside this view.`;
+    return;
+  }
+  const side = canvas.getBoundingClientRect().width;
+  marker.style.left = `${canvas.offsetLeft + fx * side}px`;
+  marker.style.top = `${fy * side}px`;
+  marker.hidden = false;
+  const value = page.shown[Math.floor(fy * g.height) * g.width + Math.floor(fx * g.width)];
+  text.textContent = `${at}: ${pixelWords(kindOf(view.kind), value)}`;
+  page.clickedText = text.textContent;
+}
 
 let pending = null;
 async function show() {
@@ -678,8 +745,19 @@ async function show() {
   deepNote.hidden = true;
   const started = performance.now();
   progress.hidden = false;
+  canvas.classList.add("stale");
   say("computing on the GPU…");
   try {
+    // A quarter of the resolution first (a sixteenth of the work): the new view in a moment,
+    // then sharpened.
+    if (g.width >= 4 * PREVIEW_MIN) {
+      const coarse = Object.assign({}, g, { width: Math.ceil(g.width / 4),
+        height: Math.ceil(g.height / 4) });
+      const rough = await compute(view, coarse, () => {});
+      if (rough === null || mine !== generation) return;
+      preview(rough, coarse, view);
+      page.previewSeconds = (performance.now() - started) / 1000;
+    }
     const values = await compute(view, g, (f) => {
       progress.firstElementChild.style.width = `${(100 * f).toFixed(1)}%`;
       say(`computing on the GPU… ${(100 * f).toFixed(0)} %`);
@@ -697,6 +775,7 @@ async function show() {
     draw(values, g, view, sc, mask);
     drawBar(sc);
     page.shown = values;
+    markClicked();
     const seconds = (performance.now() - started) / 1000;
     const finite = values.filter(Number.isFinite).length / values.length;
     page.views += 1;
@@ -725,8 +804,14 @@ async function show() {
 // most 1024 a side: the work grows with the pixels).
 function fit() {
   const box = document.getElementById("view");
+  const pad = getComputedStyle(document.getElementById("frame"));
   // Room for the axes' labels (#frame's padding) and a margin.
-  const side = Math.max(64, Math.min(box.clientWidth - 86, box.clientHeight - 54));
+  const across = parseFloat(pad.paddingLeft) + parseFloat(pad.paddingRight) + 16;
+  const below = parseFloat(pad.paddingTop) + parseFloat(pad.paddingBottom) + 16;
+  // Beside the panel the map fills the view's height; above it (a narrow screen, style.css)
+  // the width, at most most of the screen's height.
+  const tall = NARROW.matches ? 0.8 * window.innerHeight : box.clientHeight - below;
+  const side = Math.max(64, Math.floor(Math.min(box.clientWidth - across, tall)));
   const pixels = Math.min(1024, Math.round(side * (window.devicePixelRatio || 1)));
   canvas.style.width = canvas.style.height = `${side}px`;
   if (canvas.width !== pixels) {
@@ -735,6 +820,9 @@ function fit() {
   }
   return false;
 }
+
+// A narrow screen (a phone): the map above the panel (style.css).
+const NARROW = matchMedia("(max-width: 760px)");
 
 function later() {
   clearTimeout(pending);
@@ -759,11 +847,36 @@ function wire() {
     later();
   }, { passive: false });
   let drag = null;
+  // Two fingers pinch: the view scales about their midpoint as their distance changes.
+  const touches = new Map();
+  let pinch = null;
+  const spread = () => {
+    const [a, b] = [...touches.values()];
+    return { d: Math.hypot(a.x - b.x, a.y - b.y), x: (a.x + b.x) / 2, y: (a.y + b.y) / 2 };
+  };
   canvas.addEventListener("pointerdown", (e) => {
-    drag = { x: e.clientX, y: e.clientY, cx: view.cx, cy: view.cy, moved: false };
+    touches.set(e.pointerId, { x: e.clientX, y: e.clientY });
     canvas.setPointerCapture(e.pointerId);
+    if (touches.size === 2) {
+      drag = null;
+      const s0 = spread();
+      pinch = { d: s0.d, at: pointAt({ clientX: s0.x, clientY: s0.y }), cx: view.cx,
+        cy: view.cy, w: view.w, h: view.h };
+      return;
+    }
+    drag = { x: e.clientX, y: e.clientY, cx: view.cx, cy: view.cy, moved: false };
   });
+  canvas.addEventListener("pointercancel", (e) => { touches.delete(e.pointerId); });
   canvas.addEventListener("pointermove", (e) => {
+    if (touches.has(e.pointerId)) touches.set(e.pointerId, { x: e.clientX, y: e.clientY });
+    if (pinch && touches.size === 2) {
+      const k = pinch.d / Math.max(1, spread().d);
+      canvas.style.transform = `scale(${1 / k})`;
+      view.cx = pinch.at.x + (pinch.cx - pinch.at.x) * k;
+      view.cy = pinch.at.y + (pinch.cy - pinch.at.y) * k;
+      view.w = pinch.w * k; view.h = pinch.h * k;
+      return;
+    }
     if (!drag) return;
     const box = canvas.getBoundingClientRect(), dx = e.clientX - drag.x, dy = e.clientY - drag.y;
     if (Math.abs(dx) + Math.abs(dy) > 3) drag.moved = true;
@@ -772,6 +885,12 @@ function wire() {
     view.cy = drag.cy + dy / box.height * view.h;
   });
   canvas.addEventListener("pointerup", (e) => {
+    touches.delete(e.pointerId);
+    if (pinch) {
+      // The view waits for both fingers to lift.
+      if (touches.size === 0) { pinch = null; canvas.style.transform = ""; later(); }
+      return;
+    }
     canvas.style.transform = "";
     if (drag && drag.moved) later(); else if (drag) describe(e);
     drag = null;
@@ -805,6 +924,16 @@ function wire() {
     link.click();
     setTimeout(() => URL.revokeObjectURL(link.href), 10000);
   });
+  document.getElementById("copy").addEventListener("click", async () => {
+    page.copied = location.href;
+    try {
+      await navigator.clipboard.writeText(location.href);
+      say("Link copied: it opens this view, computed on the viewer's GPU.");
+    } catch (e) {
+      // A page not served over https (nor from this machine) may not reach the clipboard.
+      say(`Copy this link: ${location.href}`);
+    }
+  });
   document.getElementById("reset").addEventListener("click", () => {
     wholeAxis("x"); wholeAxis("y");
     later();
@@ -830,14 +959,11 @@ async function describe(e) {
   const y = 0.5 * (g.y[0] + g.y[1]) - (2 * row + 1 - g.height) * 0.5 * ((g.y[1] - g.y[0]) / g.height);
   const start = { theta1: 0, omega1: 0, theta2: 0, omega2: 0 };
   start[view.x] = x; start[view.y] = y;
-  const kind = kindOf(view.kind), value = page.shown ? page.shown[row * g.width + col] : NaN;
+  clicked = { x, y, xVar: view.x, yVar: view.y };
   document.getElementById("pixel").hidden = false;
-  const shown = kind.name === "flip"
-    ? (Number.isFinite(value) ? `flips at ${value.toFixed(3)} s` : Number.isNaN(value)
-      ? "left the numbers" : `never flips within ${view.t_max} s`)
-    : `${kind.label} ${value.toPrecision(4)}`;
-  document.getElementById("pixel-text").textContent =
-    `${view.x} = ${x.toPrecision(6)}, ${view.y} = ${y.toPrecision(6)}: ${shown}`;
+  markClicked();
+  // The swing in sight without scrolling: beside the map, or below it on a narrow screen.
+  document.getElementById("pixel").scrollIntoView({ block: "nearest" });
   const swing = document.getElementById("swing-command");
   document.getElementById("swing").hidden = parameterAxes(view) !== "";
   if (parameterAxes(view) !== "") {
@@ -1014,6 +1140,9 @@ page.values = async (v, width, height) => {
   const w = viewOf(v), started = performance.now();
   const times = await compute(w, grid(w, width, height), () => {});
   page.computeSeconds = (performance.now() - started) / 1000;
+  // Its colours' range as the page draws them (the kind's rule).
+  const sc = scale(kindOf(w.kind), times, w);
+  page.valuesRange = [sc.lo, sc.hi];
   return base64(new Uint8Array(times.buffer));
 };
 

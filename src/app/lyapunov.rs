@@ -20,7 +20,7 @@ pub use crate::quantity::CHAOTIC_FTLE;
 
 /// A divergence map to make: the one map job ([`super::map`]) over a [`LyapunovSpec`]; its
 /// colours span `colour_range` (1/s), by default 0 to the map's 99.5th percentile
-/// ([`crate::render::ftle_range`]).
+/// ([`crate::measure::FTLE_RANGE`]).
 pub type LyapunovMapJob = super::map::MapJob<LyapunovSpec>;
 
 pub use super::map::run as run_map;

@@ -240,7 +240,7 @@ pub fn lyapunov_map_of(spec: &LyapunovSpec, backend: Backend, pic: &PictureSpec)
 }
 
 /// `--indicator` and its settings (nothing for the FTLE, the default).
-fn indicator(i: Indicator) -> String {
+pub fn indicator(i: Indicator) -> String {
     let (name, options) = i.spelled();
     if i == Indicator::default() {
         return String::new();

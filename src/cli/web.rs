@@ -11,6 +11,7 @@ use crate::error::Result;
 use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::params::{ParamSources, Preset};
+use crate::spec::MapKind;
 use crate::web::{Pendulum, SiteSpec};
 
 #[derive(Args, Debug, Clone)]
@@ -61,10 +62,23 @@ pub fn site(physical: &PhysicalArgs) -> Result<SiteSpec> {
         Preset::Lab.params(),
     ));
     let plane = "--size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}";
+    // Every divergence-family map of the kinds' table, its indicator's flags spelt out.
+    let indicator_commands = MapKind::all()
+        .iter()
+        .filter_map(|&k| Some((k, crate::web::in_f32(k.entry().indicator?))))
+        .map(|(k, i)| {
+            let flags = command_line::indicator(i);
+            (
+                k,
+                i,
+                format!("chaoscope lyapunov{flags} {plane}{{verdict}}"),
+            )
+        })
+        .collect();
     Ok(SiteSpec {
         pendulums,
-        command: format!("chaoscope flip {plane}"),
-        indicator_command: format!("chaoscope lyapunov --indicator {{indicator}} {plane}"),
+        command: format!("chaoscope flip {plane} --colormap {{colours}}{{verdict}}"),
+        indicator_commands,
         swing_command: "chaoscope trajectory --theta1 {theta1} --omega1 {omega1} --theta2 {theta2} --omega2 {omega2} --t-max {t_max} --dt {dt} {pendulum}".into(),
     })
 }

@@ -3,10 +3,10 @@
 //! threshold (where the start is called chaotic and stops).
 
 use super::MapKindEntry;
+use super::RangeRule;
 use super::indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment};
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::{Error, Result};
-use crate::field::Field;
 use crate::field::Precision;
 use crate::gpu::layout::NEVER;
 use crate::quantity::{Quantity, Tolerance};
@@ -276,10 +276,10 @@ impl Measure for AlignmentIndex {
         }
     }
     /// The threshold to 1 for the index, 0 to t-max for its time.
-    fn default_range(&self, i: Indicator, t_max: f64, _field: &Field) -> (f32, f32) {
+    fn range_rule(&self, i: Indicator, t_max: f64) -> RangeRule {
         match parts(i) {
-            (_, _, true) => (0.0, t_max as f32),
-            (_, threshold, false) => (threshold.log10() as f32, 0.0),
+            (_, _, true) => RangeRule::fixed(0.0, t_max as f32),
+            (_, threshold, false) => RangeRule::fixed(threshold.log10() as f32, 0.0),
         }
     }
     /// The map counts the starts it stopped: those below its threshold (a running pixel's

@@ -2,9 +2,9 @@
 //! phase-space velocity f over [-t-max, t-max], one plain trajectory each way.
 
 use super::MapKindEntry;
+use super::RangeRule;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs};
 use crate::error::{Error, Result};
-use crate::field::Field;
 use crate::field::Precision;
 use crate::model::Params;
 use crate::quantity::{Quantity, Tolerance};
@@ -127,8 +127,8 @@ impl Measure for Descriptor {
             reversed: false,
         }
     }
-    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
-        crate::render::percentile_range(field, 0.005, 0.995)
+    fn range_rule(&self, _i: Indicator, _t_max: f64) -> RangeRule {
+        RangeRule::percentiles(0.005, 0.995)
     }
     /// With losses the backward half runs anti-damped: say so.
     fn notices(&self, _i: Indicator, params: &Params) -> Vec<String> {

@@ -3,8 +3,8 @@
 
 use super::MapKindEntry;
 use super::{CpuRun, Indicator, Look, Measure, Opt, Runs};
+use super::{FTLE_RANGE, RangeRule};
 use crate::error::Result;
-use crate::field::Field;
 use crate::quantity::{FTLE, Quantity};
 
 pub struct Ftle;
@@ -77,8 +77,8 @@ impl Measure for Ftle {
             reversed: false,
         }
     }
-    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
-        crate::render::ftle_range(field)
+    fn range_rule(&self, _i: Indicator, _t_max: f64) -> RangeRule {
+        FTLE_RANGE
     }
     fn kinds(&self) -> &'static [MapKindEntry] {
         &KINDS

@@ -4,8 +4,8 @@
 
 use super::MapKindEntry;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
+use super::{End, RangeRule};
 use crate::error::Result;
-use crate::field::Field;
 use crate::quantity::{Quantity, Tolerance};
 
 pub struct Growth;
@@ -140,10 +140,15 @@ impl Measure for Growth {
     }
     /// 0 to the 99.5th percentile, at least to 4 (MEGNO) or 1 (the FLI): a regular map is
     /// then drawn dark, not stretched over its small spread.
-    fn default_range(&self, i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
+    /// From 0 to the 99.5th percentile, at least to 4 (MEGNO: regular motion's 2, doubled)
+    /// or 1 (the FLI).
+    fn range_rule(&self, i: Indicator, _t_max: f64) -> RangeRule {
         let floor = if is_megno(i) { 4.0 } else { 1.0 };
-        let high = crate::render::percentile_range(field, 0.0, 0.995).1;
-        (0.0, high.max(floor))
+        RangeRule {
+            low: End::Fixed(0.0),
+            high: End::Quantile { bound: Some(floor) },
+            ..RangeRule::percentiles(0.0, 0.995)
+        }
     }
     fn kinds(&self) -> &'static [MapKindEntry] {
         &KINDS

@@ -12,6 +12,7 @@ mod ftle;
 mod growth;
 pub(crate) mod indicator;
 mod ofli;
+mod range;
 mod rli;
 mod spectrum;
 
@@ -24,6 +25,7 @@ use crate::spec::{Integrator, Stepping};
 
 pub use descriptor::DESCRIPTOR_POWERS;
 pub use indicator::{ALIGNED, ALIGNED_F32_FLOOR, Alignment, Indicator};
+pub use range::{End, FTLE_RANGE, RangeRule};
 
 /// A map's line in the kinds' table.
 pub struct MapKindEntry {
@@ -247,8 +249,12 @@ pub trait Measure: Sync {
         None
     }
     fn look(&self, i: Indicator, t_max: f64) -> Look;
+    /// The rule of its map's colour range by default (data: the browser page applies it too).
+    fn range_rule(&self, i: Indicator, t_max: f64) -> RangeRule;
     /// The colour range of its map by default.
-    fn default_range(&self, i: Indicator, t_max: f64, field: &Field) -> (f32, f32);
+    fn default_range(&self, i: Indicator, t_max: f64, field: &Field) -> (f32, f32) {
+        self.range_rule(i, t_max).apply(field)
+    }
     /// Whether the summary counts a pixel (chaotic).
     fn counted(&self, i: Indicator, x: f32) -> bool {
         (self.quantity(i).counted)(x)

@@ -8,9 +8,9 @@
 use super::MapKindEntry;
 use super::growth::CHAOTIC_FLI;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
+use super::{End, RangeRule};
 use crate::cpu::{TANGENT_START, derivative, norm, tangent_step};
 use crate::error::Result;
-use crate::field::Field;
 use crate::model::{Params, State};
 use crate::quantity::{Quantity, Tolerance};
 
@@ -131,9 +131,12 @@ impl Measure for Ofli {
     }
     /// From its 0.5th percentile (it may start below 0: v's part across the flow is shorter
     /// than v) to its 99.5th, at least to 1: a regular map is then drawn dark.
-    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
-        let (low, high) = crate::render::percentile_range(field, 0.005, 0.995);
-        (low.min(0.0), high.max(1.0))
+    fn range_rule(&self, _i: Indicator, _t_max: f64) -> RangeRule {
+        RangeRule {
+            low: End::Quantile { bound: Some(0.0) },
+            high: End::Quantile { bound: Some(1.0) },
+            ..RangeRule::percentiles(0.005, 0.995)
+        }
     }
     fn kinds(&self) -> &'static [MapKindEntry] {
         &KINDS

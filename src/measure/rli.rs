@@ -9,10 +9,10 @@
 //! the FTLE's dual numbers.
 
 use super::MapKindEntry;
+use super::RangeRule;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::cpu::{TANGENT_START, norm, tangent_step};
 use crate::error::{Error, Result};
-use crate::field::Field;
 use crate::field::Precision;
 use crate::quantity::{Quantity, Tolerance};
 
@@ -175,8 +175,8 @@ impl Measure for Rli {
             reversed: false,
         }
     }
-    fn default_range(&self, _i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
-        crate::render::percentile_range(field, 0.005, 0.995)
+    fn range_rule(&self, _i: Indicator, _t_max: f64) -> RangeRule {
+        RangeRule::percentiles(0.005, 0.995)
     }
     fn kinds(&self) -> &'static [MapKindEntry] {
         &KINDS

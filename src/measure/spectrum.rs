@@ -2,6 +2,7 @@
 //! exponent of it (in Gram-Schmidt order) or their sum; RK4 or DP54 steps.
 
 use super::MapKindEntry;
+use super::RangeRule;
 use super::{CpuRun, GpuEntry, Indicator, IndicatorAsked, Look, Measure, Opt, Runs, TANGENT_COST};
 use crate::error::{Error, Result};
 use crate::field::Field;
@@ -192,10 +193,10 @@ impl Measure for Spectrum {
     }
     /// The first exponent as the FTLE; the others and the sum from their 0.5th to 99.5th
     /// percentile (they take either sign).
-    fn default_range(&self, i: Indicator, _t_max: f64, field: &Field) -> (f32, f32) {
+    fn range_rule(&self, i: Indicator, _t_max: f64) -> RangeRule {
         match which(i) {
-            Some(1) => crate::render::ftle_range(field),
-            _ => crate::render::percentile_range(field, 0.005, 0.995),
+            Some(1) => super::FTLE_RANGE,
+            _ => RangeRule::percentiles(0.005, 0.995),
         }
     }
     fn kinds(&self) -> &'static [MapKindEntry] {

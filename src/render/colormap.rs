@@ -196,43 +196,6 @@ pub fn flip_kind_colors(field: &Field) -> Vec<u8> {
         .collect()
 }
 
-/// The finite values of `field`, None when it has none.
-fn finite_values(field: &Field) -> Option<Vec<f32>> {
-    let v: Vec<f32> = field
-        .data
-        .iter()
-        .copied()
-        .filter(|x| x.is_finite())
-        .collect();
-    (!v.is_empty()).then_some(v)
-}
-
-/// Colour range (1/s) of a divergence map: 0 (regular, dark) to the 99.5th percentile of the
-/// exponents, so a few extreme pixels do not wash out the chaotic sea, and at least 0.1 /s.
-pub fn ftle_range(field: &Field) -> (f32, f32) {
-    let Some(mut v) = finite_values(field) else {
-        return (0.0, 1.0);
-    };
-    let k = ((v.len() - 1) as f64 * 0.995).round() as usize;
-    let (_, hi, _) = v.select_nth_unstable_by(k, f32::total_cmp);
-    (0.0, hi.max(0.1))
-}
-
-/// The `low` and `high` quantiles of the finite values of `field` ((0, 1) when it has none;
-/// widened to a nonzero span).
-pub fn percentile_range(field: &Field, low: f64, high: f64) -> (f32, f32) {
-    let Some(mut v) = finite_values(field) else {
-        return (0.0, 1.0);
-    };
-    v.sort_unstable_by(f32::total_cmp);
-    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-    let (lo, hi) = (at(low), at(high));
-    match hi > lo {
-        true => (lo, hi),
-        false => (lo - 0.5, lo + 0.5),
-    }
-}
-
 /// The colour table of a divergence map, regular (low) to chaotic (high).
 pub fn ftle_table(colormap: Colormap) -> Vec<[u8; 3]> {
     lut(&*colormap.gradient(), 0.0, 1.0)

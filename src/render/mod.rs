@@ -15,7 +15,7 @@ pub use annotate::{
 };
 pub use colormap::{
     Colormap, FlipColors, NAN_RGB, NEVER_RGB, flip_colors, flip_kind_bar, flip_kind_colors,
-    flip_kind_rgb, flip_table, ftle_colors, ftle_range, ftle_table, percentile_range,
+    flip_kind_rgb, flip_table, ftle_colors, ftle_table,
 };
 pub use exposure::{Bobs, Canvas, Film, draw_arms};
 pub use files::{

@@ -14,19 +14,13 @@ import json
 import sys
 import time
 
-from selenium import webdriver
-from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.support.ui import WebDriverWait
+
+import chromium
 
 url, hashes = sys.argv[1], json.loads(sys.argv[2])
 from_disk = sys.argv[3] if len(sys.argv) > 3 else None
-options = webdriver.ChromeOptions()
-options.binary_location = "/usr/bin/chromium"
-for flag in ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
-             "--disable-background-networking", "--enable-unsafe-webgpu",
-             "--use-webgpu-adapter=swiftshader"]:
-    options.add_argument(flag)
-driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+driver = chromium.start()
 # A small window: a view the page accepts starts on a small map.
 driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
     "width": 640, "height": 400, "deviceScaleFactor": 1, "mobile": False})

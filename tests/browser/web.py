@@ -21,24 +21,16 @@ import signal
 import sys
 import time
 
-from selenium import webdriver
-from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.support.ui import WebDriverWait
+
+import chromium
 
 args = sys.argv[1:]
 webgpu = args[0] != "--no-webgpu"
 args = args if webgpu else args[1:]
 url, screenshot = args[0], args[1]
 out, views = (args[2], json.loads(args[3])) if len(args) > 3 else (None, [])
-options = webdriver.ChromeOptions()
-options.binary_location = "/usr/bin/chromium"
-flags = ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
-         "--disable-background-networking"]
-flags += ["--enable-unsafe-webgpu", "--use-webgpu-adapter=swiftshader"] if webgpu \
-    else ["--disable-gpu"]
-for flag in flags:
-    options.add_argument(flag)
-driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+driver = chromium.start(webgpu)
 driver.set_script_timeout(900)
 report = {"views": {}}
 
@@ -137,6 +129,8 @@ try:
             report["views"][name]["seconds"] = time.time() - started
             report["views"][name]["compute_seconds"] = driver.execute_script(
                 "return window.chaoscope.computeSeconds")
+            report["views"][name]["range"] = driver.execute_script(
+                "return window.chaoscope.valuesRange")
             with open(f"{out}/{name}.f32", "wb") as f:
                 f.write(base64.b64decode(data))
 finally:
