@@ -65,7 +65,7 @@ fn commands(text: &str) -> Vec<Vec<String>> {
             .strip_prefix("cargo run --release -- ")
             .or_else(|| s.strip_prefix("chaoscope "))
             .unwrap_or(s);
-        let w: Vec<String> = s.split_whitespace().map(String::from).collect();
+        let w = shell_words(s);
         w.first()
             .is_some_and(|c| COMMANDS.contains(&c.as_str()))
             .then_some(w)
@@ -83,6 +83,28 @@ fn commands(text: &str) -> Vec<Vec<String>> {
         }
     }
     out
+}
+
+/// A command line's words as a shell splits them: at spaces, but not within double quotes
+/// (`--name "our pendulum"`), which it drops.
+fn shell_words(line: &str) -> Vec<String> {
+    let (mut words, mut word, mut quoted, mut any) = (Vec::new(), String::new(), false, false);
+    for c in line.chars() {
+        match c {
+            '"' => (quoted, any) = (!quoted, true),
+            c if c.is_whitespace() && !quoted => {
+                if any {
+                    words.push(std::mem::take(&mut word));
+                }
+                any = false;
+            }
+            c => (word, any) = (word + &c.to_string(), true),
+        }
+    }
+    if any {
+        words.push(word);
+    }
+    words
 }
 
 /// Commands not run here, each with why: every other one runs.

@@ -498,6 +498,41 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     }
 }
 
+/// `web --params FILE --name NAME`: a class's own pendulum under its own name, offered first;
+/// a name out of bounds, or with no pendulum to name, is refused naming `--name`.
+#[test]
+fn a_pendulum_of_ones_own_goes_by_its_name() {
+    use predicates::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let lab = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/lab.toml");
+    chaoscope()
+        .args(["web", "--params"])
+        .arg(&lab)
+        .args(["--name", "our pendulum", "--output"])
+        .arg(dir.path().join("ours"))
+        .assert()
+        .success();
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("ours/manifest.json")).unwrap())
+            .unwrap();
+    assert_eq!(m["pendulums"][0]["name"], "our pendulum");
+    assert_eq!(m["pendulums"].as_array().unwrap().len(), 3);
+    for bad in [
+        &["--params", lab.to_str().unwrap(), "--name", ""][..],
+        &["--name", "ours"],
+    ] {
+        chaoscope()
+            .arg("web")
+            .args(bad)
+            .arg("--output")
+            .arg(dir.path().join("refused"))
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains("--name"));
+        assert!(!dir.path().join("refused").exists());
+    }
+}
+
 /// `web --output` writes into a new or empty folder, or over a site it wrote before; a folder
 /// of the user's files is refused naming them, with nothing written (its index.html was
 /// replaced before), and a link to nothing is named as such.

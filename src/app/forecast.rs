@@ -15,7 +15,10 @@ use crate::forecast::outcome::{
     ForecastSettings, Learning, Outcome, fit_and_forecast, fit_json, learned_rows,
 };
 use crate::forecast::plot::{self, Marks};
-use crate::forecast::{self, Headline};
+use crate::forecast::{self, Headline, files::MODEL_FILE};
+
+/// The files a forecast writes (and the overlay, with a film).
+const FILES: [&str; 4] = ["forecast.png", "bands.csv", "summary.json", MODEL_FILE];
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::Outputs;
@@ -120,6 +123,7 @@ pub fn run(
         (t, data),
     )?;
     crate::forecast::files::write_bands(&mut files, &out.join("bands.csv"), f, &command)?;
+    crate::forecast::files::write_model(&mut files, &out.join(MODEL_FILE), tracked, &command)?;
     let summary = summary_json(
         job,
         &command,
@@ -177,7 +181,7 @@ fn summary_of(
         scores: o.scores.clone(),
         verdict: o.verdict,
         output: out.clone(),
-        files: ["forecast.png", "bands.csv", "summary.json"]
+        files: FILES
             .iter()
             .map(|n| out.join(n))
             .chain(job.video.as_ref().map(|_| out.join(OVERLAY)))
@@ -209,7 +213,7 @@ fn check_inputs(job: &ForecastJob) -> Result<Option<crate::video::Probe>> {
     super::checks::check_directory(
         "output",
         &job.output,
-        &["forecast.png", "bands.csv", "summary.json", OVERLAY],
+        &[&FILES[..], &[OVERLAY]].concat(),
         &[],
         &inputs,
     )?;
@@ -382,7 +386,7 @@ fn draw(
                 o.window.0,
                 o.window.1,
                 job.settings.members,
-                describe_headline(headline),
+                headline.describe(),
                 1e3 * o.tolerance,
                 match (o.scores.median_follows_for, o.scores.followed_to_data_end) {
                     (Some(l), false) => format!("; on the data {l:.2} s"),
@@ -479,18 +483,6 @@ pub const OVERLAY: &str = "overlay.mp4";
 
 /// What every output of a forecast that learned from its future says.
 pub const IN_SAMPLE: &str = "in sample: the pivot, the arms, the model and its errors were learned from every row of the file, the rows this forecast is scored on included; its scores flatter it";
-
-/// The headline horizon in words: "0.42 s (0.31-0.58 s)", with "over" where the members
-/// outlast the forecast.
-pub fn describe_headline(h: &Headline) -> String {
-    let at = |v: Option<f64>| v.map_or(format!("over {:.2}", h.forecast_to), |v| format!("{v:.2}"));
-    format!(
-        "{} s ({}-{} s)",
-        at(h.lead),
-        at(h.lower_quartile),
-        at(h.upper_quartile)
-    )
-}
 
 /// Which rows of which file, or which calibration, taught each part of the forecast.
 fn provenance(job: &ForecastJob, learned: &Learned) -> serde_json::Value {

@@ -128,7 +128,7 @@ pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> 
         s.window.1,
         s.members,
         s.tracking_error * 1e3,
-        forecast::describe_headline(&s.headline),
+        s.headline.describe(),
         s.tolerance * 1e3,
         s.lyapunov_exponent,
         s.chaos_bound.map_or(String::new(), |b| format!(

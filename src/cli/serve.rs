@@ -59,7 +59,7 @@ impl ServeArgs {
             base: self.physical.sources(),
             backend: self.backend,
             store,
-            site: super::web::site(&self.physical)?,
+            site: super::web::site(&self.physical, None)?,
         })
     }
 }

@@ -7,7 +7,7 @@ use clap::Args;
 use super::args::PhysicalArgs;
 use super::{command_line, json};
 use crate::app::web::{self, WebJob};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::model::Params;
 use crate::monitor::Monitor;
 use crate::params::{ParamSources, Preset};
@@ -24,20 +24,25 @@ pub struct WebArgs {
     /// A pendulum the page offers first, besides the equal arms and the lab's.
     #[command(flatten)]
     pub physical: PhysicalArgs,
+    /// The name the page gives that pendulum ("our pendulum"; 1 to 60 characters) [default:
+    /// its parameters].
+    #[arg(long)]
+    pub name: Option<String>,
 }
 
 impl WebArgs {
     pub fn job(&self) -> Result<WebJob> {
         Ok(WebJob {
-            site: site(&self.physical)?,
+            site: site(&self.physical, self.name.as_deref())?,
             output: self.output.clone(),
         })
     }
 }
 
 /// The static explorer: the equal arms, the lab's and the `physical` flags' pendulum (when
-/// any is given, first), and the command lines its views and clicks fill in.
-pub fn site(physical: &PhysicalArgs) -> Result<SiteSpec> {
+/// any is given, first, called `name` where one is given), and the command lines its views
+/// and clicks fill in.
+pub fn site(physical: &PhysicalArgs, name: Option<&str>) -> Result<SiteSpec> {
     let pendulum = |name: String, params: Params| Pendulum {
         flags: crate::web::parameter_axes()
             .into_iter()
@@ -51,10 +56,26 @@ pub fn site(physical: &PhysicalArgs) -> Result<SiteSpec> {
     };
     let mut pendulums = Vec::new();
     let given = physical.sources();
+    if let Some(name) = name {
+        let length = name.chars().count();
+        if !(1..=60).contains(&length) || name.chars().any(char::is_control) {
+            return Err(Error::invalid(
+                "name",
+                format!("must be 1 to 60 printable characters ({length} given)"),
+            ));
+        }
+        if given == ParamSources::default() {
+            return Err(Error::invalid(
+                "name",
+                "names the pendulum the other flags give: give its --params FILE (fit's model.toml) or its parameters",
+            ));
+        }
+    }
     if given != ParamSources::default() {
         let params = given.resolve()?;
         let flags = command_line::physics(&params);
-        pendulums.push(pendulum(format!("given: {flags}"), params));
+        let called = name.map_or_else(|| format!("given: {flags}"), str::to_string);
+        pendulums.push(pendulum(called, params));
     }
     pendulums.push(pendulum("equal arms: 1 kg, 1 m".into(), Params::default()));
     pendulums.push(pendulum(

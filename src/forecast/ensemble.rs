@@ -79,6 +79,23 @@ pub struct Headline {
     pub forecast_to: f64,
 }
 
+impl Headline {
+    /// In words: "0.42 s (0.31-0.58 s)", with "over" where the members outlast the forecast.
+    pub fn describe(&self) -> String {
+        let at = |v: Option<f64>| {
+            v.map_or(format!("over {:.2}", self.forecast_to), |v| {
+                format!("{v:.2}")
+            })
+        };
+        format!(
+            "{} s ({}-{} s)",
+            at(self.lead),
+            at(self.lower_quartile),
+            at(self.upper_quartile)
+        )
+    }
+}
+
 /// The quantiles ([`QUANTILES`]) of the four coordinates x1, y1, x2, y2 at one time.
 pub type Band = [[f64; 5]; 4];
 

@@ -43,3 +43,22 @@ pub fn write_bands(
         Ok(())
     })
 }
+
+/// The file beside a forecast's bands that holds its pendulum: `tracked`'s model (learned
+/// from the rows up to the window's end, or given), for maps and pages of it (`--params`).
+pub const MODEL_FILE: &str = "model.toml";
+
+/// The forecast's pendulum as a parameter file any `--params` reads.
+pub fn write_model(
+    files: &mut Outputs,
+    path: &std::path::Path,
+    tracked: &crate::fit::pendulum::Tracked,
+    command: &str,
+) -> Result<()> {
+    let heading = format!(
+        "The pendulum `chaoscope forecast` ran ({}), learned from the rows up to its window's end (or given):\n{command}\nRead it back with --params (the maps, trajectory, web).",
+        tracked.source.describe()
+    );
+    let text = crate::fit::pendulum::model_file(&tracked.params, &tracked.source, &heading);
+    files.write(path, |w| Ok(std::io::Write::write_all(w, text.as_bytes())?))
+}

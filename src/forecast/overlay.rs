@@ -133,15 +133,30 @@ fn draw(
             ))?;
         }
     }
-    let size = 22.0 * scale;
-    let text = |s: String, line: i32, colour: RGBColor| {
-        root.draw(&Text::new(
-            s,
-            (px(16.0), px(14.0) + line * px(28.0)),
-            ("sans-serif", size).into_font().color(&colour),
-        ))
-    };
-    text(format!("t = {t:.2} s"), 0, TRACKED)?;
+    // The captions: a line 3 % of the frame's height (legible on a projector, from a phone's
+    // portrait film too), wrapped to the frame's width, each on a dark backdrop.
+    let size = (0.03 * h as f64).max(11.0);
+    let font: TextStyle = ("sans-serif", size).into_font().into();
+    let (margin, step) = ((0.5 * size) as i32, (1.3 * size) as i32);
+    let next = std::cell::Cell::new(margin);
+    let text =
+        |s: String, colour: RGBColor| -> std::result::Result<(), Box<dyn std::error::Error>> {
+            let room = w.saturating_sub(2 * margin as u32 + 8);
+            for piece in wrapped(&s, room, |p| {
+                root.estimate_text_size(p, &font).map_or(0, |e| e.0)
+            }) {
+                let width = root.estimate_text_size(&piece, &font).map_or(0, |e| e.0) as i32;
+                let (x, y) = (margin, next.get());
+                root.draw(&Rectangle::new(
+                    [(x - 4, y - 2), (x + width + 4, y + step - 2)],
+                    BLACK.mix(0.6).filled(),
+                ))?;
+                root.draw(&Text::new(piece, (x, y), font.color(&colour)))?;
+                next.set(y + step);
+            }
+            Ok(())
+        };
+    text(format!("t = {t:.2} s"), TRACKED)?;
     let stage = if t < f.t0 {
         ("tracked".to_string(), TRACKED)
     } else if t <= f.window_end {
@@ -158,10 +173,9 @@ fn draw(
             FORECAST,
         )
     };
-    text(stage.0, 1, stage.1)?;
+    text(stage.0, stage.1)?;
     // The one horizon, from its moment on: where the members say the median leaves the
     // pendulum by the tolerance; then, where the track shows it did.
-    let mut line = 2;
     if let Some(lead) = o.headline.lead
         && t >= f.window_end + lead
     {
@@ -171,10 +185,8 @@ fn draw(
                 lead,
                 1e3 * o.tolerance
             ),
-            line,
             LOST,
         )?;
-        line += 1;
     }
     let scores = &o.outcome.scores;
     if let Some(lead) = scores
@@ -188,10 +200,45 @@ fn draw(
                 f.window_end + lead,
                 1e3 * o.tolerance
             ),
-            line,
             FORECAST,
         )?;
     }
     root.present()?;
     Ok(())
+}
+
+/// `text` in lines no wider than `room` (as `width` measures them), cut between words; a
+/// word wider than the room stands on its own line.
+fn wrapped(text: &str, room: u32, width: impl Fn(&str) -> u32) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split(' ') {
+        match lines.last_mut() {
+            Some(line) if width(&format!("{line} {word}")) <= room => {
+                line.push(' ');
+                line.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn captions_wrap_between_words_within_the_room() {
+        // One unit a character: lines of at most 12.
+        let lines = super::wrapped("past the horizon (0.42 s after the window)", 12, |s| {
+            s.chars().count() as u32
+        });
+        assert_eq!(
+            lines,
+            ["past the", "horizon", "(0.42 s", "after the", "window)"]
+        );
+        assert!(lines.iter().all(|l| l.chars().count() <= 12));
+        assert_eq!(
+            super::wrapped("unbreakable-word", 4, |s| s.len() as u32),
+            ["unbreakable-word"]
+        );
+    }
 }
