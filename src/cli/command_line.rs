@@ -513,6 +513,11 @@ pub fn forecast(job: &ForecastJob) -> String {
         sources(&job.params),
         job.backend.name()
     ) + &precision(job.precision)
+        + &job
+            .video
+            .as_ref()
+            .map_or(String::new(), |v| format!(" --video {}", word(v)))
+        + &format!(" --output {}", word(&job.output))
 }
 
 pub fn twin(job: &TwinJob) -> String {
