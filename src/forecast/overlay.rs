@@ -133,6 +133,20 @@ fn draw(
             ))?;
         }
     }
+    captions(&root, (w, h), t, o)?;
+    root.present()?;
+    Ok(())
+}
+
+/// The captions over the frame at time `t`: the time, the stage (tracked, fitted, forecast),
+/// and from their moments on the headline horizon and where the median left the track.
+fn captions(
+    root: &DrawingArea<BitMapBackend, plotters::coord::Shift>,
+    (w, h): (u32, u32),
+    t: f64,
+    o: &Overlay,
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    let f = &o.outcome.forecast;
     // The captions: a line 3 % of the frame's height (legible on a projector, from a phone's
     // portrait film too), wrapped to the frame's width, each on a dark backdrop.
     let size = (0.03 * h as f64).max(11.0);
@@ -203,7 +217,6 @@ fn draw(
             FORECAST,
         )?;
     }
-    root.present()?;
     Ok(())
 }
 
