@@ -744,3 +744,27 @@ fn the_release_is_found_and_the_free_motion_read_from_it() {
     assert!(read(false)[0].t >= found - 1e-9);
     assert_eq!(read(true)[0].t, 0.0);
 }
+
+/// `--markers red` on a film of a red and a green sticker finds the masses in no frame; the
+/// note names the green one it saw and the flag that tracks both (the README's own film).
+#[test]
+fn one_colour_on_a_two_colour_film_names_the_second() {
+    use predicates::prelude::*;
+    let film = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/own_film.mp4");
+    let dir = tempfile::tempdir().unwrap();
+    for (given, other) in [("red", "green"), ("green", "red")] {
+        chaoscope()
+            .arg("track")
+            .arg(&film)
+            .args(["--markers", given, "--l1", "0.3", "--output"])
+            .arg(dir.path().join(format!("{given}.csv")))
+            .assert()
+            .success()
+            .stderr(predicate::str::contains(format!(
+                "the film shows a {other} sticker too"
+            )))
+            .stderr(predicate::str::contains(format!(
+                "--markers {given},{other}"
+            )));
+    }
+}

@@ -88,7 +88,7 @@ pub fn run(
     .map_err(|e| e.as_input("video"))?;
     let (width, height) = (decoder.probe.width, decoder.probe.height);
     let region = region_within(job.region, width, height)?;
-    let (blobs, times, digest) = markers_of(&mut decoder, job.markers, region, monitor)?;
+    let (blobs, times, digest, sampled) = markers_of(&mut decoder, job.markers, region, monitor)?;
     let mut tracked = track::track(&blobs, &times, job.scale, job.markers, &|rows, g| {
         crate::fit::pendulum::scale_from_motion(rows, g, monitor)
     })?;
@@ -107,7 +107,17 @@ pub fn run(
         |f: &dyn Fn(&TrackRow) -> bool| tracked.rows.iter().filter(|r| f(r)).count() as f64 / n;
     let measured = |m: Option<track::Mark>| m.is_some_and(|m| !m.bridged);
     let both = share(&|r| measured(r.m1) && measured(r.m2));
-    let notices = notices_of(&decoder.probe, both);
+    let mut notices = notices_of(&decoder.probe, both);
+    // One colour given, the masses unseen: a second sticker the film shows is named.
+    if let (track::Markers::Colour(given), true) = (job.markers, both < 0.5)
+        && let Some(other) = track::detect::second_colour(&sampled, width as usize, region, given)
+    {
+        let given = track::detect::colour_name(given);
+        notices.push(format!(
+            "note: with one colour both masses were measured in {:.0} % of the frames; the film shows a {other} sticker too: for a sticker of each colour, the upper mass's first, --markers {given},{other} (or {other},{given})",
+            100.0 * both
+        ));
+    }
     let mut files = Outputs::new();
     let film = track::file::Film {
         digest: Some(digest),
@@ -193,14 +203,16 @@ fn region_within(
     Ok(Some((x0 as usize, y0 as usize, x1 as usize, y1 as usize)))
 }
 
-/// Every frame's marker blobs and its time, frame by frame (the progress bar's units), and
-/// the film's digest (its first frames as read).
+/// Every frame's marker blobs and its time, frame by frame (the progress bar's units), the
+/// film's digest (its first frames as read), and, where one colour was given, a few frames
+/// spread over the film (to look for a second sticker in).
+#[allow(clippy::type_complexity)]
 fn markers_of(
     decoder: &mut Decoder,
     markers: Markers,
     region: Option<(usize, usize, usize, usize)>,
     monitor: &Monitor,
-) -> Result<(Vec<Vec<track::Blob>>, Vec<f64>, Digest)> {
+) -> Result<(Vec<Vec<track::Blob>>, Vec<f64>, Digest, Vec<Vec<u8>>)> {
     let width = decoder.probe.width as usize;
     let total = decoder.probe.times.len();
     monitor.start("track", total as u64);
@@ -208,6 +220,7 @@ fn markers_of(
     let mut scratch = track::detect::Scratch::default();
     let (mut blobs, mut times) = (Vec::with_capacity(total), Vec::with_capacity(total));
     let mut digest = Digest::start(markers.channels() as u8);
+    let mut sampled = Vec::new();
     while let Some(t) = decoder
         .next_frame(&mut frame)
         .map_err(|e| e.as_input("video"))?
@@ -217,6 +230,10 @@ fn markers_of(
             digest.add(&frame);
         }
         blobs.push(markers.find(&frame, width, region, &mut scratch));
+        let every = (total / track::detect::SAMPLED_FRAMES).max(1);
+        if matches!(markers, Markers::Colour(_)) && times.len() % every == every / 2 {
+            sampled.push(frame.clone());
+        }
         times.push(t);
         monitor.advance(1);
     }
@@ -227,7 +244,7 @@ fn markers_of(
             format!("{} frames: tracking needs at least 10", blobs.len()),
         ));
     }
-    Ok((blobs, times, digest))
+    Ok((blobs, times, digest, sampled))
 }
 
 /// What the film's reading says: repeated timestamps, masses measured too rarely.
