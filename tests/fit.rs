@@ -93,6 +93,39 @@ fn pivot_lengths_and_model_state_are_recovered_from_synthetic_tracking() {
     );
 }
 
+/// Rows beside a gap (steps Tracker left unmarked) give no velocity and so no energy: a
+/// central difference across the gap would average the motion over it (the audit: energies
+/// 20 sigma off there). Elsewhere the energy of a lossless swing keeps its value.
+#[test]
+fn no_energy_is_differentiated_across_a_gap() {
+    let p = Params::default();
+    let start = State {
+        theta1: 0.6,
+        omega1: 0.0,
+        theta2: -0.4,
+        omega2: 0.0,
+    };
+    let mut rows = synthetic(&p, start, (0.0, 0.0), 0.005, 400);
+    rows.drain(200..203);
+    let en = fit::data::energies(&rows, (0.0, 0.0), (p.m1, p.m2), (p.l1, p.l2), p.g, 1e-4);
+    // Interior row i is entry i - 1: rows 199 and 200 border the gap.
+    let unknown: Vec<usize> = (0..en.e.len()).filter(|&k| en.e[k].is_nan()).collect();
+    assert_eq!(unknown, [198, 199]);
+    let truth = en.e[0];
+    for (k, e) in en.e.iter().enumerate().filter(|(_, e)| e.is_finite()) {
+        // Central differences over 2 x 5 ms: the velocity's truncation error, h^2/6 times
+        // the third derivative (a few m/s^3 here), some 1e-4 of the energy.
+        assert!(
+            (e - truth).abs() < 2e-3 * truth.abs(),
+            "row {k}: {e} against {truth}"
+        );
+    }
+    // Across the gap the old difference was wrong by far more than that.
+    let across = (rows[201].x2 - rows[198].x2) / (rows[201].t - rows[198].t);
+    let within = (rows[199].x2 - rows[198].x2) / (rows[199].t - rows[198].t);
+    assert!((across - within).abs() > 1e-2, "{across} {within}");
+}
+
 #[test]
 fn decay_fits_recover_a_known_exponential() {
     let t: Vec<f64> = (1..60).map(|k| k as f64 / 3.0).collect();

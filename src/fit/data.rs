@@ -152,9 +152,26 @@ pub fn angles(frames: &[TrackedRow], pivot: (f64, f64)) -> Vec<(f64, f64)> {
 
 /// Central differences (x(t+) - x(t-)) / (t+ - t-) at the interior rows, as the report.
 pub fn central_differences(t: &[f64], x: &[f64]) -> Vec<f64> {
+    let gap = gaps(t);
     (1..t.len() - 1)
-        .map(|i| (x[i + 1] - x[i - 1]) / (t[i + 1] - t[i - 1]))
+        .map(|i| match gap(i) {
+            true => f64::NAN,
+            false => (x[i + 1] - x[i - 1]) / (t[i + 1] - t[i - 1]),
+        })
         .collect()
+}
+
+/// Whether row `i` of the times `t` borders a gap: an interval over 1.5 times the rows'
+/// usual one (a step Tracker left unmarked, a frame a tracker missed). No difference is
+/// taken across one: a velocity there would average the motion over the gap, and the
+/// energy from it be wrong by many of its errors (the rows' velocities are NaN there).
+pub fn gaps(t: &[f64]) -> impl Fn(usize) -> bool + '_ {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let usual = crate::stats::median(&mut steps).unwrap_or(0.0);
+    move |i: usize| {
+        let long = |a: usize, b: usize| t[b] - t[a] > 1.5 * usual;
+        (i > 0 && long(i - 1, i)) || (i + 1 < t.len() && long(i, i + 1))
+    }
 }
 
 /// Energy (J) at the interior rows, zero with both masses hanging at rest, and its error
@@ -214,6 +231,13 @@ pub struct DecayFits {
 }
 
 pub fn fit_decay(en: &Energies) -> DecayFits {
+    // Only the rows with an energy (none beside a gap in the rows).
+    let keep: Vec<usize> = (0..en.t.len()).filter(|&i| en.e[i].is_finite()).collect();
+    let en = &Energies {
+        t: keep.iter().map(|&i| en.t[i]).collect(),
+        e: keep.iter().map(|&i| en.e[i]).collect(),
+        de: keep.iter().map(|&i| en.de[i]).collect(),
+    };
     let n = en.t.len();
     // Errors of zero (a mass at rest at the bottom) would get infinite weight.
     let floor = en.de.iter().copied().fold(0.0, f64::max) * 0.05 + 1e-6;

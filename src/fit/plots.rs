@@ -123,7 +123,14 @@ pub fn energy(
     inverse_square: (f64, f64),
     unit: EnergyUnit,
 ) -> Result<()> {
-    let (t, e, de) = (&energies.t, &energies.e, &energies.de);
+    // The rows with an energy (none beside a gap in the rows).
+    let kept = |v: &[f64]| -> Vec<f64> {
+        (0..energies.t.len())
+            .filter(|&i| energies.e[i].is_finite() && energies.de[i].is_finite())
+            .map(|i| v[i])
+            .collect()
+    };
+    let (t, e, de) = (&kept(&energies.t), &kept(&energies.e), &kept(&energies.de));
     let u = unit.symbol();
     render::register_font();
     let (w, h) = (1000u32, 650u32);

@@ -133,6 +133,7 @@ pub fn write(
         let a = arm(k);
         w.iter()
             .enumerate()
+            .filter(|(_, w)| w.is_finite())
             .map(|(i, &w)| (wrap(a[i + 1]), w))
             .collect()
     };
@@ -185,7 +186,15 @@ pub fn model_energies(t: &[f64], angles: &[(f64, f64)], p: &Params, dv: f64) -> 
         e: Vec::new(),
         de: Vec::new(),
     };
+    let gap = super::data::gaps(t);
     for i in 1..t.len() - 1 {
+        if gap(i) {
+            // No velocity across a gap in the rows, so no energy.
+            out.t.push(t[i]);
+            out.e.push(f64::NAN);
+            out.de.push(f64::NAN);
+            continue;
+        }
         let h = t[i + 1] - t[i - 1];
         let s = State {
             theta1: angles[i].0,
