@@ -76,18 +76,21 @@ fn a_fit_on_absurd_time_steps_ends() {
 /// frames, to resume).
 fn stops_on(signal: &str, dir: &Path, args: &[&str], after: Duration, keeps: bool) {
     let bin = assert_cmd::cargo::cargo_bin("chaoscope");
+    // Its words kept outside `dir` (which must hold nothing the command did not write), to
+    // say why a command ended before it was stopped.
+    let said = tempfile::NamedTempFile::new().unwrap();
     let mut child = std::process::Command::new(bin)
         .args(args)
         .env("XDG_RUNTIME_DIR", std::env::temp_dir())
         .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stderr(said.reopen().unwrap())
         .spawn()
         .unwrap();
     std::thread::sleep(after);
-    assert!(
-        child.try_wait().unwrap().is_none(),
-        "{args:?} ended before the {signal}: make it longer"
-    );
+    if let Some(status) = child.try_wait().unwrap() {
+        let words = std::fs::read_to_string(said.path()).unwrap_or_default();
+        panic!("{args:?} ended before the {signal} ({status}): make it longer\n{words}");
+    }
     let sent = Instant::now();
     std::process::Command::new("kill")
         .args([&format!("-{signal}"), &child.id().to_string()])
@@ -178,7 +181,7 @@ fn ctrl_c_and_sigterm_stop_long_commands_without_leaving_files() {
         (
             "INT",
             argv(
-                "lyapunov --theta1 2 --theta2 2 --dt 1e-4 --t-max 1000 --backend gpu --output @/a.csv",
+                "lyapunov --theta1 2 --theta2 2 --dt 1e-4 --t-max 1600 --backend gpu --output @/a.csv",
             ),
             false,
         ),
