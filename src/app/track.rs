@@ -110,11 +110,11 @@ pub fn run(
     let mut notices = notices_of(&decoder.probe, both);
     // One colour given, the masses unseen: a second sticker the film shows is named.
     if let (track::Markers::Colour(given), true) = (job.markers, both < 0.5)
-        && let Some(other) = track::detect::second_colour(&sampled, width as usize, region, given)
+        && let Some(other) = track::colours::second_colour(&sampled, width as usize, region, given)
     {
-        let given = track::detect::colour_name(given);
+        let given = track::colours::colour_name(given);
         notices.push(format!(
-            "note: with one colour both masses were measured in {:.0} % of the frames; the film shows a {other} sticker too: for a sticker of each colour, the upper mass's first, --markers {given},{other} (or {other},{given})",
+            "note: with one colour both masses were measured in {:.0} % of the frames; the film shows a {other} sticker too: for a sticker of each colour, the upper mass's first, [[markers={given},{other}]] (or {other},{given})",
             100.0 * both
         ));
     }
@@ -230,7 +230,7 @@ fn markers_of(
             digest.add(&frame);
         }
         blobs.push(markers.find(&frame, width, region, &mut scratch));
-        let every = (total / track::detect::SAMPLED_FRAMES).max(1);
+        let every = (total / track::colours::SAMPLED_FRAMES).max(1);
         if matches!(markers, Markers::Colour(_)) && times.len() % every == every / 2 {
             sampled.push(frame.clone());
         }

@@ -56,7 +56,7 @@ pub fn write_model(
     command: &str,
 ) -> Result<()> {
     let heading = format!(
-        "The pendulum `chaoscope forecast` ran ({}), learned from the rows up to its window's end (or given):\n{command}\nRead it back with --params (the maps, trajectory, web).",
+        "The pendulum `chaoscope forecast` ran ({}), learned from the rows up to its window's end (or given):\n{command}\nRead it back as a parameter file (the maps, trajectory, web).",
         tracked.source.describe()
     );
     let text = crate::fit::pendulum::model_file(&tracked.params, &tracked.source, &heading);

@@ -4,6 +4,7 @@
 //! is not seen in a frame is reported as not seen, never placed. [`synth`] renders test
 //! films with a known truth.
 
+pub mod colours;
 pub mod detect;
 mod errors;
 pub mod file;
