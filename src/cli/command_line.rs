@@ -513,11 +513,10 @@ pub fn forecast(job: &ForecastJob) -> String {
         sources(&job.params),
         job.backend.name()
     ) + &precision(job.precision)
-        + &job
-            .video
-            .as_ref()
-            .map_or(String::new(), |v| format!(" --video {}", word(v)))
-        + &format!(" --output {}", word(&job.output))
+        // A film drawn on says which, and where it went: its comment makes it again.
+        + &job.video.as_ref().map_or(String::new(), |v| {
+            format!(" --video {} --output {}", word(v), word(&job.output))
+        })
 }
 
 pub fn twin(job: &TwinJob) -> String {
