@@ -119,6 +119,8 @@ struct MomentsFile {
     /// The joints' damping over P (s).
     k1: Option<f64>,
     k2: Option<f64>,
+    /// P itself (J), where the pendulum was weighed ([`crate::fit::weighed`]).
+    p: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Default)]
@@ -225,8 +227,13 @@ fn read_params_file(path: &Path, base: Params) -> Result<Params> {
                 )));
             }
         }
-        // One kilogram's scale: P = 1 kg g l1.
-        let unit = p.g * p.l1;
+        // P as weighed, else one kilogram's scale: P = 1 kg g l1.
+        if let Some(v) = m.p.filter(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(in_file(format!(
+                "key moments.p: {v} is not allowed; the gravity moment P must be > 0 (J)"
+            )));
+        }
+        let unit = m.p.unwrap_or(p.g * p.l1);
         p = Params::from_moments(
             [m.a * unit, m.b * unit, m.c * unit, unit],
             (p.l1, p.l2, p.g),

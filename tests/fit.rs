@@ -755,3 +755,96 @@ fn a_tracker_y_up_export_fits_as_its_y_down_twin() {
         .code(2)
         .stderr(predicate::str::contains("--y-up"));
 }
+
+/// A weighed pendulum (`--mass`, all that swings): the moments found from its motion come in
+/// kg m^2 and J and the energies in joules. Bobs on uniform rods are their own equivalent,
+/// so the masses written are the truth's within the moments' own errors; model.toml states
+/// P and reads back in kilograms. A mass beside a stated model is refused naming the flag.
+#[test]
+fn a_weighed_pendulum_has_its_moments_in_kilograms() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = compound(1.0);
+    let total = truth.m1 + truth.m2 + truth.rod1 + truth.rod2;
+    let csv = dir.path().join("compound.csv");
+    std::fs::write(
+        &csv,
+        compound_csv(&truth, State::at_rest(2.0, 2.6), 200.0, 12.0, 1e-4),
+    )
+    .unwrap();
+    let out = dir.path().join("weighed");
+    let mass = total.to_string();
+    let (file, o) = (csv.to_str().unwrap(), out.to_str().unwrap());
+    let (code, s, err) =
+        fit_json(&[&[file, "--output", o, "--mass", &mass][..], &FIT_SETTINGS].concat());
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(s["energy_unit"], "J", "{s}");
+    assert!(err.contains("kg m^2"), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let params = &summary["model"]["parameters"];
+    let found = |key: &str, k: usize| match key {
+        "rod_mass" => params[key][k].as_f64().unwrap(),
+        _ => params[key].as_f64().unwrap(),
+    };
+    // The scale puts the equivalent's total at the weighed mass, to rounding.
+    let sum = found("m1", 0) + found("m2", 0) + found("rod_mass", 0) + found("rod_mass", 1);
+    assert!((sum / total - 1.0).abs() < 1e-12, "{params}");
+    // The masses follow from a, b, c with their stated relative errors (below 1e-3, asserted)
+    // amplified by the differences that split them into bobs and rods (6 (c / l1 l2 - b /
+    // l2^2) and the like: a few times): the rods within 0.5 %; the light bobs (4 and 1 % of
+    // the total) are differences of the rods' large terms, so they are held to 0.5 % of the
+    // total, as P, whose share of it they move.
+    let over_p = &summary["identified"]["over_p"];
+    let relative = ["a", "b", "c"]
+        .iter()
+        .map(|m| over_p[format!("{m}_error")].as_f64().unwrap() / over_p[m].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    assert!(relative < 1e-3, "{over_p}");
+    for (got, want, of) in [
+        (found("rod_mass", 0), truth.rod1, truth.rod1),
+        (found("rod_mass", 1), truth.rod2, truth.rod2),
+        (found("m1", 0), truth.m1, total),
+        (found("m2", 0), truth.m2, total),
+    ] {
+        assert!(
+            (got - want).abs() < 5e-3 * of,
+            "{got} against {want}: {params}"
+        );
+    }
+    let p = summary["model"]["weighed"]["p"].as_f64().unwrap();
+    let k = truth.inertia();
+    assert!((p / k.p - 1.0).abs() < 5e-3, "P {p} against {}", k.p);
+    // model.toml states P and reads back in kilograms: `trajectory --params` runs it, and
+    // the fit of the same file with it is the same pendulum's.
+    let model = std::fs::read_to_string(out.join("model.toml")).unwrap();
+    assert!(model.contains("\np = "), "{model}");
+    let again = dir.path().join("again");
+    let (code, s2, err) = fit_json(
+        &[
+            &[
+                file,
+                "--params",
+                out.join("model.toml").to_str().unwrap(),
+                "--output",
+                again.to_str().unwrap(),
+            ][..],
+            &FIT_SETTINGS,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let read: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(again.join("summary.json")).unwrap())
+            .unwrap();
+    let m1 = read["model"]["parameters"]["m1"].as_f64().unwrap();
+    // Written to 17 digits and read back: the same masses to rounding.
+    assert!((m1 / found("m1", 0) - 1.0).abs() < 1e-9, "{m1}");
+    assert_eq!(s2["energy_unit"], "J");
+    // A stated model states its own masses.
+    chaoscope()
+        .args(["fit", file, "--preset", "lab", "--mass", "0.2", "--output"])
+        .arg(dir.path().join("refused"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--mass"));
+}

@@ -34,6 +34,7 @@ def fit(
     held_out: int = 40,
     lead: float = 1.0,
     velocity_error: float = 0.1,
+    mass: Optional[float] = None,
     m1: Optional[float] = None,
     m2: Optional[float] = None,
     l1: Optional[float] = None,
@@ -69,7 +70,9 @@ def fit(
     lead and the tracking error; ``held_out=0``: none); ``until`` (s) reads the rows up to
     that time only, a calibration stretch of a longer recording. The model: a
     ``preset`` or ``params_file`` where given, else the pendulum's own moments found from its
-    motion; the joint damping is what the fit finds. ``summary["verdict"]`` says whether the
+    motion, over the upper arm's gravity moment P unless ``mass`` (kg, the weighed
+    pendulum: all that swings) sets their scale in kg m^2 and joules; the joint damping is what
+    the fit finds. ``summary["verdict"]`` says whether the
     model follows the data in the window; where it does not, :class:`ModelWarning` is raised
     as a warning and the figures are no findings.
     """

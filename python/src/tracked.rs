@@ -37,6 +37,7 @@ pub fn fit<'py>(
             .unwrap_or(chaoscope::app::fit::CALIBRATION_WINDOWS),
         lead: k.or("lead", chaoscope::app::fit::CALIBRATION_LEAD)?,
         velocity_error: k.or("velocity_error", 0.1)?,
+        mass: k.get("mass")?,
         params: k.sources()?,
         backend: k.backend()?,
         precision: k.precision()?,

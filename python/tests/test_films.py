@@ -36,6 +36,10 @@ def test_fit_equals_its_command(tmp_path):
     # y_up is for pixels: metres are read y up already.
     with pytest.raises(ValueError, match="^y_up: "):
         chaoscope.fit(str(data), output=str(tmp_path / "up"), y_up=True, progress=False)
+    # A weighed mass sets the scale of moments found from the motion, not a stated model's.
+    with pytest.raises(ValueError, match="^mass: "):
+        chaoscope.fit(str(data), output=str(tmp_path / "kg"), preset="lab", mass=0.5,
+                      progress=False)
 
 
 

@@ -9,9 +9,11 @@ use super::{check_count, check_within};
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::fit::data::Units;
-use crate::fit::pendulum::{ModelSource, Tracked, model_file, tracked_model};
+use crate::fit::model_toml::model_file;
+use crate::fit::pendulum::{ModelSource, Tracked, tracked_model};
 use crate::fit::report::{self, EnergyReport};
 use crate::fit::verdict::Verdict;
+use crate::fit::weighed::Weighed;
 use crate::fit::{ModelFit, ModelFitSpec, fit_model, grid_pivot, read_frames};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
@@ -44,6 +46,9 @@ pub struct FitJob {
     pub lead: f64,
     /// Velocity error (m/s) of each mass, for the energy error bars.
     pub velocity_error: f64,
+    /// The pendulum's weighed mass (kg, all that swings), which sets the scale of moments
+    /// found from the motion ([`Weighed`]). None: they stay over P.
+    pub mass: Option<f64>,
     /// The model's parameters: the lab preset unless a preset or file is given, the arm
     /// lengths from the data unless given.
     pub params: ParamSources,
@@ -117,8 +122,9 @@ pub fn run(
         tolerance: job.tolerance.unwrap_or_else(|| tracked.default_tolerance()),
         candidates: job.candidates,
     };
-    let energy = EnergyReport::of(&tracked, &t, job.velocity_error);
-    let mut notices = notices_of(engine, &tracked);
+    let weighed = weighed_of(job, &tracked);
+    let energy = EnergyReport::of(&tracked, &t, job.velocity_error, weighed.as_ref().ok());
+    let mut notices = notices_of(engine, &tracked, &weighed);
     let pivot = (tracked.pivot.x, tracked.pivot.y);
     let fit = fit_model(
         &tracked.frames,
@@ -150,9 +156,15 @@ pub fn run(
         &energy,
         &verdict,
         &calibration,
+        weighed.as_ref().ok(),
     );
     files.write_json(&out.join("summary.json"), &summary)?;
-    write_model(&mut files, out, &tracked, &fit, &calibration, &command)?;
+    let model = Written {
+        tracked: &tracked,
+        fit: &fit,
+        weighed: weighed.as_ref().ok(),
+    };
+    write_model(&mut files, out, &model, &calibration, &command)?;
     files.commit(monitor)?;
     let (ex, inv) = (&energy.decay.exponential, &energy.decay.inverse_square);
     Ok(FitSummary {
@@ -175,9 +187,26 @@ pub fn run(
 
 /// What the run says of its model before the fit: the engine's notices, which pendulum is
 /// fitted (said, never assumed), what the motion says of it, and the tracked model's own.
-fn notices_of(engine: &Engine, tracked: &Tracked) -> Vec<String> {
+fn notices_of(
+    engine: &Engine,
+    tracked: &Tracked,
+    weighed: &std::result::Result<Weighed, String>,
+) -> Vec<String> {
     let mut notices: Vec<String> = engine.notices();
-    notices.push(tracked.source.describe_model(&tracked.params));
+    let params = match weighed {
+        Ok(w) => w.scaled(&tracked.params),
+        Err(_) => tracked.params,
+    };
+    notices.push(
+        tracked
+            .source
+            .describe_model(&params, weighed.as_ref().ok()),
+    );
+    if let Err(why) = weighed
+        && !why.is_empty()
+    {
+        notices.push(why.clone());
+    }
     notices.push(match &tracked.identified {
         Ok(id) => describe_identified(id),
         Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
@@ -186,24 +215,49 @@ fn notices_of(engine: &Engine, tracked: &Tracked) -> Vec<String> {
     notices
 }
 
+/// What model.toml is written from: the tracked model, its fit and its scale.
+struct Written<'a> {
+    tracked: &'a Tracked,
+    fit: &'a ModelFit,
+    weighed: Option<&'a Weighed>,
+}
+
+impl Written<'_> {
+    /// The model with the fit's joint damping, on the weighed scale where there is one.
+    fn fitted(&self) -> crate::model::Params {
+        let mut fitted = self.tracked.params;
+        (fitted.losses.joint1, fitted.losses.joint2) = self.fit.damping;
+        self.weighed.map_or(fitted, |w| w.scaled(&fitted))
+    }
+}
+
+/// The scale of moments found from the motion: the weighed one where a mass was given; else
+/// why not, in words (empty where the model was given, and states its masses).
+fn weighed_of(job: &FitJob, tracked: &Tracked) -> std::result::Result<Weighed, String> {
+    match (&tracked.source, job.mass) {
+        (ModelSource::Identified, Some(mass)) => Weighed::of(&tracked.params, mass),
+        (ModelSource::Identified, None) => Err("the moments and the energies are over P, the upper arm's gravity moment (the motion cannot see the masses' scale): weigh all that swings and give its mass with [[mass]] for kg m^2 and joules".into()),
+        (ModelSource::Given, _) => Err(String::new()),
+    }
+}
+
 /// model.toml: the fitted pendulum with its joint damping from the fit, and the calibration.
 fn write_model(
     files: &mut Outputs,
     out: &std::path::Path,
-    tracked: &Tracked,
-    fit: &ModelFit,
+    model: &Written,
     calibration: &Option<crate::forecast::calibration::Calibration>,
     command: &str,
 ) -> Result<()> {
-    let mut fitted = tracked.params;
-    (fitted.losses.joint1, fitted.losses.joint2) = fit.damping;
+    let (tracked, fitted) = (model.tracked, model.fitted());
     let heading = format!(
         "The pendulum `chaoscope fit` fitted ({}), its joint damping from the fit:\n{command}\nRead it back with --params (trajectory, the maps, forecast).",
         tracked.source.describe()
     );
     files.write(&out.join(MODEL_FILE), |w| {
         use std::io::Write;
-        write!(w, "{}", model_file(&fitted, &tracked.source, &heading))?;
+        let text = model_file(&fitted, &tracked.source, &heading, model.weighed);
+        write!(w, "{text}")?;
         if let Some(c) = calibration {
             write!(w, "{}", c.to_toml())?;
         }
@@ -223,8 +277,12 @@ fn summary_json(
     energy: &EnergyReport,
     verdict: &Verdict,
     calibration: &Option<crate::forecast::calibration::Calibration>,
+    weighed: Option<&Weighed>,
 ) -> serde_json::Value {
     let pivot = &tracked.pivot;
+    // On the weighed scale where there is one (masses and damping alike).
+    let factor = weighed.map_or(1.0, |w| w.factor);
+    let params = weighed.map_or(tracked.params, |w| w.scaled(&tracked.params));
     // The report's grid: whole millimetres within 5 cm of the data's origin.
     let grid = grid_pivot(&tracked.frames, (0.0, 0.0), 0.05, 0.001);
     json!({
@@ -250,10 +308,11 @@ fn summary_json(
         "model": {
             "source": tracked.source.key(),
             "source_text": tracked.source.describe(),
-            "parameters": crate::params::to_json(&tracked.params),
+            "parameters": crate::params::to_json(&params),
+            "weighed": weighed,
             "start_row": fit.row, "t0": fit.t0,
             "state": fit.start.to_array(),
-            "joint_damping": [fit.damping.0, fit.damping.1],
+            "joint_damping": [fit.damping.0 * factor, fit.damping.1 * factor],
             "energy_unit": energy.unit_symbol(),
             "rms_position_error_in_window": fit.rms,
             "window": spec.window,
@@ -282,6 +341,15 @@ fn check_job(job: &FitJob) -> Result<()> {
         crate::forecast::outcome::MOST_HELD_OUT as u64,
     )?;
     check_within("lead", job.lead, 0.05, 60.0)?;
+    if let Some(mass) = job.mass {
+        check_within("mass", mass, 1e-6, 1e6)?;
+        if job.params.preset.is_some() || job.params.params.is_some() {
+            return Err(Error::invalid(
+                "mass",
+                "sets the scale of moments found from the motion; the model given (a preset or a parameter file) states its own masses",
+            ));
+        }
+    }
     super::checks::check_damping_not_given(&job.params)?;
     super::checks::check_units(&job.units)?;
     if job.start.is_some_and(|s| !s.is_finite()) {

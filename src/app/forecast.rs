@@ -89,7 +89,7 @@ pub fn run(
     let learned = learned(job, &read, monitor)?;
     let (tracked, calibration) = (&learned.tracked, learned.calibration.as_ref());
     let mut notices = engine.notices();
-    notices.push(tracked.source.describe_model(&tracked.params));
+    notices.push(tracked.source.describe_model(&tracked.params, None));
     notices.extend(film_notice);
     notices.extend(tracked.notices.iter().cloned());
     let provenance = provenance(job, &learned);

@@ -470,7 +470,7 @@ fn units(u: &crate::fit::data::Units) -> String {
 
 pub fn fit(job: &FitJob) -> String {
     format!(
-        "chaoscope fit {}{}{}{}{}{} --candidates {} --held-out {} --lead {} --velocity-error {}{} --backend {}",
+        "chaoscope fit {}{}{}{}{}{} --candidates {} --held-out {} --lead {} --velocity-error {}{}{} --backend {}",
         word(&job.file),
         units(&job.units),
         given("until", job.until),
@@ -481,6 +481,7 @@ pub fn fit(job: &FitJob) -> String {
         job.held_out,
         job.lead,
         job.velocity_error,
+        given("mass", job.mass),
         sources(&job.params),
         job.backend.name()
     ) + &precision(job.precision)

@@ -56,6 +56,12 @@ pub struct FitArgs {
     /// Velocity error (m/s) of each mass, for the energy error bars (the report: 0.1).
     #[arg(long, default_value = "0.1", value_parser = parse_number, allow_hyphen_values = true)]
     pub velocity_error: f64,
+    /// The pendulum's weighed mass (kg, 1e-6 to 1e6): all that swings, both arms with
+    /// their bobs. Sets the scale of moments found from the motion, so that they and the
+    /// energies come in kg m^2 and joules (exact for bobs on uniform rods) [default: over
+    /// P, the upper arm's gravity moment]
+    #[arg(long, value_parser = parse_number, allow_hyphen_values = true)]
+    pub mass: Option<f64>,
     #[command(flatten)]
     pub physical: PhysicalArgs,
     #[command(flatten)]
@@ -76,6 +82,7 @@ impl FitArgs {
             held_out: self.held_out,
             lead: self.lead,
             velocity_error: self.velocity_error,
+            mass: self.mass,
             params: self.physical.sources(),
             backend: self.engine.backend,
             precision: self.engine.precision.unwrap_or_default(),

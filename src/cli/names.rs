@@ -125,6 +125,7 @@ mod tests {
                     "output",
                     "y_up",
                     "pixels_per_metre",
+                    "mass",
                 ],
             ),
             (

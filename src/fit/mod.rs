@@ -9,11 +9,13 @@ pub mod identify;
 pub mod joint;
 mod lsq;
 mod model;
+pub mod model_toml;
 pub mod pendulum;
 pub mod plots;
 mod refine;
 pub mod report;
 pub mod verdict;
+pub mod weighed;
 pub mod window;
 
 pub use data::{

@@ -6,6 +6,7 @@
 use super::data::{Estimate, Pivot, TrackedRow, angles, arm_lengths, fit_pivot};
 use super::identify::{Identified, identify};
 use super::joint::{Joint, joint_off_marker};
+use super::weighed::Weighed;
 use super::window::TrackRows;
 use crate::error::{Error, Result};
 use crate::model::Params;
@@ -29,8 +30,9 @@ impl ModelSource {
         }
     }
 
-    /// One line on the model fitted: where it came from and what it is.
-    pub fn describe_model(&self, p: &Params) -> String {
+    /// One line on the model fitted: where it came from and what it is; a model found from
+    /// the motion and weighed (`p` on the weighed scale) in kg m^2 and J.
+    pub fn describe_model(&self, p: &Params, weighed: Option<&Weighed>) -> String {
         let k = p.inertia();
         match self {
             ModelSource::Given => format!(
@@ -46,22 +48,35 @@ impl ModelSource {
             ),
             ModelSource::Identified => {
                 let masses = [p.m1, p.m2, p.rod1, p.rod2];
+                let scale = match weighed {
+                    Some(w) => format!("scaled to the weighed {} kg", w.mass),
+                    None => "on a 1 kg scale: the motion cannot see the masses'".into(),
+                };
                 // Bobs and uniform rods hold the moments only where no mass comes out negative
                 // (a marker at a bar's centre of mass puts the moments where none does).
                 let equivalent = match masses.iter().all(|&m| m >= 0.0) {
                     true => format!(
-                        "an equivalent pendulum of bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg (a 1 kg scale: the motion cannot see the masses')",
+                        "an equivalent pendulum of bobs {:.4} and {:.4} kg, rods {:.4} and {:.4} kg ({scale})",
                         p.m1, p.m2, p.rod1, p.rod2
                     ),
                     false => "no pendulum of point bobs on uniform rods with masses >= 0 has these moments (the arms' masses lie otherwise: the moments are the model)".into(),
                 };
+                let moments = match weighed {
+                    Some(_) => format!(
+                        "A {:.4e}, B {:.4e}, C {:.4e} kg m^2, P {:.4e}, Q {:.4e} J",
+                        k.a, k.b, k.c, k.p, k.q
+                    ),
+                    None => format!(
+                        "A/P {:.4e}, B/P {:.4e}, C/P {:.4e} s^2, Q/P {:.4}",
+                        k.a / k.p,
+                        k.b / k.p,
+                        k.c / k.p,
+                        k.q / k.p
+                    ),
+                };
                 format!(
-                    "the model fitted: {} (no preset or params given): A/P {:.4e}, B/P {:.4e}, C/P {:.4e} s^2, Q/P {:.4}, markers at {:.4} and {:.4} m, g {:.4} m/s^2 (the motion's); {equivalent}",
+                    "the model fitted: {} (no preset or params given): {moments}, markers at {:.4} and {:.4} m, g {:.4} m/s^2 (the motion's); {equivalent}",
                     self.describe(),
-                    k.a / k.p,
-                    k.b / k.p,
-                    k.c / k.p,
-                    k.q / k.p,
                     p.l1,
                     p.l2,
                     p.g,
@@ -538,60 +553,4 @@ pub fn tracked_model_from(
         identified,
         notices,
     })
-}
-
-/// The model `p` as a parameter file that `--params` reads back (src/params.rs), headed by
-/// `heading` (a comment: where it came from). A model found from the motion is written by
-/// its moments over P (table `[moments]`: the masses' scale is not in the motion); a model
-/// given by masses, by them, its losses included.
-pub fn model_file(p: &Params, source: &ModelSource, heading: &str) -> String {
-    let mut out = String::new();
-    for line in heading.lines() {
-        out.push_str(&format!("# {line}\n"));
-    }
-    let l = &p.losses;
-    match source {
-        ModelSource::Identified => {
-            let k = p.inertia();
-            out.push_str(&format!(
-                "l1 = {}  # the upper marker's distance from the pivot (m): the middle joint\n\
-                 l2 = {}  # the lower marker's distance from the middle joint (m)\n\
-                 g = {}  # the gravity under which the model follows the data's metres and seconds (m/s^2)\n\
-                 \n\
-                 [moments]  # over P, the upper arm's gravity moment\n\
-                 a = {}  # A/P (s^2): the upper arm's inertia about the pivot, the lower arm's mass at the joint\n\
-                 b = {}  # B/P (s^2): the lower arm's inertia about the middle joint\n\
-                 c = {}  # C/P (s^2): the arms' coupling\n\
-                 k1 = {}  # the pivot's damping over P (s)\n\
-                 k2 = {}  # the middle joint's damping over P (s)\n",
-                p.l1,
-                p.l2,
-                p.g,
-                k.a / k.p,
-                k.b / k.p,
-                k.c / k.p,
-                l.joint1 / k.p,
-                l.joint2 / k.p
-            ));
-        }
-        ModelSource::Given => {
-            out.push_str(&format!(
-                "m1 = {}\nm2 = {}\nl1 = {}\nl2 = {}\ng = {}\nrod_mass = [{}, {}]\njoint_damping = [{}, {}]  # N m s\n",
-                p.m1, p.m2, p.l1, p.l2, p.g, p.rod1, p.rod2, l.joint1, l.joint2
-            ));
-            if l.has_bearings() {
-                out.push_str(&format!(
-                    "bearing_friction = {}\nbearing_radius = {}\n",
-                    l.bearing, l.bearing_radius
-                ));
-            }
-            if l.has_drag() {
-                out.push_str(&format!(
-                    "\n[air_drag]\nrho = {}\ncw = {}\nbob_area = [{}, {}]\nrod_area = [{}, {}]\n",
-                    l.rho, l.cw, l.bob_area1, l.bob_area2, l.rod_area1, l.rod_area2
-                ));
-            }
-        }
-    }
-    out
 }

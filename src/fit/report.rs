@@ -5,6 +5,7 @@ use serde_json::{Value, json};
 
 use super::pendulum::{ModelSource, Tracked};
 use super::plots::{self, EnergyUnit};
+use super::weighed::Weighed;
 use super::{DecayFits, Energies, Fit, ModelFit, data, energies, fit_decay};
 use crate::error::Result;
 use crate::model::{Params, State};
@@ -22,9 +23,14 @@ pub struct EnergyReport {
 
 impl EnergyReport {
     /// The tracked rows' energy and its decay. A model found from the motion cannot see the
-    /// masses' scale: its energy is in units of its gravity moment P, and counts the arms' own
-    /// inertia as the model does.
-    pub fn of(tracked: &Tracked, t: &[f64], velocity_error: f64) -> EnergyReport {
+    /// masses' scale: its energy is in units of its gravity moment P (in joules where the
+    /// pendulum was `weighed`), and counts the arms' own inertia as the model does.
+    pub fn of(
+        tracked: &Tracked,
+        t: &[f64],
+        velocity_error: f64,
+        weighed: Option<&Weighed>,
+    ) -> EnergyReport {
         let params = &tracked.params;
         let (en, unit) = match tracked.source {
             ModelSource::Given => (
@@ -38,10 +44,21 @@ impl EnergyReport {
                 ),
                 EnergyUnit::Joule,
             ),
-            ModelSource::Identified => (
-                model_energies(t, &tracked.angles, params, velocity_error),
-                EnergyUnit::GravityMoment,
-            ),
+            ModelSource::Identified => {
+                let over_p = model_energies(t, &tracked.angles, params, velocity_error);
+                match weighed {
+                    // E/P does not see the scale: times the weighed P, joules.
+                    Some(w) => (
+                        Energies {
+                            t: over_p.t,
+                            e: over_p.e.iter().map(|e| e * w.p).collect(),
+                            de: over_p.de.iter().map(|e| e * w.p).collect(),
+                        },
+                        EnergyUnit::Joule,
+                    ),
+                    None => (over_p, EnergyUnit::GravityMoment),
+                }
+            }
         };
         let decay = fit_decay(&en);
         let better = if decay.exponential.reduced_chi2() <= decay.inverse_square.reduced_chi2() {

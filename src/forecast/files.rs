@@ -59,6 +59,6 @@ pub fn write_model(
         "The pendulum `chaoscope forecast` ran ({}), learned from the rows up to its window's end (or given):\n{command}\nRead it back as a parameter file (the maps, trajectory, web).",
         tracked.source.describe()
     );
-    let text = crate::fit::pendulum::model_file(&tracked.params, &tracked.source, &heading);
+    let text = crate::fit::model_toml::model_file(&tracked.params, &tracked.source, &heading, None);
     files.write(path, |w| Ok(std::io::Write::write_all(w, text.as_bytes())?))
 }
