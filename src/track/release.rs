@@ -47,10 +47,16 @@ pub fn release(named: &[(Named, Named)], times: &[f64]) -> Option<f64> {
     if fast <= 2.0 * STILL {
         return None;
     }
+    // A hold is both markers still: a step with one of them unseen (a fast-whirling lower
+    // arm blurred away) says nothing of it, whatever the other did at its turning point.
+    let both_seen: Vec<bool> = named
+        .windows(2)
+        .map(|w| [w[0].0, w[0].1, w[1].0, w[1].1].iter().all(Option::is_some))
+        .collect();
     let mut release = None;
     let mut run = 0;
     for (i, step) in steps.iter().enumerate() {
-        if step.is_some_and(|s| s <= STILL) {
+        if both_seen[i] && step.is_some_and(|s| s <= STILL) {
             run += 1;
             continue;
         }
@@ -68,4 +74,40 @@ pub fn release(named: &[(Named, Named)], times: &[f64]) -> Option<f64> {
         run = 0;
     }
     release
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::track::detect::{Blob, Role};
+
+    /// Frames at 60 a second: the pendulum swinging fast, then for `still` frames the upper
+    /// marker at a turning point while the lower one is seen every other frame (far apart:
+    /// a fast whirl, blurred away in between), then swinging fast again.
+    fn whirl(still: usize, lower_seen: bool) -> (Vec<Named>, Vec<Named>) {
+        let mut upper = Vec::new();
+        let mut lower = Vec::new();
+        for k in 0..60 {
+            let held = (20..20 + still).contains(&k);
+            let x = if held { 100.0 } else { 100.0 + 20.0 * (k as f64).sin() };
+            upper.push(Some(Blob::round(x, 50.0, Role::Either)));
+            let seen = !held || lower_seen || k % 2 == 0;
+            let y = if held && lower_seen { 150.0 } else { 150.0 + 30.0 * (k as f64).cos() };
+            lower.push(seen.then(|| Blob::round(200.0, y, Role::Either)));
+        }
+        (upper, lower)
+    }
+
+    /// One marker still at its turning point while the other is out of sight is no hold:
+    /// no release is found in the middle of a swing; both still for as long is one.
+    #[test]
+    fn a_hold_needs_both_markers_still() {
+        let times: Vec<f64> = (0..60).map(|k| k as f64 / 60.0).collect();
+        let (upper, lower) = whirl(6, false);
+        let named: Vec<(Named, Named)> = upper.into_iter().zip(lower).collect();
+        assert_eq!(release(&named, &times), None);
+        let (upper, lower) = whirl(6, true);
+        let named: Vec<(Named, Named)> = upper.into_iter().zip(lower).collect();
+        assert_eq!(release(&named, &times), Some(times[25]));
+    }
 }
