@@ -404,12 +404,17 @@ fn is_ratio(code: u32) -> bool {
     return code == 6u || code == 9u;
 }
 
-// The coefficients of pixel i: the uniform ones, or (PER_PIXEL) those of its parameters, as
-// src/model.rs `Params::inertia` forms them (ratios set after the values they multiply).
+// The coefficients of pixel i: the uniform ones, or (PER_PIXEL) those of its parameters.
 fn pixel_coeffs(p: Params, i: u32) -> Coeffs {
     if !PER_PIXEL {
         return coeffs_from(p);
     }
+    return plane_coeffs(p, i);
+}
+
+// The coefficients of pixel i's own parameters (the plane's axes set in the uniform ones), as
+// src/model.rs `Params::inertia` forms them (ratios set after the values they multiply).
+fn plane_coeffs(p: Params, i: u32) -> Coeffs {
     let xy = pixel_xy(p, i);
     var r = Physical(p.m1, p.m2, p.l1, p.l2, p.g, p.rod1, p.rod2, p.joint1, p.joint2);
     if is_ratio(p.x_var) {

@@ -9,6 +9,11 @@
 // carried[i] (the state with its cos and sin): lavapipe ends every loop of an invocation
 // after 65535 iterations in all, so the host keeps a dispatch's steps below that.
 
+// On for the explorer's click on a parameter plane: run i is pixel i of the params' plane
+// (its grid of one pixel at the click), its coefficients that pixel's parameters, as the
+// map's kernels form them.
+override PLANE_RUN: bool = false;
+
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read_write> states: array<vec4<real>>;
 @group(0) @binding(2) var<storage, read> damping: array<vec2<real>>;
@@ -23,6 +28,9 @@ fn trajectory(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     let kept = params.total_steps / params.interval + 1u;
     let base = i * kept;
     var c = coeffs_from(params);
+    if PLANE_RUN {
+        c = plane_coeffs(params, i);
+    }
     if PER_PIXEL {
         c.joint1 = damping[i].x;
         c.joint2 = damping[i].y;

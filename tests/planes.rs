@@ -388,3 +388,64 @@ fn supersampling_reduces_the_finer_map_and_one_sample_is_the_plain_map() {
     // Reproducible: the same flags, the same bits.
     assert_eq!(run("again", &["--size", "12x10", "--samples", "3"]), three);
 }
+
+/// `trajectory --at NAME=VALUE` runs a parameter plane's pixel: its parameters set as the map
+/// sets them (a ratio after the value it multiplies, whichever comes first), the same rows as
+/// the parameters given outright; a start's component, a value out of its range, two that
+/// set one value, or one a flag gives too are refused naming the flag.
+#[test]
+fn a_parameter_planes_pixel_runs_as_a_trajectory() {
+    let run = |extra: &str| {
+        let out = common::chaoscope()
+            .args("trajectory --theta1 2 --theta2 2 --t-max 1 --dt 0.01".split(' '))
+            .args(extra.split(' '))
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (code, given, err) = run("--m1 2 --m2 5 --l1 0.5 --l2 0.35");
+    assert_eq!(code, Some(0), "{err}");
+    for at in [
+        "--at l2/l1=0.7 --at m2/m1=2.5 --m1 2 --l1 0.5",
+        "--m1 2 --l1 0.5 --at m2/m1=2.5 --at l2/l1=0.7",
+        "--at m1=2 --at m2/m1=2.5 --l1 0.5 --l2 0.35",
+    ] {
+        let (code, rows, err) = run(at);
+        assert_eq!(code, Some(0), "{at}: {err}");
+        // The same parameters to rounding (2.5 x 2 and 0.7 x 0.5 are exact in binary but
+        // 0.35 is not): the rows agree to the last digits of the CSV.
+        let numbers = |s: &str| -> Vec<f64> {
+            s.lines()
+                .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
+                .flat_map(|l| {
+                    l.split(',')
+                        .map(|x| x.parse::<f64>().unwrap())
+                        .collect::<Vec<_>>()
+                })
+                .collect()
+        };
+        let (a, b) = (numbers(&rows), numbers(&given));
+        assert_eq!(a.len(), b.len(), "{at}");
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-9, "{at}: {worst}");
+    }
+    for (bad, says) in [
+        ("--at theta1=1", "--at"),
+        ("--at g=-1", "--at"),
+        ("--at m2=1 --at m2/m1=2", "--at"),
+        ("--m2 3 --at m2/m1=2", "--m2"),
+        ("--at mass=1", "--at"),
+    ] {
+        let (code, _, err) = run(bad);
+        assert_eq!(code, Some(2), "{bad}: {err}");
+        assert!(err.contains(says), "{bad}: {err}");
+    }
+}

@@ -276,6 +276,13 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     views.as_array_mut().unwrap().push(serde_json::json!({
         "name": "swing", "width": 64, "height": 64, "times": false,
         "swing": {"theta1": 1.0, "theta2": 2.0}, "view": {"t_max": 2, "dt": 0.01}}));
+    // A click on a plane of two parameters (both ratios: each multiplies a value the other
+    // does not set): the pixel's own pendulum swings, and the page's command runs it.
+    views.as_array_mut().unwrap().push(serde_json::json!({
+        "name": "swing_plane", "width": 64, "height": 64, "times": false,
+        "swing": {"theta1": 0.5, "theta2": 0.5}, "at": {"x": 2.5, "y": 0.7},
+        "view": {"x": "m2/m1", "y": "l2/l1", "cx": 2, "cy": 1, "w": 2, "h": 1,
+                 "t_max": 2, "dt": 0.01}}));
     // The page's rule for a view too deep for f32 is the engine's (`Grid::needs_f64`): the
     // widths around the switch on a 512-pixel grid at a point of the boundary.
     let widths = [1e-2, 3e-3, 2e-3, 1.9e-3, 1.5e-3, 1e-3, 1e-4];
@@ -441,6 +448,53 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
             );
         }
     }
+    // The parameter plane's pixel: its arms drawn at its own lengths, and its run the one its
+    // command line computes. The page's kernel forms the pixel's coefficients in f32 from its
+    // parameters where the engine rounds them once from f64: a few ulps (1e-7 relative), grown
+    // over 100 steps of a regular swing (0.5 rad) by far less than the 1e-4 asked.
+    let plane = &report["views"]["swing_plane"]["swing"];
+    let arms: Vec<f64> = plane["arms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(arms, [1.0, 0.7], "{}", plane["command"]);
+    let command = plane["command"].as_str().unwrap();
+    assert!(
+        command.contains("--at m2/m1=2.5 --at l2/l1=0.7"),
+        "{command}"
+    );
+    let words: Vec<&str> = command.split_whitespace().skip(1).collect();
+    let csv = chaoscope()
+        .args(&words)
+        .args("--every 0.02 --backend gpu --precision f32".split(' '))
+        .output()
+        .unwrap();
+    assert!(
+        csv.status.success(),
+        "{command}: {}",
+        String::from_utf8_lossy(&csv.stderr)
+    );
+    let rows: Vec<Vec<f64>> = String::from_utf8_lossy(&csv.stdout)
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let states: Vec<f64> = plane["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(states.len(), 4 * rows.len(), "states kept");
+    let states = &states;
+    let worst = rows
+        .iter()
+        .enumerate()
+        .flat_map(|(k, row)| (0..4).map(move |j| (states[4 * k + j] - row[1 + j]).abs()))
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-4, "the page's run departs by {worst}");
     for v in views
         .as_array()
         .unwrap()

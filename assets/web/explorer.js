@@ -958,39 +958,42 @@ async function describe(e) {
   const x = 0.5 * (g.x[0] + g.x[1]) + (2 * col + 1 - g.width) * 0.5 * ((g.x[1] - g.x[0]) / g.width);
   const y = 0.5 * (g.y[0] + g.y[1]) - (2 * row + 1 - g.height) * 0.5 * ((g.y[1] - g.y[0]) / g.height);
   const start = { theta1: 0, omega1: 0, theta2: 0, omega2: 0 };
-  start[view.x] = x; start[view.y] = y;
+  for (const [name, value] of [[view.x, x], [view.y, y]]) if (varOf(name).state) start[name] = value;
   clicked = { x, y, xVar: view.x, yVar: view.y };
   document.getElementById("pixel").hidden = false;
   markClicked();
   // The swing in sight without scrolling: beside the map, or below it on a narrow screen.
   document.getElementById("pixel").scrollIntoView({ block: "nearest" });
-  const swing = document.getElementById("swing-command");
-  document.getElementById("swing").hidden = parameterAxes(view) !== "";
-  if (parameterAxes(view) !== "") {
-    // The swing runs the pendulum's own parameters: a parameter plane's pixel has others.
-    swing.textContent = "";
-    document.getElementById("swing-time").textContent =
-      "A pixel of a parameter plane is a pendulum of its own: its command above computes it.";
-    return;
-  }
-  const values = { theta1: start.theta1, omega1: start.omega1, theta2: start.theta2,
-    omega2: start.omega2, t_max: view.t_max, dt: view.dt,
-    pendulum: manifest.pendulums[view.pendulum].flags[""] };
-  swing.textContent =
-    manifest.swing_command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
+  document.getElementById("swing").hidden = false;
+  document.getElementById("swing-command").textContent = swingCommand(view, start, { x, y });
   try {
-    animate(await trajectory(start, view), view);
+    animate(await trajectory(start, view, { x, y }), view);
   } catch (err) {
     say(`Could not swing the pendulum: ${err.message}`, true);
   }
 }
 
+// The command line of the run from `start` at the plane's point `at` ({x, y}): a parameter
+// axis sets the pixel's pendulum, as `trajectory --at NAME=VALUE` does.
+function swingCommand(v, start, at) {
+  const p = manifest.pendulums[v.pendulum];
+  const set = [[v.x, at.x], [v.y, at.y]].filter(([name]) => !varOf(name).state);
+  const values = { theta1: start.theta1, omega1: start.omega1, theta2: start.theta2,
+    omega2: start.omega2, t_max: v.t_max, dt: v.dt,
+    pendulum: p.flags[parameterAxes(v)] + set.map(([name, x]) => ` --at ${name}=${x}`).join("") };
+  return manifest.swing_command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
+}
+
 // The states of one run from `start` over the view's t-max, every `stride`-th step.
-async function trajectory(start, v) {
+// On a parameter plane, `at` ({x, y}: the axes' values) makes the run the plane's pixel
+// there: a grid of that one pixel, whose coefficients the kernel forms as the map's do.
+async function trajectory(start, v, at) {
   await ready();
   const c = manifest.constants, kernel = await kernelOf(gpu, "trajectory"), k = kernel.k;
   const p = manifest.pendulums[v.pendulum];
-  const [pipeline] = await pipelines(gpu, "trajectory", ["trajectory"], { LOSSES: p.losses });
+  const plane = parameterAxes(v) !== "";
+  const constants = plane ? { LOSSES: p.losses, PLANE_RUN: 1 } : { LOSSES: p.losses };
+  const [pipeline] = await pipelines(gpu, "trajectory", ["trajectory"], constants);
   const stride = Math.max(1, Math.round(1 / 60 / v.dt));
   const total = Math.max(stride, Math.floor(steps(v.t_max, v.dt) / stride) * stride);
   const kept = total / stride + 1;
@@ -1004,6 +1007,13 @@ async function trajectory(start, v) {
   try {
     const u = paramsOf(p, k.params.fields, k.params.size);
     u.set("dt", v.dt); u.set("interval", stride); u.set("count", 1); u.set("total_steps", total);
+    if (plane) {
+      const scaled = (name, value) => value * (varOf(name).mass ? p.mass_scale : 1);
+      u.set("x_mid", scaled(v.x, at.x)); u.set("y_mid", scaled(v.y, at.y));
+      u.set("x_half_step", 0); u.set("y_half_step", 0);
+      u.set("x_var", varOf(v.x).code); u.set("y_var", varOf(v.y).code);
+      u.set("width", 1); u.set("height", 1);
+    }
     const params = buffer(k.params.size, GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST);
     const y = [start.theta1, start.omega1, start.theta2, start.omega2];
     const states = buffer(kept * 16), damping = buffer(16), carried = buffer(32);
@@ -1030,17 +1040,27 @@ async function trajectory(start, v) {
     await read.mapAsync(GPUMapMode.READ);
     const out = new Float32Array(read.getMappedRange()).slice();
     read.unmap();
-    return { states: out, seconds: stride * v.dt, p };
+    return { states: out, seconds: stride * v.dt, arms: arms(p, v, at) };
   } finally {
     made.forEach((b) => b.destroy());
   }
+}
+
+// The arms' lengths of the run (m): the pendulum's, or a length axis's value at the pixel
+// (src/spec/var.rs `Var::set`: l2/l1 multiplies the upper arm, set first).
+function arms(p, v, at) {
+  const set = { l1: p.l1, l2: p.l2 };
+  const along = at ? [[v.x, at.x], [v.y, at.y]] : [];
+  for (const [name, value] of along.filter(([n]) => n === "l1" || n === "l2")) set[name] = value;
+  for (const [name, value] of along.filter(([n]) => n === "l2/l1")) set.l2 = value * set.l1;
+  return [set.l1, set.l2];
 }
 
 // The pendulum swinging in real time, again and again; the lower bob leaves a trail.
 let swinging = null;
 function animate(run, v) {
   const swing = document.getElementById("swing"), ctx = swing.getContext("2d");
-  const l1 = run.p.l1, l2 = run.p.l2, scale = 0.45 * swing.width / (l1 + l2);
+  const [l1, l2] = run.arms, scale = 0.45 * swing.width / (l1 + l2);
   const o = { x: swing.width / 2, y: swing.height / 2 }, n = run.states.length / 4;
   const at = (k) => {
     const s = run.states.subarray(4 * k, 4 * k + 4);
@@ -1099,9 +1119,11 @@ function viewOf(v) {
 
 // For tests: the run a click on a pixel with start `start` swings (its kept states, and the
 // seconds between them).
-page.swing = async (start, v) => {
-  const run = await trajectory(Object.assign({ theta1: 0, omega1: 0, theta2: 0, omega2: 0 },
-    start), viewOf(v));
+page.swing = async (start, v, at) => {
+  const from = Object.assign({ theta1: 0, omega1: 0, theta2: 0, omega2: 0 }, start);
+  const w = viewOf(v), run = await trajectory(from, w, at);
+  if (at) return { states: Array.from(run.states), seconds: run.seconds, arms: run.arms,
+    command: swingCommand(w, from, at) };
   return { states: Array.from(run.states), seconds: run.seconds };
 };
 

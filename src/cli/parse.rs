@@ -145,6 +145,16 @@ pub fn parse_axis(s: &str) -> Result<AxisArg, String> {
     Ok(AxisArg { var, range })
 }
 
+/// `--at`: `NAME=VALUE`, a map axis's variable at one value.
+pub fn parse_at(s: &str) -> Result<(crate::spec::Var, f64), String> {
+    not_a_flag(s)?;
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}` must be NAME=VALUE, e.g. m2/m1=2.5"))?;
+    let AxisArg { var, .. } = parse_axis(name)?;
+    Ok((var, parse_number(value)?))
+}
+
 pub fn parse_angles(s: &str) -> Result<Angles, String> {
     if s.contains(':') {
         parse_range(s).map(Angles::Range)

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::args::{PhysicalArgs, StartArgs, StepArgs, backend_parser};
-use super::parse::{one_of, parse_number};
+use super::parse::{one_of, parse_at, parse_number};
 use super::{command_line, json, say};
 use crate::app::trajectory::{self, TrajectoryJob};
 use crate::engine::Backend;
@@ -32,6 +32,11 @@ pub struct TrajectoryArgs {
     pub precision: Option<Precision>,
     #[command(flatten)]
     pub physical: PhysicalArgs,
+    /// A parameter as a map's pixel sets it, NAME=VALUE with a map axis's name (m2/m1=2.5:
+    /// m2 is 2.5 m1); twice for a pixel of two parameter axes. The run of a parameter
+    /// plane's pixel, as the explorer prints it.
+    #[arg(long, value_parser = parse_at, action = clap::ArgAction::Append)]
+    pub at: Vec<(crate::spec::Var, f64)>,
     /// CSV to write; standard output if absent.
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -40,7 +45,7 @@ pub struct TrajectoryArgs {
 impl TrajectoryArgs {
     pub fn job(&self) -> Result<TrajectoryJob> {
         Ok(TrajectoryJob {
-            params: self.physical.sources().resolve()?,
+            params: crate::spec::resolve_at(&self.physical.sources(), &self.at)?,
             start: self.start.state(),
             stepping: self.step.stepping(),
             every: self.every,

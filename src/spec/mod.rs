@@ -27,7 +27,7 @@ pub use method::{
     ACCURATE, ACCURATE_FTLE, Integrator, MIN_TOLERANCE_F32, MIN_TOLERANCE_F64, Precision,
     SteppingAsked, integrator_of,
 };
-pub use plane::{Angles, AxisAsked, PlaneAsked, check_along, resolve_on};
+pub use plane::{Angles, AxisAsked, PlaneAsked, check_along, resolve_at, resolve_on};
 pub use stability::{largest_stable_dt, speed_bound, validate_speeds, validate_stability};
 pub use zoom::{ZOOM, ZoomDefaults};
 

@@ -160,6 +160,47 @@ pub fn check_along(sources: &ParamSources, along: &[(&'static str, Var)]) -> Res
     Ok(())
 }
 
+/// The parameters of one pixel of a parameter plane: the sources' with each of `at` (a
+/// parameter axis's variable and its value there) set as the map sets it, ratios after the
+/// values they multiply. Each must be a parameter (a start's component has its own value),
+/// within its range, set by no other of `at` nor by a value the sources give.
+pub fn resolve_at(sources: &ParamSources, at: &[(Var, f64)]) -> Result<Params> {
+    for (k, &(var, v)) in at.iter().enumerate() {
+        if var.is_state() {
+            return Err(Error::invalid(
+                "at",
+                format!(
+                    "{} is a component of the start, given by its own value",
+                    var.name()
+                ),
+            ));
+        }
+        let r = var.limits();
+        if !(v.is_finite() && r.min <= v && v <= r.max) {
+            return Err(Error::invalid(
+                "at",
+                format!("{}={v} must be from {} to {}", var.name(), r.min, r.max),
+            ));
+        }
+        if let Some((other, _)) = at[..k].iter().find(|(o, _)| o.overlaps(var)) {
+            return Err(Error::invalid(
+                "at",
+                format!("{} and {} set the same value", other.name(), var.name()),
+            ));
+        }
+    }
+    let along: Vec<(&'static str, Var)> = at.iter().map(|&(v, _)| ("[[at]]", v)).collect();
+    check_along(sources, &along)?;
+    let mut p = sources.resolve()?;
+    let mut start = State::default();
+    let (ratios, values): (Vec<_>, Vec<_>) = at.iter().partition(|(v, _)| v.is_ratio());
+    for (var, v) in values.into_iter().chain(ratios) {
+        var.set(v, &mut p, &mut start);
+    }
+    crate::params::validate(&p)?;
+    Ok(p)
+}
+
 /// The parameters of a map on `grid`, none given that an axis sets ([`check_along`]).
 pub fn resolve_on(sources: &ParamSources, grid: &Grid) -> Result<Params> {
     check_along(sources, &[("x", grid.x.var), ("y", grid.y.var)])?;

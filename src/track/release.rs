@@ -89,10 +89,18 @@ mod tests {
         let mut lower = Vec::new();
         for k in 0..60 {
             let held = (20..20 + still).contains(&k);
-            let x = if held { 100.0 } else { 100.0 + 20.0 * (k as f64).sin() };
+            let x = if held {
+                100.0
+            } else {
+                100.0 + 20.0 * (k as f64).sin()
+            };
             upper.push(Some(Blob::round(x, 50.0, Role::Either)));
             let seen = !held || lower_seen || k % 2 == 0;
-            let y = if held && lower_seen { 150.0 } else { 150.0 + 30.0 * (k as f64).cos() };
+            let y = if held && lower_seen {
+                150.0
+            } else {
+                150.0 + 30.0 * (k as f64).cos()
+            };
             lower.push(seen.then(|| Blob::round(200.0, y, Role::Either)));
         }
         (upper, lower)

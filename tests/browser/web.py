@@ -109,7 +109,8 @@ try:
         report["views"][name] = {"command": page_call("command", v["view"], w, h),
                                  "resolves": page_call("resolves", v["view"], w, h)}
         if "swing" in v:
-            report["views"][name]["swing"] = page_call("swing", v["swing"], v["view"])
+            report["views"][name]["swing"] = page_call("swing", v["swing"], v["view"],
+                                                       v.get("at"))
         if v.get("verdict"):
             started = time.time()
             data = page_call("verdict", v["view"], w, h)
