@@ -61,13 +61,15 @@ pub fn parameter_axes() -> Vec<Vec<Var>> {
 pub struct SiteSpec {
     pub pendulums: Vec<Pendulum>,
     /// The flip map's command line with `{width}`, `{height}`, `{x_min}`, `{x_max}`,
-    /// `{y_min}`, `{y_max}`, `{t_max}`, `{dt}`, `{pendulum}`, `{colours}` and `{verdict}`
+    /// `{y_min}`, `{y_max}`, `{t_max}`, `{dt}`, `{start}` (the fixed start's angles as
+    /// flags, or nothing), `{pendulum}`, `{colours}` and `{verdict}`
     /// to fill in: the page shows it for its view, the map the command line computes for the
     /// same pixels.
     pub command: String,
     /// The divergence-family maps the page offers (the kinds' table's, in its order), each
-    /// with the indicator it computes ([`in_f32`]) and its command line, as the flip map's.
-    pub indicator_commands: Vec<(MapKind, Indicator, String)>,
+    /// with the settings of its indicator the page offers ([`variants`]: its f32 default
+    /// first), each with its command line, as the flip map's.
+    pub indicator_commands: Vec<(MapKind, Vec<(Indicator, String)>)>,
     /// A clicked pixel's run as a command line, with `{theta1}`, `{omega1}`, `{theta2}`,
     /// `{omega2}`, `{t_max}`, `{dt}` and `{pendulum}` to fill in.
     pub swing_command: String,
@@ -133,6 +135,61 @@ pub fn in_f32(indicator: Indicator) -> Indicator {
     }
 }
 
+/// The settings of `kind`'s indicator the page offers, in f32: its default there first
+/// ([`in_f32`]), then each combination of its options' values (a whole option's range, the
+/// others' offered values) that f32 allows, each once. None for the flip time.
+pub fn variants(kind: MapKind) -> Vec<Indicator> {
+    let Some(default) = kind.entry().indicator else {
+        return Vec::new();
+    };
+    let first = in_f32(default);
+    let name = first.spelled().0;
+    let mut combos: Vec<Vec<(&'static str, f64)>> = vec![Vec::new()];
+    for opt in first.measure().options(name) {
+        let values: Vec<f64> = match opt.whole {
+            Some((lo, hi)) => (lo..=hi).map(f64::from).collect(),
+            None => opt.offered.to_vec(),
+        };
+        combos = combos
+            .iter()
+            .flat_map(|c| {
+                values
+                    .iter()
+                    .map(move |&v| [&c[..], &[(opt.field, v)]].concat())
+            })
+            .collect();
+    }
+    let mut out = vec![first];
+    for options in combos {
+        let asked = IndicatorAsked {
+            name,
+            options: &options,
+            accurate: false,
+            gpu_f32: true,
+        };
+        if let Ok(i) = asked.indicator()
+            && i.validate(Precision::F32).is_ok()
+            && !out.contains(&i)
+        {
+            out.push(i);
+        }
+    }
+    out
+}
+
+/// An indicator's options in words for the page's menu: "gali 3, threshold 1e-4".
+fn options_label(indicator: Indicator) -> String {
+    let (_, options) = indicator.spelled();
+    match options.is_empty() {
+        true => "its settings".into(),
+        false => options
+            .iter()
+            .map(|(opt, v)| format!("{} {v}", opt.field.replace('_', "-")))
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
+}
+
 /// The page's settings: the kernels' layouts, the engine's constants, the pendulums, the
 /// planes' variables, the colours.
 fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
@@ -186,11 +243,33 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
         "command": spec.command,
         "vouch": vouch(&crate::quantity::FLIP_TIME),
     })];
-    kinds.extend(
-        spec.indicator_commands
+    // Each kind as its default setting, with every setting the page offers (the default
+    // first) for its menu of options.
+    kinds.extend(spec.indicator_commands.iter().map(|(kind, offered)| {
+        let default = options_label(offered[0].0);
+        let settings: Vec<Value> = offered
             .iter()
-            .map(|(kind, i, command)| divergence_kind(*kind, *i, command)),
-    );
+            .enumerate()
+            .map(|(k, (i, command))| {
+                let mut v = divergence_kind(*kind, *i, command);
+                let options = options_label(*i);
+                // The kinds' table's words are its default setting's: another says so.
+                if k > 0 {
+                    v["label"] = json!(format!("{} ({options})", v["bar_label"].as_str().unwrap()));
+                    v["about"] = json!(format!(
+                        "Colour: {}, at {options}. At its default setting ({default}): {}",
+                        v["bar_label"].as_str().unwrap(),
+                        v["about"].as_str().unwrap()
+                    ));
+                }
+                v["options"] = json!(options);
+                v
+            })
+            .collect();
+        let mut first = settings[0].clone();
+        first["settings"] = json!(settings);
+        first
+    }));
     let colours: serde_json::Map<String, Value> = colours.into_iter().collect();
     json!({
         "generator": GENERATOR,

@@ -267,6 +267,20 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
             "name": kind, "width": 32, "height": 32,
             "view": {"kind": kind, "cx": 0.5, "cy": 0.5, "w": 3, "t_max": 5, "dt": 0.01}}));
     }
+    // Indicators at settings other than their defaults, as the page's menu offers them
+    // (src/web.rs `variants`, whose order the manifest keeps).
+    for (kind, options) in [
+        ("exponent", "exponent 3"),
+        ("gali", "gali 2, threshold 1e-4"),
+        ("descriptor", "ld-p 2"),
+    ] {
+        let kind = MapKind::from_short(kind).unwrap();
+        let setting = setting_of(kind, options);
+        views.as_array_mut().unwrap().push(serde_json::json!({
+            "name": format!("{}-{setting}", kind.short()), "width": 32, "height": 32,
+            "view": {"kind": kind.short(), "setting": setting, "cx": 0.5, "cy": 0.5, "w": 3,
+                     "t_max": 5, "dt": 0.01}}));
+    }
     // The verdict in f32: the same map at half and a quarter of the step.
     views.as_array_mut().unwrap().push(serde_json::json!({
         "name": "judged", "width": 64, "height": 64, "times": false, "verdict": true,
@@ -276,6 +290,11 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     views.as_array_mut().unwrap().push(serde_json::json!({
         "name": "swing", "width": 64, "height": 64, "times": false,
         "swing": {"theta1": 1.0, "theta2": 2.0}, "view": {"t_max": 2, "dt": 0.01}}));
+    // A plane of two parameters from a start the view fixes (both arms at 2 rad).
+    views.as_array_mut().unwrap().push(serde_json::json!({
+        "name": "ratios", "width": 48, "height": 48,
+        "view": {"x": "m2/m1", "y": "l2/l1", "cx": 1.5, "cy": 1.5, "w": 2, "h": 2,
+                 "theta1": 2, "theta2": 2, "t_max": 5, "dt": 0.01}}));
     // A click on a plane of two parameters (both ratios: each multiplies a value the other
     // does not set): the pixel's own pendulum swings, and the page's command runs it.
     views.as_array_mut().unwrap().push(serde_json::json!({
@@ -527,7 +546,10 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         assert!(agree >= 0.999, "{name}: {agree}");
         // The colours' range the page drew is the measure's rule on the command line's map.
         let kind = v["view"]["kind"].as_str().unwrap_or("flip");
-        if let Some(i) = MapKind::from_short(kind).and_then(|k| k.entry().indicator) {
+        let setting = v["view"]["setting"].as_u64().unwrap_or(0) as usize;
+        if let Some(i) = MapKind::from_short(kind)
+            .and_then(|k| chaoscope::web::variants(k).get(setting).copied())
+        {
             let t_max = v["view"]["t_max"].as_f64().unwrap();
             let field = chaoscope::field::Field {
                 width: w as u32,
@@ -550,6 +572,22 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
             "{name}"
         );
     }
+}
+
+/// The index of `kind`'s setting whose options read `options` in the page's menu.
+fn setting_of(kind: MapKind, options: &str) -> usize {
+    chaoscope::web::variants(kind)
+        .iter()
+        .position(|i| {
+            let spelled: Vec<String> = i
+                .spelled()
+                .1
+                .iter()
+                .map(|(o, v)| format!("{} {v}", o.field.replace('_', "-")))
+                .collect();
+            spelled.join(", ") == options
+        })
+        .unwrap_or_else(|| panic!("{options}: no such setting of {}", kind.short()))
 }
 
 /// `web --params FILE --name NAME`: a class's own pendulum under its own name, offered first;
@@ -657,6 +695,8 @@ fn link_value_ok(manifest: &serde_json::Value, key: &str, text: &str, number: Op
         "kind" => names("kinds", Some("name")).iter().any(|n| n == text),
         "colours" => names("colours", None).iter().any(|n| n == text),
         "verdict" => text == "0" || text == "1",
+        // The start's fixed angles: within the turn, as an angle axis.
+        "theta1" | "theta2" => within([-std::f64::consts::PI, std::f64::consts::PI]),
         _ => false,
     }
 }
@@ -734,6 +774,7 @@ fn a_link_is_held_to_the_controls_rules_in_chromium() {
     ];
     let keys = [
         "t_max", "dt", "cx", "cy", "w", "h", "pendulum", "x", "y", "kind", "colours", "verdict",
+        "theta1", "theta2",
     ];
     let odd_keys = [
         "constructor",
@@ -743,7 +784,12 @@ fn a_link_is_held_to_the_controls_rules_in_chromium() {
         "T_MAX",
         "t_max ",
     ];
-    let numeric = |k: &str| ["t_max", "dt", "cx", "cy", "w", "h", "pendulum"].contains(&k);
+    let numeric = |k: &str| {
+        [
+            "t_max", "dt", "cx", "cy", "w", "h", "pendulum", "theta1", "theta2",
+        ]
+        .contains(&k)
+    };
     let number_of = |t: &str| {
         numbers
             .iter()
@@ -770,6 +816,16 @@ fn a_link_is_held_to_the_controls_rules_in_chromium() {
         "colours=viridis&t_max=1",
         "x=theta1&y=m2/m1&t_max=1",
         "x=theta1&y=theta1&t_max=1",
+        // A setting is one of its kind's, whichever the link names first.
+        "kind=gali&setting=2&t_max=1",
+        "setting=3&kind=exponent&t_max=1",
+        "kind=gali&setting=99",
+        "setting=1",
+        "kind=sali&setting=0.5",
+        // The start's angles where no axis sets them.
+        "x=m2/m1&y=l2/l1&theta1=2&theta2=2&t_max=1",
+        "theta1=4",
+        "theta2=-1e9",
     ]
     .iter()
     .map(|l| {
@@ -858,9 +914,26 @@ fn a_link_is_held_to_the_controls_rules_in_chromium() {
         assert_eq!(case["errors"], serde_json::json!([]), "{case}");
         assert!(case["error"].is_null(), "{case}");
         assert!(!status.starts_with("starting"), "{case}");
+        // A setting is judged against the link's kind (the last one it names that the page
+        // has, else the flip time's single setting).
+        let kind = pairs
+            .iter()
+            .rev()
+            .find(|(k, v, n)| k == "kind" && link_value_ok(&manifest, k, v, *n))
+            .map_or("flip", |(_, v, _)| v.as_str());
+        let settings = manifest["kinds"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|k| k["name"] == kind)
+            .and_then(|k| k["settings"].as_array())
+            .map_or(1, Vec::len) as f64;
         let bad: Vec<&String> = pairs
             .iter()
-            .filter(|(k, v, n)| !link_value_ok(&manifest, k, v, *n))
+            .filter(|(k, v, n)| match k.as_str() {
+                "setting" => !n.is_some_and(|x| x.fract() == 0.0 && (0.0..settings).contains(&x)),
+                _ => !link_value_ok(&manifest, k, v, *n),
+            })
             .map(|(k, _, _)| k)
             .collect();
         let said = case["refused"].as_array().unwrap();

@@ -24,7 +24,14 @@ let manifest = null;
 let gpu = null;            // { device, layout, module, pipelines: Map }
 let generation = 0;        // bumped by every new view: a computation of an older one stops
 const view = { pendulum: 0, x: "theta1", y: "theta2", cx: 0, cy: 0, w: TURN, h: TURN,
-  t_max: 20, dt: 0.01, colours: "inferno", kind: "flip", verdict: false };
+  t_max: 20, dt: 0.01, colours: "inferno", kind: "flip", setting: 0, verdict: false,
+  // The start's angles where no axis sets them (rad; released from rest).
+  theta1: 0, theta2: 0 };
+
+// The start's angles the view fixes (those no axis sets), by name.
+function fixedAngles(v) {
+  return ["theta1", "theta2"].filter((name) => v.x !== name && v.y !== name);
+}
 
 function say(text, error) {
   statusLine.textContent = text;
@@ -101,10 +108,13 @@ function resolves(g) {
 // The command line that computes the same pixels.
 function command(v, g) {
   const p = manifest.pendulums[v.pendulum];
+  const start = fixedAngles(v).filter((name) => v[name] !== 0)
+    .map((name) => ` --${name} ${v[name]}`).join("");
   const values = { width: g.width, height: g.height, x_min: g.x[0], x_max: g.x[1],
-    y_min: g.y[0], y_max: g.y[1], t_max: v.t_max, dt: v.dt, pendulum: p.flags[parameterAxes(v)],
+    y_min: g.y[0], y_max: g.y[1], t_max: v.t_max, dt: v.dt, start,
+    pendulum: p.flags[parameterAxes(v)],
     x: v.x, y: v.y, colours: v.colours, verdict: v.verdict ? " --show-unresolved" : "" };
-  return kindOf(v.kind).command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
+  return measureOf(v).command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
 }
 
 // src/spec/mod.rs `Stepping::steps`.
@@ -125,6 +135,7 @@ function readHash() {
     cx: [() => true, "a number"], cy: [() => true, "a number"],
     w: [(x) => x > 0, "a width above 0"], h: [(x) => x > 0, "a height above 0"],
     pendulum: [(x) => Number.isInteger(x) && x >= 0 && x < n, `a whole number from 0 to ${n - 1}`],
+    theta1: between(limitsOf("theta1"), " rad"), theta2: between(limitsOf("theta2"), " rad"),
   };
   const oneOf = (names) => `one of ${names.join(", ")}`;
   const words = {
@@ -140,6 +151,8 @@ function readHash() {
       const x = raw.trim() === "" ? NaN : Number(raw), [ok, rule] = numbers[k];
       if (Number.isFinite(x) && ok(x)) view[k] = x;
       else refused.push(`${k} = ${shown} (${rule})`);
+    } else if (k === "setting") {
+      continue;
     } else if (Object.hasOwn(words, k)) {
       const [ok, rule] = words[k];
       if (ok(raw)) view[k] = k === "verdict" ? raw === "1" : raw;
@@ -155,6 +168,13 @@ function readHash() {
     if (h.has(k) && varOf(h.get(k)) && !h.has(c) && !h.has(size)) wholeAxis(k);
   }
   if (h.has("w") && !h.has("h")) view.h = view.w;
+  // A setting is one of its kind's (read after the kind, whichever the link gives first).
+  if (h.has("setting")) {
+    const raw = h.get("setting"), x = raw.trim() === "" ? NaN : Number(raw);
+    const n = settingsOf(view.kind).length;
+    if (Number.isInteger(x) && x >= 0 && x < n) view.setting = x;
+    else refused.push(`setting = ${raw.slice(0, 24)} (a whole number from 0 to ${n - 1} for ${view.kind})`);
+  }
   return refused;
 }
 
@@ -163,6 +183,8 @@ function writeHash() {
   for (const k of ["kind", "x", "y", "cx", "cy", "w", "h", "t_max", "dt", "pendulum", "colours"]) {
     q.set(k, String(view[k]));
   }
+  if (view.setting) q.set("setting", String(view.setting));
+  for (const name of fixedAngles(view)) if (view[name] !== 0) q.set(name, String(view[name]));
   if (view.verdict) q.set("verdict", "1");
   history.replaceState(null, "", "#" + q.toString());
 }
@@ -250,6 +272,13 @@ function paramsOf(p, fields, size) {
 
 function kindOf(name) { return manifest.kinds.find((k) => k.name === name); }
 
+// The settings the page offers for a kind's indicator (manifest.json's, its default first).
+function settingsOf(name) { return kindOf(name).settings || [kindOf(name)]; }
+
+// What view `v` maps: its kind at its setting (the measure's entries, setting, range rule,
+// labels and command line, as src/web.rs `variants` lists them).
+function measureOf(v) { return settingsOf(v.kind)[v.setting] || kindOf(v.kind); }
+
 // What every kernel's run shares: the params set for view `v` on grid `g` (as
 // src/gpu/layout.rs `with_grid` forms them: in f64, rounded once to f32), the rows to
 // integrate (src/spec/grid.rs `point_symmetric`: starts in opposite pairs about the plane's
@@ -268,11 +297,15 @@ function setUp(v, g, k) {
   u.set("y_half_step", 0.5 * ((y1 - y0) / g.height) * sy);
   u.set("x_var", varOf(v.x).code);
   u.set("y_var", varOf(v.y).code);
-  for (const name of ["theta1", "omega1", "theta2", "omega2"]) u.set(name, 0);
+  // The start's fixed part (the axes' components are each pixel's own).
+  for (const name of ["omega1", "omega2"]) u.set(name, 0);
+  for (const name of ["theta1", "theta2"]) u.set(name, v[name]);
   u.set("width", g.width);
   u.set("height", g.height);
   u.set("t_max", v.t_max);
-  const symmetric = 0.5 * (x0 + x1) === 0 && 0.5 * (y0 + y1) === 0 && parameterAxes(v) === "";
+  // Mirrored only where the fixed start is zero too (src/spec/grid.rs `point_symmetric`).
+  const symmetric = 0.5 * (x0 + x1) === 0 && 0.5 * (y0 + y1) === 0 && parameterAxes(v) === "" &&
+    fixedAngles(v).every((name) => v[name] === 0);
   const integrated = symmetric ? Math.ceil(g.height / 2) : g.height;
   const rowsPerTile = Math.max(1, Math.min(integrated, Math.floor((1 << 20) / g.width)));
   const usage = GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC | GPUBufferUsage.COPY_DST;
@@ -461,7 +494,7 @@ function agrees(t, a, b) {
 // without f64, the browser's case): the same map at half the step and at a quarter, 1 where
 // each agrees with the next within the kind's vouching tolerance, else 0.
 async function verdictOf(values, v, g, onProgress) {
-  const t = kindOf(v.kind).vouch;
+  const t = measureOf(v).vouch;
   const half = await compute(Object.assign({}, v, { dt: v.dt / 2 }), g, (f) => onProgress(f / 3));
   if (half === null) return null;
   const quarter = await compute(Object.assign({}, v, { dt: v.dt / 4 }), g,
@@ -486,7 +519,7 @@ async function compute(v, g, onProgress) {
       `${manifest.constants.max_steps} a run.`);
   }
   await ready();
-  const kind = kindOf(v.kind);
+  const kind = measureOf(v);
   return kind.name === "flip" ? flipTimes(v, g, onProgress) : divergence(kind, v, g, onProgress);
 }
 
@@ -530,7 +563,7 @@ function colourTable(kind, v) {
 }
 
 function image(values, g, v, sc, mask) {
-  const kind = kindOf(v.kind), lut = colourTable(kind, v), n = lut.length / 3;
+  const kind = measureOf(v), lut = colourTable(kind, v), n = lut.length / 3;
   const image = new ImageData(g.width, g.height);
   for (let i = 0; i < values.length; i++) {
     const x = values[i];
@@ -639,7 +672,7 @@ function drawAxes(g) {
 }
 
 function drawBar(sc) {
-  const kind = kindOf(view.kind);
+  const kind = measureOf(view);
   const bar = document.getElementById("bar-colours"), ctx = bar.getContext("2d");
   const lut = colourTable(kind, view), n = lut.length / 3;
   for (let x = 0; x < bar.width; x++) {
@@ -673,7 +706,7 @@ const PREVIEW_MIN = 64;
 function preview(values, g, v) {
   const small = document.createElement("canvas");
   [small.width, small.height] = [g.width, g.height];
-  small.getContext("2d").putImageData(image(values, g, v, scale(kindOf(v.kind), values, v)), 0, 0);
+  small.getContext("2d").putImageData(image(values, g, v, scale(measureOf(v), values, v)), 0, 0);
   const ctx = canvas.getContext("2d");
   ctx.imageSmoothingEnabled = false;
   ctx.drawImage(small, 0, 0, canvas.width, canvas.height);
@@ -713,7 +746,7 @@ function markClicked() {
   marker.style.top = `${fy * side}px`;
   marker.hidden = false;
   const value = page.shown[Math.floor(fy * g.height) * g.width + Math.floor(fx * g.width)];
-  text.textContent = `${at}: ${pixelWords(kindOf(view.kind), value)}`;
+  text.textContent = `${at}: ${pixelWords(measureOf(view), value)}`;
   page.clickedText = text.textContent;
 }
 
@@ -724,6 +757,14 @@ async function show() {
   writeHash();
   drawBar(null);
   form.elements.colours.closest("label").hidden = view.kind !== "flip";
+  const settings = settingsOf(view.kind);
+  form.elements.setting.replaceChildren(...settings.map((m, i) => new Option(m.options, String(i))));
+  form.elements.setting.value = String(view.setting);
+  form.elements.setting.closest("label").hidden = settings.length < 2;
+  for (const name of ["theta1", "theta2"]) {
+    form.elements[name].value = view[name];
+    form.elements[name].closest("label").hidden = !fixedAngles(view).includes(name);
+  }
   document.getElementById("command").textContent = command(view, g);
   const span = (name, r) => `${name} from ${r[0].toPrecision(5)} to ${r[1].toPrecision(5)} ` +
     `${varOf(name).unit}`;
@@ -771,7 +812,7 @@ async function show() {
       });
       if (mask === null || mine !== generation) return;
     }
-    const kind = kindOf(view.kind), sc = scale(kind, values, view);
+    const kind = measureOf(view), sc = scale(kind, values, view);
     draw(values, g, view, sc, mask);
     drawBar(sc);
     page.shown = values;
@@ -898,14 +939,27 @@ function wire() {
   form.addEventListener("change", () => {
     const f = new FormData(form);
     view.pendulum = Number(f.get("pendulum"));
+    let axes = false;
     for (const a of ["x", "y"]) {
-      if (view[a] !== f.get(a)) { view[a] = f.get(a); wholeAxis(a); }
+      if (view[a] !== f.get(a)) { view[a] = f.get(a); wholeAxis(a); axes = true; }
     }
     const t = Number(f.get("t_max")), dt = Number(f.get("dt"));
     const b = manifest.bounds;
     if (t >= b.t_max[0] && t <= b.t_max[1]) view.t_max = t;
     if (dt >= b.dt[0] && dt <= b.dt[1]) view.dt = dt;
+    for (const name of ["theta1", "theta2"]) {
+      const a = Number(f.get(name)), [lo, hi] = limitsOf(name);
+      if (!axes && f.get(name) !== null && a >= lo && a <= hi) view[name] = a;
+    }
+    // Axes newly set to two parameters from a start at rest would map pendulums hanging
+    // still: they start where the guide's parameter plane does, both arms at 2 rad.
+    const params = [view.x, view.y].every((name) => !varOf(name).state);
+    if (axes && params && view.theta1 === 0 && view.theta2 === 0) {
+      view.theta1 = 2; view.theta2 = 2;
+    }
     view.colours = f.get("colours");
+    // Another kind starts at its default setting.
+    view.setting = view.kind === f.get("kind") ? Number(f.get("setting") || 0) : 0;
     view.kind = f.get("kind");
     view.verdict = f.get("verdict") === "on";
     later();
@@ -957,7 +1011,7 @@ async function describe(e) {
   // The pixel's centre, as the kernels place it (src/spec/grid.rs `Axis::at`).
   const x = 0.5 * (g.x[0] + g.x[1]) + (2 * col + 1 - g.width) * 0.5 * ((g.x[1] - g.x[0]) / g.width);
   const y = 0.5 * (g.y[0] + g.y[1]) - (2 * row + 1 - g.height) * 0.5 * ((g.y[1] - g.y[0]) / g.height);
-  const start = { theta1: 0, omega1: 0, theta2: 0, omega2: 0 };
+  const start = { theta1: view.theta1, omega1: 0, theta2: view.theta2, omega2: 0 };
   for (const [name, value] of [[view.x, x], [view.y, y]]) if (varOf(name).state) start[name] = value;
   clicked = { x, y, xVar: view.x, yVar: view.y };
   document.getElementById("pixel").hidden = false;
@@ -1163,7 +1217,7 @@ page.values = async (v, width, height) => {
   const times = await compute(w, grid(w, width, height), () => {});
   page.computeSeconds = (performance.now() - started) / 1000;
   // Its colours' range as the page draws them (the kind's rule).
-  const sc = scale(kindOf(w.kind), times, w);
+  const sc = scale(measureOf(w), times, w);
   page.valuesRange = [sc.lo, sc.hi];
   return base64(new Uint8Array(times.buffer));
 };

@@ -82,18 +82,21 @@ pub fn site(physical: &PhysicalArgs, name: Option<&str>) -> Result<SiteSpec> {
         "the lab's (--preset lab)".into(),
         Preset::Lab.params(),
     ));
-    let plane = "--size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt} {pendulum}";
-    // Every divergence-family map of the kinds' table, its indicator's flags spelt out.
+    let plane = "--size {width}x{height} --x {x}={x_min}:{x_max} --y {y}={y_min}:{y_max} --t-max {t_max} --dt {dt}{start} {pendulum}";
+    // Every divergence-family map of the kinds' table, each setting the page offers with
+    // its indicator's flags spelt out.
     let indicator_commands = MapKind::all()
         .iter()
-        .filter_map(|&k| Some((k, crate::web::in_f32(k.entry().indicator?))))
-        .map(|(k, i)| {
-            let flags = command_line::indicator(i);
-            (
-                k,
-                i,
-                format!("chaoscope lyapunov{flags} {plane}{{verdict}}"),
-            )
+        .filter(|k| k.entry().indicator.is_some())
+        .map(|&k| {
+            let offered = crate::web::variants(k)
+                .into_iter()
+                .map(|i| {
+                    let flags = command_line::indicator(i);
+                    (i, format!("chaoscope lyapunov{flags} {plane}{{verdict}}"))
+                })
+                .collect();
+            (k, offered)
         })
         .collect();
     Ok(SiteSpec {

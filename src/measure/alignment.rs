@@ -65,6 +65,7 @@ const ORDER: Opt = Opt {
     field: "gali",
     help: "Tangent vectors of {indicator} gali or gali-time, 2..4.",
     whole: Some((2, 4)),
+    offered: &[],
 };
 
 /// The index below which a start is called chaotic.
@@ -72,6 +73,7 @@ const THRESHOLD: Opt = Opt {
     field: "threshold",
     help: "The alignment index below which a start is called chaotic and stops [default: 1e-8; f32 resolves 1e-5 at best, its default there].",
     whole: None,
+    offered: &[1e-5, 1e-4, 1e-3],
 };
 
 static KINDS: [MapKindEntry; 3] = [

@@ -32,6 +32,7 @@ const POWER: Opt = Opt {
     field: "ld_p",
     help: "The exponent p of the descriptor's sum of |f_i|^p: 0.25, 0.5, 1 or 2.",
     whole: None,
+    offered: &[0.25, 0.5, 1.0, 2.0],
 };
 
 static KINDS: [MapKindEntry; 1] = [MapKindEntry {

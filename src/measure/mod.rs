@@ -116,6 +116,8 @@ pub struct Opt {
     /// Whole numbers within this range (inclusive); None: any number, the measure's
     /// [`Measure::validate`] checks it.
     pub whole: Option<(u8, u8)>,
+    /// The values the explorer offers besides the whole ones (its f32 runs' choices).
+    pub offered: &'static [f64],
 }
 
 /// Every option the measures take, each once, in the list's order.

@@ -23,6 +23,7 @@ const DELTA: Opt = Opt {
     field: "rli_delta",
     help: "How far the relative Lyapunov indicator's neighbour starts (along +-(1, 1, 1, 1) in (theta1, omega1, theta2, omega2), the sign of the start's first non-zero one), 1e-12..1e-2 [default: 1e-8; in f32 at least 1e-4, its default there].",
     whole: None,
+    offered: &[1e-4, 1e-3, 1e-2],
 };
 
 /// The default separation in f64, and in f32: f32 carries an angle of 3 rad to 2e-7, so a

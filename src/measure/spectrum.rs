@@ -40,6 +40,7 @@ const WHICH: Opt = Opt {
     field: "exponent",
     help: "Which exponent {indicator} exponent maps, 1..4, in Gram-Schmidt order: the k-th orthonormalised tangent vector's growth. The first is the largest; at a finite time the others are not sorted per pixel (exponents 3 and 4 cross where both are near 0).",
     whole: Some((1, 4)),
+    offered: &[],
 };
 
 static KINDS: [MapKindEntry; 2] = [
