@@ -31,8 +31,7 @@ pub fn engine_then<J>(
     backend: Backend,
     job: impl FnOnce(bool) -> crate::Result<J>,
 ) -> crate::Result<(Engine, J)> {
-    f32_on_the_cpu(precision, backend);
-    let engine = Engine::new(backend)?;
+    let engine = lent_engine(precision, backend)?;
     let job = job(engine.computes_in_f32(precision.unwrap_or_default()))?;
     Ok((engine, job))
 }
@@ -55,8 +54,10 @@ impl LentEngineArgs {
     }
 }
 
-/// The engine a command that runs trajectories or ensembles lends its run: in the precision
-/// asked (f32 unless given), made once for the command ([`f32_on_the_cpu`]'s note first).
+/// The one way the command line makes an engine, once a command: its trajectories and
+/// ensembles in the precision asked (f32 unless given; [`f32_on_the_cpu`]'s note first). A
+/// map's plan picks each map's precision on it ([`crate::plan::MapPlan`]), f64 on a GPU
+/// without it falling back alike.
 pub fn lent_engine(
     asked: Option<crate::spec::Precision>,
     backend: Backend,

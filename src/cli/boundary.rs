@@ -8,7 +8,7 @@ use super::args::{PhysicalArgs, PlaneArgs, StepArgs, backend_parser};
 use super::parse::{one_of, parse_range, parse_u32};
 use super::{command_line, json, say};
 use crate::app::boundary::{self, BoundaryClass, BoundaryJob};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::measure::IndicatorAsked;
 use crate::monitor::Monitor;
@@ -121,7 +121,7 @@ impl BoundaryArgs {
 
 pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
-    let engine = Engine::new(job.backend)?;
+    let engine = super::args::lent_engine(None, job.backend)?;
     let s = boundary::run(&job, &engine, command_line::boundary(&job), monitor)?;
     say("boundary", &s.notices);
     for l in &s.levels {

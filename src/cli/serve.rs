@@ -7,7 +7,7 @@ use clap::Args;
 
 use super::args::{PhysicalArgs, backend_parser};
 use super::{command_line, json, say};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
 use crate::params::ParamSources;
@@ -78,7 +78,7 @@ pub const COMMANDS: Commands = Commands {
 pub fn run(args: &ServeArgs, monitor: &Monitor, json_out: bool) -> Result<serde_json::Value> {
     let job = args.job()?;
     // The explorer's one engine, lent to every tile, point, range and saved view.
-    let engine = Engine::new(job.backend)?;
+    let engine = super::args::lent_engine(None, job.backend)?;
     let summary = serve::run(&job, engine, COMMANDS, monitor, |ready| {
         say("serve", &ready.notices);
         match json_out {

@@ -10,7 +10,7 @@ use super::{command_line, json, say};
 use crate::app::film::FilmSpec;
 use crate::app::frames::TABLE;
 use crate::app::sweep::{self, MapKind, SweepJob, Vary};
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::Result;
 use crate::monitor::Monitor;
 use crate::spec::Var;
@@ -149,7 +149,7 @@ impl SweepArgs {
 
 pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
-    let engine = Engine::new(job.backend)?;
+    let engine = super::args::lent_engine(None, job.backend)?;
     let s = sweep::run(
         &job,
         &engine,
