@@ -178,7 +178,7 @@ pub fn variants(kind: MapKind) -> Vec<Indicator> {
 }
 
 /// An indicator's options in words for the page's menu: "gali 3, threshold 1e-4".
-fn options_label(indicator: Indicator) -> String {
+pub fn options_label(indicator: Indicator) -> String {
     let (_, options) = indicator.spelled();
     match options.is_empty() {
         true => "its settings".into(),

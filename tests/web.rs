@@ -578,15 +578,7 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
 fn setting_of(kind: MapKind, options: &str) -> usize {
     chaoscope::web::variants(kind)
         .iter()
-        .position(|i| {
-            let spelled: Vec<String> = i
-                .spelled()
-                .1
-                .iter()
-                .map(|(o, v)| format!("{} {v}", o.field.replace('_', "-")))
-                .collect();
-            spelled.join(", ") == options
-        })
+        .position(|&i| chaoscope::web::options_label(i) == options)
         .unwrap_or_else(|| panic!("{options}: no such setting of {}", kind.short()))
 }
 

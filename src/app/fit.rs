@@ -122,9 +122,10 @@ pub fn run(
         tolerance: job.tolerance.unwrap_or_else(|| tracked.default_tolerance()),
         candidates: job.candidates,
     };
-    let weighed = weighed_of(job, &tracked);
-    let energy = EnergyReport::of(&tracked, &t, job.velocity_error, weighed.as_ref().ok());
-    let mut notices = notices_of(engine, &tracked, &weighed);
+    let (weighed, scale_note) = weighed_of(job, &tracked);
+    let energy = EnergyReport::of(&tracked, &t, job.velocity_error, weighed.as_ref());
+    let mut notices = notices_of(engine, &tracked, weighed.as_ref());
+    notices.extend(scale_note);
     let pivot = (tracked.pivot.x, tracked.pivot.y);
     let fit = fit_model(
         &tracked.frames,
@@ -156,13 +157,13 @@ pub fn run(
         &energy,
         &verdict,
         &calibration,
-        weighed.as_ref().ok(),
+        weighed.as_ref(),
     );
     files.write_json(&out.join("summary.json"), &summary)?;
     let model = Written {
         tracked: &tracked,
         fit: &fit,
-        weighed: weighed.as_ref().ok(),
+        weighed: weighed.as_ref(),
     };
     write_model(&mut files, out, &model, &calibration, &command)?;
     files.commit(monitor)?;
@@ -187,26 +188,10 @@ pub fn run(
 
 /// What the run says of its model before the fit: the engine's notices, which pendulum is
 /// fitted (said, never assumed), what the motion says of it, and the tracked model's own.
-fn notices_of(
-    engine: &Engine,
-    tracked: &Tracked,
-    weighed: &std::result::Result<Weighed, String>,
-) -> Vec<String> {
+fn notices_of(engine: &Engine, tracked: &Tracked, weighed: Option<&Weighed>) -> Vec<String> {
     let mut notices: Vec<String> = engine.notices();
-    let params = match weighed {
-        Ok(w) => w.scaled(&tracked.params),
-        Err(_) => tracked.params,
-    };
-    notices.push(
-        tracked
-            .source
-            .describe_model(&params, weighed.as_ref().ok()),
-    );
-    if let Err(why) = weighed
-        && !why.is_empty()
-    {
-        notices.push(why.clone());
-    }
+    let params = weighed.map_or(tracked.params, |w| w.scaled(&tracked.params));
+    notices.push(tracked.source.describe_model(&params, weighed));
     notices.push(match &tracked.identified {
         Ok(id) => describe_identified(id),
         Err(e) => format!("the pendulum's own moments could not be found from this file: {e}"),
@@ -231,13 +216,17 @@ impl Written<'_> {
     }
 }
 
-/// The scale of moments found from the motion: the weighed one where a mass was given; else
-/// why not, in words (empty where the model was given, and states its masses).
-fn weighed_of(job: &FitJob, tracked: &Tracked) -> std::result::Result<Weighed, String> {
+/// The scale of moments found from the motion, the weighed one where a mass was given and
+/// one exists, and what to say of their units where there is none (a given model states
+/// its masses: nothing).
+fn weighed_of(job: &FitJob, tracked: &Tracked) -> (Option<Weighed>, Option<String>) {
     match (&tracked.source, job.mass) {
-        (ModelSource::Identified, Some(mass)) => Weighed::of(&tracked.params, mass),
-        (ModelSource::Identified, None) => Err("the moments and the energies are over P, the upper arm's gravity moment (the motion cannot see the masses' scale): weigh all that swings and give its mass with [[mass]] for kg m^2 and joules".into()),
-        (ModelSource::Given, _) => Err(String::new()),
+        (ModelSource::Identified, Some(mass)) => match Weighed::of(&tracked.params, mass) {
+            Ok(w) => (Some(w), None),
+            Err(why) => (None, Some(why)),
+        },
+        (ModelSource::Identified, None) => (None, Some("the moments and the energies are over P, the upper arm's gravity moment (the motion cannot see the masses' scale): weigh all that swings and give its mass with [[mass]] for kg m^2 and joules".into())),
+        (ModelSource::Given, _) => (None, None),
     }
 }
 
