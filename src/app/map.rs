@@ -176,16 +176,35 @@ pub fn compute<S: MapKernels>(
     samples: u32,
     monitor: &Monitor,
 ) -> Result<Judged> {
-    if samples == 1 {
-        return make(spec, engine, verdict, monitor);
-    }
+    let plan = engine.plan(&computed_spec(spec, samples), verdict)?;
+    compute_planned(spec, plan, engine, samples, monitor)
+}
+
+/// The map `spec`'s pixels are computed as: itself, or with `samples` x `samples` starts a
+/// pixel.
+pub fn computed_spec<S: MapSpec>(spec: &S, samples: u32) -> S {
     let g = spec.grid();
-    let fine = spec.on_grid(Grid {
+    spec.on_grid(Grid {
         width: g.width * samples,
         height: g.height * samples,
         ..*g
-    });
-    let made = make(&fine, engine, verdict, monitor)?;
+    })
+}
+
+/// [`compute`] of a map already planned on `engine` (its [`computed_spec`]'s plan), reduced
+/// to `spec`'s pixels.
+pub fn compute_planned<S: MapKernels>(
+    spec: &S,
+    plan: MapPlan<S>,
+    engine: &Engine,
+    samples: u32,
+    monitor: &Monitor,
+) -> Result<Judged> {
+    let made = engine.planned_map(&plan, monitor)?;
+    let made = Made::of(plan, made);
+    if samples == 1 {
+        return Ok(made);
+    }
     let (field, mask) = &made.made;
     let reduced = super::supersample::reduce_map(spec.quantity(), field, mask.as_deref(), samples);
     Ok(Made {
@@ -275,18 +294,6 @@ impl<T> Made<T> {
             rule_in_full: plan.rule_in_full,
         }
     }
-}
-
-/// `spec`'s map on `backend` and, with `verdict`, its mask.
-pub fn make<S: MapKernels>(
-    spec: &S,
-    engine: &Engine,
-    verdict: bool,
-    monitor: &Monitor,
-) -> Result<Made<(Field, Option<Vec<u8>>)>> {
-    let plan = engine.plan(spec, verdict)?;
-    let made = engine.planned_map(&plan, monitor)?;
-    Ok(Made::of(plan, made))
 }
 
 /// `spec`'s map into its Zarr store at `path` ([`fill_store`]): this task's part of it

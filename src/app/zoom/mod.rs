@@ -14,10 +14,11 @@ use std::time::Instant;
 
 use super::film::{FilmSpec, Format};
 use super::frames::{self, FrameSet, Frames, TABLE, text};
-use super::map::{Judged, MapJob, check_in_memory, compute};
+use super::map::{Judged, MapJob, check_in_memory, compute_planned, computed_spec};
 use crate::engine::{Backend, Engine, MapKernels};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
+use crate::plan::MapPlan;
 use crate::render::{self, MapPicture};
 use crate::spec::{Grid, Precision};
 
@@ -111,15 +112,6 @@ pub struct ZoomSummary {
     pub plans: Vec<FramePlan>,
 }
 
-/// The grid a frame's map is computed on: `samples` x `samples` starts a pixel.
-fn computed_grid(grid: &Grid, samples: u32) -> Grid {
-    Grid {
-        width: grid.width * samples,
-        height: grid.height * samples,
-        ..*grid
-    }
-}
-
 /// A zoom's checks that need neither an engine nor every frame's map: the first map, each
 /// view it goes to within what the map allows, and every frame's starts told apart by f64.
 /// A frame between two views lies within the box of both (its corners move on straight
@@ -151,7 +143,7 @@ pub fn check<S: MapKernels + MapPicture>(job: &ZoomJob<S>) -> Result<Vec<Grid>> 
     let aspect =
         (spec.grid().y.range.max - spec.grid().y.range.min) / Target::of(spec.grid()).width;
     for (k, g) in grids.iter().enumerate() {
-        let fine = computed_grid(g, job.map.samples);
+        let fine = *computed_spec(&spec.on_grid(*g), job.map.samples).grid();
         if fine.beyond_f64() {
             // The widest the last view may be: each axis's f64 step limit, in widths.
             let x = fine.x.finest_step(f64::EPSILON) * fine.width as f64;
@@ -170,12 +162,13 @@ pub fn check<S: MapKernels + MapPicture>(job: &ZoomJob<S>) -> Result<Vec<Grid>> 
     Ok(grids)
 }
 
-/// Every frame planned on `engine`, checked as its map would be, before any work ([`check`],
-/// then each frame's map against the map's limits and the path it runs on).
+/// Every frame planned on `engine` as its map is ([`crate::plan::MapPlan`]: its path, its
+/// checks on that path, the verdict's finer maps), before any work ([`check`] first, then
+/// each frame's map against the map's limits), with what frames.csv says of each.
 pub fn plan<S: MapKernels + MapPicture>(
     job: &ZoomJob<S>,
     engine: &Engine,
-) -> Result<Vec<FramePlan>> {
+) -> Result<Vec<(FramePlan, MapPlan<S>)>> {
     let spec = &job.map.spec;
     let verdict = job.wants_verdict();
     let grids = check(job)?;
@@ -183,7 +176,7 @@ pub fn plan<S: MapKernels + MapPicture>(
         .iter()
         .enumerate()
         .map(|(k, g)| {
-            let fine = computed_grid(g, job.map.samples);
+            let fine = computed_spec(&spec.on_grid(*g), job.map.samples);
             if k > 0 {
                 check_in_memory(&spec.on_grid(*g), verdict, job.map.samples).map_err(
                     |e| match e {
@@ -195,18 +188,20 @@ pub fn plan<S: MapKernels + MapPicture>(
                     },
                 )?;
             }
-            let path = engine.map_info(&fine, spec.precision()).path;
-            Ok(FramePlan {
+            let map = engine.plan(&fine, verdict)?;
+            let path = map.info.path;
+            let frame = FramePlan {
                 frame: k as u32,
                 x: g.x.range.mid(),
                 y: g.y.range.mid(),
                 width: g.x.range.max - g.x.range.min,
                 height: g.y.range.max - g.y.range.min,
-                step: fine.x_step(),
+                step: fine.grid().x_step(),
                 precision: path.precision().name(),
                 on_gpu: path.on_gpu(),
                 grid: *g,
-            })
+            };
+            Ok((frame, map))
         })
         .collect()
 }
@@ -243,6 +238,8 @@ fn parse_range(s: &str) -> Option<(f32, f32)> {
 struct ZoomFrames<'a, S> {
     job: &'a ZoomJob<S>,
     plans: &'a [FramePlan],
+    /// Each frame's map as planned ([`plan`]).
+    maps: &'a [MapPlan<S>],
     engine: &'a Engine,
     /// The zoom's command, carried by every frame.
     command: &'a str,
@@ -254,6 +251,12 @@ struct ZoomFrames<'a, S> {
 }
 
 impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
+    /// Frame `k`'s map, as planned.
+    fn compute(&self, k: u32, this: &MapJob<S>, monitor: &Monitor) -> Result<Judged> {
+        let map = self.maps[k as usize].clone();
+        compute_planned(&this.spec, map, self.engine, this.samples, monitor)
+    }
+
     fn job(&self, k: u32) -> MapJob<S> {
         let plan = &self.plans[k as usize];
         MapJob {
@@ -287,14 +290,7 @@ impl<S: MapKernels + MapPicture> ZoomFrames<'_, S> {
                     Some(r) => Some(r),
                     None => {
                         let first = self.job(0);
-                        let quiet = monitor.quiet();
-                        let made = compute(
-                            &first.spec,
-                            self.engine,
-                            self.verdict,
-                            first.samples,
-                            &quiet,
-                        )?;
+                        let made = self.compute(0, &first, &monitor.quiet())?;
                         let drawn = first.spec.draw(&made.made.0, &first.picture, None, None)?;
                         *self.first.get_mut() = Some(made);
                         Some(
@@ -324,7 +320,7 @@ impl<S: MapKernels + MapPicture> Frames for ZoomFrames<'_, S> {
         let this = self.job(k);
         let computed = match (k, self.first.take()) {
             (0, Some(m)) => m,
-            _ => compute(&this.spec, self.engine, self.verdict, this.samples, monitor)?,
+            _ => self.compute(k, &this, monitor)?,
         };
         let (field, mask) = &computed.made;
         let shown = mask.as_deref().filter(|_| this.files.show_unresolved);
@@ -370,7 +366,7 @@ pub fn run<S: MapKernels + MapPicture>(
         &job.film,
         FILM_FORMATS,
     )?;
-    let plans = plan(job, engine)?;
+    let (plans, maps): (Vec<FramePlan>, Vec<MapPlan<S>>) = plan(job, engine)?.into_iter().unzip();
     set.check()?;
     let mut notices = engine.notices();
     let switch = switch(&plans);
@@ -387,6 +383,7 @@ pub fn run<S: MapKernels + MapPicture>(
     let mut frames = ZoomFrames {
         job,
         plans: &plans,
+        maps: &maps,
         engine,
         command: &command,
         frame_command,
