@@ -108,16 +108,12 @@ pub fn run(
     let measured = |m: Option<track::Mark>| m.is_some_and(|m| !m.bridged);
     let both = share(&|r| measured(r.m1) && measured(r.m2));
     let mut notices = notices_of(&decoder.probe, both);
-    // One colour given, the masses unseen: a second sticker the film shows is named.
-    if let (track::Markers::Colour(given), true) = (job.markers, both < 0.5)
-        && let Some(other) = track::colours::second_colour(&sampled, width as usize, region, given)
-    {
-        let given = track::colours::colour_name(given);
-        notices.push(format!(
-            "note: with one colour both masses were measured in {:.0} % of the frames; the film shows a {other} sticker too: for a sticker of each colour, the upper mass's first, [[markers={given},{other}]] (or {other},{given})",
-            100.0 * both
-        ));
-    }
+    notices.extend(second_colour_note(
+        job.markers,
+        both,
+        (&sampled, width as usize),
+        region,
+    ));
     let mut files = Outputs::new();
     let film = track::file::Film {
         digest: Some(digest),
@@ -155,6 +151,28 @@ pub fn run(
         files: vec![job.output.clone()],
         notices,
     })
+}
+
+/// One colour given and both masses measured in under half the frames: the second sticker
+/// the film shows (in the `sampled` frames, `width` pixels wide), named, where it shows one.
+fn second_colour_note(
+    markers: track::Markers,
+    both: f64,
+    (sampled, width): (&[Vec<u8>], usize),
+    region: Option<(usize, usize, usize, usize)>,
+) -> Option<String> {
+    let track::Markers::Colour(given) = markers else {
+        return None;
+    };
+    if both >= 0.5 {
+        return None;
+    }
+    let other = track::colours::second_colour(sampled, width, region, given)?;
+    let given = track::colours::colour_name(given);
+    Some(format!(
+        "note: with one colour both masses were measured in {:.0} % of the frames; the film shows a {other} sticker too: for a sticker of each colour, the upper mass's first, [[markers={given},{other}]] (or {other},{given})",
+        100.0 * both
+    ))
 }
 
 /// The job's values, its film and its output, before any work; the engine where it bridges.
