@@ -111,7 +111,8 @@ pub fn run(
     notices.extend(second_colour_note(
         job.markers,
         both,
-        (&sampled, width as usize),
+        &sampled,
+        width as usize,
         region,
     ));
     let mut files = Outputs::new();
@@ -158,7 +159,8 @@ pub fn run(
 fn second_colour_note(
     markers: track::Markers,
     both: f64,
-    (sampled, width): (&[Vec<u8>], usize),
+    sampled: &[Vec<u8>],
+    width: usize,
     region: Option<(usize, usize, usize, usize)>,
 ) -> Option<String> {
     let track::Markers::Colour(given) = markers else {
