@@ -108,13 +108,8 @@ pub fn run(
     let measured = |m: Option<track::Mark>| m.is_some_and(|m| !m.bridged);
     let both = share(&|r| measured(r.m1) && measured(r.m2));
     let mut notices = notices_of(&decoder.probe, both);
-    notices.extend(second_colour_note(
-        job.markers,
-        both,
-        &sampled,
-        width as usize,
-        region,
-    ));
+    let second = second_colour_note(job.markers, both, &sampled, width as usize, region);
+    notices.extend(second);
     let mut files = Outputs::new();
     let film = track::file::Film {
         digest: Some(digest),
