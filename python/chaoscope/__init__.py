@@ -20,7 +20,7 @@ import io
 import json
 import warnings
 from pathlib import Path
-from typing import Any, Optional, Tuple, Union
+from typing import Any, Dict, Optional, Tuple, Union
 
 import numpy as np
 import pandas as pd
@@ -292,6 +292,7 @@ def trajectory(
     bearing_radius: Optional[float] = None,
     preset: Optional[str] = None,
     params_file: Optional[str] = None,
+    at: Optional[Dict[str, float]] = None,
     backend: str = "cpu",
     precision: Optional[str] = None,
     progress: Progress = False,
@@ -299,7 +300,9 @@ def trajectory(
     """One start's trajectory (``chaoscope trajectory``'s CSV, CPU f64 by default): a Dataset
     over ``t`` (s; the CSV's column, each variable named as the CSV names it) with the angles (rad), angular velocities (rad/s), the bobs' positions
     (m, pivot at the origin, y up), the energy and the energy dissipated (J); a row every
-    ``every`` s (every step by default). ``attrs["command"]`` reproduces the CSV.
+    ``every`` s (every step by default). ``attrs["command"]`` reproduces the CSV. ``at``: a
+    parameter plane's pixel, its axes' values by name (``{"m2/m1": 2.5}``), set as the map
+    sets them (``trajectory --at``).
 
     A Dataset rather than a DataFrame: the maps are xarray, and time is a coordinate with a
     unit like their axes.

@@ -390,8 +390,19 @@ fn trajectory<'py>(
 ) -> PyResult<String> {
     let k = Keywords { dict: keywords };
     let stepping = k.stepping(20.0)?;
+    // `at`: a parameter plane's pixel, {axis name: value}, as `trajectory --at` takes it.
+    let at = k
+        .get::<std::collections::BTreeMap<String, f64>>("at")?
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(name, v)| {
+            chaoscope::spec::Var::parse(&name)
+                .map(|var| (var, v))
+                .ok_or_else(|| PyValueError::new_err(format!("at: {name:?} is no map axis")))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
     let job = TrajectoryJob {
-        params: k.sources()?.resolve().map_err(py_err)?,
+        params: chaoscope::spec::resolve_at(&k.sources()?, &at).map_err(py_err)?,
         start: State {
             theta1: k.or("theta1", 0.0)?,
             omega1: k.or("omega1", 0.0)?,

@@ -130,6 +130,17 @@ def test_trajectory_equals_its_command():
         assert np.array_equal(table[:, k], run[name].values), name
 
 
+def test_trajectory_at_a_parameter_planes_pixel():
+    # m2/m1 = 2.5 on m1 = 2 is m2 = 5, whichever way it is given (2.5 x 2 is exact).
+    at = chaoscope.trajectory(theta1=2, theta2=2, t_max=1, m1=2, at={"m2/m1": 2.5})
+    given = chaoscope.trajectory(theta1=2, theta2=2, t_max=1, m1=2, m2=5)
+    assert np.array_equal(at.theta2.values, given.theta2.values)
+    with pytest.raises(ValueError, match="^at: "):
+        chaoscope.trajectory(theta1=2, theta2=2, t_max=1, at={"theta1": 1.0})
+    with pytest.raises(ValueError, match="^at: "):
+        chaoscope.trajectory(theta1=2, theta2=2, t_max=1, at={"mass": 1.0})
+
+
 
 def png_pixels(png):
     """A PNG's size and its decompressed scanlines (the encoder's filtered rows)."""
