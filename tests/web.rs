@@ -439,80 +439,24 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     assert!(same >= 0.999, "{same}");
     let swing = &report["views"]["swing"]["swing"];
     assert_eq!(swing["seconds"].as_f64(), Some(0.02), "{swing}");
-    let page: Vec<f64> = swing["states"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
-    let csv = chaoscope()
-        .args("trajectory --theta1 1 --theta2 2 --t-max 2 --dt 0.01 --every 0.02".split(' '))
-        .args(["--backend", "gpu", "--precision", "f32"])
-        .output()
-        .unwrap();
-    let rows: Vec<Vec<f64>> = String::from_utf8_lossy(&csv.stdout)
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-        .collect();
-    assert_eq!(page.len(), 4 * rows.len(), "states kept");
-    for (k, row) in rows.iter().enumerate() {
-        for j in 0..4 {
-            // The same f32 kernel from the same start: equal but for the start's cos and sin,
-            // which the page's JavaScript and the engine's Rust may round an ulp apart.
-            let (a, b) = (page[4 * k + j], row[1 + j]);
-            assert!(
-                (a - b).abs() <= 1e-4,
-                "state {k}, component {j}: {a} against {b}"
-            );
-        }
-    }
+    let rows = gpu_trajectory("trajectory --theta1 1 --theta2 2 --t-max 2 --dt 0.01");
+    // The same f32 kernel from the same start: equal but for the start's cos and sin, which
+    // the page's JavaScript and the engine's Rust may round an ulp apart.
+    let worst = departure(&numbers(&swing["states"]), &rows);
+    assert!(worst <= 1e-4, "the page's swing departs by {worst}");
     // The parameter plane's pixel: its arms drawn at its own lengths, and its run the one its
     // command line computes. The page's kernel forms the pixel's coefficients in f32 from its
     // parameters where the engine rounds them once from f64: a few ulps (1e-7 relative), grown
     // over 100 steps of a regular swing (0.5 rad) by far less than the 1e-4 asked.
     let plane = &report["views"]["swing_plane"]["swing"];
-    let arms: Vec<f64> = plane["arms"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
-    assert_eq!(arms, [1.0, 0.7], "{}", plane["command"]);
+    assert_eq!(numbers(&plane["arms"]), [1.0, 0.7], "{}", plane["command"]);
     let command = plane["command"].as_str().unwrap();
     assert!(
         command.contains("--at m2/m1=2.5 --at l2/l1=0.7"),
         "{command}"
     );
-    let words: Vec<&str> = command.split_whitespace().skip(1).collect();
-    let csv = chaoscope()
-        .args(&words)
-        .args("--every 0.02 --backend gpu --precision f32".split(' '))
-        .output()
-        .unwrap();
-    assert!(
-        csv.status.success(),
-        "{command}: {}",
-        String::from_utf8_lossy(&csv.stderr)
-    );
-    let rows: Vec<Vec<f64>> = String::from_utf8_lossy(&csv.stdout)
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-        .collect();
-    let states: Vec<f64> = plane["states"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
-    assert_eq!(states.len(), 4 * rows.len(), "states kept");
-    let states = &states;
-    let worst = rows
-        .iter()
-        .enumerate()
-        .flat_map(|(k, row)| (0..4).map(move |j| (states[4 * k + j] - row[1 + j]).abs()))
-        .fold(0.0, f64::max);
+    let rows = gpu_trajectory(command.strip_prefix("chaoscope ").unwrap());
+    let worst = departure(&numbers(&plane["states"]), &rows);
     assert!(worst <= 1e-4, "the page's run departs by {worst}");
     for v in views
         .as_array()
@@ -572,6 +516,45 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
             "{name}"
         );
     }
+}
+
+/// A JSON array of numbers.
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+/// `chaoscope WORDS` (a trajectory) on the GPU in f32, a row kept every 0.02 s: its rows
+/// (t, then the state).
+fn gpu_trajectory(words: &str) -> Vec<Vec<f64>> {
+    let out = chaoscope()
+        .args(words.split_whitespace())
+        .args("--every 0.02 --backend gpu --precision f32".split(' '))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{words}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect()
+}
+
+/// The largest difference between a page's kept states (four a row, flat) and `rows`' (t,
+/// then the state), one kept state for each row.
+fn departure(states: &[f64], rows: &[Vec<f64>]) -> f64 {
+    assert_eq!(states.len(), 4 * rows.len(), "states kept");
+    rows.iter()
+        .enumerate()
+        .flat_map(|(k, row)| (0..4).map(move |j| (states[4 * k + j] - row[1 + j]).abs()))
+        .fold(0.0, f64::max)
 }
 
 /// The index of `kind`'s setting whose options read `options` in the page's menu.
