@@ -142,6 +142,7 @@ pub fn run(
         spec.params.l1 + spec.params.l2,
     );
     notices.push(verdict.describe());
+    notices.extend(negative_damping_note(&fit));
     let calibration = calibration_of(job, &tracked, spec.window, engine, monitor, &mut notices)?;
 
     // Plots, derived quantities and summary, written as a set.
@@ -198,6 +199,23 @@ fn notices_of(engine: &Engine, tracked: &Tracked, weighed: Option<&Weighed>) -> 
     });
     notices.extend(tracked.notices.iter().cloned());
     notices
+}
+
+/// What to say where the fit put a joint's damping below zero: the value with its error,
+/// and that it is written as none.
+fn negative_damping_note(fit: &ModelFit) -> Option<String> {
+    let (a, b) = fit.negative_damping?;
+    let (ea, eb) = fit.damping_error;
+    let joints = [("pivot", a, ea), ("middle joint", b, eb)];
+    let below: Vec<String> = joints
+        .iter()
+        .filter(|j| j.1 < 0.0)
+        .map(|(name, c, e)| format!("the {name}'s damping at {c:.2e} ± {e:.1e} N m s"))
+        .collect();
+    Some(format!(
+        "the fit put {} (below zero, which no joint is: written as 0 in model.toml)",
+        below.join(" and ")
+    ))
 }
 
 /// What model.toml is written from: the tracked model, its fit and its scale.
@@ -302,6 +320,8 @@ fn summary_json(
             "start_row": fit.row, "t0": fit.t0,
             "state": fit.start.to_array(),
             "joint_damping": [fit.damping.0 * factor, fit.damping.1 * factor],
+            "joint_damping_error": [fit.damping_error.0 * factor, fit.damping_error.1 * factor],
+            "joint_damping_fitted_below_zero": fit.negative_damping.map(|(a, b)| [a * factor, b * factor]),
             "energy_unit": energy.unit_symbol(),
             "rms_position_error_in_window": fit.rms,
             "window": spec.window,

@@ -344,28 +344,6 @@ pub fn flip_time_with(run: &mut impl Stepper, t_max: f64) -> (f64, u32) {
 mod tests {
     use super::*;
 
-    /// The tableau's order conditions up to order 5 (quadrature and the tall trees' simplest
-    /// ones): sum b = 1, sum b c^(q-1) = 1/q, row sums of a equal c; the embedded weights
-    /// b - e are fourth order.
-    #[test]
-    fn tableau_conditions() {
-        let t = &DP54;
-        for (i, row) in t.a.iter().enumerate() {
-            let sum: f64 = row.iter().sum();
-            assert!((sum - t.c[i]).abs() < 1e-14, "row {i}");
-        }
-        for q in 1..=5 {
-            let s: f64 = (0..7).map(|i| t.b[i] * t.c[i].powi(q - 1)).sum();
-            assert!((s - 1.0 / q as f64).abs() < 1e-14, "b order {q}");
-        }
-        for q in 1..=4 {
-            let s: f64 = (0..7)
-                .map(|i| (t.b[i] - t.e[0][i]) * t.c[i].powi(q - 1))
-                .sum();
-            assert!((s - 1.0 / q as f64).abs() < 1e-14, "embedded order {q}");
-        }
-    }
-
     /// The dense output is (at least) fourth order: its error inside a step falls by at least
     /// 2^5 = 32 per halved step (local error O(h^5)), and it meets the step's ends.
     #[test]

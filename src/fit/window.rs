@@ -198,7 +198,7 @@ pub fn track_with(p: &Params, start: State, t: &[f64], steps_per_second: f64) ->
 }
 
 /// `p` with the joint damping `c1`, `c2` (N m s).
-pub(super) fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
+fn with_damping(p: &Params, c1: f64, c2: f64) -> Params {
     let mut q = *p;
     (q.losses.joint1, q.losses.joint2) = (c1, c2);
     q
