@@ -25,7 +25,7 @@ fn main() -> Result<(), chaoscope::Error> {
     let map = engine.map(&spec, &Monitor::hidden())?;
     let picture = flip_picture(&map, &spec, &PictureSpec::default(), None)?;
     let out = std::path::Path::new("out/example_flip.png");
-    write_png(out, picture.width, picture.height, &picture.rgb, &[])?;
+    write_png(out, (picture.width, picture.height), &picture.rgb, &[])?;
     let flipped = map.data.iter().filter(|t| t.is_finite()).count() as f64 / map.data.len() as f64;
     let readme = read_png("docs/flip.png".as_ref())?;
     println!(

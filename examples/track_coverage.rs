@@ -101,7 +101,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             precision: Precision::F32,
             video: None,
         };
-        let s = forecast(&job, &engine, "track_coverage".into(), &quiet)?;
+        let s = forecast(
+            &job,
+            &chaoscope::app::Running::new(&engine, "track_coverage".into(), &quiet),
+        )?;
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json"))?)?;
         let pivot = (

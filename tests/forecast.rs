@@ -464,7 +464,11 @@ fn twin_experiments_are_calibrated() {
         precision: Precision::F32,
     };
     let engine = Engine::in_precision(job.backend, job.precision).unwrap();
-    let s = twin::run(&job, &engine, "test".into(), &Monitor::hidden()).unwrap();
+    let s = twin::run(
+        &job,
+        &chaoscope::app::Running::new(&engine, "test".into(), &Monitor::hidden()),
+    )
+    .unwrap();
     let defined = s.rows.iter().filter(|r| r.coverage.is_some()).count();
     eprintln!(
         "twin calibration: coverage {} over {defined} replicates",

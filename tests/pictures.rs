@@ -217,7 +217,7 @@ fn a_sweep_in_tiles_adds_up_to_the_whole_and_remakes_a_damaged_frame() {
     let damaged = tiled.join("frame_0002.png");
     let mut png = read_png(&damaged).unwrap();
     png.rgb[0] ^= 0xff;
-    chaoscope::render::write_png(&damaged, png.width, png.height, &png.rgb, &png.text).unwrap();
+    chaoscope::render::write_png(&damaged, (png.width, png.height), &png.rgb, &png.text).unwrap();
     sweep(&tiled, "cpu", &args)
         .success()
         .stderr(predicate::str::contains("1 made, 2 kept"))

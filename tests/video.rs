@@ -479,7 +479,7 @@ fn a_killed_zoom_resumes_to_the_same_frames_and_tiles_add_up() {
     let changed = tiles.join("frame_0005.png");
     let mut png = read_png(&changed).unwrap();
     png.rgb[0] ^= 0xff;
-    chaoscope::render::write_png(&changed, png.width, png.height, &png.rgb, &png.text).unwrap();
+    chaoscope::render::write_png(&changed, (png.width, png.height), &png.rgb, &png.text).unwrap();
     let s = common::summary(zoom(&tiles).args(map).output().unwrap());
     assert_eq!(
         (s["made"].as_u64(), s["kept"].as_u64()),

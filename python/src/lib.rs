@@ -419,7 +419,11 @@ fn trajectory<'py>(
     let engine = engine_in(job.backend, job.precision)?;
     let csv = watched(py, progress, move |monitor| {
         let mut csv = Vec::new();
-        chaoscope::app::trajectory::run(&job, &engine, command, monitor, &mut csv)?;
+        chaoscope::app::trajectory::run(
+            &job,
+            &chaoscope::app::Running::new(&engine, command, monitor),
+            &mut csv,
+        )?;
         Ok(csv)
     })?;
     String::from_utf8(csv).map_err(|e| PyRuntimeError::new_err(e.to_string()))
@@ -465,9 +469,12 @@ fn traces<'py>(
     let command = command_line::traces(&job);
     let engine = engine_in(job.backend, job.precision)?;
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::traces::run(&job, &engine, command.clone(), monitor)
-            .map(|s| (s, command))
-            .map_err(|e| e.renamed("t_max", "exposure"))
+        chaoscope::app::traces::run(
+            &job,
+            &chaoscope::app::Running::new(&engine, command.clone(), monitor),
+        )
+        .map(|s| (s, command))
+        .map_err(|e| e.renamed("t_max", "exposure"))
     })?;
     let mut value =
         serde_json::to_value(&summary.0).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;

@@ -45,7 +45,10 @@ pub fn fit<'py>(
     let command = command_line::fit(&job);
     let engine = engine_in(job.backend, job.precision)?;
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::fit::run(&job, &engine, command, monitor)
+        chaoscope::app::fit::run(
+            &job,
+            &chaoscope::app::Running::new(&engine, command, monitor),
+        )
     })?;
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
@@ -88,7 +91,10 @@ pub fn forecast<'py>(
     let command = command_line::forecast(&job);
     let engine = engine_in(job.backend, job.precision)?;
     let summary = watched(py, progress, move |monitor| {
-        chaoscope::app::forecast::run(&job, &engine, command, monitor)
+        chaoscope::app::forecast::run(
+            &job,
+            &chaoscope::app::Running::new(&engine, command, monitor),
+        )
     })?;
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }

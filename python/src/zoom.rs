@@ -47,7 +47,11 @@ pub fn run<'py, S: MapKernels + MapPicture + Copy + Send + Sync + 'static>(
     let command = chaoscope::cli::command_line::zoom(&job, &command_of(&job.map));
     let engine = engine(job.map.backend)?;
     let summary = watched(py, progress, move |monitor| {
-        zoom::run(&job, &engine, command, &command_of, monitor)
+        zoom::run(
+            &job,
+            &chaoscope::app::Running::new(&engine, command, monitor),
+            &command_of,
+        )
     })?;
     serde_json::to_string(&summary).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }

@@ -160,12 +160,8 @@ impl BoundaryJob {
     }
 }
 
-pub fn run(
-    job: &BoundaryJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
-) -> Result<BoundarySummary> {
+pub fn run(job: &BoundaryJob, at: &super::Running) -> Result<BoundarySummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     job.validate()?;
     let started = std::time::Instant::now();
     let all = eps_levels(job.eps.0, job.eps.1, job.levels);

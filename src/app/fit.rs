@@ -105,12 +105,8 @@ const FILES: [&str; 6] = [
 ];
 
 /// Runs the fit; `command` reproduces it and goes into summary.json.
-pub fn run(
-    job: &FitJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
-) -> Result<FitSummary> {
+pub fn run(job: &FitJob, at: &super::Running) -> Result<FitSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     check_job(job)?;
     let read = read_rows(job)?;
     let t: Vec<f64> = read.iter().map(|f| f.t).collect();

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::fit::read_frames;
 use crate::fit::verdict::Verdict;
@@ -77,12 +77,8 @@ pub struct ForecastSummary {
 }
 
 /// Runs the forecast; `command` reproduces it and goes into summary.json.
-pub fn run(
-    job: &ForecastJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
-) -> Result<ForecastSummary> {
+pub fn run(job: &ForecastJob, at: &super::Running) -> Result<ForecastSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     let film = check_inputs(job)?;
     let read = read_frames(&job.file, &job.units)?;
     let (geometry, film_notice) = film_placement(job, film.as_ref())?;

@@ -227,13 +227,8 @@ impl<'a> FrameSet<'a> {
             meta.extend(frame.text);
             meta.push((FRAME_KEY.into(), format!("{k} of {}", self.count)));
             meta.push((PIXELS_KEY.into(), digest(&picture.rgb)));
-            render::write_png(
-                &self.path(k),
-                picture.width,
-                picture.height,
-                &picture.rgb,
-                &meta,
-            )?;
+            let size = (picture.width, picture.height);
+            render::write_png(&self.path(k), size, &picture.rgb, &meta)?;
             made += 1;
             monitor.advance(1);
         }

@@ -6,12 +6,11 @@ use std::path::PathBuf;
 
 use super::check_output;
 use crate::cpu;
-use crate::engine::{Backend, Engine, MapKernels};
+use crate::engine::{Backend, MapKernels};
 use crate::error::Error;
 use crate::error::Result;
 use crate::measure::Runs;
 use crate::model::State;
-use crate::monitor::Monitor;
 use crate::spec::{self, LyapunovSpec, MapSpec};
 
 use super::map::MapSummary;
@@ -53,11 +52,10 @@ pub struct LyapunovPointSummary {
 
 pub fn run_point(
     job: &LyapunovPointJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
+    at: &super::Running,
     stdout: &mut dyn Write,
 ) -> Result<LyapunovPointSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     job.spec.validate_run()?;
     spec::validate_start(&job.start)?;
     if let Some(path) = &job.output {
@@ -126,11 +124,10 @@ pub fn run_point(
 /// float32 of shape (4, height, width). No verdict and no store: they hold one quantity.
 pub fn run_spectrum(
     job: &LyapunovMapJob,
-    engine: &Engine,
+    at: &super::Running,
     spectrum: &std::path::Path,
-    command: String,
-    monitor: &Monitor,
 ) -> Result<MapSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     use crate::render::MapPicture;
     let started = std::time::Instant::now();
     let spec = &job.spec;

@@ -90,12 +90,8 @@ impl serde::Serialize for MapSummary {
 
 /// Runs `job` on the `engine` its door lends: its map (and verdict) into files, or its part
 /// of a store; `command` (the line that reproduces it) goes into the PNG or the store.
-pub fn run<S: MapKernels + MapPicture>(
-    job: &MapJob<S>,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
-) -> Result<MapSummary> {
+pub fn run<S: MapKernels + MapPicture>(job: &MapJob<S>, at: &super::Running) -> Result<MapSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     job.spec.check_picture(&job.picture, job.colour_range)?;
     validate(&job.spec, &job.files, job.tile)?;
     validate_samples(&job.spec, job.samples, job.files.store().is_some())?;

@@ -25,5 +25,27 @@ pub mod web;
 pub mod zoom;
 
 pub use crate::error::{check_count, check_within};
+
+use crate::engine::Engine;
+use crate::monitor::Monitor;
+
+/// What a command's run is handed beside its job: the engine it computes on, the monitor
+/// that shows its progress and stops it at the first Ctrl-C, and the command line that
+/// reproduces it (into summary.json and the pictures' metadata).
+pub struct Running<'a> {
+    pub engine: &'a Engine,
+    pub monitor: &'a Monitor,
+    pub command: String,
+}
+
+impl<'a> Running<'a> {
+    pub fn new(engine: &'a Engine, command: String, monitor: &'a Monitor) -> Self {
+        Running {
+            engine,
+            monitor,
+            command,
+        }
+    }
+}
 pub use checks::{check_extension, check_output, write_text};
 pub use map::{MapOutputs, check_tile, write_map};

@@ -61,12 +61,8 @@ pub struct PhaseSummary {
     pub notices: Vec<String>,
 }
 
-pub fn run(
-    job: &PhaseJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
-) -> Result<PhaseSummary> {
+pub fn run(job: &PhaseJob, at: &super::Running) -> Result<PhaseSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     job.validate()?;
     let colormap = job.colormap.unwrap_or(Colormap::Inferno);
     monitor.check()?;

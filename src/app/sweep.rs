@@ -274,11 +274,10 @@ impl Frames for SweepFrames<'_> {
 /// identifies it when a sweep resumes).
 pub fn run(
     job: &SweepJob,
-    engine: &Engine,
-    command: String,
+    at: &super::Running,
     frame_command: &dyn Fn(&AnyMap, Backend, &PictureSpec) -> String,
-    monitor: &Monitor,
 ) -> Result<SweepSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     // The plane as given, before any frame: its own errors name its own fields (--x),
     // not the varied parameter.
     spec::validate_grid(&job.grid)?;

@@ -78,12 +78,8 @@ fn run_color(k: usize, n: usize) -> [u8; 3] {
     [r, gg, b]
 }
 
-pub fn run(
-    job: &TracesJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
-) -> Result<TracesSummary> {
+pub fn run(job: &TracesJob, at: &super::Running) -> Result<TracesSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     job.validate()?;
     monitor.check()?;
     let p = &job.params;

@@ -4,10 +4,9 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use super::check_output;
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::model::{Params, State};
-use crate::monitor::Monitor;
 use crate::spec::{self, Precision, Stepping};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -57,11 +56,10 @@ pub const COLUMNS: &str = "t,theta1,omega1,theta2,omega2,x1,y1,x2,y2,energy,diss
 
 pub fn run(
     job: &TrajectoryJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
+    at: &super::Running,
     stdout: &mut dyn Write,
 ) -> Result<TrajectorySummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     spec::validate_params(&job.params)?;
     spec::validate_stepping(&job.stepping)?;
     spec::validate_stability(&job.params, &job.stepping)?;

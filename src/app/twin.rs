@@ -9,14 +9,13 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::check_count;
-use crate::engine::{Backend, Engine};
+use crate::engine::Backend;
 use crate::error::{Error, Result};
 use crate::forecast::Slope;
 use crate::forecast::outcome::{ForecastSettings, fit_json};
 use crate::forecast::plot::{self, Marks};
 use crate::forecast::twin::{self, Design, TwinRow, experiments};
 use crate::model::State;
-use crate::monitor::Monitor;
 use crate::params::ParamSources;
 use crate::render::Outputs;
 use crate::spec::Precision;
@@ -55,12 +54,8 @@ pub struct TwinSummary {
     pub notices: Vec<String>,
 }
 
-pub fn run(
-    job: &TwinJob,
-    engine: &Engine,
-    command: String,
-    monitor: &Monitor,
-) -> Result<TwinSummary> {
+pub fn run(job: &TwinJob, at: &super::Running) -> Result<TwinSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     check_job(job)?;
     let truth = job.params.resolve()?;
     let notices = engine.notices();

@@ -1,5 +1,6 @@
 //! `chaoscope boundary`.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -122,7 +123,10 @@ impl BoundaryArgs {
 pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let engine = super::args::lent_engine(None, job.backend)?;
-    let s = boundary::run(&job, &engine, command_line::boundary(&job), monitor)?;
+    let s = boundary::run(
+        &job,
+        &Running::new(&engine, command_line::boundary(&job), monitor),
+    )?;
     say("boundary", &s.notices);
     for l in &s.levels {
         eprintln!(

@@ -1,5 +1,6 @@
 //! `chaoscope fit`.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -93,7 +94,10 @@ impl FitArgs {
 pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
     let engine = args.engine.lent()?;
-    let s = fit::run(&job, &engine, command_line::fit(&job), monitor)?;
+    let s = fit::run(
+        &job,
+        &Running::new(&engine, command_line::fit(&job), monitor),
+    )?;
     say("fit", &s.notices);
     let agrees = match s.verdict.follows {
         true => format!(

@@ -1,5 +1,6 @@
 //! `chaoscope flip`.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -159,7 +160,10 @@ pub fn nan_note(nan: usize) -> String {
 pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let (engine, job) =
         super::args::engine_then(args.precision, args.backend, |f32| args.job_on(f32))?;
-    let s = flip::run(&job, &engine, command_line::flip(&job), monitor)?;
+    let s = flip::run(
+        &job,
+        &Running::new(&engine, command_line::flip(&job), monitor),
+    )?;
     say("flip", &s.notices);
     eprintln!(
         "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s{}{} -> {}",

@@ -1,5 +1,6 @@
 //! `chaoscope forecast`.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -106,7 +107,10 @@ impl ForecastArgs {
 pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
     let engine = args.engine.lent()?;
-    let s = forecast::run(&job, &engine, command_line::forecast(&job), monitor)?;
+    let s = forecast::run(
+        &job,
+        &Running::new(&engine, command_line::forecast(&job), monitor),
+    )?;
     say("forecast", &s.notices);
     if !s.verdict.follows {
         // The verdict (among the notices) says why; nothing here is a finding.

@@ -1,5 +1,6 @@
 //! `chaoscope lyapunov`: a divergence map, or with single angles a convergence run.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
@@ -307,9 +308,9 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             let s = match &args.spectrum {
                 Some(path) => {
                     let command = format!("{command} --spectrum {}", path.display());
-                    lyapunov::run_spectrum(&job, &engine, path, command, monitor)?
+                    lyapunov::run_spectrum(&job, &Running::new(&engine, command, monitor), path)?
                 }
-                None => lyapunov::run_map(&job, &engine, command, monitor)?,
+                None => lyapunov::run_map(&job, &Running::new(&engine, command, monitor))?,
             };
             say("lyapunov", &s.notices);
             let q = job.spec.quantity();
@@ -343,9 +344,7 @@ pub fn run(args: &LyapunovArgs, monitor: &Monitor) -> Result<serde_json::Value> 
             let command = command_line::lyapunov_point(&job);
             let s = lyapunov::run_point(
                 &job,
-                &engine,
-                command,
-                monitor,
+                &Running::new(&engine, command, monitor),
                 &mut std::io::stdout().lock(),
             )?;
             say("lyapunov", &s.notices);

@@ -1,5 +1,6 @@
 //! `chaoscope phase`.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -83,7 +84,10 @@ impl PhaseArgs {
 pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let engine = args.engine.lent()?;
-    let s = phase::run(&job, &engine, command_line::phase(&job), monitor)?;
+    let s = phase::run(
+        &job,
+        &Running::new(&engine, command_line::phase(&job), monitor),
+    )?;
     say("phase", &s.notices);
     eprintln!("phase portrait -> {}", s.output.display());
     json(&s)

@@ -152,10 +152,8 @@ pub fn run(args: &SweepArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let engine = super::args::lent_engine(None, job.backend)?;
     let s = sweep::run(
         &job,
-        &engine,
-        command_line::sweep(&job),
+        &crate::app::Running::new(&engine, command_line::sweep(&job), monitor),
         &command_line::frame,
-        monitor,
     )?;
     say("sweep", &s.notices);
     let made = format!(

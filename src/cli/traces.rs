@@ -1,5 +1,6 @@
 //! `chaoscope traces`.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -84,7 +85,10 @@ impl TracesArgs {
 pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let engine = args.engine.lent()?;
-    let s = traces::run(&job, &engine, command_line::traces(&job), monitor)?;
+    let s = traces::run(
+        &job,
+        &Running::new(&engine, command_line::traces(&job), monitor),
+    )?;
     say("traces", &s.notices);
     eprintln!(
         "{} releases over {} s on {} -> {}",

@@ -61,7 +61,11 @@ pub fn run(args: &TrajectoryArgs, monitor: &Monitor) -> Result<serde_json::Value
     let command = command_line::trajectory(&job);
     let engine = super::args::lent_engine(args.precision, job.backend)?;
     let mut out = std::io::stdout().lock();
-    let s = trajectory::run(&job, &engine, command, monitor, &mut out)?;
+    let s = trajectory::run(
+        &job,
+        &crate::app::Running::new(&engine, command, monitor),
+        &mut out,
+    )?;
     say("trajectory", &s.notices);
     let to = match &s.output {
         Some(path) => path.display().to_string(),

@@ -1,5 +1,6 @@
 //! `chaoscope twin`.
 
+use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -111,7 +112,10 @@ impl TwinArgs {
 pub fn run(args: &TwinArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
     let engine = args.engine.lent()?;
-    let s = twin::run(&job, &engine, command_line::twin(&job), monitor)?;
+    let s = twin::run(
+        &job,
+        &Running::new(&engine, command_line::twin(&job), monitor),
+    )?;
     say("twin", &s.notices);
     for l in &s.slopes {
         eprintln!(

@@ -339,31 +339,3 @@ pub fn flip_time_with(run: &mut impl Stepper, t_max: f64) -> (f64, u32) {
     }
     (f64::INFINITY, run.clock().attempts)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The dense output is (at least) fourth order: its error inside a step falls by at least
-    /// 2^5 = 32 per halved step (local error O(h^5)), and it meets the step's ends.
-    #[test]
-    fn dense_output_order() {
-        let p = Params::default();
-        let start = State::at_rest(0.3, -0.2);
-        let error_at = |h: f64| {
-            let mut run = Adaptive::new(&p, start, h, 1.0, 1.0);
-            let step = run.step(1.0).unwrap();
-            let y = super::super::fine_rk4(&p, start, 0.3 * h);
-            assert_eq!(step.dense(0.0), step.span.y0);
-            assert!((step.dense(1.0)[0] - step.span.y1[0]).abs() < 1e-15);
-            (step.dense(0.3)[0] - y.theta1).abs()
-        };
-        let (e1, e2) = (error_at(0.2), error_at(0.1));
-        let ratio = e1 / e2;
-        // >= 32 for an O(h^5) error (less than 28: lower order); 64 if the h^5 term vanishes.
-        assert!(
-            (28.0..80.0).contains(&ratio),
-            "ratio {ratio} ({e1:e}, {e2:e})"
-        );
-    }
-}

@@ -191,38 +191,3 @@ impl<'a> Stepper for Dop853<'a> {
         }
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The dense output is seventh order: inside a step its error falls by about 2^8 = 256
-    /// per halved step (local error O(h^8)); it meets the step's ends, and its slope is the
-    /// derivative of its value.
-    #[test]
-    fn dense_output_order() {
-        let p = Params::default();
-        let start = State::at_rest(1.3, -0.9);
-        let error_at = |h: f64| {
-            let mut run = Dop853::new(&p, start, h, 1.0, 1.0);
-            let step = run.step(1.0).unwrap();
-            let y = super::super::fine_rk4(&p, start, 0.3 * h);
-            assert_eq!(step.dense(0.0), step.span.y0);
-            assert!((step.dense(1.0)[2] - step.span.y1[2]).abs() < 1e-15);
-            let (v, d) = step.value_and_slope(2, 0.3);
-            let fd = (step.dense(0.3 + 1e-6)[2] - step.dense(0.3 - 1e-6)[2]) / 2e-6;
-            assert!(
-                (d - fd).abs() < 1e-7 * d.abs().max(1.0),
-                "slope {d} vs {fd}"
-            );
-            (v - y.theta2).abs()
-        };
-        let (e1, e2) = (error_at(0.4), error_at(0.2));
-        let ratio = e1 / e2;
-        // 256 for an O(h^8) error; below 180 would be a lower order.
-        assert!(
-            (180.0..700.0).contains(&ratio),
-            "ratio {ratio} ({e1:e}, {e2:e})"
-        );
-    }
-}

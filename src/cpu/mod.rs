@@ -412,3 +412,59 @@ pub fn hermite_crossing(theta_a: f64, omega_a: f64, theta_b: f64, omega_b: f64, 
     }
     hi
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use adaptive::Stepper;
+
+    /// How much a method's dense output errs inside its first step of `h` against one of `h/2`
+    /// (component `i`, at 0.3 of the step, against [`fine_rk4`]): 2^(q+1) for local error
+    /// O(h^(q+1)). Each step's dense output must meet the step's ends (the start exactly, the
+    /// end to rounding) and its slope must be its value's derivative (to a central difference's
+    /// error over 1e-6 of the step).
+    fn dense_error_ratio<'p, S: super::adaptive::DenseStep>(
+        p: &'p Params,
+        start: State,
+        h: f64,
+        i: usize,
+        step_of: impl Fn(&'p Params, State, f64) -> S,
+    ) -> f64 {
+        let error_at = |h: f64| {
+            let step = step_of(p, start, h);
+            let y = fine_rk4(p, start, 0.3 * h).to_array();
+            assert_eq!(step.dense(0.0), step.span().y0);
+            assert!((step.dense(1.0)[i] - step.span().y1[i]).abs() < 1e-15);
+            let d = step.slope(i, 0.3);
+            let fd = (step.dense(0.3 + 1e-6)[i] - step.dense(0.3 - 1e-6)[i]) / 2e-6;
+            assert!(
+                (d - fd).abs() < 1e-7 * d.abs().max(1.0),
+                "slope {d} vs {fd}"
+            );
+            (step.dense(0.3)[i] - y[i]).abs()
+        };
+        error_at(h) / error_at(h / 2.0)
+    }
+
+    /// DP54's dense output is (at least) fourth order: its error inside a step falls by at
+    /// least 2^5 = 32 per halved step (local error O(h^5)); DOP853's is seventh order, by
+    /// about 2^8 = 256.
+    #[test]
+    fn dense_outputs_have_their_order() {
+        let p = Params::default();
+        let dp54 = dense_error_ratio(&p, State::at_rest(0.3, -0.2), 0.2, 0, |p, start, h| {
+            adaptive::Adaptive::new(p, start, h, 1.0, 1.0)
+                .step(1.0)
+                .unwrap()
+        });
+        // >= 32 for an O(h^5) error (less than 28: lower order); 64 if the h^5 term vanishes.
+        assert!((28.0..80.0).contains(&dp54), "DP54's ratio {dp54}");
+        let dop853 = dense_error_ratio(&p, State::at_rest(1.3, -0.9), 0.4, 2, |p, start, h| {
+            dop853::Dop853::new(p, start, h, 1.0, 1.0)
+                .step(1.0)
+                .unwrap()
+        });
+        // 256 for an O(h^8) error; below 180 would be a lower order.
+        assert!((180.0..700.0).contains(&dop853), "DOP853's ratio {dop853}");
+    }
+}

@@ -212,23 +212,9 @@ impl Outputs {
         })
     }
 
-    /// An animated GIF of equally sized RGB frames (each quantised to its own 256-colour
-    /// palette), `delay_cs` hundredths of a second per frame, looping forever.
-    pub fn gif(
-        &mut self,
-        path: &Path,
-        width: u32,
-        height: u32,
-        frames: &[Vec<u8>],
-        delay_cs: u16,
-    ) -> Result<()> {
-        self.gif_from(path, (width, height), frames.len(), delay_cs, |k| {
-            Ok(frames[k].clone())
-        })
-    }
-
-    /// As [`Outputs::gif`], with `count` frames made one at a time by `frame(k)` (memory of
-    /// one frame).
+    /// An animated GIF of `count` equally sized RGB frames made one at a time by `frame(k)`
+    /// (memory of one frame), each quantised to its own 256-colour palette, `delay_cs`
+    /// hundredths of a second per frame, looping forever.
     pub fn gif_from(
         &mut self,
         path: &Path,
@@ -334,13 +320,12 @@ pub fn check_writable(field: &'static str, path: &Path) -> Result<()> {
 /// An 8-bit RGB PNG with tEXt chunks (keyword, text).
 pub fn write_png(
     path: &Path,
-    width: u32,
-    height: u32,
+    size: (u32, u32),
     rgb: &[u8],
     text: &[(String, String)],
 ) -> Result<()> {
     let mut set = Outputs::new();
-    set.png(path, width, height, rgb, text)?;
+    set.png(path, size.0, size.1, rgb, text)?;
     set.commit_now()
 }
 
@@ -454,16 +439,3 @@ pub fn read_png(path: &Path) -> Result<Png> {
     })
 }
 
-/// An animated GIF of equally sized RGB frames (each quantised to its own 256-colour
-/// palette), `delay_cs` hundredths of a second per frame, looping forever.
-pub fn write_gif(
-    path: &Path,
-    width: u32,
-    height: u32,
-    frames: &[Vec<u8>],
-    delay_cs: u16,
-) -> Result<()> {
-    let mut set = Outputs::new();
-    set.gif(path, width, height, frames, delay_cs)?;
-    set.commit_now()
-}

@@ -19,7 +19,7 @@ pub use colormap::{
 };
 pub use exposure::{Bobs, Canvas, Film, draw_arms};
 pub use files::{
-    Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic, write_gif,
+    Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic,
     write_npy, write_npy_shaped, write_png,
 };
 pub use legend::legend;

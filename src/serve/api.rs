@@ -161,8 +161,12 @@ pub(super) async fn trajectory(AxumState(shared): AxumState<S>, AxumQuery(q): Pa
         let mut csv = Vec::new();
         // A single run on the CPU: an engine without a device, made per request.
         let engine = crate::engine::Engine::new(Backend::Cpu)?;
-        crate::app::trajectory::run(&job, &engine, command, &Monitor::hidden(), &mut csv)
-            .map(|_| csv)
+        crate::app::trajectory::run(
+            &job,
+            &crate::app::Running::new(&engine, command, &Monitor::hidden()),
+            &mut csv,
+        )
+        .map(|_| csv)
     });
     match tokio::time::timeout(REQUEST_LIMIT, work).await {
         Ok(Ok(Ok(csv))) => ([(header::CONTENT_TYPE, "text/csv")], csv).into_response(),
@@ -249,7 +253,10 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     colour_range: None,
                     samples: 1,
                 };
-                crate::app::flip::run(&job, engine, (commands.flip)(&job), monitor)?;
+                crate::app::flip::run(
+                    &job,
+                    &crate::app::Running::new(engine, (commands.flip)(&job), monitor),
+                )?;
                 "chaoscope-flip.png"
             }
             Kind::Map(_) => {
@@ -262,7 +269,10 @@ pub(super) async fn save(AxumState(shared): AxumState<S>, AxumQuery(q): Params) 
                     colour_range: Some(view.range),
                     samples: 1,
                 };
-                crate::app::lyapunov::run_map(&job, engine, (commands.lyapunov)(&job), monitor)?;
+                crate::app::lyapunov::run_map(
+                    &job,
+                    &crate::app::Running::new(engine, (commands.lyapunov)(&job), monitor),
+                )?;
                 "chaoscope-lyapunov.png"
             }
         };

@@ -139,7 +139,7 @@ pub fn dump_maps(name: &str, maps: &[(&str, &chaoscope::Field)], t_max: f64) -> 
             },
         );
         let path = dir.join(format!("{name}-{label}.png"));
-        chaoscope::render::write_png(&path, field.width, field.height, &rgb, &[])
+        chaoscope::render::write_png(&path, (field.width, field.height), &rgb, &[])
             .expect("write failure map");
         paths.push(path.display().to_string());
     }

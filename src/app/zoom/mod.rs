@@ -353,11 +353,10 @@ impl<S: MapKernels + MapPicture> Frames for ZoomFrames<'_, S> {
 /// identifies it when a zoom resumes).
 pub fn run<S: MapKernels + MapPicture>(
     job: &ZoomJob<S>,
-    engine: &Engine,
-    command: String,
+    at: &crate::app::Running,
     frame_command: &dyn Fn(&MapJob<S>) -> String,
-    monitor: &Monitor,
 ) -> Result<ZoomSummary> {
+    let (engine, monitor, command) = (at.engine, at.monitor, at.command.clone());
     let set = FrameSet::new(
         "zoom",
         &job.output,
