@@ -17,10 +17,12 @@ from _common import cli
 
 def test_fit_equals_its_command(tmp_path):
     data = Path(__file__).parents[2] / "data" / "lab_table1.csv"
+    # The guide's window (a table of one row every 1/3 s is fitted there with a small search;
+    # the default window from the second row wants the default 65 536 candidates).
     made = chaoscope.fit(str(data), output=str(tmp_path / "py"), candidates=4096,
-                         preset="lab", progress=False)
+                         preset="lab", start=0.8, window=1.5, progress=False)
     cli("fit", str(data), "--output", str(tmp_path / "cli"), "--candidates", "4096",
-        "--preset", "lab")
+        "--preset", "lab", "--start", "0.8", "--window", "1.5")
     written = json.loads((tmp_path / "cli" / "summary.json").read_text())
     ours = json.loads((tmp_path / "py" / "summary.json").read_text())
     # The same fit: the model, its search and agreement, and the command that makes it.

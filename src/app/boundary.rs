@@ -11,7 +11,8 @@ use crate::engine::MapKernels;
 use crate::engine::{Backend, Engine};
 use crate::error::{Error, Result};
 use crate::monitor::Monitor;
-use crate::render::{self, Outputs};
+use crate::render::Outputs;
+use crate::render::chart::{self, err as plot_err};
 use crate::spec::{FlipMeasure, FlipSpec, Grid, LyapunovSpec, MapSpec, Sampling};
 
 /// What decides a start's outcome.
@@ -258,10 +259,6 @@ fn measure<S: MapKernels>(
     Ok((levels, info, notices))
 }
 
-fn plot_err<E: std::fmt::Debug>(e: E) -> Error {
-    Error::plot(e)
-}
-
 /// f(eps) on log-log axes with binomial error bars (grey: too few uncertain pairs to fit)
 /// and the fitted line.
 fn plot(
@@ -271,9 +268,6 @@ fn plot(
     fitted: Option<&Fit>,
     command: &str,
 ) -> Result<()> {
-    render::register_font();
-    let (w, h) = (900u32, 640u32);
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
     let title = match fitted {
         Some(f) => format!(
             "uncertainty exponent α = {:.3} ± {:.3}, boundary dimension D = 2 - α = {:.3}",
@@ -291,10 +285,13 @@ fn plot(
         .fold(1.0, f64::min)
         .max(1e-7)
         / 3.0;
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let mut chart = ChartBuilder::on(&root)
+    let text = [
+        // tEXt is Latin-1: the Greek letters spelt out.
+        ("Title".into(), title.replace('α', "alpha")),
+        ("chaoscope:command".into(), command.into()),
+    ];
+    chart::plot(out, &job.output, (900, 640), &text, |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(&title, ("sans-serif", 18))
             .margin(16)
             .x_label_area_size(50)
@@ -346,16 +343,6 @@ fn plot(
                 ))
                 .map_err(plot_err)?;
         }
-    }
-    out.png(
-        &job.output,
-        w,
-        h,
-        &rgb,
-        &[
-            // tEXt is Latin-1: the Greek letters spelt out.
-            ("Title".into(), title.replace('α', "alpha")),
-            ("chaoscope:command".into(), command.into()),
-        ],
-    )
+        Ok(())
+    })
 }

@@ -4,45 +4,14 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::error::{Error, Result};
-use crate::render::{self, Outputs};
+use crate::error::Result;
+use crate::render::Outputs;
+use crate::render::chart::{err, plot, range, titled};
 
-pub(crate) fn err<E: std::fmt::Debug>(e: E) -> Error {
-    Error::plot(e)
-}
-
-pub(crate) const BG: RGBColor = RGBColor(255, 255, 255);
 pub(crate) const MEASURED: RGBColor = RGBColor(30, 30, 30);
 const SIMULATED: RGBColor = RGBColor(214, 39, 40);
 const FIT_A: RGBColor = RGBColor(31, 119, 180);
 const FIT_B: RGBColor = RGBColor(44, 160, 44);
-
-/// An axis range over the finite `values`, padded by `pad` of its span; 0..1 when there are
-/// none or their span overflows (plotters never ends on a non-finite range).
-pub(crate) fn range(values: impl Iterator<Item = f64>, pad: f64) -> std::ops::Range<f64> {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(v), b.max(v))
-        });
-    let m = ((hi - lo) * pad).max(1e-9 * (1.0 + lo.abs().max(hi.abs())));
-    if (lo - m).is_finite() && (hi + m).is_finite() && lo <= hi {
-        (lo - m)..(hi + m)
-    } else {
-        0.0..1.0
-    }
-}
-
-pub(crate) fn save(
-    out: &mut Outputs,
-    path: &Path,
-    w: u32,
-    h: u32,
-    rgb: &[u8],
-    title: &str,
-) -> Result<()> {
-    out.png(path, w, h, rgb, &[("Title".into(), title.into())])
-}
 
 /// Measured (dots) and simulated (line) x1, y1, x2, y2 over time up to `t_end`, one panel
 /// each.
@@ -60,58 +29,58 @@ pub fn positions(
     let last = t.last().copied().unwrap_or(t_end);
     let simulated: Vec<(f64, [f64; 4])> =
         simulated.iter().copied().filter(|s| s.0 <= last).collect();
-    render::register_font();
-    let (w, h) = (1200u32, 800u32);
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        root.fill(&BG).map_err(err)?;
-        let panels = root.split_evenly((2, 2));
-        let names = ["x1 (m)", "y1 (m)", "x2 (m)", "y2 (m)"];
-        for (k, area) in panels.iter().enumerate() {
-            let yr = range(
-                measured
-                    .iter()
-                    .map(|m| m[k])
-                    .chain(simulated.iter().map(|s| s.1[k])),
-                0.08,
-            );
-            let mut chart = ChartBuilder::on(area)
-                .caption(
-                    format!(
-                        "{} — measured (dots), model fitted at t = {t0} s (line)",
-                        names[k]
-                    ),
-                    ("sans-serif", 16),
-                )
-                .margin(10)
-                .x_label_area_size(30)
-                .y_label_area_size(50)
-                .build_cartesian_2d(range(t.iter().copied(), 0.02), yr)
-                .map_err(err)?;
-            chart
-                .configure_mesh()
-                .x_desc("t (s)")
-                .light_line_style(RGBColor(235, 235, 235))
-                .draw()
-                .map_err(err)?;
-            chart
-                .draw_series(
-                    t.iter()
-                        .zip(measured)
-                        .map(|(&x, m)| Circle::new((x, m[k]), 3, MEASURED.filled())),
-                )
-                .map_err(err)?;
-            chart
-                .draw_series(LineSeries::new(
-                    simulated.iter().map(|s| (s.0, s.1[k])),
-                    SIMULATED.stroke_width(2),
-                ))
-                .map_err(err)?;
-        }
-        root.present().map_err(err)?;
-    }
-    save(out, path, w, h, &rgb, "measured and simulated positions")
+    plot(
+        out,
+        path,
+        (1200, 800),
+        &titled("measured and simulated positions"),
+        |root| {
+            let panels = root.split_evenly((2, 2));
+            let names = ["x1 (m)", "y1 (m)", "x2 (m)", "y2 (m)"];
+            for (k, area) in panels.iter().enumerate() {
+                let yr = range(
+                    measured
+                        .iter()
+                        .map(|m| m[k])
+                        .chain(simulated.iter().map(|s| s.1[k])),
+                    0.08,
+                );
+                let mut chart = ChartBuilder::on(area)
+                    .caption(
+                        format!(
+                            "{} — measured (dots), model fitted at t = {t0} s (line)",
+                            names[k]
+                        ),
+                        ("sans-serif", 16),
+                    )
+                    .margin(10)
+                    .x_label_area_size(30)
+                    .y_label_area_size(50)
+                    .build_cartesian_2d(range(t.iter().copied(), 0.02), yr)
+                    .map_err(err)?;
+                chart
+                    .configure_mesh()
+                    .x_desc("t (s)")
+                    .light_line_style(RGBColor(235, 235, 235))
+                    .draw()
+                    .map_err(err)?;
+                chart
+                    .draw_series(
+                        t.iter()
+                            .zip(measured)
+                            .map(|(&x, m)| Circle::new((x, m[k]), 3, MEASURED.filled())),
+                    )
+                    .map_err(err)?;
+                chart
+                    .draw_series(LineSeries::new(
+                        simulated.iter().map(|s| (s.0, s.1[k])),
+                        SIMULATED.stroke_width(2),
+                    ))
+                    .map_err(err)?;
+            }
+            Ok(())
+        },
+    )
 }
 
 /// Energy with error bars and both decay fits.
@@ -132,74 +101,78 @@ pub fn energy(
     };
     let (t, e, de) = (&kept(&energies.t), &kept(&energies.e), &kept(&energies.de));
     let u = unit.symbol();
-    render::register_font();
-    let (w, h) = (1000u32, 650u32);
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        root.fill(&BG).map_err(err)?;
-        let yr = range(e.iter().zip(de).flat_map(|(v, d)| [v - d, v + d]), 0.05);
-        let xr = range(t.iter().copied(), 0.02);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!(
-                    "Tracked energy ({}), error bars, two decay laws",
-                    unit.name()
-                ),
-                ("sans-serif", 20),
-            )
-            .margin(15)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(xr.clone(), yr)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc("t (s)")
-            .y_desc(unit.axis())
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()
-            .map_err(err)?;
-        chart
-            .draw_series(t.iter().zip(e).zip(de).map(|((&x, &y), &d)| {
-                ErrorBar::new_vertical(x, y - d, y, y + d, MEASURED.filled(), 6)
-            }))
-            .map_err(err)?;
-        let curve = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
-            (0..=300)
-                .map(|i| {
-                    let x = xr.start + (xr.end - xr.start) * i as f64 / 300.0;
-                    (x, f(x))
-                })
-                .collect()
-        };
-        let (a, b) = exponential;
-        chart
-            .draw_series(LineSeries::new(
-                curve(&|x| a * (b * x).exp()),
-                FIT_A.stroke_width(2),
-            ))
-            .map_err(err)?
-            .label(format!("a exp(b t): a = {a:.3} {u}, b = {b:.4} 1/s"))
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], FIT_A.stroke_width(2)));
-        let (a2, b2) = inverse_square;
-        chart
-            .draw_series(LineSeries::new(
-                curve(&|x| a2 * (b2 * x + 1.0).powi(-2)),
-                FIT_B.stroke_width(2),
-            ))
-            .map_err(err)?
-            .label(format!("a (b t + 1)^-2: a = {a2:.3} {u}, b = {b2:.4} 1/s"))
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], FIT_B.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(180, 180, 180))
-            .draw()
-            .map_err(err)?;
-        root.present().map_err(err)?;
-    }
-    save(out, path, w, h, &rgb, "energy and decay fits")
+    plot(
+        out,
+        path,
+        (1000, 650),
+        &titled("energy and decay fits"),
+        |root| {
+            let yr = range(e.iter().zip(de).flat_map(|(v, d)| [v - d, v + d]), 0.05);
+            let xr = range(t.iter().copied(), 0.02);
+            let mut chart = ChartBuilder::on(root)
+                .caption(
+                    format!(
+                        "Tracked energy ({}), error bars, two decay laws",
+                        unit.name()
+                    ),
+                    ("sans-serif", 20),
+                )
+                .margin(15)
+                .x_label_area_size(40)
+                .y_label_area_size(60)
+                .build_cartesian_2d(xr.clone(), yr)
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc("t (s)")
+                .y_desc(unit.axis())
+                .light_line_style(RGBColor(235, 235, 235))
+                .draw()
+                .map_err(err)?;
+            chart
+                .draw_series(t.iter().zip(e).zip(de).map(|((&x, &y), &d)| {
+                    ErrorBar::new_vertical(x, y - d, y, y + d, MEASURED.filled(), 6)
+                }))
+                .map_err(err)?;
+            let curve = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+                (0..=300)
+                    .map(|i| {
+                        let x = xr.start + (xr.end - xr.start) * i as f64 / 300.0;
+                        (x, f(x))
+                    })
+                    .collect()
+            };
+            let (a, b) = exponential;
+            chart
+                .draw_series(LineSeries::new(
+                    curve(&|x| a * (b * x).exp()),
+                    FIT_A.stroke_width(2),
+                ))
+                .map_err(err)?
+                .label(format!("a exp(b t): a = {a:.3} {u}, b = {b:.4} 1/s"))
+                .legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], FIT_A.stroke_width(2))
+                });
+            let (a2, b2) = inverse_square;
+            chart
+                .draw_series(LineSeries::new(
+                    curve(&|x| a2 * (b2 * x + 1.0).powi(-2)),
+                    FIT_B.stroke_width(2),
+                ))
+                .map_err(err)?
+                .label(format!("a (b t + 1)^-2: a = {a2:.3} {u}, b = {b2:.4} 1/s"))
+                .legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], FIT_B.stroke_width(2))
+                });
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(RGBColor(180, 180, 180))
+                .draw()
+                .map_err(err)?;
+            Ok(())
+        },
+    )
 }
 
 /// The unit of an energy plot: joules (a model with masses given), or the upper arm's
@@ -264,45 +237,45 @@ pub fn phase(
     arms: [&[(f64, f64)]; 2],
     cadence: &str,
 ) -> Result<()> {
-    render::register_font();
-    let (w, h) = (1200u32, 550u32);
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        root.fill(&BG).map_err(err)?;
-        let panels = root.split_evenly((1, 2));
-        for (k, area) in panels.iter().enumerate() {
-            let pts = arms[k];
-            let mut chart = ChartBuilder::on(area)
-                .caption(
-                    format!(
-                        "Arm {}: ω{} (rad/s) against θ{} (rad), measured {cadence}",
-                        k + 1,
-                        k + 1,
-                        k + 1
-                    ),
-                    ("sans-serif", 18),
-                )
-                .margin(12)
-                .x_label_area_size(35)
-                .y_label_area_size(50)
-                .build_cartesian_2d(
-                    range(pts.iter().map(|p| p.0), 0.05),
-                    range(pts.iter().map(|p| p.1), 0.05),
-                )
-                .map_err(err)?;
-            chart
-                .configure_mesh()
-                .x_desc(format!("θ{} (rad)", k + 1))
-                .y_desc(format!("ω{} (rad/s)", k + 1))
-                .light_line_style(RGBColor(235, 235, 235))
-                .draw()
-                .map_err(err)?;
-            chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, FIT_A.filled())))
-                .map_err(err)?;
-        }
-        root.present().map_err(err)?;
-    }
-    save(out, path, w, h, &rgb, "measured phase portraits")
+    plot(
+        out,
+        path,
+        (1200, 550),
+        &titled("measured phase portraits"),
+        |root| {
+            let panels = root.split_evenly((1, 2));
+            for (k, area) in panels.iter().enumerate() {
+                let pts = arms[k];
+                let mut chart = ChartBuilder::on(area)
+                    .caption(
+                        format!(
+                            "Arm {}: ω{} (rad/s) against θ{} (rad), measured {cadence}",
+                            k + 1,
+                            k + 1,
+                            k + 1
+                        ),
+                        ("sans-serif", 18),
+                    )
+                    .margin(12)
+                    .x_label_area_size(35)
+                    .y_label_area_size(50)
+                    .build_cartesian_2d(
+                        range(pts.iter().map(|p| p.0), 0.05),
+                        range(pts.iter().map(|p| p.1), 0.05),
+                    )
+                    .map_err(err)?;
+                chart
+                    .configure_mesh()
+                    .x_desc(format!("θ{} (rad)", k + 1))
+                    .y_desc(format!("ω{} (rad/s)", k + 1))
+                    .light_line_style(RGBColor(235, 235, 235))
+                    .draw()
+                    .map_err(err)?;
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, FIT_A.filled())))
+                    .map_err(err)?;
+            }
+            Ok(())
+        },
+    )
 }

@@ -438,4 +438,3 @@ pub fn read_png(path: &Path) -> Result<Png> {
         text,
     })
 }
-

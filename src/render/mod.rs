@@ -3,6 +3,7 @@
 //! is left behind.
 
 mod annotate;
+pub(crate) mod chart;
 mod colormap;
 mod exposure;
 pub(crate) mod files;
@@ -19,8 +20,8 @@ pub use colormap::{
 };
 pub use exposure::{Bobs, Canvas, Film, draw_arms};
 pub use files::{
-    Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic,
-    write_npy, write_npy_shaped, write_png,
+    Outputs, Png, check_writable, png_bytes, read_png, remove_pending, write_atomic, write_npy,
+    write_npy_shaped, write_png,
 };
 pub use legend::legend;
 pub use maps::{

@@ -13,40 +13,27 @@ pub(super) fn check_same(
     theirs: &StoreInfo,
     ours: &StoreInfo,
 ) -> Result<()> {
+    // Every refusal names the store first.
+    let refuse = |why: String| Err(Error::invalid(field, format!("{} {why}", path.display())));
     if theirs.version != ours.version {
-        return Err(Error::invalid(
-            field,
-            format!(
-                "{} was made by chaoscope {}, this is {}: start a new store",
-                path.display(),
-                theirs.version,
-                ours.version
-            ),
+        return refuse(format!(
+            "was made by chaoscope {}, this is {}: start a new store",
+            theirs.version, ours.version
         ));
     }
     if theirs.resolved != ours.resolved {
-        return Err(Error::invalid(
-            field,
-            format!(
-                "{} was made {} the verdict ([[resolved]]): ask for it {}",
-                path.display(),
-                if theirs.resolved { "with" } else { "without" },
-                if theirs.resolved {
-                    "too"
-                } else {
-                    "in a new store"
-                }
-            ),
+        let (made, ask) = match theirs.resolved {
+            true => ("with", "too"),
+            false => ("without", "in a new store"),
+        };
+        return refuse(format!(
+            "was made {made} the verdict ([[resolved]]): ask for it {ask}"
         ));
     }
     if theirs.identity.is_null() {
-        return Err(Error::invalid(
-            field,
-            format!(
-                "{} records no settings as data (chaoscope:identity): it was made by an older chaoscope; start a new store",
-                path.display()
-            ),
-        ));
+        return refuse(
+            "records no settings as data (chaoscope:identity): it was made by an older chaoscope; start a new store".into(),
+        );
     }
     let mut differences = Vec::new();
     differ(
