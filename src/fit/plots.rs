@@ -6,7 +6,7 @@ use plotters::prelude::*;
 
 use crate::error::Result;
 use crate::render::Outputs;
-use crate::render::chart::{err, plot, range, titled};
+use crate::render::chart::{err, plot, range, time_grid, titled};
 
 pub(crate) const MEASURED: RGBColor = RGBColor(30, 30, 30);
 const SIMULATED: RGBColor = RGBColor(214, 39, 40);
@@ -58,12 +58,7 @@ pub fn positions(
                     .y_label_area_size(50)
                     .build_cartesian_2d(range(t.iter().copied(), 0.02), yr)
                     .map_err(err)?;
-                chart
-                    .configure_mesh()
-                    .x_desc("t (s)")
-                    .light_line_style(RGBColor(235, 235, 235))
-                    .draw()
-                    .map_err(err)?;
+                time_grid(&mut chart)?;
                 chart
                     .draw_series(
                         t.iter()

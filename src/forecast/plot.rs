@@ -10,7 +10,7 @@ use super::ensemble::{Forecast, Slope};
 use crate::error::Result;
 use crate::fit::plots::MEASURED;
 use crate::render::Outputs;
-use crate::render::chart::{err, plot, range, titled};
+use crate::render::chart::{err, plot, range, time_grid, titled};
 
 const BAND: RGBColor = RGBColor(31, 119, 180);
 const TRUTH: RGBColor = RGBColor(44, 160, 44);
@@ -80,12 +80,7 @@ pub fn forecast(out: &mut Outputs, path: &Path, f: &Forecast, marks: &Marks) -> 
                     .y_label_area_size(52)
                     .build_cartesian_2d(x_range.clone(), yr)
                     .map_err(err)?;
-                chart
-                    .configure_mesh()
-                    .x_desc("t (s)")
-                    .light_line_style(RGBColor(235, 235, 235))
-                    .draw()
-                    .map_err(err)?;
+                time_grid(&mut chart)?;
                 // The fit window.
                 chart
                     .draw_series([Rectangle::new(

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 use super::Outputs;
@@ -56,4 +57,16 @@ pub(crate) fn plot(
 /// A chart's Title text (PNG tEXt is Latin-1: say it in ASCII).
 pub(crate) fn titled(title: &str) -> [(String, String); 1] {
     [("Title".into(), title.into())]
+}
+
+/// A panel of positions over time: `t (s)` along x under a light grid.
+pub(crate) fn time_grid(
+    chart: &mut ChartContext<'_, BitMapBackend<'_>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+) -> Result<()> {
+    chart
+        .configure_mesh()
+        .x_desc("t (s)")
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)
 }
