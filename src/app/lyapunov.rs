@@ -135,23 +135,22 @@ pub fn run_spectrum(
     // Its map is read off the four layers (an empty run asks whether it is).
     let empty: [crate::field::Field; 4] =
         std::array::from_fn(|_| crate::field::Field::new(0, 0, 0.0));
-    if measure.of_spectrum(spec.indicator, &empty).is_none() {
-        return Err(Error::invalid(
-            "spectrum",
+    let refused = [
+        (
+            measure.of_spectrum(spec.indicator, &empty).is_none(),
             "is for the indicators exponent and exponent-sum",
-        ));
-    }
-    if job.files.store().is_some() || job.tile.is_some() {
-        return Err(Error::invalid(
-            "spectrum",
+        ),
+        (
+            job.files.store().is_some() || job.tile.is_some(),
             "writes a .npy beside a map; a Zarr store holds one quantity (leave out [[spectrum]])",
-        ));
-    }
-    if job.files.wants_verdict() {
-        return Err(Error::invalid(
-            "spectrum",
+        ),
+        (
+            job.files.wants_verdict(),
             "has no verdict: leave out [[resolved]] and [[show_unresolved]], or [[spectrum]]",
-        ));
+        ),
+    ];
+    if let Some((_, why)) = refused.into_iter().find(|r| r.0) {
+        return Err(Error::invalid("spectrum", why));
     }
     spec.check_picture(&job.picture, job.colour_range)?;
     super::map::validate(spec, &job.files, job.tile)?;

@@ -52,6 +52,22 @@ impl LentEngineArgs {
     pub fn lent(&self) -> crate::Result<Engine> {
         lent_engine(self.precision, self.backend)
     }
+
+    /// A command's `run` of `job` on the engine lent, with the command line that `command`
+    /// makes of the job (written into its files).
+    pub fn run<J, S>(
+        &self,
+        job: &J,
+        command: impl FnOnce(&J) -> String,
+        monitor: &crate::monitor::Monitor,
+        run: impl FnOnce(&J, &crate::app::Running) -> crate::Result<S>,
+    ) -> crate::Result<S> {
+        let engine = self.lent()?;
+        run(
+            job,
+            &crate::app::Running::new(&engine, command(job), monitor),
+        )
+    }
 }
 
 /// The one way the command line makes an engine, once a command: its trajectories and

@@ -123,10 +123,8 @@ impl BoundaryArgs {
 pub fn run(args: &BoundaryArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
     let engine = super::args::lent_engine(None, job.backend)?;
-    let s = boundary::run(
-        &job,
-        &Running::new(&engine, command_line::boundary(&job), monitor),
-    )?;
+    let at = Running::new(&engine, command_line::boundary(&job), monitor);
+    let s = boundary::run(&job, &at)?;
     say("boundary", &s.notices);
     for l in &s.levels {
         eprintln!(

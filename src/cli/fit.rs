@@ -1,6 +1,5 @@
 //! `chaoscope fit`.
 
-use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -93,11 +92,9 @@ impl FitArgs {
 
 pub fn run(args: &FitArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
-    let engine = args.engine.lent()?;
-    let s = fit::run(
-        &job,
-        &Running::new(&engine, command_line::fit(&job), monitor),
-    )?;
+    let s = args
+        .engine
+        .run(&job, command_line::fit, monitor, fit::run)?;
     say("fit", &s.notices);
     let agrees = match s.verdict.follows {
         true => format!(

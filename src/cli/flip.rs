@@ -160,10 +160,8 @@ pub fn nan_note(nan: usize) -> String {
 pub fn run(args: &FlipArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let (engine, job) =
         super::args::engine_then(args.precision, args.backend, |f32| args.job_on(f32))?;
-    let s = flip::run(
-        &job,
-        &Running::new(&engine, command_line::flip(&job), monitor),
-    )?;
+    let at = Running::new(&engine, command_line::flip(&job), monitor);
+    let s = flip::run(&job, &at)?;
     say("flip", &s.notices);
     eprintln!(
         "{}x{} on {} in {:.2} s: {:.1} % flipped within {} s{}{} -> {}",

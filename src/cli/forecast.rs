@@ -1,6 +1,5 @@
 //! `chaoscope forecast`.
 
-use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -106,11 +105,9 @@ impl ForecastArgs {
 
 pub fn run(args: &ForecastArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
-    let engine = args.engine.lent()?;
-    let s = forecast::run(
-        &job,
-        &Running::new(&engine, command_line::forecast(&job), monitor),
-    )?;
+    let s = args
+        .engine
+        .run(&job, command_line::forecast, monitor, forecast::run)?;
     say("forecast", &s.notices);
     if !s.verdict.follows {
         // The verdict (among the notices) says why; nothing here is a finding.

@@ -1,6 +1,5 @@
 //! `chaoscope phase`.
 
-use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -83,11 +82,9 @@ impl PhaseArgs {
 
 pub fn run(args: &PhaseArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
-    let engine = args.engine.lent()?;
-    let s = phase::run(
-        &job,
-        &Running::new(&engine, command_line::phase(&job), monitor),
-    )?;
+    let s = args
+        .engine
+        .run(&job, command_line::phase, monitor, phase::run)?;
     say("phase", &s.notices);
     eprintln!("phase portrait -> {}", s.output.display());
     json(&s)

@@ -1,6 +1,5 @@
 //! `chaoscope traces`.
 
-use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -84,11 +83,9 @@ impl TracesArgs {
 
 pub fn run(args: &TracesArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job()?;
-    let engine = args.engine.lent()?;
-    let s = traces::run(
-        &job,
-        &Running::new(&engine, command_line::traces(&job), monitor),
-    )?;
+    let s = args
+        .engine
+        .run(&job, command_line::traces, monitor, traces::run)?;
     say("traces", &s.notices);
     eprintln!(
         "{} releases over {} s on {} -> {}",

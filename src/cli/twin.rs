@@ -1,6 +1,5 @@
 //! `chaoscope twin`.
 
-use crate::app::Running;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -111,11 +110,9 @@ impl TwinArgs {
 
 pub fn run(args: &TwinArgs, monitor: &Monitor) -> Result<serde_json::Value> {
     let job = args.job();
-    let engine = args.engine.lent()?;
-    let s = twin::run(
-        &job,
-        &Running::new(&engine, command_line::twin(&job), monitor),
-    )?;
+    let s = args
+        .engine
+        .run(&job, command_line::twin, monitor, twin::run)?;
     say("twin", &s.notices);
     for l in &s.slopes {
         eprintln!(

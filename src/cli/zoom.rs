@@ -144,11 +144,8 @@ pub fn run(args: &ZoomArgs, monitor: &Monitor) -> Result<serde_json::Value> {
                 super::args::engine_then(map.precision, map.backend, |f32| map.job_on(f32))?;
             let job = args.job_of(job);
             let command = command_line::zoom(&job, &command_line::flip(&job.map));
-            zoom::run(
-                &job,
-                &crate::app::Running::new(&engine, command, monitor),
-                &command_line::flip,
-            )?
+            let at = crate::app::Running::new(&engine, command, monitor);
+            zoom::run(&job, &at, &command_line::flip)?
         }
         ZoomMap::Lyapunov(map) => {
             not_in_a_zoom(&map.output, &map.data, map.tile, &map.verdict.resolved)?;
@@ -168,11 +165,8 @@ pub fn run(args: &ZoomArgs, monitor: &Monitor) -> Result<serde_json::Value> {
             };
             let job = args.job_of(mapjob);
             let command = command_line::zoom(&job, &command_line::lyapunov_map(&job.map));
-            zoom::run(
-                &job,
-                &crate::app::Running::new(&engine, command, monitor),
-                &command_line::lyapunov_map,
-            )?
+            let at = crate::app::Running::new(&engine, command, monitor);
+            zoom::run(&job, &at, &command_line::lyapunov_map)?
         }
     };
     say("zoom", &s.notices);
