@@ -10,7 +10,9 @@
 use serde_json::{Value, json};
 use wgpu::naga;
 
-use crate::gpu::layout::{GpuParams, GpuPendulum, NEVER, NONFINITE, WORKGROUP_SIZE, mass_scale};
+use crate::gpu::layout::{
+    GpuParams, GpuPendulum, MAX_WORKGROUPS, NEVER, NONFINITE, WORKGROUP_SIZE, mass_scale,
+};
 use crate::gpu::shaders::{Kernel, source};
 use crate::gpu::{
     LEFT_BELOW, MIN_STEPS, STALLED_BELOW, STEPS_PER_DISPATCH, STEPS_PER_INVOCATION,
@@ -20,11 +22,13 @@ use crate::measure::{End, Indicator, IndicatorAsked, Runs};
 use crate::model::Params;
 use crate::quantity::Quantity;
 use crate::render::{Colormap, flip_table, ftle_table, legend};
-use crate::spec::{F32_MIN_PIXEL_STEP, LyapunovSpec, MapKind, Precision, Var};
+use crate::spec::{LyapunovSpec, MapKind, Precision, Var};
 
 /// The page, its script and its style.
 const PAGE: &str = include_str!("../assets/web/index.html");
 const SCRIPT: &str = include_str!("../assets/web/explorer.js");
+/// The engine's rules the page applies per view, shared with the served page.
+const RULES: &str = include_str!("../assets/rules.js");
 const STYLE: &str = include_str!("../assets/web/style.css");
 
 /// A pendulum the page offers: its name, its parameters, and their flags in a command line
@@ -91,6 +95,7 @@ pub const GENERATOR: &str = "chaoscope web";
 pub fn files(spec: &SiteSpec) -> Vec<(String, Vec<u8>)> {
     let mut files = vec![
         ("index.html".to_string(), PAGE.as_bytes().to_vec()),
+        ("rules.js".to_string(), RULES.as_bytes().to_vec()),
         ("explorer.js".to_string(), SCRIPT.as_bytes().to_vec()),
         ("style.css".to_string(), STYLE.as_bytes().to_vec()),
     ];
@@ -285,7 +290,7 @@ fn manifest(spec: &SiteSpec, kernels: Value) -> Value {
             "min_steps": MIN_STEPS,
             "pendulum_bytes": std::mem::size_of::<GpuPendulum>(),
             "f32_epsilon": f32::EPSILON,
-            "f32_min_pixel_step": F32_MIN_PIXEL_STEP,
+            "max_workgroups": MAX_WORKGROUPS,
             // The coarsest step the verdict vouches at (src/verdict.rs).
             "verdict_dt_max": crate::verdict::LARGEST_VOUCHED_DT,
             // The most steps a run may take (src/spec/map.rs): the page computes no more.

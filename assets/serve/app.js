@@ -108,28 +108,24 @@ function fillForm() {
   form.elements.accurate.disabled = !kindInfo().accurate;
 }
 
-// How many steps of the finest an axis' pixels are at zoom z (below 1: the precision's
-// pixels are no longer distinct): the finest is 16 ulp of the axis' largest value (of pi for
-// angles), as the server decides (spec::Axis::finest_step).
-function resolves(axis, step, piStep) {
-  const v = varInfo(axis.name);
-  const largest = Math.max(Math.abs(axis.range[0]), Math.abs(axis.range[1]),
-    v.angle ? Math.PI : 1e-300);
-  return step / (piStep * 2 ** (Math.floor(Math.log2(largest)) - 1));
+// How many steps of the finest an axis' pixels are at zoom z in a precision of machine
+// epsilon `epsilon` (below 1: its pixels are no longer distinct; rules.js `finestStep`).
+function resolves(axis, step, epsilon) {
+  return step / finestStep(axis.range, varInfo(axis.name).angle, epsilon);
 }
 
 // The pixel's steps along x and y at zoom z, and what precision they need.
 function precisionAt(z) {
   const w = world();
   const steps = [Math.abs(w.kx) / 2 ** z, Math.abs(w.ky) / 2 ** z];
-  const below = (piStep) => Math.min(resolves(w.x, steps[0], piStep),
-    resolves(w.y, steps[1], piStep)) < 1;
+  const below = (epsilon) => Math.min(resolves(w.x, steps[0], epsilon),
+    resolves(w.y, steps[1], epsilon)) < 1;
   const info = page.info;
   if (info.store && z <= info.store.native) return [steps, `read from ${info.store.name}`];
-  if (below(info.f64_min_pixel_step)) return [steps, "beyond f64: no pixel is resolved"];
+  if (below(info.f64_epsilon)) return [steps, "beyond f64: no pixel is resolved"];
   const where = info.place === "the CPU" ? "CPU" : "GPU";
   if (state.accurate) return [steps, `f64 DP54 on the ${info.has_f64 ? where : "CPU"}`];
-  if (below(info.f32_min_pixel_step)) return [steps, `f64 on the ${info.has_f64 ? where : "CPU"}`];
+  if (below(info.f32_epsilon)) return [steps, `f64 on the ${info.has_f64 ? where : "CPU"}`];
   return [steps, `f32 on the ${where}`];
 }
 

@@ -89,20 +89,14 @@ function outside(g) {
   return null;
 }
 
-// src/spec/grid.rs `Axis::finest_step`: 16 ulp of the axis's largest value (angles: of pi
-// at least, where they flip).
-function finestStep(range, angle) {
-  const eps = manifest.constants.f32_epsilon;
-  const largest = Math.max(Math.abs(range[0]), Math.abs(range[1]), angle ? Math.PI : 0);
-  return 16 * eps * Math.pow(2, Math.floor(Math.log2(largest)));
-}
-
 function varOf(name) { return manifest.vars.find((v) => v.name === name); }
 
 // Whether f32 resolves the view's pixel step along both axes (the rule `zoom` uses).
 function resolves(g) {
   const sx = (g.x[1] - g.x[0]) / g.width, sy = (g.y[1] - g.y[0]) / g.height;
-  return sx >= finestStep(g.x, varOf(g.xVar).angle) && sy >= finestStep(g.y, varOf(g.yVar).angle);
+  const eps = manifest.constants.f32_epsilon;
+  return sx >= finestStep(g.x, varOf(g.xVar).angle, eps) &&
+    sy >= finestStep(g.y, varOf(g.yVar).angle, eps);
 }
 
 // The command line that computes the same pixels.
@@ -115,12 +109,6 @@ function command(v, g) {
     pendulum: p.flags[parameterAxes(v)],
     x: v.x, y: v.y, colours: v.colours, verdict: v.verdict ? " --show-unresolved" : "" };
   return measureOf(v).command.replace(/\{(\w+)\}/g, (_, k) => String(values[k]));
-}
-
-// src/spec/mod.rs `Stepping::steps`.
-function steps(t_max, dt) {
-  const n = t_max / dt, rounded = Math.round(n);
-  return Math.abs(n - rounded) < 1e-9 * Math.max(n, 1) ? rounded : Math.ceil(n);
 }
 
 // The view of the address's hash, each value held to the rules the controls keep (the
@@ -324,12 +312,6 @@ function setUp(v, g, k) {
     free: () => made.forEach((b) => b.destroy()) };
 }
 
-function workgroups(n) {
-  const groups = Math.max(1, Math.ceil(n / manifest.constants.workgroup_size));
-  const x = Math.min(groups, 65535);
-  return [x, Math.ceil(groups / x)];
-}
-
 // Records one dispatch of `count` invocations into a new encoder, after writing the params.
 function encode(s, pipeline, group, count) {
   const device = gpu.device;
@@ -338,7 +320,7 @@ function encode(s, pipeline, group, count) {
   const pass = encoder.beginComputePass();
   pass.setPipeline(pipeline);
   pass.setBindGroup(0, group);
-  pass.dispatchWorkgroups(...workgroups(count));
+  pass.dispatchWorkgroups(...workgroups(count, manifest.constants));
   pass.end();
   return encoder;
 }
@@ -394,7 +376,7 @@ async function flipTimes(v, g, onProgress) {
       let step0 = 0, forward = true;
       while (step0 < total && active > 0) {
         if (mine !== generation) return null;
-        const steps = stepsFor(active, 1, total - step0);
+        const steps = stepsFor(active, 1, total - step0, manifest.constants);
         s.u.set("step0", step0); s.u.set("steps", steps); s.u.set("count", active);
         active = await dispatch(advance, forward ? aToB : bToA, active);
         forward = !forward;
@@ -412,23 +394,6 @@ async function flipTimes(v, g, onProgress) {
     s.free();
   }
   return mirrored(out, s.integrated * g.width);
-}
-
-// The steps of the next dispatch of `active` pixels, each step costing `cost` plain steps,
-// `left` steps to go (src/gpu/tiled.rs `time_loop`): at most steps_per_dispatch
-// pendulum-steps (a driver's watchdog; the browser stays responsive between dispatches),
-// at least min_steps, at most steps_per_invocation (lavapipe's loop limit) a pixel.
-function stepsFor(active, cost, left) {
-  const c = manifest.constants;
-  const bounded = Math.max(Math.floor(c.steps_per_dispatch / cost / active),
-    Math.floor(c.min_steps / cost));
-  return Math.min(bounded, Math.max(1, Math.floor(c.steps_per_invocation / cost)), left);
-}
-
-// Rows from `start` on filled by point reflection (src/field.rs `mirror_below`).
-function mirrored(out, start) {
-  for (let i = start; i < out.length; i++) out[i] = out[out.length - 1 - i];
-  return out;
 }
 
 // A divergence-family map of view `v` (FTLE, MEGNO, ...: kind `kind` of manifest.json) on
@@ -463,7 +428,7 @@ async function divergence(kind, v, g, onProgress) {
       await run(init, n);
       for (let step0 = 0; step0 < total;) {
         if (mine !== generation) return null;
-        const steps = stepsFor(n, kind.cost, total - step0);
+        const steps = stepsFor(n, kind.cost, total - step0, manifest.constants);
         s.u.set("step0", step0); s.u.set("steps", steps); s.u.set("count", n);
         await run(advance, n);
         step0 += steps;

@@ -10,6 +10,10 @@ use crate::spec::Grid;
 /// on discrete GPUs.
 pub const WORKGROUP_SIZE: u32 = 64;
 
+/// The most workgroups a dispatch takes along one dimension (WebGPU's and wgpu's default
+/// limit).
+pub const MAX_WORKGROUPS: u32 = 65535;
+
 /// The flip-time sentinel for "has not flipped" inside the shader (times are never negative).
 pub const NEVER: f32 = -1.0;
 

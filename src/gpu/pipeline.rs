@@ -1,7 +1,7 @@
 //! The wgpu boilerplate every kernel shares: modules, pipelines, bindings, one dispatch.
 
 use super::context::GpuContext;
-use super::layout::WORKGROUP_SIZE;
+use super::layout::{MAX_WORKGROUPS, WORKGROUP_SIZE};
 use super::shaders::{Kernel, source};
 use crate::error::Result;
 use crate::spec::Precision;
@@ -251,10 +251,10 @@ pub fn params_buffer_of(ctx: &GpuContext, bytes: u64) -> wgpu::Buffer {
     })
 }
 
-/// Workgroup counts (x, y) covering `invocations`, within the 65535-per-dimension limit.
+/// Workgroup counts (x, y) covering `invocations`, within [`MAX_WORKGROUPS`] along x.
 pub fn workgroups(invocations: u32) -> (u32, u32) {
     let groups = invocations.div_ceil(WORKGROUP_SIZE).max(1);
-    let x = groups.min(65535);
+    let x = groups.min(MAX_WORKGROUPS);
     (x, groups.div_ceil(x))
 }
 

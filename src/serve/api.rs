@@ -63,8 +63,9 @@ pub(super) async fn info(AxumState(shared): AxumState<S>) -> Response {
         "version": env!("CARGO_PKG_VERSION"),
         "place": shared.place,
         "has_f64": shared.has_f64,
-        "f32_min_pixel_step": crate::spec::F32_MIN_PIXEL_STEP,
-        "f64_min_pixel_step": crate::spec::F64_MIN_PIXEL_STEP,
+        // The precisions' epsilons, for the page's finest steps (assets/rules.js).
+        "f32_epsilon": f32::EPSILON,
+        "f64_epsilon": f64::EPSILON,
         "max_zoom": view::MAX_ZOOM,
         "max_t_max": view::MAX_T_MAX,
         "kinds": Kind::all().map(Kind::describe).collect::<Vec<_>>(),

@@ -7,6 +7,11 @@ use axum::response::{IntoResponse, Response};
 /// (path under /assets/, content type, bytes).
 const ASSETS: &[(&str, &str, &[u8])] = &[
     (
+        "rules.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../../assets/rules.js"),
+    ),
+    (
         "app.js",
         "text/javascript; charset=utf-8",
         include_bytes!("../../assets/serve/app.js"),
