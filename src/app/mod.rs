@@ -25,6 +25,8 @@ pub mod web;
 pub mod zoom;
 
 pub use crate::error::{check_count, check_within};
+pub use checks::{check_extension, check_output, write_text};
+pub use map::{MapOutputs, check_tile, write_map};
 
 use crate::engine::Engine;
 use crate::monitor::Monitor;
@@ -47,5 +49,3 @@ impl<'a> Running<'a> {
         }
     }
 }
-pub use checks::{check_extension, check_output, write_text};
-pub use map::{MapOutputs, check_tile, write_map};
