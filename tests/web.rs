@@ -439,7 +439,7 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
     assert!(same >= 0.999, "{same}");
     let swing = &report["views"]["swing"]["swing"];
     assert_eq!(swing["seconds"].as_f64(), Some(0.02), "{swing}");
-    let rows = gpu_trajectory("trajectory --theta1 1 --theta2 2 --t-max 2 --dt 0.01");
+    let rows = cli_trajectory("trajectory --theta1 1 --theta2 2 --t-max 2 --dt 0.01");
     // The same f32 kernel from the same start: equal but for the start's cos and sin, which
     // the page's JavaScript and the engine's Rust may round an ulp apart.
     let worst = departure(&numbers(&swing["states"]), &rows);
@@ -455,7 +455,7 @@ fn the_page_computes_the_command_lines_f32_maps_in_chromium() {
         command.contains("--at m2/m1=2.5 --at l2/l1=0.7"),
         "{command}"
     );
-    let rows = gpu_trajectory(command.strip_prefix("chaoscope ").unwrap());
+    let rows = cli_trajectory(command.strip_prefix("chaoscope ").unwrap());
     let worst = departure(&numbers(&plane["states"]), &rows);
     assert!(worst <= 1e-4, "the page's run departs by {worst}");
     for v in views
@@ -529,7 +529,7 @@ fn numbers(v: &serde_json::Value) -> Vec<f64> {
 
 /// `chaoscope WORDS` (a trajectory) on the GPU in f32, a row kept every 0.02 s: its rows
 /// (t, then the state).
-fn gpu_trajectory(words: &str) -> Vec<Vec<f64>> {
+fn cli_trajectory(words: &str) -> Vec<Vec<f64>> {
     let out = chaoscope()
         .args(words.split_whitespace())
         .args("--every 0.02 --backend gpu --precision f32".split(' '))

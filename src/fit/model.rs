@@ -28,7 +28,8 @@ pub struct ModelFit {
     pub backend: &'static str,
     /// Until when (s) the simulation stays within the tolerance of every tracked position.
     pub agrees_until: f64,
-    /// Simulated positions (m, pivot at the origin) from t0 on, ten per data interval.
+    /// Simulated positions (m, from the tracked pivot, the fit's pivot offset included) from
+    /// t0 on, ten per data interval.
     pub simulated: Vec<(f64, [f64; 4])>,
 }
 
@@ -95,15 +96,6 @@ pub fn fit_model(
         engine,
         monitor,
     )?;
-    let in_window = &t[fit.row0..fit.row0 + fit.rows];
-    let rms = (fit
-        .positions(in_window)
-        .iter()
-        .zip(&data[fit.row0..])
-        .map(|(a, b)| (0..4).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>())
-        .sum::<f64>()
-        / (4 * fit.rows) as f64)
-        .sqrt();
     // Ten points per data interval for the plots; every tenth is at a data time.
     let times: Vec<f64> = std::iter::once(t[row])
         .chain((row..t.len() - 1).flat_map(|i| {
@@ -126,6 +118,15 @@ pub fn fit_model(
         .map(|s| s.1)
         .collect();
     let agrees_until = agrees_until(&at_rows, &data[row..], &t[row..], spec.tolerance);
+    // The fit's own rows are the first of them.
+    let in_window = &at_rows[fit.row0 - row..][..fit.rows];
+    let rms = (in_window
+        .iter()
+        .zip(&data[fit.row0..])
+        .map(|(a, b)| (0..4).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>())
+        .sum::<f64>()
+        / (4 * fit.rows) as f64)
+        .sqrt();
     let (c1, c2) = (fit.values[4], fit.values[5]);
     Ok(ModelFit {
         row,
