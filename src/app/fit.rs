@@ -300,7 +300,9 @@ fn summary_json(
             "report_grid_least_distance_variance": { "x": grid.0, "y": grid.1, "grid_step": 0.001 },
         },
         "arm_lengths": { "l1": tracked.l1, "l2": tracked.l2 },
-        "middle_joint_off_marker": tracked.joint,
+        "middle_joint_off_marker": tracked.placed.joint,
+        "markers_off_axes": tracked.placed.offsets,
+        "roll": tracked.placed.roll,
         "energy": energy.to_json(),
         "identified": match &tracked.identified {
             Ok(id) => identified_json(id),
@@ -442,6 +444,8 @@ fn calibration_of(
                     _ => None,
                 },
                 damping: tracked.damping_prior(),
+                roll: tracked.placed.roll,
+                offsets: tracked.placed.offsets,
             };
             let made =
                 crate::forecast::calibrate::calibrate(&rows, &params, &asked, engine, monitor)?;

@@ -135,6 +135,7 @@ pub fn run(job: &ForecastJob, at: &super::Running) -> Result<ForecastSummary> {
             rows: &tracked.frames,
             geometry,
             pivot: (pivot.x, pivot.y),
+            roll: tracked.placed.roll.map_or(0.0, |r| r.applied),
             outcome: &o,
             headline,
             tolerance: o.tolerance,
@@ -283,19 +284,27 @@ fn learned(
     )
     .max(1);
     // The pivot, arm lengths and model as `fit` finds them, from the rows that may teach.
+    let pair = |key: fn(&Calibration) -> Option<[f64; 2]>| {
+        calibration.as_ref().and_then(key).map(|[a, b]| (a, b))
+    };
     let known = crate::fit::pendulum::Known {
-        scale: calibration
-            .as_ref()
-            .and_then(|c| c.pixels_per_metre)
-            .map(|[v, e]| (v, e)),
-        pivot: calibration
-            .as_ref()
-            .and_then(|c| c.pivot)
-            .map(|[x, y]| (x, y)),
+        scale: pair(|c| c.pixels_per_metre),
+        pivot: pair(|c| c.pivot),
         l1: match &calibration {
             Some(_) => Some(job.params.resolve()?.l1),
             None => None,
         },
+        roll: pair(|c| c.roll),
+        offsets: calibration
+            .as_ref()
+            .and_then(|c| c.marker_offsets)
+            .map(|[o, errors]| crate::fit::joint::Offsets {
+                along: o[0],
+                across: o[1],
+                lower: (o[2], o[3]),
+                errors,
+                from_calibration: true,
+            }),
     };
     let tracked = crate::fit::pendulum::tracked_model_from(
         read,
@@ -538,11 +547,34 @@ fn provenance(job: &ForecastJob, learned: &Learned) -> serde_json::Value {
         }),
     };
     let damping = damping_source(learned, calibrated, these_rows);
+    let placed = |found: Option<(bool, serde_json::Value)>, what: &str| match found {
+        None => {
+            json!({ "from": "none: the rows show none and no calibration gives one", "what": what })
+        }
+        Some((true, v)) => {
+            let mut c = calibrated(what).unwrap_or_default();
+            c["value"] = v;
+            c
+        }
+        Some((false, v)) => {
+            let mut c = these_rows(what);
+            c["value"] = v;
+            c
+        }
+    };
     json!({
         "sample": if job.settings.in_sample { "in sample" } else { "out of sample" },
         "rows": rows,
         "window": window_from,
         "geometry": these_rows("the pivot, the arm lengths and the middle joint"),
+        "markers": placed(
+            tracked.placed.offsets.map(|o| (o.from_calibration, json!(o))),
+            "the markers' offsets from the arms' axes (m), taken out of every row",
+        ),
+        "roll": placed(
+            tracked.placed.roll.map(|r| (r.from_calibration, json!(r))),
+            "the picture's roll against gravity (rad), levelled out of every row",
+        ),
         "scale": scale,
         "model": model,
         "fit": these_rows("the state, joint damping, pivot offset, scale and lower arm in the window"),

@@ -37,29 +37,36 @@ pub fn rod_correlation(data: &[[f64; 4]]) -> Correlation {
             s.iter().map(|x| x - mean).collect()
         })
         .collect();
-    // The autocorrelation at lag l, both rods pooled.
-    let rho = |l: usize| {
-        let (mut lagged, mut square) = (0.0, 0.0);
-        for e in &centred {
-            lagged += (l..e.len()).map(|i| e[i] * e[i - l]).sum::<f64>();
-            square += e.iter().map(|x| x * x).sum::<f64>();
-        }
-        lagged / square.max(1e-300)
-    };
-    let n = centred.iter().map(Vec::len).min().unwrap_or(0);
     let rms = {
         let square = |e: &Vec<f64>| e.iter().map(|x| x * x).sum::<f64>();
         ((square(&centred[0]) + square(&centred[1]) / 2.0)
             / (centred[0].len() + centred[1].len()).max(1) as f64)
             .sqrt()
     };
+    let (lag_one, lags, inflation) = long_run(&centred);
+    Correlation {
+        rms,
+        lag_one,
+        lags,
+        inflation,
+    }
+}
+
+/// The lag-one autocorrelation of `centred` (series of residuals about their means, pooled),
+/// the lags summed and the long-run variance over the variance (see [`Correlation`]); no
+/// correlation (NaN, 0, 1) for series under 8 long.
+pub fn long_run(centred: &[Vec<f64>]) -> (f64, usize, f64) {
+    let rho = |l: usize| {
+        let (mut lagged, mut square) = (0.0, 0.0);
+        for e in centred {
+            lagged += (l..e.len()).map(|i| e[i] * e[i - l]).sum::<f64>();
+            square += e.iter().map(|x| x * x).sum::<f64>();
+        }
+        lagged / square.max(1e-300)
+    };
+    let n = centred.iter().map(Vec::len).min().unwrap_or(0);
     if n < 8 {
-        return Correlation {
-            rms,
-            lag_one: f64::NAN,
-            lags: 0,
-            inflation: 1.0,
-        };
+        return (f64::NAN, 0, 1.0);
     }
     let lag_one = rho(1).clamp(-0.97, 0.97);
     let alpha = 4.0 * lag_one.powi(2) / ((1.0 - lag_one).powi(2) * (1.0 + lag_one).powi(2));
@@ -67,10 +74,5 @@ pub fn rod_correlation(data: &[[f64; 4]]) -> Correlation {
     let sum: f64 = (1..=lags)
         .map(|l| (1.0 - l as f64 / (lags + 1) as f64) * rho(l))
         .sum();
-    Correlation {
-        rms,
-        lag_one,
-        lags,
-        inflation: (1.0 + 2.0 * sum).max(1.0),
-    }
+    (lag_one, lags, (1.0 + 2.0 * sum).max(1.0))
 }

@@ -7,6 +7,7 @@ mod correlation;
 pub mod data;
 pub mod identify;
 pub mod joint;
+pub mod level;
 mod lsq;
 mod model;
 pub mod model_toml;

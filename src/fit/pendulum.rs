@@ -5,7 +5,8 @@
 
 use super::data::{Estimate, Pivot, TrackedRow, angles, arm_lengths, fit_pivot};
 use super::identify::{Identified, identify};
-use super::joint::{Joint, joint_off_marker};
+use super::joint::{Joint, Offsets, joint_off_marker, marker_offsets};
+use super::level::{Roll, levelled};
 use super::weighed::Weighed;
 use super::window::TrackRows;
 use crate::error::{Error, Result};
@@ -102,9 +103,6 @@ pub struct Tracked {
     pub frames: Vec<TrackedRow>,
     /// The metre scale found from the motion (pixels per metre and its error), where asked.
     pub scale_from_motion: Option<(f64, f64)>,
-    /// The middle joint, where the upper marker is not on it (the frames then hold the
-    /// joint's positions in its place).
-    pub joint: Option<Joint>,
     pub pivot: Pivot,
     pub l1: Estimate,
     pub l2: Estimate,
@@ -120,6 +118,8 @@ pub struct Tracked {
     pub identified: std::result::Result<Identified, String>,
     /// Notices on the model (a negative damping, a time scale that disagrees).
     pub notices: Vec<String>,
+    /// Where the markers sit on the arms and gravity's down (taken out of `frames`).
+    pub placed: Placed,
 }
 
 impl Tracked {
@@ -197,7 +197,7 @@ const UNIT_MISTAKE: f64 = 25.0;
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
 pub fn scale_from_motion(frames: &[TrackedRow], g: f64, monitor: &Monitor) -> Result<(f64, f64)> {
-    let (frames, _) = on_joint(frames, frames.len())?;
+    let (frames, _) = on_joint(frames, frames.len(), None, 1.0)?;
     fit_pivot(&frames)?;
     motion_scale(&frames, g, monitor)
 }
@@ -252,18 +252,74 @@ fn motion_scale(frames: &[TrackedRow], g: f64, monitor: &Monitor) -> Result<(f64
     Ok((ts.g_implied / g, ts.g_implied_error / g))
 }
 
+/// Where the learned rows (or a calibration) put the markers against the arms and gravity's
+/// down: the middle joint where the upper marker is not on it (m), the markers' small
+/// offsets from the axes (m), the picture's roll.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Placed {
+    pub joint: Option<Joint>,
+    pub offsets: Option<Offsets>,
+    pub roll: Option<Roll>,
+}
+
 /// `frames` with the upper marker moved out to the middle joint where it is not on it
-/// ([`super::joint`]), and where the joint lies, as the first `learn` rows show it (rows too
-/// few to place the pivot show no joint: the marker is taken to be on it).
-fn on_joint(frames: &[TrackedRow], learn: usize) -> Result<(Vec<TrackedRow>, Option<Joint>)> {
+/// ([`super::joint`]), the markers' small offsets from the axes taken out and the picture
+/// levelled ([`super::level`]), all as the first `learn` rows show them (rows too few to
+/// place the pivot show nothing: the markers are taken to be on the axes, the picture level).
+fn on_joint(
+    frames: &[TrackedRow],
+    learn: usize,
+    known: Option<&Known>,
+    unit: f64,
+) -> Result<(Vec<TrackedRow>, Placed)> {
     let Ok(pivot) = fit_pivot(&frames[..learn]) else {
-        return Ok((frames.to_vec(), None));
+        return Ok((frames.to_vec(), Placed::default()));
     };
     let pivot = (pivot.x, pivot.y);
-    Ok(match joint_off_marker(&frames[..learn], pivot) {
+    let (mut frames, joint) = match joint_off_marker(&frames[..learn], pivot) {
         Some(j) => (j.moved(frames, pivot), Some(j)),
         None => (frames.to_vec(), None),
-    })
+    };
+    // The calibration's, in the frames' units (`unit` of them a metre), where it knows more.
+    let spread = |o: &Offsets| o.errors.iter().sum::<f64>();
+    let theirs = known
+        .and_then(|k| k.offsets)
+        .filter(|_| unit.is_finite())
+        .map(|o| o.scaled(unit));
+    let offsets = match (marker_offsets(&frames[..learn], pivot), theirs) {
+        (Some(own), Some(k)) if spread(&own) <= spread(&k) => Some(own),
+        (_, Some(k)) => Some(k),
+        (own, None) => own,
+    }
+    .filter(Offsets::any);
+    if let Some(o) = &offsets {
+        frames = o.moved(&frames, pivot);
+    }
+    let t: Vec<f64> = frames[..learn].iter().map(|f| f.t).collect();
+    let roll = match (
+        super::level::roll(&t, &angles(&frames[..learn], pivot)),
+        known.and_then(|k| k.roll),
+    ) {
+        (Some(own), Some((_, e))) if own.error <= e => Some(own),
+        (_, Some((r, e))) => Some(Roll {
+            roll: r,
+            error: e,
+            applied: super::joint::shrunk(r, e),
+            from_calibration: true,
+        }),
+        (own, None) => own,
+    };
+    if let Some(r) = roll.filter(|r| r.applied != 0.0) {
+        frames = levelled(&frames, pivot, r.applied);
+    }
+    Ok((
+        frames,
+        Placed {
+            joint,
+            offsets,
+            roll,
+        },
+    ))
 }
 
 /// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
@@ -294,6 +350,11 @@ pub fn tracked_model(
 pub struct Known {
     pub scale: Option<(f64, f64)>,
     pub pivot: Option<(f64, f64)>,
+    /// The picture's roll (rad) and its error, and the markers' offsets from the axes (m),
+    /// as the calibration's recording showed them: where the learned rows show either less
+    /// precisely, the calibration's stands.
+    pub roll: Option<(f64, f64)>,
+    pub offsets: Option<Offsets>,
     /// The upper marker's distance from the pivot (m) in the calibration's model: a circle
     /// through a few rows that disagrees with it places no pivot.
     pub l1: Option<f64>,
@@ -324,7 +385,13 @@ pub fn tracked_model_from(
     let scale = known.scale;
     let g = given.g.unwrap_or(Params::default().g);
     let learn = learn.clamp(1, frames.len());
-    let (frames, mut joint) = on_joint(frames, learn)?;
+    // The frames' units per metre: pixels where the scale comes from the motion (the
+    // calibration's, where it gives one; a recording's own is found only after this).
+    let unit = match units.pixels_per_metre {
+        Some(super::data::PixelScale::FromMotion) => scale.map_or(f64::NAN, |(ppm, _)| ppm),
+        _ => 1.0,
+    };
+    let (frames, mut on_axes) = on_joint(frames, learn, Some(&known), unit)?;
     let frames = &frames[..];
     let (frames, scale_from_motion) = match units.pixels_per_metre {
         Some(super::data::PixelScale::FromMotion) => {
@@ -332,13 +399,14 @@ pub fn tracked_model_from(
                 Some(s) => s,
                 None => motion_scale(&frames[..learn], g, monitor)?,
             };
-            if let Some(j) = &mut joint {
+            if let Some(j) = &mut on_axes.joint {
                 *j = Joint {
                     marker: j.marker / ppm,
                     joint: j.joint / ppm,
                     error: j.error / ppm,
                 };
             }
+            on_axes.offsets = on_axes.offsets.map(|o| o.scaled(1.0 / ppm));
             let scaled = frames
                 .iter()
                 .map(|f| TrackedRow {
@@ -520,10 +588,31 @@ pub fn tracked_model_from(
         }
     }
     notices.extend(pivot_notice);
-    if let Some(j) = &joint {
+    if let Some(j) = &on_axes.joint {
         notices.push(format!(
             "the upper marker is not on the middle joint: it sits {:.4} m from the pivot, the joint (where the lower arm turns) {:.4} ± {:.4} m; the joint's positions along the upper arm stand in for the marker's",
             j.marker, j.joint, j.error
+        ));
+    }
+    if let Some(o) = &on_axes.offsets {
+        notices.push(format!(
+            "the markers sit off the arms' axes, as the lower rod's length shows it: the upper marker {:.2} mm along and {:.2} mm across the upper arm from the middle joint, the lower marker seen ({:.2}, {:.2}) mm off (errors {:.2}, {:.2}, {:.2}, {:.2} mm); taken out",
+            1e3 * o.along,
+            1e3 * o.across,
+            1e3 * o.lower.0,
+            1e3 * o.lower.1,
+            1e3 * o.errors[0],
+            1e3 * o.errors[1],
+            1e3 * o.errors[2],
+            1e3 * o.errors[3]
+        ));
+    }
+    if let Some(r) = on_axes.roll.filter(|r| r.applied != 0.0) {
+        notices.push(format!(
+            "the picture is rolled against gravity by {:.3} ± {:.3} degrees, as the motion shows it; levelled by {:.3} degrees",
+            r.roll.to_degrees(),
+            r.error.to_degrees(),
+            r.applied.to_degrees()
         ));
     }
     if let Some((ppm, error)) = scale_from_motion {
@@ -541,7 +630,7 @@ pub fn tracked_model_from(
         learned: learn,
         frames: frames.to_vec(),
         scale_from_motion,
-        joint,
+        placed: on_axes,
         pivot,
         l1,
         l2,

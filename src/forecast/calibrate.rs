@@ -29,6 +29,9 @@ pub struct Asked<'a> {
     /// The joint damping the recording's motion shows, which each stretch's fit is held to
     /// (and a forecast's, after).
     pub damping: Option<DampingPrior>,
+    /// The picture's roll and the markers' offsets from the axes (m) the recording shows.
+    pub roll: Option<crate::fit::level::Roll>,
+    pub offsets: Option<crate::fit::joint::Offsets>,
 }
 
 /// The calibration of `p` on the recording `rows`: the model's own error on half the
@@ -87,6 +90,10 @@ pub fn calibrate(
                 .collect()
         }),
         damping: asked.damping,
+        roll: asked.roll.map(|r| [r.roll, r.error]),
+        marker_offsets: asked
+            .offsets
+            .map(|o| [[o.along, o.across, o.lower.0, o.lower.1], o.errors]),
         model_error,
         band_factors,
     }))

@@ -46,6 +46,14 @@ pub struct Calibration {
     /// standard errors, where the model came from the motion: each window's fit is held to it.
     #[serde(default)]
     pub damping: Option<DampingPrior>,
+    /// The picture's roll against gravity (rad) and its error, as the recording's motion
+    /// shows it: a recording too short to show it takes this one.
+    #[serde(default)]
+    pub roll: Option<[f64; 2]>,
+    /// The markers' offsets from the arms' axes (m: the upper marker along and across its
+    /// arm, the lower marker's lean in x and y), then their errors: likewise.
+    #[serde(default)]
+    pub marker_offsets: Option<[[f64; 4]; 2]>,
     pub model_error: ModelError,
     /// By how much the bands are widened at each lead to hold the data (measured on held-out
     /// windows of the recording other than the model error's).
@@ -86,6 +94,19 @@ impl Calibration {
             out.push_str(&format!(
                 "pivot = {}  # m, in the recording's frame (relative to its pivot marker where it has one)\n",
                 list(&p)
+            ));
+        }
+        if let Some(r) = self.roll {
+            out.push_str(&format!(
+                "roll = {}  # rad and its error: the picture's down against gravity's, from the motion\n",
+                list(&r)
+            ));
+        }
+        if let Some([o, e]) = self.marker_offsets {
+            out.push_str(&format!(
+                "marker_offsets = [{}, {}]  # m, then their errors: the upper marker along and across its arm from the joint, the lower marker's lean (x, y)\n",
+                list(&o),
+                list(&e)
             ));
         }
         if let Some(c) = &self.moment_covariance {
@@ -215,6 +236,18 @@ impl Calibration {
         if self.damping.is_some_and(|d| !d.is_valid()) {
             return Err("damping: finite values and errors > 0".into());
         }
+        // A roll is a camera's few degrees at most; an offset a fraction of the arm.
+        if self
+            .roll
+            .is_some_and(|[r, e]| !(r.abs() < 0.2 && e.is_finite() && e >= 0.0))
+        {
+            return Err("key roll: [radians under 0.2 in size, error >= 0]".into());
+        }
+        if self.marker_offsets.is_some_and(|[o, e]| {
+            !(o.iter().all(|v| v.is_finite()) && e.iter().all(|v| v.is_finite() && *v >= 0.0))
+        }) {
+            return Err("key marker_offsets: [four finite offsets (m), four errors >= 0]".into());
+        }
         if let Some(b) = &self.band_factors {
             let ok = b.step.is_finite()
                 && b.step > 0.0
@@ -313,6 +346,8 @@ mod tests {
                 damping: [-2.2e-5, 1.4e-4],
                 error: [9.4e-5, 1.46e-5],
             }),
+            roll: Some([5.45e-3, 1.85e-3]),
+            marker_offsets: Some([[3.8e-4, -1.8e-4, -6.0e-5, -2.6e-4], [1.0e-5; 4]]),
             model_error: ModelError {
                 step: 0.062_253_619_963_832_09,
                 lag50: vec![1.3e-4, 5.6e-4, 1.2e-3],

@@ -22,6 +22,8 @@ pub struct Overlay<'a> {
     pub geometry: Placement,
     /// The fitted pivot (m, in the CSV's frame) the forecast's positions are relative to.
     pub pivot: (f64, f64),
+    /// The roll (rad) the track was levelled by ([`crate::fit::level`]): turned back here.
+    pub roll: f64,
     pub outcome: &'a Outcome,
     /// The forecast's headline horizon ([`crate::forecast::Forecast::headline`]), found once.
     pub headline: crate::forecast::Headline,
@@ -50,7 +52,9 @@ pub fn write(
     };
     // Metres in the forecast's frame to the picture's pixels.
     let (px, py) = overlay.pivot;
+    let (s, c) = overlay.roll.sin_cos();
     let at = move |x: f64, y: f64| -> (i32, i32) {
+        let (x, y) = (x * c - y * s, y * c + x * s);
         let (u, v) = placement.pixels(x + px, y + py);
         (u.round() as i32, v.round() as i32)
     };
