@@ -797,6 +797,67 @@ fn bands_hold_the_models_own_error_on_precise_data() {
     );
 }
 
+/// A calibration made on a recording's first 3 s is measured again on the rows just before a
+/// later window (as long a stretch as its span, and nothing after the window): the summary
+/// says so and names that span; a window with fewer rows before it keeps the calibration's.
+#[test]
+fn a_calibrations_error_is_measured_again_just_before_the_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let recording = encoder_recording(dir.path(), "run.csv", State::at_rest(1.2, 1.6));
+    let cal = dir.path().join("cal");
+    chaoscope()
+        .arg("fit")
+        .arg(&recording)
+        .args("--until 3 --window 0.4 --lead 0.5 --held-out 8 --candidates 1024 --backend cpu --output".split(' '))
+        .arg(&cal)
+        .assert()
+        .success();
+    let params = cal.join("model.toml");
+    let model_error = |window: &str, name: &str| {
+        let out = dir.path().join(name);
+        chaoscope()
+            .arg("forecast")
+            .arg(&recording)
+            .args([
+                "--window",
+                window,
+                "--members",
+                "200",
+                "--candidates",
+                "1024",
+            ])
+            .args(["--backend", "cpu", "--params", params.to_str().unwrap()])
+            .arg("--output")
+            .arg(&out)
+            .assert()
+            .success();
+        summary_of(&out)["learned_from"].clone()
+    };
+    let learned = model_error("4.5:4.9", "later");
+    let later = &learned["model_error"];
+    assert!(
+        later["from"]
+            .as_str()
+            .unwrap()
+            .contains("just before the window"),
+        "{later}"
+    );
+    // The 3 s before the window's start, to a row (100 rows a second).
+    let span: Vec<f64> = serde_json::from_value(later["span"].clone()).unwrap();
+    assert!(
+        (span[0] - 1.5).abs() <= 0.01 && span[1] < 4.5 && span[1] > 4.48,
+        "{span:?}"
+    );
+    // The damping (and the scale, the model) still come from the calibration's own span.
+    let damping: Vec<f64> = serde_json::from_value(learned["damping"]["span"].clone()).unwrap();
+    assert!(damping[0] == 0.0 && damping[1] <= 3.0, "{learned}");
+    let early = model_error("2:2.4", "early")["model_error"].clone();
+    assert!(
+        early["from"].as_str().unwrap().contains("the calibration"),
+        "{early}"
+    );
+}
+
 /// Nothing is learned from the future: a forecast of the whole recording and one of the
 /// same recording cut at its window's end, both run 1 s past the window (`--ahead`), give
 /// the same bands and headline horizon. The model found from the motion, the pivot, the

@@ -24,6 +24,18 @@ pub struct Roll {
     pub from_calibration: bool,
 }
 
+impl Roll {
+    /// A calibration's roll and its error, applied shrunk as the rows' own would be.
+    pub fn calibrated(roll: f64, error: f64) -> Roll {
+        Roll {
+            roll,
+            error,
+            applied: super::joint::shrunk(roll, error),
+            from_calibration: true,
+        }
+    }
+}
+
 /// The rows a local polynomial spans on either side: 25 ms of rows, enough for the angular
 /// accelerations of the motion's fastest swings (a degree-4 polynomial over 21 rows at 400
 /// frames a second recovered a 0.5 degree roll to 0.02 degree on a film made by the model).

@@ -12,6 +12,7 @@ mod lsq;
 mod model;
 pub mod model_toml;
 pub mod pendulum;
+mod placed;
 pub mod plots;
 mod refine;
 pub mod report;

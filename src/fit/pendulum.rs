@@ -5,8 +5,9 @@
 
 use super::data::{Estimate, Pivot, TrackedRow, angles, arm_lengths, fit_pivot};
 use super::identify::{Identified, identify};
-use super::joint::{Joint, Offsets, joint_off_marker, marker_offsets};
-use super::level::{Roll, levelled};
+use super::joint::{Joint, Offsets};
+use super::level::Roll;
+use super::placed::{Placed, on_axes};
 use super::weighed::Weighed;
 use super::window::TrackRows;
 use crate::error::{Error, Result};
@@ -197,7 +198,7 @@ const UNIT_MISTAKE: f64 = 25.0;
 /// The metre scale of `frames` (in pixels, y up) that their motion implies under gravity
 /// `g` at their times: pixels per metre and its error.
 pub fn scale_from_motion(frames: &[TrackedRow], g: f64, monitor: &Monitor) -> Result<(f64, f64)> {
-    let (frames, _) = on_joint(frames, frames.len(), None, 1.0)?;
+    let (frames, _) = on_axes(frames, frames.len(), &Placed::default(), 1.0)?;
     fit_pivot(&frames)?;
     motion_scale(&frames, g, monitor)
 }
@@ -250,76 +251,6 @@ fn motion_scale(frames: &[TrackedRow], g: f64, monitor: &Monitor) -> Result<(f64
         ));
     }
     Ok((ts.g_implied / g, ts.g_implied_error / g))
-}
-
-/// Where the learned rows (or a calibration) put the markers against the arms and gravity's
-/// down: the middle joint where the upper marker is not on it (m), the markers' small
-/// offsets from the axes (m), the picture's roll.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Placed {
-    pub joint: Option<Joint>,
-    pub offsets: Option<Offsets>,
-    pub roll: Option<Roll>,
-}
-
-/// `frames` with the upper marker moved out to the middle joint where it is not on it
-/// ([`super::joint`]), the markers' small offsets from the axes taken out and the picture
-/// levelled ([`super::level`]), all as the first `learn` rows show them (rows too few to
-/// place the pivot show nothing: the markers are taken to be on the axes, the picture level).
-fn on_joint(
-    frames: &[TrackedRow],
-    learn: usize,
-    known: Option<&Known>,
-    unit: f64,
-) -> Result<(Vec<TrackedRow>, Placed)> {
-    let Ok(pivot) = fit_pivot(&frames[..learn]) else {
-        return Ok((frames.to_vec(), Placed::default()));
-    };
-    let pivot = (pivot.x, pivot.y);
-    let (mut frames, joint) = match joint_off_marker(&frames[..learn], pivot) {
-        Some(j) => (j.moved(frames, pivot), Some(j)),
-        None => (frames.to_vec(), None),
-    };
-    // The calibration's, in the frames' units (`unit` of them a metre), where it knows more.
-    let spread = |o: &Offsets| o.errors.iter().sum::<f64>();
-    let theirs = known
-        .and_then(|k| k.offsets)
-        .filter(|_| unit.is_finite())
-        .map(|o| o.scaled(unit));
-    let offsets = match (marker_offsets(&frames[..learn], pivot), theirs) {
-        (Some(own), Some(k)) if spread(&own) <= spread(&k) => Some(own),
-        (_, Some(k)) => Some(k),
-        (own, None) => own,
-    }
-    .filter(Offsets::any);
-    if let Some(o) = &offsets {
-        frames = o.moved(&frames, pivot);
-    }
-    let t: Vec<f64> = frames[..learn].iter().map(|f| f.t).collect();
-    let roll = match (
-        super::level::roll(&t, &angles(&frames[..learn], pivot)),
-        known.and_then(|k| k.roll),
-    ) {
-        (Some(own), Some((_, e))) if own.error <= e => Some(own),
-        (_, Some((r, e))) => Some(Roll {
-            roll: r,
-            error: e,
-            applied: super::joint::shrunk(r, e),
-            from_calibration: true,
-        }),
-        (own, None) => own,
-    };
-    if let Some(r) = roll.filter(|r| r.applied != 0.0) {
-        frames = levelled(&frames, pivot, r.applied);
-    }
-    Ok((
-        frames,
-        Placed {
-            joint,
-            offsets,
-            roll,
-        },
-    ))
 }
 
 /// The pivot (a least-squares circle through the upper mass), the arm lengths and angles of
@@ -391,7 +322,12 @@ pub fn tracked_model_from(
         Some(super::data::PixelScale::FromMotion) => scale.map_or(f64::NAN, |(ppm, _)| ppm),
         _ => 1.0,
     };
-    let (frames, mut on_axes) = on_joint(frames, learn, Some(&known), unit)?;
+    let theirs = Placed {
+        joint: None,
+        offsets: known.offsets,
+        roll: known.roll.map(|(r, e)| Roll::calibrated(r, e)),
+    };
+    let (frames, mut placed) = on_axes(frames, learn, &theirs, unit)?;
     let frames = &frames[..];
     let (frames, scale_from_motion) = match units.pixels_per_metre {
         Some(super::data::PixelScale::FromMotion) => {
@@ -399,14 +335,14 @@ pub fn tracked_model_from(
                 Some(s) => s,
                 None => motion_scale(&frames[..learn], g, monitor)?,
             };
-            if let Some(j) = &mut on_axes.joint {
+            if let Some(j) = &mut placed.joint {
                 *j = Joint {
                     marker: j.marker / ppm,
                     joint: j.joint / ppm,
                     error: j.error / ppm,
                 };
             }
-            on_axes.offsets = on_axes.offsets.map(|o| o.scaled(1.0 / ppm));
+            placed.offsets = placed.offsets.map(|o| o.scaled(1.0 / ppm));
             let scaled = frames
                 .iter()
                 .map(|f| TrackedRow {
@@ -423,7 +359,7 @@ pub fn tracked_model_from(
     };
     let frames = &frames[..];
     let own = fit_pivot(&frames[..learn]);
-    let placed = |p: &Pivot| {
+    let well_placed = |p: &Pivot| {
         p.errors[0].hypot(p.errors[1]) <= PIVOT_SHARE * p.radius
             && known
                 .l1
@@ -431,7 +367,7 @@ pub fn tracked_model_from(
     };
     let mut pivot_notice = None;
     let pivot = match (own, known.pivot) {
-        (Ok(p), _) if placed(&p) => p,
+        (Ok(p), _) if well_placed(&p) => p,
         (Ok(p), None) => p,
         (own, Some((x, y))) => {
             pivot_notice = Some(format!(
@@ -588,13 +524,13 @@ pub fn tracked_model_from(
         }
     }
     notices.extend(pivot_notice);
-    if let Some(j) = &on_axes.joint {
+    if let Some(j) = &placed.joint {
         notices.push(format!(
             "the upper marker is not on the middle joint: it sits {:.4} m from the pivot, the joint (where the lower arm turns) {:.4} ± {:.4} m; the joint's positions along the upper arm stand in for the marker's",
             j.marker, j.joint, j.error
         ));
     }
-    if let Some(o) = &on_axes.offsets {
+    if let Some(o) = &placed.offsets {
         notices.push(format!(
             "the markers sit off the arms' axes, as the lower rod's length shows it: the upper marker {:.2} mm along and {:.2} mm across the upper arm from the middle joint, the lower marker seen ({:.2}, {:.2}) mm off (errors {:.2}, {:.2}, {:.2}, {:.2} mm); taken out",
             1e3 * o.along,
@@ -607,7 +543,7 @@ pub fn tracked_model_from(
             1e3 * o.errors[3]
         ));
     }
-    if let Some(r) = on_axes.roll.filter(|r| r.applied != 0.0) {
+    if let Some(r) = placed.roll.filter(|r| r.applied != 0.0) {
         notices.push(format!(
             "the picture is rolled against gravity by {:.3} ± {:.3} degrees, as the motion shows it; levelled by {:.3} degrees",
             r.roll.to_degrees(),
@@ -630,7 +566,7 @@ pub fn tracked_model_from(
         learned: learn,
         frames: frames.to_vec(),
         scale_from_motion,
-        placed: on_axes,
+        placed,
         pivot,
         l1,
         l2,
