@@ -87,6 +87,9 @@ pub fn run(job: &ForecastJob, at: &super::Running) -> Result<ForecastSummary> {
     notices.push(tracked.source.describe_model(&tracked.params, None));
     notices.extend(film_notice);
     notices.extend(tracked.notices.iter().cloned());
+    notices.extend(learned.refreshed.map(|[a, b]| {
+        format!("the model's own error and the bands' factors measured again on this file's rows {a:.2}-{b:.2} s, just before the window (the calibration's model kept)")
+    }));
     let provenance = provenance(job, &learned);
     let settings = ForecastSettings {
         window: Some(learned.window),
